@@ -1,0 +1,231 @@
+"""The ``crmgrasp`` command.
+
+Every failure caused by the user's input prints one line,
+``crmgrasp <command>: error: <what is wrong>``, and exits with status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import re
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import NoReturn
+
+import numpy as np
+
+from . import __version__
+from ._io import save_figure
+from ._validation import CrmgraspError, as_point, finite
+from .contacts import Config
+from .hand import CRM
+from .quality import min_friction
+from .sensing import Error, SensorNoise, observe
+from .tasks import Task, make_task, task_names
+
+__all__ = ["main"]
+
+_NUMBERISH = re.compile(r"^-[\d.]")
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors and values such as ``-0.15,-0.02``."""
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+        self._negative_number_matcher = _NUMBERISH
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+
+
+def _point(text: str) -> tuple[float, float]:
+    parts = str(text).split(",")
+    if len(parts) != 2:
+        raise argparse.ArgumentTypeError(f"expected X,Y (two numbers), got {text!r}")
+    try:
+        return as_point(parts, "point")
+    except CrmgraspError as exc:
+        raise argparse.ArgumentTypeError(f"{exc} in {text!r}") from None
+
+
+def _number(text: str) -> float:
+    try:
+        return finite(text, "value")
+    except CrmgraspError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _resolve_crm(task: Task, text: str) -> CRM:
+    """``C1``..``Cn`` names the task's actions; anything else is parsed as ``c,f,r``."""
+    m = re.fullmatch(r"[Cc](\d+)", text.strip())
+    if m:
+        i = int(m.group(1))
+        if not 1 <= i <= len(task.actions):
+            raise CrmgraspError(f"task {task.name} has actions C1..C{len(task.actions)}, got {text!r}")
+        return task.actions[i - 1]
+    return task.hand.check_crm(CRM.parse(text))
+
+
+def _add_scene_args(p: argparse.ArgumentParser, crm_required: bool) -> None:
+    p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
+    p.add_argument(
+        "--a", type=_point, required=True, metavar="X,Y", help="point projected onto the boundary for contact a (m)"
+    )
+    p.add_argument(
+        "--b", type=_point, required=True, metavar="X,Y", help="point projected onto the boundary for contact b (m)"
+    )
+    p.add_argument(
+        "--crm",
+        required=crm_required,
+        metavar="C",
+        help="CRM as c,f,r (e.g. a,b,0 or b,b,-0.08) or a task action C1..Cn",
+    )
+    p.add_argument(
+        "--sigma-n", type=_number, default=0.0, metavar="DEG", help="normal sensing noise, degrees (default 0)"
+    )
+    p.add_argument(
+        "--sigma-p", type=_number, default=0.0, metavar="M", help="position sensing noise, metres (default 0)"
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of the sensing noise (default 0)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``crmgrasp`` command."""
+    parser = _Parser(prog="crmgrasp", description="Grasp strategies composed of contact relative motions (Platt).")
+    parser.add_argument("--version", action="version", version=f"crmgrasp {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    p = sub.add_parser(
+        "crm",
+        help="execute one CRM and print the outcome",
+        description="Execute one CRM from the configuration given by --a and --b.",
+    )
+    _add_scene_args(p, crm_required=True)
+    p.add_argument("--json", action="store_true", help="print JSON instead of text")
+
+    p = sub.add_parser(
+        "show",
+        help="draw the scene (and a CRM) to an image",
+        description="Draw object, contacts with normals, palm point and, with --crm, the goal line and path.",
+    )
+    _add_scene_args(p, crm_required=False)
+    p.add_argument("--out", type=Path, required=True, help="image file (.png, .pdf or .svg)")
+
+    p = sub.add_parser(
+        "reproduce",
+        help="run the paper's experiments",
+        description="Run the paper's experiments into one folder with an index README.md.",
+    )
+    p.add_argument("experiments", nargs="*", metavar="NAME", help="experiments to run (default: all)")
+    p.add_argument(
+        "--out", type=Path, default=Path("crmgrasp-results"), help="output folder (default: ./crmgrasp-results)"
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
+    p.add_argument("--quick", action="store_true", help="small budgets (under a minute on 2 cores)")
+
+    sub.add_parser("tasks", help="list registered tasks", description="List the registered tasks.")
+    return parser
+
+
+def _scene(args: argparse.Namespace) -> tuple[Task, Config, CRM | None, SensorNoise, np.random.Generator]:
+    task = make_task(args.task)
+    config = task.hand.contact(task.obj, args.a, args.b)
+    crm = _resolve_crm(task, args.crm) if args.crm else None
+    noise = SensorNoise(math.radians(args.sigma_n), args.sigma_p)
+    return task, config, crm, noise, np.random.default_rng(args.seed)
+
+
+def _cmd_crm(args: argparse.Namespace) -> int:
+    task, config, crm, noise, rng = _scene(args)
+    assert crm is not None
+    start_err = task.hand.feasible(task.obj, config)
+    if start_err is not Error.NONE:
+        raise CrmgraspError(f"the start configuration is infeasible ({start_err.name.lower()} error)")
+    out = task.hand.execute(task.obj, config, crm, noise=noise, rng=rng)
+    obs = observe(noise.sense(out.config, rng))
+    index = task.discretizer.index(obs, out.error)
+    result = {
+        "task": task.name,
+        "crm": {"c": crm.c, "f": crm.f, "r": crm.r},
+        "error": out.error.name.lower(),
+        "config": out.config.to_dict(),
+        "observation": {
+            "rho": obs.rho,
+            "m_a": obs.m_a,
+            "m_b": obs.m_b,
+            "index": index,
+            "label": task.discretizer.label(index),
+        },
+        "min_friction": min_friction(out.config),
+        "success": task.is_success(out.config),
+        "path": [list(p) for p in out.path],
+    }
+    if args.json:
+        print(json.dumps(result, indent=2))
+        return 0
+    print(f"CRM {crm} on {task.name}: error={result['error']}")
+    for lab in ("a", "b"):
+        c = out.config[lab]
+        print(f"  {lab}: x=({c.x + 0.0:.6g}, {c.y + 0.0:.6g})  n=({c.nx + 0.0:.6g}, {c.ny + 0.0:.6g})")
+    label = task.discretizer.label(index)
+    print(f"  observation: rho={obs.rho:.6g} m_a={obs.m_a:.6g} m_b={obs.m_b:.6g}  [{index}: {label}]")
+    print(f"  min_friction={result['min_friction']:.6g}  success={result['success']}")
+    return 0
+
+
+def _cmd_show(args: argparse.Namespace) -> int:
+    from .plotting import scene_figure
+
+    if args.out.suffix.lower() not in {".png", ".pdf", ".svg"}:
+        raise CrmgraspError(f"--out must end in .png, .pdf or .svg, got {args.out.name!r}")
+    task, config, crm, noise, rng = _scene(args)
+    outcome = task.hand.execute(task.obj, config, crm, noise=noise, rng=rng) if crm else None
+    title = f"{task.name}" + (f": CRM {crm} -> {outcome.error.name.lower()}" if outcome else "")
+    save_figure(scene_figure(task.obj, task.hand, config, outcome, title), args.out, dpi=120)
+    print(f"wrote {args.out.resolve()}")
+    return 0
+
+
+def _cmd_reproduce(args: argparse.Namespace) -> int:
+    from .experiments import reproduce
+
+    results = reproduce(args.out, args.experiments, seed=args.seed, quick=args.quick)
+    root = args.out.resolve()
+    for name, summary in results.items():
+        print(f"{name}: {root / name} ({summary['seconds']} s)")
+        for key, value in summary.items():
+            if key != "seconds":
+                print(f"  {key}: {value}")
+    print(f"index: {root / 'README.md'}")
+    return 0
+
+
+def _cmd_tasks(args: argparse.Namespace) -> int:
+    for name in task_names():
+        print(f"{name}: {make_task(name).description}")
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    handlers = {"crm": _cmd_crm, "show": _cmd_show, "reproduce": _cmd_reproduce, "tasks": _cmd_tasks}
+    try:
+        return handlers[args.command](args)
+    except CrmgraspError as exc:
+        print(f"crmgrasp {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(
+            f"crmgrasp {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), file=sys.stderr
+        )
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

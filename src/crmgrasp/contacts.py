@@ -1,0 +1,114 @@
+"""Contact configurations of the two-contact planar hand (SPEC section 2).
+
+A :class:`Contact` is a position and the object's inward unit normal there; a
+:class:`Config` is the pair of contacts labelled ``a`` and ``b``. Both are
+immutable, hashable named tuples of plain floats. The batched layout of a
+configuration is one row of 8 floats, ``[ax, ay, anx, any, bx, by, bnx, bny]``
+(``np.asarray(config).reshape(8)``).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ._validation import CrmgraspError, as_point
+
+__all__ = ["LABELS", "Contact", "Config", "label_index", "other", "configs_to_array", "array_to_configs"]
+
+LABELS = ("a", "b")
+"""Contact labels, in index order."""
+
+
+def label_index(label: str) -> int:
+    """Index (0 or 1) of a contact label; raises on anything but ``'a'`` or ``'b'``."""
+    if label == "a":
+        return 0
+    if label == "b":
+        return 1
+    raise CrmgraspError(f"unknown contact label {label!r}; expected 'a' or 'b'")
+
+
+def other(label: str) -> str:
+    """The other contact's label."""
+    return LABELS[1 - label_index(label)]
+
+
+class Contact(NamedTuple):
+    """A contact: position ``(x, y)`` in metres and inward unit normal ``(nx, ny)``."""
+
+    x: float
+    y: float
+    nx: float
+    ny: float
+
+    @property
+    def point(self) -> tuple[float, float]:
+        """Position ``(x, y)``."""
+        return (self.x, self.y)
+
+    @property
+    def normal(self) -> tuple[float, float]:
+        """Inward unit normal."""
+        return (self.nx, self.ny)
+
+    @property
+    def tangent(self) -> tuple[float, float]:
+        """Frame tangent ``tau = n x z = (n_y, -n_x)``."""
+        return (self.ny, -self.nx)
+
+    @classmethod
+    def make(cls, point: ArrayLike, normal: ArrayLike) -> Contact:
+        """Validated constructor: finite point, unit normal (normalised if within 1e-6)."""
+        x, y = as_point(point, "contact point")
+        nx, ny = as_point(normal, "contact normal")
+        norm = math.sqrt(nx * nx + ny * ny)
+        if abs(norm - 1.0) > 1e-6:
+            raise CrmgraspError(f"contact normal must be a unit vector, got length {norm:g}")
+        return cls(x, y, nx / norm, ny / norm)
+
+
+class Config(NamedTuple):
+    """Configuration of the two-contact hand: contacts ``a`` and ``b``."""
+
+    a: Contact
+    b: Contact
+
+    def __getitem__(self, key: int | str) -> Contact:  # type: ignore[override]
+        if isinstance(key, str):
+            key = label_index(key)
+        return tuple.__getitem__(self, key)  # type: ignore[return-value]
+
+    def replace(self, label: str, contact: Contact) -> Config:
+        """A copy with contact ``label`` replaced."""
+        return Config(contact, self.b) if label_index(label) == 0 else Config(self.a, contact)
+
+    def swapped(self) -> Config:
+        """The same contacts with labels ``a`` and ``b`` exchanged."""
+        return Config(self.b, self.a)
+
+    @property
+    def separation(self) -> float:
+        """Distance ``|x_a - x_b|`` in metres."""
+        dx, dy = self.b.x - self.a.x, self.b.y - self.a.y
+        return math.sqrt(dx * dx + dy * dy)
+
+    def to_dict(self) -> dict[str, dict[str, list[float]]]:
+        """JSON-friendly form ``{"a": {"point": [x, y], "normal": [nx, ny]}, "b": ...}``."""
+        return {lab: {"point": list(c.point), "normal": list(c.normal)} for lab, c in zip(LABELS, self)}
+
+
+def configs_to_array(configs: list[Config] | tuple[Config, ...]) -> NDArray[np.float64]:
+    """Stack configurations into the batched ``(N, 8)`` layout."""
+    return np.asarray(configs, dtype=np.float64).reshape(len(configs), 8)
+
+
+def array_to_configs(arr: ArrayLike) -> list[Config]:
+    """Inverse of :func:`configs_to_array`."""
+    a = np.asarray(arr, dtype=np.float64)
+    if a.ndim != 2 or a.shape[1] != 8:
+        raise CrmgraspError(f"configuration array must have shape (N, 8), got {a.shape}")
+    return [Config(Contact(*map(float, r[:4])), Contact(*map(float, r[4:]))) for r in a]

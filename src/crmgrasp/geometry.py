@@ -1,0 +1,575 @@
+"""Planar objects: boundary, inward normals, projection, strict inside test, ray entry.
+
+Conventions (SPEC section 1)
+----------------------------
+* Units are metres; the plane is x-y and z points out of the plane.
+* Polygon vertices are stored counter-clockwise (clockwise input is reversed).
+* Every boundary point has an inward unit normal ``n``. For a CCW edge with
+  direction ``e`` the inward normal is ``n = (-e_y, e_x)``.
+* "Inside" means strictly inside: a point within :data:`EPS` of the boundary is
+  *not* inside.
+* Arclength ``s`` runs counter-clockwise from vertex 0 (polygons) or from the
+  point at angle 0 (discs), in ``[0, perimeter)``.
+
+Every operation has a scalar path on plain Python floats (readable, and fast for a
+single call) and a ``*_batch`` path over NumPy arrays. The two compute the same
+expressions in the same order, so they agree bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+from typing import NamedTuple, Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ._validation import CrmgraspError, as_point, finite, positive
+
+__all__ = [
+    "EPS",
+    "BoundaryPoint",
+    "Entry",
+    "Shape",
+    "Polygon",
+    "Disc",
+    "Rectangle",
+    "regular_polygon",
+]
+
+EPS = 1e-9
+"""Boundary tolerance in metres: points closer than this to the boundary are on it."""
+
+_S_TOL = 1e-12  # relative edge-parameter slack so a ray through a vertex hits an edge
+
+Array = NDArray[np.float64]
+
+
+class BoundaryPoint(NamedTuple):
+    """A point on an object's boundary with its inward unit normal and arclength."""
+
+    point: tuple[float, float]
+    normal: tuple[float, float]
+    s: float
+
+
+class Entry(NamedTuple):
+    """Where a segment ``o + u d`` (``0 <= u <= u_max``) first enters an object."""
+
+    u: float
+    point: tuple[float, float]
+    normal: tuple[float, float]
+
+
+@runtime_checkable
+class Shape(Protocol):
+    """What the hand model needs from an object (a closed planar region)."""
+
+    @property
+    def perimeter(self) -> float: ...
+
+    def boundary(self, s: float) -> BoundaryPoint: ...
+
+    def boundary_batch(self, s: ArrayLike) -> tuple[Array, Array]: ...
+
+    def project(self, p: ArrayLike) -> BoundaryPoint: ...
+
+    def contains(self, p: ArrayLike) -> bool: ...
+
+    def contains_batch(self, p: ArrayLike) -> NDArray[np.bool_]: ...
+
+    def ray_entry(self, origin: tuple[float, float], direction: tuple[float, float], u_max: float) -> Entry | None: ...
+
+    def ray_entry_batch(self, origin: Array, direction: Array, u_max: Array) -> tuple[Array, Array, Array]: ...
+
+    def bounds(self) -> tuple[float, float, float, float]: ...
+
+
+def _points(p: ArrayLike, name: str = "points") -> Array:
+    arr = np.asarray(p, dtype=np.float64)
+    if arr.ndim == 1:
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise CrmgraspError(f"{name} must have shape (N, 2), got {np.shape(p)}")
+    if not np.all(np.isfinite(arr)):
+        raise CrmgraspError(f"{name} must be finite")
+    return arr
+
+
+def _segments_cross(p: tuple, q: tuple, r: tuple, s: tuple) -> bool:
+    """True if closed segments pq and rs share a point (collinear overlap included)."""
+
+    def orient(a: tuple, b: tuple, c: tuple) -> float:
+        return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+
+    def on_seg(a: tuple, b: tuple, c: tuple) -> bool:
+        return min(a[0], b[0]) <= c[0] <= max(a[0], b[0]) and min(a[1], b[1]) <= c[1] <= max(a[1], b[1])
+
+    d1, d2, d3, d4 = orient(r, s, p), orient(r, s, q), orient(p, q, r), orient(p, q, s)
+    if ((d1 > 0) != (d2 > 0)) and d1 != 0 and d2 != 0 and ((d3 > 0) != (d4 > 0)) and d3 != 0 and d4 != 0:
+        return True
+    return (
+        (d1 == 0 and on_seg(r, s, p))
+        or (d2 == 0 and on_seg(r, s, q))
+        or (d3 == 0 and on_seg(p, q, r))
+        or (d4 == 0 and on_seg(p, q, s))
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class Polygon:
+    """A simple polygon, convex or not.
+
+    Parameters
+    ----------
+    vertices
+        Sequence of at least 3 ``(x, y)`` points in metres, in either orientation
+        (clockwise input is reversed to counter-clockwise). The polygon must be
+        simple (no self-intersection) with non-zero area and no repeated vertex.
+
+    Examples
+    --------
+    >>> sq = Polygon([(0, 0), (1, 0), (1, 1), (0, 1)])
+    >>> sq.contains((0.5, 0.5)), sq.contains((1.0, 0.5)), sq.contains((2.0, 0.5))
+    (True, False, False)
+    >>> sq.project((0.5, -0.2)).normal      # inward normal of the bottom edge
+    (-0.0, 1.0)
+    >>> sq.ray_entry((0.5, 2.0), (0.0, -1.0), 5.0).point   # enters through the top
+    (0.5, 1.0)
+    """
+
+    vertices: tuple[tuple[float, float], ...]
+
+    def __init__(self, vertices: ArrayLike) -> None:
+        try:
+            raw = list(vertices)  # type: ignore[call-overload]
+        except TypeError:
+            raise CrmgraspError(f"polygon vertices must be a sequence of (x, y), got {vertices!r}") from None
+        if len(raw) < 3:
+            raise CrmgraspError(f"a polygon needs at least 3 vertices, got {len(raw)}")
+        pts = [as_point(v, f"vertex {i}") for i, v in enumerate(raw)]
+        area2 = sum(
+            pts[i][0] * pts[(i + 1) % len(pts)][1] - pts[(i + 1) % len(pts)][0] * pts[i][1] for i in range(len(pts))
+        )
+        scale = max(max(abs(x), abs(y)) for x, y in pts) or 1.0
+        if abs(area2) <= 1e-12 * scale * scale:
+            raise CrmgraspError("polygon has zero area")
+        if area2 < 0:
+            pts.reverse()
+        _check_simple(pts)
+        object.__setattr__(self, "vertices", tuple(pts))
+
+    def __repr__(self) -> str:
+        return f"Polygon({[tuple(round(c, 6) for c in v) for v in self.vertices]})"
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Polygon) and type(other) is type(self) and other.vertices == self.vertices
+
+    def __hash__(self) -> int:
+        return hash(self.vertices)
+
+    # ----------------------------------------------------------- derived data
+    @cached_property
+    def edges(self) -> tuple[tuple[float, float, float, float, float, float, float], ...]:
+        """Per edge ``(ax, ay, ex, ey, L2, nx, ny)``: start, edge vector, squared
+        length, inward unit normal."""
+        out = []
+        v = self.vertices
+        for i in range(len(v)):
+            (ax, ay), (bx, by) = v[i], v[(i + 1) % len(v)]
+            ex, ey = bx - ax, by - ay
+            length = math.sqrt(ex * ex + ey * ey)
+            out.append((ax, ay, ex, ey, ex * ex + ey * ey, -ey / length, ex / length))
+        return tuple(out)
+
+    @cached_property
+    def _edge_arrays(self) -> Array:
+        return np.array(self.edges, dtype=np.float64)  # (E, 7)
+
+    @cached_property
+    def _cumlen(self) -> tuple[float, ...]:
+        acc, out = 0.0, [0.0]
+        for e in self.edges:
+            acc += math.sqrt(e[4])
+            out.append(acc)
+        return tuple(out)
+
+    @property
+    def perimeter(self) -> float:
+        """Total boundary length in metres."""
+        return self._cumlen[-1]
+
+    @property
+    def area(self) -> float:
+        """Enclosed area in square metres (positive)."""
+        v = self.vertices
+        n = len(v)
+        return 0.5 * sum(v[i][0] * v[(i + 1) % n][1] - v[(i + 1) % n][0] * v[i][1] for i in range(n))
+
+    def bounds(self) -> tuple[float, float, float, float]:
+        """``(xmin, ymin, xmax, ymax)``."""
+        xs = [x for x, _ in self.vertices]
+        ys = [y for _, y in self.vertices]
+        return (min(xs), min(ys), max(xs), max(ys))
+
+    def vertex_arclengths(self) -> tuple[float, ...]:
+        """Arclength of each vertex (where normals are undefined)."""
+        return self._cumlen[:-1]
+
+    # ------------------------------------------------------------- boundary
+    def boundary(self, s: float) -> BoundaryPoint:
+        """Point and inward normal at arclength ``s`` (wrapped into ``[0, perimeter)``).
+
+        At a vertex the point belongs to the edge that *starts* there.
+        """
+        s = finite(s, "arclength") % self.perimeter
+        cum = self._cumlen
+        i = int(np.searchsorted(cum, s, side="right")) - 1
+        i = min(i, len(self.edges) - 1)
+        ax, ay, ex, ey, l2, nx, ny = self.edges[i]
+        frac = (s - cum[i]) / math.sqrt(l2)
+        return BoundaryPoint((ax + frac * ex, ay + frac * ey), (nx, ny), s)
+
+    def boundary_batch(self, s: ArrayLike) -> tuple[Array, Array]:
+        """Vectorised :meth:`boundary`: points ``(N, 2)`` and normals ``(N, 2)``."""
+        s = np.mod(np.asarray(s, dtype=np.float64), self.perimeter)
+        cum = np.asarray(self._cumlen)
+        i = np.minimum(np.searchsorted(cum, s, side="right") - 1, len(self.edges) - 1)
+        e = self._edge_arrays[i]
+        frac = (s - cum[i]) / np.sqrt(e[:, 4])
+        pts = np.stack([e[:, 0] + frac * e[:, 2], e[:, 1] + frac * e[:, 3]], axis=1)
+        return pts, e[:, 5:7].copy()
+
+    def project(self, p: ArrayLike) -> BoundaryPoint:
+        """Nearest boundary point to ``p``, with its inward normal and arclength.
+
+        Raises
+        ------
+        CrmgraspError
+            If the nearest point is a vertex, where the normal is undefined.
+        """
+        px, py = as_point(p, "point")
+        best: tuple[float, int, float] | None = None
+        for i, (ax, ay, ex, ey, l2, _, _) in enumerate(self.edges):
+            t = min(1.0, max(0.0, ((px - ax) * ex + (py - ay) * ey) / l2))
+            dx, dy = ax + t * ex - px, ay + t * ey - py
+            d2 = dx * dx + dy * dy
+            if best is None or d2 < best[0]:
+                best = (d2, i, t)
+        assert best is not None
+        _, i, t = best
+        ax, ay, ex, ey, l2, nx, ny = self.edges[i]
+        if t <= 0.0 or t >= 1.0:
+            vx, vy = (ax, ay) if t <= 0.0 else (ax + ex, ay + ey)
+            raise CrmgraspError(
+                f"point ({px:g}, {py:g}) projects onto vertex ({vx:g}, {vy:g}), where the "
+                "normal is undefined; move it along an edge"
+            )
+        off = (px - ax) * nx + (py - ay) * ny  # signed distance inside the edge's line
+        return BoundaryPoint((px - off * nx, py - off * ny), (nx, ny), self._cumlen[i] + t * math.sqrt(l2))
+
+    def _edge_distances2(self, px: float, py: float) -> list[float]:
+        out = []
+        for ax, ay, ex, ey, l2, _, _ in self.edges:
+            t = min(1.0, max(0.0, ((px - ax) * ex + (py - ay) * ey) / l2))
+            dx, dy = ax + t * ex - px, ay + t * ey - py
+            out.append(dx * dx + dy * dy)
+        return out
+
+    def distance(self, p: ArrayLike) -> float:
+        """Unsigned distance from ``p`` to the boundary, in metres."""
+        return math.sqrt(min(self._edge_distances2(*as_point(p, "point"))))
+
+    def edge_index(self, p: ArrayLike) -> int:
+        """Index of the edge nearest ``p`` (edge ``i`` runs from vertex ``i`` to ``i + 1``)."""
+        d2 = self._edge_distances2(*as_point(p, "point"))
+        return d2.index(min(d2))
+
+    def edge_length(self, i: int) -> float:
+        """Length of edge ``i`` in metres."""
+        return math.sqrt(self.edges[i][4])
+
+    # --------------------------------------------------------------- inside
+    def contains(self, p: ArrayLike) -> bool:
+        """True if ``p`` is strictly inside (farther than :data:`EPS` from the boundary)."""
+        px, py = (p[0], p[1]) if isinstance(p, tuple) else as_point(p, "point")
+        inside = False
+        for ax, ay, ex, ey, _, _, _ in self.edges:
+            by = ay + ey
+            if (ay > py) != (by > py):
+                if px < ax + (py - ay) * ex / ey:
+                    inside = not inside
+        if not inside:
+            return False
+        for ax, ay, ex, ey, l2, _, _ in self.edges:
+            t = min(1.0, max(0.0, ((px - ax) * ex + (py - ay) * ey) / l2))
+            dx, dy = ax + t * ex - px, ay + t * ey - py
+            if dx * dx + dy * dy <= EPS * EPS:
+                return False
+        return True
+
+    def contains_batch(self, p: ArrayLike) -> NDArray[np.bool_]:
+        """Vectorised :meth:`contains` over points of shape ``(N, 2)``."""
+        pts = _points(p)
+        px, py = pts[:, :1], pts[:, 1:]
+        e = self._edge_arrays
+        ax, ay, ex, ey, l2 = e[:, 0], e[:, 1], e[:, 2], e[:, 3], e[:, 4]
+        by = ay + ey
+        straddle = (ay > py) != (by > py)
+        with np.errstate(all="ignore"):
+            xint = ax + (py - ay) * ex / ey
+        inside = (np.count_nonzero(straddle & (px < xint), axis=1) % 2) == 1
+        t = np.minimum(1.0, np.maximum(0.0, ((px - ax) * ex + (py - ay) * ey) / l2))
+        dx, dy = ax + t * ex - px, ay + t * ey - py
+        near = np.any(dx * dx + dy * dy <= EPS * EPS, axis=1)
+        return inside & ~near
+
+    # ------------------------------------------------------------ ray entry
+    def ray_entry(self, origin: tuple[float, float], direction: tuple[float, float], u_max: float) -> Entry | None:
+        """First point where the segment ``origin + u direction``, ``0 <= u <= u_max``,
+        crosses the boundary from outside to inside (``direction . n > 0``).
+
+        ``direction`` need not be unit length; ``u`` is in its units. Returns
+        ``None`` if the segment never enters the object. Ties (a ray through a
+        vertex) go to the lower edge index.
+        """
+        ox, oy = origin
+        dx, dy = direction
+        best: Entry | None = None
+        for ax, ay, ex, ey, l2, nx, ny in self.edges:
+            denom = dx * nx + dy * ny
+            if denom <= 0.0:
+                continue
+            u = ((ax - ox) * nx + (ay - oy) * ny) / denom
+            if u < -EPS or u > u_max + EPS:
+                continue
+            qx, qy = ox + u * dx, oy + u * dy
+            s = ((qx - ax) * ex + (qy - ay) * ey) / l2
+            if s < -_S_TOL or s > 1.0 + _S_TOL:
+                continue
+            if best is None or u < best.u:
+                best = Entry(u, (qx, qy), (nx, ny))
+        return best
+
+    def ray_entry_batch(self, origin: Array, direction: Array, u_max: Array) -> tuple[Array, Array, Array]:
+        """Vectorised :meth:`ray_entry` over ``N`` segments.
+
+        Returns ``u`` of shape ``(N,)`` (``inf`` where the segment never enters),
+        entry points ``(N, 2)`` and inward normals ``(N, 2)`` (NaN where none).
+        """
+        ox, oy = origin[:, :1], origin[:, 1:]
+        dx, dy = direction[:, :1], direction[:, 1:]
+        e = self._edge_arrays
+        ax, ay, ex, ey, l2, nx, ny = (e[:, j] for j in range(7))
+        denom = dx * nx + dy * ny
+        with np.errstate(all="ignore"):
+            u = ((ax - ox) * nx + (ay - oy) * ny) / denom
+            s = (((ox + u * dx) - ax) * ex + ((oy + u * dy) - ay) * ey) / l2
+        ok = (denom > 0.0) & (u >= -EPS) & (u <= u_max[:, None] + EPS) & (s >= -_S_TOL) & (s <= 1.0 + _S_TOL)
+        u = np.where(ok, u, np.inf)
+        k = np.argmin(u, axis=1)
+        rows = np.arange(len(k))
+        u_best = u[rows, k]
+        hit = np.isfinite(u_best)
+        with np.errstate(all="ignore"):
+            pts = np.stack([origin[:, 0] + u_best * direction[:, 0], origin[:, 1] + u_best * direction[:, 1]], axis=1)
+        normals = np.stack([nx[k], ny[k]], axis=1)
+        pts[~hit] = np.nan
+        normals[~hit] = np.nan
+        return u_best, pts, normals
+
+
+def _check_simple(pts: list[tuple[float, float]]) -> None:
+    n = len(pts)
+    for i in range(n):
+        p, q = pts[i], pts[(i + 1) % n]
+        if p == q:
+            raise CrmgraspError(f"polygon has a repeated vertex {p} (zero-length edge {i})")
+    for i in range(n):
+        p, q = pts[i], pts[(i + 1) % n]
+        r = pts[(i + 2) % n]
+        ux, uy, wx, wy = q[0] - p[0], q[1] - p[1], r[0] - q[0], r[1] - q[1]
+        if ux * wy - uy * wx == 0.0 and ux * wx + uy * wy < 0.0:
+            raise CrmgraspError(f"polygon is not simple: edges {i} and {(i + 1) % n} fold back")
+        for j in range(i + 2, n):
+            if i == 0 and j == n - 1:
+                continue
+            if _segments_cross(p, q, pts[j], pts[(j + 1) % n]):
+                raise CrmgraspError(f"polygon is not simple: edges {i} and {j} intersect")
+
+
+@dataclass(frozen=True)
+class Disc:
+    """An exact disc (not a polygon approximation).
+
+    Parameters
+    ----------
+    radius
+        Radius in metres, > 0.
+    center
+        Centre ``(x, y)`` in metres.
+
+    Examples
+    --------
+    >>> d = Disc(0.05)
+    >>> d.project((0.2, 0.0))
+    BoundaryPoint(point=(0.05, 0.0), normal=(-1.0, -0.0), s=0.0)
+    >>> [round(v, 12) for v in d.ray_entry((0.0, 0.2), (0.0, -1.0), 1.0).point]
+    [0.0, 0.05]
+    """
+
+    radius: float
+    center: tuple[float, float] = (0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "radius", positive(self.radius, "disc radius"))
+        object.__setattr__(self, "center", as_point(self.center, "disc center"))
+
+    @property
+    def perimeter(self) -> float:
+        """Circumference in metres."""
+        return 2.0 * math.pi * self.radius
+
+    @property
+    def area(self) -> float:
+        """Area in square metres."""
+        return math.pi * self.radius * self.radius
+
+    def bounds(self) -> tuple[float, float, float, float]:
+        """``(xmin, ymin, xmax, ymax)``."""
+        cx, cy = self.center
+        r = self.radius
+        return (cx - r, cy - r, cx + r, cy + r)
+
+    def boundary(self, s: float) -> BoundaryPoint:
+        """Point at arclength ``s`` CCW from angle 0, normal toward the centre."""
+        s = finite(s, "arclength") % self.perimeter
+        phi = s / self.radius
+        c, si = math.cos(phi), math.sin(phi)
+        return BoundaryPoint((self.center[0] + self.radius * c, self.center[1] + self.radius * si), (-c, -si), s)
+
+    def boundary_batch(self, s: ArrayLike) -> tuple[Array, Array]:
+        """Vectorised :meth:`boundary`."""
+        phi = np.mod(np.asarray(s, dtype=np.float64), self.perimeter) / self.radius
+        c, si = np.cos(phi), np.sin(phi)
+        pts = np.stack([self.center[0] + self.radius * c, self.center[1] + self.radius * si], axis=1)
+        return pts, np.stack([-c, -si], axis=1)
+
+    def project(self, p: ArrayLike) -> BoundaryPoint:
+        """Nearest boundary point to ``p`` (undefined at the centre: raises)."""
+        px, py = as_point(p, "point")
+        vx, vy = px - self.center[0], py - self.center[1]
+        dist = math.sqrt(vx * vx + vy * vy)
+        if dist == 0.0:
+            raise CrmgraspError("the disc centre has no unique nearest boundary point")
+        ux, uy = vx / dist, vy / dist
+        s = (math.atan2(uy, ux) % (2.0 * math.pi)) * self.radius
+        return BoundaryPoint((self.center[0] + self.radius * ux, self.center[1] + self.radius * uy), (-ux, -uy), s)
+
+    def distance(self, p: ArrayLike) -> float:
+        """Unsigned distance from ``p`` to the circle, in metres."""
+        px, py = as_point(p, "point")
+        vx, vy = px - self.center[0], py - self.center[1]
+        return abs(math.sqrt(vx * vx + vy * vy) - self.radius)
+
+    def contains(self, p: ArrayLike) -> bool:
+        """True if ``p`` is strictly inside (deeper than :data:`EPS`)."""
+        px, py = (p[0], p[1]) if isinstance(p, tuple) else as_point(p, "point")
+        vx, vy = px - self.center[0], py - self.center[1]
+        return math.sqrt(vx * vx + vy * vy) < self.radius - EPS
+
+    def contains_batch(self, p: ArrayLike) -> NDArray[np.bool_]:
+        """Vectorised :meth:`contains`."""
+        pts = _points(p)
+        vx, vy = pts[:, 0] - self.center[0], pts[:, 1] - self.center[1]
+        return np.sqrt(vx * vx + vy * vy) < self.radius - EPS
+
+    def ray_entry(self, origin: tuple[float, float], direction: tuple[float, float], u_max: float) -> Entry | None:
+        """First entry of ``origin + u direction`` (``0 <= u <= u_max``) into the disc.
+
+        Solves ``|o + u d - c|^2 = R^2``; the entry is the smaller root. A tangent
+        line (zero discriminant) grazes and does not enter.
+        """
+        ox, oy = origin
+        dx, dy = direction
+        wx, wy = ox - self.center[0], oy - self.center[1]
+        qa = dx * dx + dy * dy
+        qb = wx * dx + wy * dy
+        qc = wx * wx + wy * wy - self.radius * self.radius
+        disc = qb * qb - qa * qc
+        if disc <= 0.0:
+            return None
+        u = (-qb - math.sqrt(disc)) / qa
+        if u < -EPS or u > u_max + EPS:
+            return None
+        px, py = ox + u * dx, oy + u * dy
+        nx, ny = self.center[0] - px, self.center[1] - py
+        norm = math.sqrt(nx * nx + ny * ny)
+        return Entry(u, (px, py), (nx / norm, ny / norm))
+
+    def ray_entry_batch(self, origin: Array, direction: Array, u_max: Array) -> tuple[Array, Array, Array]:
+        """Vectorised :meth:`ray_entry` (``inf``/NaN where there is no entry)."""
+        ox, oy, dx, dy = origin[:, 0], origin[:, 1], direction[:, 0], direction[:, 1]
+        wx, wy = ox - self.center[0], oy - self.center[1]
+        qa = dx * dx + dy * dy
+        qb = wx * dx + wy * dy
+        qc = wx * wx + wy * wy - self.radius * self.radius
+        disc = qb * qb - qa * qc
+        with np.errstate(all="ignore"):
+            u = (-qb - np.sqrt(disc)) / qa
+        ok = (disc > 0.0) & (u >= -EPS) & (u <= u_max + EPS)
+        u = np.where(ok, u, np.inf)
+        with np.errstate(all="ignore"):
+            px, py = ox + u * dx, oy + u * dy
+            nx, ny = self.center[0] - px, self.center[1] - py
+            norm = np.sqrt(nx * nx + ny * ny)
+            normals = np.stack([nx / norm, ny / norm], axis=1)
+        pts = np.stack([px, py], axis=1)
+        pts[~ok] = np.nan
+        normals[~ok] = np.nan
+        return u, pts, normals
+
+
+def Rectangle(length: float, width: float) -> Polygon:  # noqa: N802 - reads as a type
+    """Axis-aligned rectangle centred at the origin, long axis along x.
+
+    Parameters
+    ----------
+    length
+        Extent along x in metres (> 0).
+    width
+        Extent along y in metres (> 0).
+
+    Examples
+    --------
+    >>> Rectangle(0.30, 0.10).vertices
+    ((-0.15, -0.05), (0.15, -0.05), (0.15, 0.05), (-0.15, 0.05))
+    """
+    hx = positive(length, "rectangle length") / 2.0
+    hy = positive(width, "rectangle width") / 2.0
+    return Polygon([(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)])
+
+
+def regular_polygon(
+    n: int, circumradius: float, center: tuple[float, float] = (0.0, 0.0), rotation: float = 0.0
+) -> Polygon:
+    """Regular ``n``-gon with vertex ``k`` at angle ``rotation + 2 pi k / n`` (radians).
+
+    Examples
+    --------
+    >>> len(regular_polygon(6, 0.1).vertices)
+    6
+    """
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 3:
+        raise CrmgraspError(f"a regular polygon needs an integer n >= 3, got {n!r}")
+    r = positive(circumradius, "circumradius")
+    cx, cy = as_point(center, "center")
+    rot = finite(rotation, "rotation")
+    return Polygon(
+        [
+            (cx + r * math.cos(rot + 2 * math.pi * k / n), cy + r * math.sin(rot + 2 * math.pi * k / n))
+            for k in range(int(n))
+        ]
+    )

@@ -1,0 +1,295 @@
+"""The two-contact planar hand and contact relative motions (SPEC sections 2 and 3).
+
+Palm model
+----------
+With ``d = (x_b - x_a) / |x_b - x_a|`` and ``u = (d_y, -d_x)`` (the right of the
+directed segment a -> b), the palm point is ``P = (x_a + x_b) / 2 + h u``. A
+configuration is feasible iff ``|x_a - x_b| <= A`` (else APERTURE) and the palm is
+clear: ``P`` not strictly inside the object and ``n_a . u <= tol`` and
+``n_b . u <= tol`` (else PALM), with ``tol = Hand.palm_normal_tol`` (SPEC: 1e-9).
+Coincident contacts (``x_a == x_b``) leave ``u`` undefined; this implementation
+reports them as PALM (the fingers collide).
+
+CRM ``(c, f, r)``
+-----------------
+1. Goal line ``p(t) = x_f + r tau_f + t n_f`` in the (sensed) frame of contact f.
+2. Reach: the chord ``[t_lo, t_hi]`` of the line within distance A of the contact
+   that stays still; if the line misses that disc: APERTURE.
+3. Start at ``t_lo`` when ``c == f`` (approach along ``+n_f``), else at ``t_hi``
+   (approach along ``-n_f``). The moving contact backs off by ``d`` along its
+   outward normal, travels to the start, then approaches along the line.
+4. Start strictly inside the object, or no entry before the chord's other end:
+   APERTURE.
+5. The new contact is the first entry point, with the inward normal there.
+6. New configuration's palm not clear: PALM.
+7. On any error the configuration is unchanged and the error is observed.
+
+With sensing noise the goal line comes from *sensed* contacts while motion,
+contact and the stationary contact's reach are in the true world.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ._validation import CrmgraspError, finite, non_negative, positive
+from .contacts import LABELS, Config, Contact, label_index
+from .geometry import Shape
+from .sensing import Error, SensorNoise
+
+__all__ = ["Hand", "CRM", "Error", "GoalLine", "Outcome", "palm_point", "feasible", "execute_crm"]
+
+PALM_NORMAL_TOL = 1e-9
+"""Slack on ``n . u <= 0`` in the palm test (unitless)."""
+
+
+@dataclass(frozen=True)
+class CRM:
+    """A contact relative motion: move contact ``c`` onto a line in contact ``f``'s frame.
+
+    Parameters
+    ----------
+    c
+        Label of the contact that moves, ``'a'`` or ``'b'``.
+    f
+        Label of the frame contact, ``'a'`` or ``'b'``.
+    r
+        Offset of the goal line along the frame tangent ``tau_f = n_f x z``, metres.
+
+    Examples
+    --------
+    >>> CRM("a", "b", 0.0)
+    CRM('a', 'b', 0)
+    >>> CRM.parse("b,b,-0.08")
+    CRM('b', 'b', -0.08)
+    """
+
+    c: str
+    f: str
+    r: float = 0.0
+
+    def __post_init__(self) -> None:
+        label_index(self.c)
+        label_index(self.f)
+        object.__setattr__(self, "r", finite(self.r, "CRM offset r"))
+
+    def __repr__(self) -> str:
+        return f"CRM({self.c!r}, {self.f!r}, {self.r:g})"
+
+    def __str__(self) -> str:
+        return f"({self.c},{self.f},{self.r:g})"
+
+    @classmethod
+    def parse(cls, text: str) -> CRM:
+        """Parse ``"c,f,r"``, e.g. ``"a,b,0"``."""
+        parts = [p.strip() for p in str(text).split(",")]
+        if len(parts) != 3:
+            raise CrmgraspError(f"CRM must be written c,f,r (e.g. a,b,0), got {text!r}")
+        return cls(parts[0], parts[1], finite(parts[2], "CRM offset r"))
+
+    @property
+    def opposition(self) -> bool:
+        """True for an opposition CRM ``(c, other, 0)``."""
+        return self.c != self.f and self.r == 0.0
+
+
+class GoalLine(NamedTuple):
+    """The CRM's goal line ``base + t direction`` and its reachable chord ``[t_lo, t_hi]``."""
+
+    base: tuple[float, float]
+    direction: tuple[float, float]
+    t_lo: float
+    t_hi: float
+
+    def at(self, t: float) -> tuple[float, float]:
+        """Point at parameter ``t``."""
+        return (self.base[0] + t * self.direction[0], self.base[1] + t * self.direction[1])
+
+
+class Outcome(NamedTuple):
+    """Result of executing a CRM.
+
+    ``path`` lists the waypoints of the moving contact: its start, the back-off
+    point, the approach start, and the new contact (or, on error, the point where
+    the attempt stopped and the original contact again).
+    """
+
+    config: Config
+    error: Error
+    path: tuple[tuple[float, float], ...]
+    goal: GoalLine | None
+
+
+@dataclass(frozen=True)
+class Hand:
+    """A two-contact planar hand (SPEC section 2).
+
+    Parameters
+    ----------
+    aperture
+        Maximum distance between the two contacts, metres (> 0).
+    palm_depth
+        Distance ``h`` of the palm point from the contacts' midpoint, metres (>= 0).
+    backoff
+        Distance ``d`` a moving contact first retreats along its outward normal,
+        metres (>= 0). Drawn and followed by real executors; it does not change
+        outcomes in this kinematic model.
+    r_max
+        Largest allowed ``|r|`` of a CRM, metres. Defaults to the aperture: a goal
+        line offset farther than A from the frame contact is out of reach.
+    palm_normal_tol
+        Largest ``n . u`` a contact may have (the sine of the angle by which its
+        surface may face the palm side) before the palm test fails. SPEC: 1e-9.
+        Under sensing noise an opposition lands slightly misaligned and one normal
+        then faces the palm side by a hair; a real fingertip tolerates a few
+        degrees, which a larger value (e.g. ``sin(10 deg)``) models.
+    """
+
+    aperture: float
+    palm_depth: float
+    backoff: float = 0.01
+    r_max: float | None = None
+    palm_normal_tol: float = PALM_NORMAL_TOL
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "aperture", positive(self.aperture, "hand aperture"))
+        object.__setattr__(self, "palm_depth", non_negative(self.palm_depth, "hand palm_depth"))
+        object.__setattr__(self, "backoff", non_negative(self.backoff, "hand backoff"))
+        r_max = self.aperture if self.r_max is None else positive(self.r_max, "hand r_max")
+        object.__setattr__(self, "r_max", r_max)
+        tol = non_negative(self.palm_normal_tol, "hand palm_normal_tol")
+        if tol >= 1.0:
+            raise CrmgraspError(f"hand palm_normal_tol must be < 1, got {tol}")
+        object.__setattr__(self, "palm_normal_tol", tol)
+
+    def check_crm(self, crm: CRM) -> CRM:
+        """Return ``crm`` if ``|r| <= r_max``, else raise :class:`CrmgraspError`."""
+        if not isinstance(crm, CRM):
+            raise CrmgraspError(f"expected a CRM, got {crm!r}")
+        assert self.r_max is not None
+        if abs(crm.r) > self.r_max:
+            raise CrmgraspError(f"CRM offset r = {crm.r:g} is beyond r_max = {self.r_max:g}")
+        return crm
+
+    def contact(self, obj: Shape, a: ArrayLike, b: ArrayLike) -> Config:
+        """Configuration with contacts at the boundary points nearest ``a`` and ``b``."""
+        pa, pb = obj.project(a), obj.project(b)
+        return Config(Contact(*pa.point, *pa.normal), Contact(*pb.point, *pb.normal))
+
+    def palm(self, config: Config) -> tuple[float, float]:
+        """Palm point ``P`` of a configuration."""
+        return palm_point(config, self.palm_depth)
+
+    def feasible(self, obj: Shape, config: Config) -> Error:
+        """``Error.NONE`` if ``config`` is feasible, else the violated constraint."""
+        return feasible(obj, self, config)
+
+    def execute(
+        self,
+        obj: Shape,
+        config: Config,
+        crm: CRM,
+        *,
+        noise: SensorNoise | None = None,
+        rng: np.random.Generator | None = None,
+        sensed: Config | None = None,
+    ) -> Outcome:
+        """Execute ``crm`` from ``config`` on ``obj`` (SPEC section 3).
+
+        The goal line is computed from ``sensed`` if given; otherwise from a fresh
+        reading through ``noise`` (which then needs ``rng``); otherwise from the
+        true configuration.
+        """
+        self.check_crm(crm)
+        if sensed is None and noise is not None and noise.active:
+            if rng is None:
+                raise CrmgraspError("sensing noise needs a numpy Generator (rng)")
+            sensed = noise.sense(config, rng)
+        return execute_crm(obj, self, config, crm, sensed)
+
+
+def palm_point(config: Config, palm_depth: float) -> tuple[float, float]:
+    """``P = (x_a + x_b)/2 + h u`` with ``u`` the right of a -> b (NaN if coincident)."""
+    a, b = config
+    dx, dy = b.x - a.x, b.y - a.y
+    dist = math.sqrt(dx * dx + dy * dy)
+    if dist == 0.0:
+        return (math.nan, math.nan)
+    ux, uy = dy / dist, -dx / dist
+    return (0.5 * (a.x + b.x) + palm_depth * ux, 0.5 * (a.y + b.y) + palm_depth * uy)
+
+
+def feasible(obj: Shape, hand: Hand, config: Config) -> Error:
+    """Feasibility of a configuration (SPEC section 2), as an :class:`Error`."""
+    a, b = config
+    dx, dy = b.x - a.x, b.y - a.y
+    dist = math.sqrt(dx * dx + dy * dy)
+    if dist > hand.aperture:
+        return Error.APERTURE
+    if dist == 0.0:
+        return Error.PALM
+    ux, uy = dy / dist, -dx / dist
+    tol = hand.palm_normal_tol
+    if a.nx * ux + a.ny * uy > tol or b.nx * ux + b.ny * uy > tol:
+        return Error.PALM
+    palm = (0.5 * (a.x + b.x) + hand.palm_depth * ux, 0.5 * (a.y + b.y) + hand.palm_depth * uy)
+    if obj.contains(palm):
+        return Error.PALM
+    return Error.NONE
+
+
+def goal_line(crm: CRM, sensed: Config, still: Contact, aperture: float) -> GoalLine | None:
+    """Goal line of ``crm`` in the sensed frame and its chord within ``aperture`` of ``still``.
+
+    Solves ``|base + t n_f - x_still|^2 = A^2`` for ``t``; ``None`` if the line
+    misses the disc of radius A around the stationary contact.
+    """
+    f = sensed[crm.f]
+    base = (f.x + crm.r * f.ny, f.y - crm.r * f.nx)
+    wx, wy = base[0] - still.x, base[1] - still.y
+    qa = f.nx * f.nx + f.ny * f.ny
+    qb = wx * f.nx + wy * f.ny
+    qc = wx * wx + wy * wy - aperture * aperture
+    disc = qb * qb - qa * qc
+    if disc < 0.0:
+        return None
+    root = math.sqrt(disc)
+    return GoalLine(base, (f.nx, f.ny), (-qb - root) / qa, (-qb + root) / qa)
+
+
+def execute_crm(obj: Shape, hand: Hand, config: Config, crm: CRM, sensed: Config | None = None) -> Outcome:
+    """Pure CRM transition: ``(object, hand, config, crm, sensed config) -> Outcome``.
+
+    See the module docstring for the algorithm. ``sensed`` defaults to ``config``
+    (no sensing noise).
+    """
+    if sensed is None:
+        sensed = config
+    mover = config[crm.c]
+    still = config[LABELS[1 - label_index(crm.c)]]
+    origin = (mover.x, mover.y)
+    backed = (mover.x - hand.backoff * mover.nx, mover.y - hand.backoff * mover.ny)
+    line = goal_line(crm, sensed, still, hand.aperture)
+    if line is None:
+        return Outcome(config, Error.APERTURE, (origin, backed, origin), None)
+    same = crm.c == crm.f
+    t0, t1 = (line.t_lo, line.t_hi) if same else (line.t_hi, line.t_lo)
+    start = line.at(t0)
+    if obj.contains(start):
+        return Outcome(config, Error.APERTURE, (origin, backed, origin), line)
+    sign = 1.0 if same else -1.0
+    direction = (sign * line.direction[0], sign * line.direction[1])
+    entry = obj.ray_entry(start, direction, abs(t1 - t0))
+    if entry is None:
+        return Outcome(config, Error.APERTURE, (origin, backed, start, line.at(t1), origin), line)
+    moved = Contact(entry.point[0], entry.point[1], entry.normal[0], entry.normal[1])
+    new = config.replace(crm.c, moved)
+    err = feasible(obj, hand, new)
+    if err is not Error.NONE:
+        return Outcome(config, err, (origin, backed, start, entry.point, origin), line)
+    return Outcome(new, Error.NONE, (origin, backed, start, entry.point), line)

@@ -1,0 +1,228 @@
+"""Named grasping tasks: object, hand, CRM set, observation bins, starts, goal.
+
+A :class:`Task` bundles everything an environment or experiment needs. Tasks are
+looked up by name with :func:`make_task` (``"paper-box"`` is SPEC section 7);
+users build their own by constructing :class:`Task` directly and may register a
+factory under a new name with :func:`register_task`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from ._validation import CrmgraspError, non_negative
+from .contacts import Config, Contact
+from .geometry import Polygon, Rectangle, Shape
+from .hand import CRM, Hand, feasible
+from .quality import min_friction
+from .sensing import Discretizer, Error, SensorNoise
+
+__all__ = [
+    "StartSampler",
+    "CornerStarts",
+    "UniformStarts",
+    "Task",
+    "paper_box",
+    "make_task",
+    "register_task",
+    "task_names",
+]
+
+
+@runtime_checkable
+class StartSampler(Protocol):
+    """Draws a start configuration; every draw comes from ``rng``."""
+
+    def __call__(self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator) -> Config: ...
+
+
+def _acceptable(obj: Shape, hand: Hand, mu_goal: float, config: Config) -> bool:
+    return feasible(obj, hand, config) is Error.NONE and min_friction(config) > mu_goal
+
+
+def _edge_contact(obj: Polygon, edge: int, frac: float) -> Contact:
+    ax, ay, ex, ey, _, nx, ny = obj.edges[edge]
+    return Contact(ax + frac * ex, ay + frac * ey, nx, ny)
+
+
+def _open_unit(rng: np.random.Generator) -> float:
+    """Uniform on the open interval (0, 1), so contacts never sit on a vertex."""
+    while True:
+        u = float(rng.random())
+        if u > 0.0:
+            return u
+
+
+@dataclass(frozen=True)
+class CornerStarts:
+    """SPEC section 7 starts: a random polygon corner, one contact uniform on each
+    of the two sides meeting there, a fair coin for which contact is ``a``;
+    resampled until feasible and not already a grasp (``min_friction > mu_goal``).
+
+    Draw order per attempt: corner index, fraction along the incoming side,
+    fraction along the outgoing side, coin.
+    """
+
+    max_tries: int = 10_000
+
+    def __call__(self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator) -> Config:
+        if not isinstance(obj, Polygon):
+            raise CrmgraspError(f"corner starts need a polygon, got {type(obj).__name__}")
+        n = len(obj.vertices)
+        for _ in range(self.max_tries):
+            k = int(rng.integers(n))
+            first = _edge_contact(obj, (k - 1) % n, _open_unit(rng))
+            second = _edge_contact(obj, k, _open_unit(rng))
+            cfg = Config(first, second) if rng.random() < 0.5 else Config(second, first)
+            if _acceptable(obj, hand, mu_goal, cfg):
+                return cfg
+        raise CrmgraspError(f"no feasible corner start found in {self.max_tries} tries")
+
+
+@dataclass(frozen=True)
+class UniformStarts:
+    """Two contacts uniform in arclength on the whole boundary, resampled until
+    feasible, not a grasp and (for polygons) off the vertices."""
+
+    max_tries: int = 10_000
+
+    def __call__(self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator) -> Config:
+        vertices = set(obj.vertex_arclengths()) if isinstance(obj, Polygon) else set()
+        for _ in range(self.max_tries):
+            s = rng.random(2) * obj.perimeter
+            if vertices and (float(s[0]) in vertices or float(s[1]) in vertices):
+                continue
+            pa, pb = obj.boundary(float(s[0])), obj.boundary(float(s[1]))
+            cfg = Config(Contact(*pa.point, *pa.normal), Contact(*pb.point, *pb.normal))
+            if _acceptable(obj, hand, mu_goal, cfg):
+                return cfg
+        raise CrmgraspError(f"no feasible uniform start found in {self.max_tries} tries")
+
+
+@dataclass(frozen=True)
+class Task:
+    """A grasping task.
+
+    Parameters
+    ----------
+    name
+        Registry name, e.g. ``"paper-box"``.
+    obj
+        The object (:class:`~crmgrasp.geometry.Polygon`, :class:`~crmgrasp.geometry.Disc`, ...).
+    hand
+        The two-contact hand.
+    actions
+        The CRM set; action ``i`` of an agent is ``actions[i]``.
+    discretizer
+        Observation bins (with the error flag).
+    starts
+        Start sampler.
+    mu_goal
+        Success when ``min_friction(true config) <= mu_goal`` (unitless, >= 0).
+    max_steps
+        Episode truncation, in CRMs.
+    noise
+        Sensing noise applied during the task (off by default).
+    reference_mean_steps
+        Best achievable mean CRMs per episode for a learner on this task (the
+        belief-space optimum where known), used to report ``episodes_to_5pct``.
+    """
+
+    name: str
+    obj: Shape
+    hand: Hand
+    actions: tuple[CRM, ...]
+    discretizer: Discretizer = field(default_factory=Discretizer)
+    starts: StartSampler = field(default_factory=CornerStarts)
+    mu_goal: float = 0.05
+    max_steps: int = 10
+    noise: SensorNoise = field(default_factory=SensorNoise)
+    reference_mean_steps: float | None = None
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.obj, Shape):
+            raise CrmgraspError(f"task object must be a Shape (Polygon, Disc, ...), got {self.obj!r}")
+        if not isinstance(self.hand, Hand):
+            raise CrmgraspError(f"task hand must be a Hand, got {self.hand!r}")
+        actions = tuple(self.actions)
+        if not actions:
+            raise CrmgraspError("a task needs at least one CRM action")
+        for a in actions:
+            self.hand.check_crm(a)
+        object.__setattr__(self, "actions", actions)
+        object.__setattr__(self, "mu_goal", non_negative(self.mu_goal, "mu_goal"))
+        if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) or self.max_steps < 1:
+            raise CrmgraspError(f"max_steps must be an integer >= 1, got {self.max_steps!r}")
+        if self.reference_mean_steps is not None and not (
+            math.isfinite(self.reference_mean_steps) and self.reference_mean_steps > 0
+        ):
+            raise CrmgraspError(f"reference_mean_steps must be > 0, got {self.reference_mean_steps!r}")
+
+    def sample_start(self, rng: np.random.Generator) -> Config:
+        """A start configuration drawn from ``rng``."""
+        return self.starts(self.obj, self.hand, self.mu_goal, rng)
+
+    def is_success(self, config: Config) -> bool:
+        """SPEC section 5: ``min_friction(config) <= mu_goal``."""
+        return min_friction(config) <= self.mu_goal
+
+    def action_names(self) -> tuple[str, ...]:
+        """``('C1 (a,b,0)', ...)``: readable action names in index order."""
+        return tuple(f"C{i + 1} {crm}" for i, crm in enumerate(self.actions))
+
+
+def paper_box() -> Task:
+    """The paper's box task (SPEC section 7).
+
+    Examples
+    --------
+    >>> t = paper_box()
+    >>> t.actions
+    (CRM('a', 'b', 0), CRM('b', 'a', 0), CRM('a', 'a', 0.08), CRM('b', 'b', -0.08))
+    >>> t.discretizer.size, t.max_steps, t.mu_goal
+    (24, 10, 0.05)
+    """
+    return Task(
+        name="paper-box",
+        obj=Rectangle(0.30, 0.10),
+        hand=Hand(aperture=0.16, palm_depth=0.12, backoff=0.01),
+        actions=(CRM("a", "b", 0.0), CRM("b", "a", 0.0), CRM("a", "a", 0.08), CRM("b", "b", -0.08)),
+        discretizer=Discretizer(rho=(1.0,), m_a=(0.10,), m_b=(0.10,)),
+        starts=CornerStarts(),
+        mu_goal=0.05,
+        max_steps=10,
+        reference_mean_steps=1.66,
+        description="0.30 x 0.10 m box, aperture 0.16 m, palm depth 0.12 m (Platt, Sec. III-C)",
+    )
+
+
+_TASKS: dict[str, Callable[[], Task]] = {"paper-box": paper_box}
+
+
+def register_task(name: str, factory: Callable[[], Task], *, overwrite: bool = False) -> None:
+    """Make ``make_task(name)`` return ``factory()``."""
+    if not isinstance(name, str) or not name:
+        raise CrmgraspError(f"task name must be a non-empty string, got {name!r}")
+    if name in _TASKS and not overwrite:
+        raise CrmgraspError(f"task {name!r} is already registered")
+    _TASKS[name] = factory
+
+
+def task_names() -> tuple[str, ...]:
+    """Registered task names, sorted."""
+    return tuple(sorted(_TASKS))
+
+
+def make_task(name: str) -> Task:
+    """The task registered as ``name``."""
+    try:
+        factory = _TASKS[name]
+    except (KeyError, TypeError):
+        raise CrmgraspError(f"unknown task {name!r}; known tasks: {', '.join(task_names())}") from None
+    return factory()

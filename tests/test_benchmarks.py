@@ -1,0 +1,15 @@
+"""Smoke run of the benchmark script (tiny sizes; no thresholds asserted)."""
+
+import importlib.util
+from pathlib import Path
+
+BENCH = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_core.py"
+
+
+def test_bench_core_smoke(capsys):
+    spec = importlib.util.spec_from_file_location("bench_core", BENCH)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    res = mod.main(["--smoke"])
+    assert res["execute_us"] > 0 and res["cartpole_step_us"] > 0 and res["batch_us_per_crm"] > 0
+    assert '"execute_ratio_vs_cartpole_step"' in capsys.readouterr().out

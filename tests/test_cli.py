@@ -1,0 +1,79 @@
+"""The crmgrasp command: outputs, and one-line errors with exit status 2."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from crmgrasp.cli import main
+
+NEAR = ["--a", "-0.15,-0.02", "--b", "-0.10,-0.05"]
+
+
+def test_crm_text(capsys):
+    assert main(["crm", *NEAR, "--crm", "a,b,0"]) == 0
+    out = capsys.readouterr().out
+    assert "error=none" in out and "a: x=(-0.1, 0.05)  n=(0, -1)" in out and "success=True" in out
+
+
+def test_crm_json_and_action_names(capsys):
+    assert main(["crm", "--a", "-0.15,-0.02", "--b", "0,-0.05", "--crm", "C4", "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["error"] == "none" and res["config"]["b"]["point"] == [-0.08, -0.05]
+    assert res["crm"] == {"c": "b", "f": "b", "r": -0.08}
+    assert main(["crm", "--a", "-0.15,-0.02", "--b", "0,-0.05", "--crm", "C1", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["error"] == "palm"
+
+
+def test_crm_with_noise_is_seeded(capsys):
+    args = ["crm", *NEAR, "--crm", "C1", "--json", "--sigma-n", "3", "--sigma-p", "0.002", "--seed", "7"]
+    main(args)
+    first = capsys.readouterr().out
+    main(args)
+    assert capsys.readouterr().out == first
+
+
+@pytest.mark.parametrize(
+    "argv, msg",
+    [
+        (["crm", *NEAR, "--crm", "a,c,0"], "unknown contact label 'c'"),
+        (["crm", *NEAR, "--crm", "a,a,0.5"], "beyond r_max"),
+        (["crm", *NEAR, "--crm", "C9"], "C1..C4"),
+        (["crm", *NEAR, "--crm", "a,b"], "c,f,r"),
+        (["crm", "--a", "-0.15", "--b", "0,0", "--crm", "C1"], "expected X,Y"),
+        (["crm", "--a", "nan,0", "--b", "0,0", "--crm", "C1"], "finite"),
+        (["crm", "--task", "nope", *NEAR, "--crm", "C1"], "unknown task 'nope'"),
+        (["crm", "--a", "-0.2,-0.1", "--b", "0,-0.05", "--crm", "C1"], "vertex"),
+        (["crm", "--a", "-0.15,0.0", "--b", "0.15,0.0", "--crm", "C1"], "infeasible"),
+        (["crm", *NEAR], "required: --crm"),
+        (["crm", *NEAR, "--crm", "C1", "--sigma-n", "inf"], "finite"),
+        (["show", *NEAR, "--out", "x.txt"], ".png, .pdf or .svg"),
+        (["reproduce", "figure99"], "unknown experiment 'figure99'"),
+        (["frobnicate"], "invalid choice"),
+    ],
+)
+def test_bad_input_is_one_line_exit_2(argv, msg, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as info:
+        sys.exit(main(argv))
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert msg in err and err.count("\n") == 1, err
+
+
+def test_show_writes_image(tmp_path, capsys):
+    out = tmp_path / "sub" / "scene.png"
+    assert main(["show", *NEAR, "--crm", "C1", "--out", str(out)]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert main(["show", *NEAR, "--out", str(tmp_path / "s.svg")]) == 0
+
+
+def test_installed_entry_point_help():
+    res = subprocess.run([sys.executable, "-m", "crmgrasp.cli", "crm", "--help"], capture_output=True, text=True)
+    assert res.returncode == 0 and "--crm" in res.stdout
+
+
+def test_tasks_listing(capsys):
+    assert main(["tasks"]) == 0
+    assert "paper-box" in capsys.readouterr().out

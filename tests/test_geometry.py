@@ -1,0 +1,166 @@
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from crmgrasp import CrmgraspError, Disc, Polygon, Rectangle, regular_polygon
+from crmgrasp.geometry import EPS
+
+from .strategies import objects, star_polygons
+
+U_SHAPE = [(0, 0), (0.3, 0), (0.3, 0.2), (0.2, 0.2), (0.2, 0.05), (0.1, 0.05), (0.1, 0.2), (0, 0.2)]
+
+
+def test_rectangle_vertices_and_normals():
+    r = Rectangle(0.30, 0.10)
+    assert r.vertices == ((-0.15, -0.05), (0.15, -0.05), (0.15, 0.05), (-0.15, 0.05))
+    normals = [e[5:7] for e in r.edges]
+    assert normals == [(-0.0, 1.0), (-1.0, 0.0), (-0.0, -1.0), (1.0, 0.0)]
+    assert r.perimeter == pytest.approx(0.8)
+    assert r.area == pytest.approx(0.03)
+
+
+def test_clockwise_input_is_reoriented():
+    cw = Polygon([(0, 0), (0, 1), (1, 1), (1, 0)])
+    assert cw.area > 0
+    assert cw.vertices[0] == (1.0, 0.0) or cw.vertices == ((1.0, 0.0), (1.0, 1.0), (0.0, 1.0), (0.0, 0.0))
+    assert cw.project((0.5, -1)).normal == (0.0, 1.0) or cw.project((0.5, -1)).normal == (-0.0, 1.0)
+
+
+@pytest.mark.parametrize(
+    "verts, msg",
+    [
+        ([(0, 0), (1, 0)], "at least 3"),
+        ([(0, 0), (1, 0), (2, 0)], "zero area"),
+        ([(0, 0), (1, 0), (float("nan"), 1)], "finite"),
+        ([(0, 0), (2, 2), (2, 0), (0, 1)], "not simple"),
+        ([(0, 0), (1, 0), (1, 0), (0, 1)], "repeated vertex"),
+        ([(0, 0), (1, 0), (1, 1, 1), (0, 1)], "2 coordinates"),
+        ("abc", "vertex 0"),
+        (5, "sequence"),
+    ],
+)
+def test_bad_polygons_raise_one_line(verts, msg):
+    with pytest.raises(CrmgraspError, match=msg) as info:
+        Polygon(verts)
+    assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("bad", [0, -1, float("inf"), float("nan"), "x"])
+def test_bad_disc_and_rectangle(bad):
+    with pytest.raises(CrmgraspError):
+        Disc(bad)
+    with pytest.raises(CrmgraspError):
+        Rectangle(bad, 0.1)
+
+
+def test_regular_polygon_validation():
+    assert len(regular_polygon(6, 0.1).vertices) == 6
+    for n in (2, 3.5, True):
+        with pytest.raises(CrmgraspError, match="n >= 3"):
+            regular_polygon(n, 0.1)
+
+
+def test_strict_inside():
+    r = Rectangle(0.3, 0.1)
+    assert r.contains((0.0, 0.0))
+    assert not r.contains((0.15, 0.0))  # on the boundary
+    assert not r.contains((0.15 - EPS / 2, 0.0))  # within tolerance of it
+    assert r.contains((0.15 - 10 * EPS, 0.0))
+    assert not r.contains((-0.15, -0.05))  # vertex
+    u = Polygon(U_SHAPE)
+    assert not u.contains((0.15, 0.15))  # in the gap of the U
+    assert u.contains((0.05, 0.15)) and u.contains((0.15, 0.02))
+    d = Disc(0.05, (0.1, 0.0))
+    assert d.contains((0.1, 0.0)) and not d.contains((0.15, 0.0)) and not d.contains((0.2, 0.0))
+
+
+def test_project_and_vertex_error():
+    r = Rectangle(0.3, 0.1)
+    bp = r.project((-0.15, -0.02))
+    assert bp.point == (-0.15, -0.02) and bp.normal == (1.0, 0.0)
+    assert r.project((0.0, 0.0)).point == (0.0, -0.05)  # nearest of the two long sides (first edge wins ties)
+    with pytest.raises(CrmgraspError, match="vertex"):
+        r.project((-0.2, -0.1))
+    with pytest.raises(CrmgraspError, match="centre"):
+        Disc(0.05).project((0.0, 0.0))
+    assert Disc(0.05).project((0.0, -1.0)).normal == pytest.approx((0.0, 1.0))
+
+
+def test_ray_entry_polygon_first_entry_in_u():
+    u = Polygon(U_SHAPE)
+    # along y = 0.15 from the right going left: enters the right arm first at x = 0.3
+    e = u.ray_entry((0.4, 0.15), (-1.0, 0.0), 1.0)
+    assert e.point == pytest.approx((0.3, 0.15)) and e.normal == (-1.0, 0.0)
+    # starting in the gap: enters the left arm's inner face at x = 0.1
+    e = u.ray_entry((0.16, 0.15), (-1.0, 0.0), 1.0)
+    assert e.point == pytest.approx((0.1, 0.15)) and e.normal == (-1.0, 0.0)
+    # exits do not count; too short a segment finds nothing
+    assert u.ray_entry((0.16, 0.15), (-1.0, 0.0), 0.05) is None
+    assert u.ray_entry((0.0, 0.3), (1.0, 0.0), 1.0) is None
+
+
+def test_ray_entry_disc():
+    d = Disc(0.05)
+    e = d.ray_entry((0.03, 0.2), (0.0, -1.0), 1.0)
+    assert e.point == pytest.approx((0.03, 0.04)) and e.normal == pytest.approx((-0.6, -0.8))
+    assert d.ray_entry((0.05, 0.2), (0.0, -1.0), 1.0) is None  # tangent: grazes
+    assert d.ray_entry((0.0, 0.2), (0.0, 1.0), 1.0) is None  # moving away
+
+
+@given(objects, st.floats(0, 1, exclude_max=True))
+def test_boundary_points_are_on_boundary_with_unit_inward_normal(obj, frac):
+    bp = obj.boundary(frac * obj.perimeter)
+    assert obj.distance(bp.point) < 1e-12
+    assert math.hypot(*bp.normal) == pytest.approx(1.0)
+    step = 1e-6
+    inner = (bp.point[0] + step * bp.normal[0], bp.point[1] + step * bp.normal[1])
+    outer = (bp.point[0] - step * bp.normal[0], bp.point[1] - step * bp.normal[1])
+    assert not obj.contains(outer)
+    near_vertex = isinstance(obj, Polygon) and min(math.dist(bp.point, v) for v in obj.vertices) < 1e-4
+    if not near_vertex:
+        assert obj.contains(inner)
+
+
+@given(objects, st.lists(st.tuples(st.floats(-0.3, 0.3), st.floats(-0.3, 0.3)), min_size=1, max_size=30))
+def test_contains_batch_matches_scalar(obj, pts):
+    expected = [obj.contains(p) for p in pts]
+    assert obj.contains_batch(np.array(pts)).tolist() == expected
+
+
+@given(
+    objects,
+    st.lists(
+        st.tuples(st.floats(-0.3, 0.3), st.floats(-0.3, 0.3), st.floats(0, 2 * math.pi), st.floats(0, 0.6)),
+        min_size=1,
+        max_size=30,
+    ),
+)
+def test_ray_entry_batch_matches_scalar_bitwise(obj, rays):
+    o = np.array([(x, y) for x, y, _, _ in rays])
+    d = np.array([(math.cos(a), math.sin(a)) for _, _, a, _ in rays])
+    umax = np.array([m for *_, m in rays])
+    u, pts, nrm = obj.ray_entry_batch(o, d, umax)
+    for i in range(len(rays)):
+        e = obj.ray_entry(tuple(map(float, o[i])), tuple(map(float, d[i])), float(umax[i]))
+        if e is None:
+            assert math.isinf(u[i])
+        else:
+            assert (e.u, *e.point, *e.normal) == (u[i], *pts[i], *nrm[i])
+
+
+@given(star_polygons(), st.floats(0, 1, exclude_max=True))
+def test_boundary_batch_matches_scalar(obj, frac):
+    s = frac * obj.perimeter
+    pts, nrm = obj.boundary_batch([s])
+    bp = obj.boundary(s)
+    assert tuple(pts[0]) == pytest.approx(bp.point) and tuple(nrm[0]) == bp.normal
+
+
+def test_batch_input_validation():
+    with pytest.raises(CrmgraspError, match=r"shape \(N, 2\)"):
+        Rectangle(0.3, 0.1).contains_batch(np.zeros((3, 3)))
+    with pytest.raises(CrmgraspError, match="finite"):
+        Disc(0.1).contains_batch([[np.nan, 0.0]])

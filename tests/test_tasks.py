@@ -1,0 +1,64 @@
+import numpy as np
+import pytest
+
+from crmgrasp import CRM, CrmgraspError, Disc, Error, Hand, Task, make_task, min_friction, register_task
+from crmgrasp.tasks import CornerStarts, UniformStarts, task_names
+
+
+def test_paper_box_matches_spec(task):
+    assert task.name == "paper-box"
+    assert task.obj.vertices == ((-0.15, -0.05), (0.15, -0.05), (0.15, 0.05), (-0.15, 0.05))
+    assert (task.hand.aperture, task.hand.palm_depth, task.hand.backoff) == (0.16, 0.12, 0.01)
+    assert task.actions == (CRM("a", "b", 0), CRM("b", "a", 0), CRM("a", "a", 0.08), CRM("b", "b", -0.08))
+    assert task.discretizer.size == 24 and task.max_steps == 10 and task.mu_goal == 0.05
+    assert task.reference_mean_steps == 1.66
+    assert make_task("paper-box") == task
+
+
+def test_corner_starts_are_valid_and_deterministic(task):
+    starts = [task.sample_start(np.random.default_rng(s)) for s in range(300)]
+    again = [task.sample_start(np.random.default_rng(s)) for s in range(300)]
+    assert starts == again
+    corners = set()
+    for cfg in starts:
+        assert task.hand.feasible(task.obj, cfg) is Error.NONE
+        assert min_friction(cfg) > task.mu_goal
+        edges = {task.obj.edge_index(c.point) for c in cfg}
+        assert len(edges) == 2 and (max(edges) - min(edges)) in (1, 3)  # adjacent sides
+        corners.add(frozenset(edges))
+    assert len(corners) == 4  # every corner occurs
+
+
+def test_uniform_starts_on_a_disc():
+    t = Task("disc", Disc(0.05), Hand(0.16, 0.12), (CRM("a", "b", 0),), starts=UniformStarts())
+    cfg = t.sample_start(np.random.default_rng(1))
+    assert t.hand.feasible(t.obj, cfg) is Error.NONE
+
+
+def test_corner_starts_need_a_polygon():
+    t = Task("disc", Disc(0.05), Hand(0.16, 0.12), (CRM("a", "b", 0),), starts=CornerStarts())
+    with pytest.raises(CrmgraspError, match="polygon"):
+        t.sample_start(np.random.default_rng(0))
+
+
+def test_impossible_start_reports_cleanly():
+    t = Task("tiny", Disc(0.5), Hand(0.01, 0.12), (CRM("a", "b", 0),), starts=UniformStarts(max_tries=50))
+    with pytest.raises(CrmgraspError, match="no feasible uniform start"):
+        t.sample_start(np.random.default_rng(0))
+
+
+def test_registry_and_validation(task):
+    with pytest.raises(CrmgraspError, match="unknown task 'nope'; known tasks: paper-box"):
+        make_task("nope")
+    register_task("my-disc", lambda: Task("my-disc", Disc(0.05), Hand(0.16, 0.12), (CRM("a", "b", 0),)))
+    assert "my-disc" in task_names() and make_task("my-disc").name == "my-disc"
+    with pytest.raises(CrmgraspError, match="already registered"):
+        register_task("my-disc", lambda: task)
+    with pytest.raises(CrmgraspError, match="at least one CRM"):
+        Task("x", task.obj, task.hand, ())
+    with pytest.raises(CrmgraspError, match="beyond r_max"):
+        Task("x", task.obj, task.hand, (CRM("a", "a", 0.5),))
+    with pytest.raises(CrmgraspError, match="max_steps"):
+        Task("x", task.obj, task.hand, task.actions, max_steps=0)
+    with pytest.raises(CrmgraspError, match="Shape"):
+        Task("x", "box", task.hand, task.actions)
