@@ -51,6 +51,12 @@ def test_crm_with_noise_is_seeded(capsys):
         (["show", *NEAR, "--out", "x.txt"], ".png, .pdf or .svg"),
         (["reproduce", "figure99"], "unknown experiment 'figure99'"),
         (["frobnicate"], "invalid choice"),
+        (["learn", "--agent", "nope", "--out", "x"], "unknown agent 'nope'"),
+        (["learn", "--trials", "0", "--out", "x"], "trials must be"),
+        (["learn", "--alpha", "2", "--trials", "1", "--episodes", "1", "--out", "x"], "alpha must be in"),
+        (["learn", "--k", "-1", "--out", "x"], "--k must be >= 0"),
+        (["evaluate", "--policy", "missing.json"], "does not exist"),
+        (["evaluate", "--policy", "missing.json", "--episodes", "0"], "--episodes must be >= 1"),
     ],
 )
 def test_bad_input_is_one_line_exit_2(argv, msg, capsys, tmp_path, monkeypatch):
@@ -77,3 +83,65 @@ def test_installed_entry_point_help():
 def test_tasks_listing(capsys):
     assert main(["tasks"]) == 0
     assert "paper-box" in capsys.readouterr().out
+
+
+def test_learn_then_evaluate(tmp_path, capsys):
+    out = tmp_path / "run"
+    args = [
+        "learn",
+        "--agent",
+        "sarsa",
+        "--trials",
+        "2",
+        "--episodes",
+        "300",
+        "--eval-episodes",
+        "50",
+        "--seed",
+        "3",
+        "--out",
+        str(out),
+    ]
+    assert main(args) == 0
+    for name in ("curve.csv", "summary.json", "policy.json", "learning_curve.png"):
+        assert (out / name).exists()
+    summary = json.loads((out / "summary.json").read_text())
+    for key in (
+        "agent",
+        "task",
+        "trials",
+        "episodes",
+        "seed",
+        "final_mean_steps",
+        "greedy_mean_steps",
+        "episodes_to_5pct",
+    ):
+        assert key in summary
+    assert (out / "curve.csv").read_text().splitlines()[0] == "episode,mean_steps,sem_steps"
+    capsys.readouterr()
+    assert main(["evaluate", "--policy", str(out / "policy.json"), "--episodes", "100", "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["task"] == "paper-box" and 1.0 <= res["mean_steps"] <= 10.0
+    assert res["ci95"][0] <= res["mean_steps"] <= res["ci95"][1]
+    assert (
+        main(
+            [
+                "learn",
+                "--agent",
+                "dyna-q",
+                "--planning",
+                "sweep",
+                "--k",
+                "1",
+                "--trials",
+                "1",
+                "--episodes",
+                "20",
+                "--eval-episodes",
+                "10",
+                "--out",
+                str(tmp_path / "d"),
+            ]
+        )
+        == 0
+    )

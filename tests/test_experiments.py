@@ -6,7 +6,17 @@ import numpy as np
 
 from crmgrasp import Error, min_friction
 from crmgrasp.cli import main
-from crmgrasp.experiments import Figure4Config, figure_4_opposition_quality, reproduce
+from crmgrasp.experiments import (
+    Figure4Config,
+    Figure7Config,
+    Figure8Config,
+    Figure9Config,
+    figure_4_opposition_quality,
+    figure_7_learning_curve,
+    figure_8_strategies,
+    figure_9_robonaut_trials,
+    reproduce,
+)
 from crmgrasp.experiments.figure4 import long_side_start
 
 
@@ -45,11 +55,47 @@ def test_long_side_starts(task):
         assert out.error is Error.NONE and min_friction(out.config) == 0.0
 
 
+def test_figure7_small(tmp_path):
+    from crmgrasp.experiments.figure7 import PAPER_LEARNER
+    from crmgrasp.experiments.learning import LearnerSpec
+
+    cfg = Figure7Config(
+        trials=2,
+        episodes=40,
+        eval_episodes=20,
+        learners=(PAPER_LEARNER, LearnerSpec("random", 2, {}, "random")),
+        ablation_ks=(0, 2),
+    )
+    s = figure_7_learning_curve(tmp_path, cfg)
+    for name in ("curves.csv", "learners.csv", "figure7.png", "figure7_k_ablation.png", "policy.json", "config.json"):
+        assert (tmp_path / name).exists(), name
+    with open(tmp_path / "curves.csv") as fh:
+        rows = list(csv.reader(fh))
+    assert len(rows) == 41 and rows[0][:3] == ["episode", "SARSA k=2 (paper) mean", "SARSA k=2 (paper) sem"]
+    assert "sarsa_k0_greedy_mean_steps" in s
+    assert figure_7_learning_curve(tmp_path / "again", cfg) == s
+
+
+def test_figures_8_and_9(tmp_path):
+    s8 = figure_8_strategies(tmp_path / "f8", Figure8Config(train_trials=2, train_episodes=1500))
+    assert len(s8) == 3
+    assert (tmp_path / "f8" / "figure8.gif").read_bytes()[:6] == b"GIF89a"
+    assert (tmp_path / "f8" / "figure8.png").exists() and (tmp_path / "f8" / "rollouts.csv").exists()
+    s9 = figure_9_robonaut_trials(tmp_path / "f9", Figure9Config(train_trials=2, train_episodes=1500))
+    assert s9["trials"] == 11 and s9["successes"] >= 10
+    before, after = s9["centroid before CRM 1"], s9["centroid after last CRM"]
+    assert before[0] > 1.5 and after[0] < 0.2 and after[1] < 0.03  # rho ~2 -> ~0: separate clusters
+    assert figure_9_robonaut_trials(tmp_path / "f9b", Figure9Config(train_trials=2, train_episodes=1500)) == s9
+
+
 def test_reproduce_index_and_cli(tmp_path, capsys):
-    res = reproduce(tmp_path / "a", quick=True)
+    res = reproduce(tmp_path / "a", ["figure4"], quick=True)
     assert set(res) == {"figure4"}
     index = (tmp_path / "a" / "README.md").read_text()
-    assert "figure4/figure4.png" in index
+    assert "figure4/figure4.png" in index and "| figure | quantity | ours | paper |" in index
     assert main(["reproduce", "--quick", "--out", str(tmp_path / "b")]) == 0
     out = capsys.readouterr().out
-    assert "figure4:" in out and "index:" in out
+    for name in ("figure4:", "figure7:", "figure8:", "figure9:", "index:"):
+        assert name in out
+    index = (tmp_path / "b" / "README.md").read_text()
+    assert "figure9/figure9.png" in index and "1.8" in index

@@ -2,6 +2,7 @@
 
 from ._validation import CrmgraspError
 from .contacts import Config, Contact
+from .env import CRMGraspEnv, KOrderHistory  # registers crmgrasp/PaperBox-v0
 from .geometry import Disc, Polygon, Rectangle, regular_polygon
 from .hand import CRM, Hand, Outcome
 from .quality import force_closure, is_force_closure, min_friction
@@ -33,5 +34,7 @@ __all__ = [
     "make_task",
     "paper_box",
     "register_task",
+    "CRMGraspEnv",
+    "KOrderHistory",
     "__version__",
 ]

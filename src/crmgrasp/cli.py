@@ -127,8 +127,48 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
     p.add_argument("--quick", action="store_true", help="small budgets (under a minute on 2 cores)")
 
+    p = sub.add_parser(
+        "learn",
+        help="train a learner over independent trials",
+        description="Train a learner on a task; write curve.csv, summary.json, policy.json "
+        "and learning_curve.png to --out.",
+    )
+    p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
+    p.add_argument("--agent", default="sarsa", help="sarsa, q, sarsa-lambda, dyna-q, random or fixed")
+    p.add_argument("--k", type=int, default=2, help="history order of the state (default 2)")
+    p.add_argument("--trials", type=int, default=20, help="independent trials (default 20)")
+    p.add_argument("--episodes", type=int, default=2000, help="training episodes per trial (default 2000)")
+    p.add_argument("--eval-episodes", type=int, default=1000, help="greedy evaluation episodes per trial")
+    p.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
+    p.add_argument("--out", type=Path, required=True, help="output folder")
+    for flag, kind, text in _AGENT_FLAGS:
+        p.add_argument(flag, type=kind, default=None, help=text)
+
+    p = sub.add_parser(
+        "evaluate",
+        help="evaluate a saved policy",
+        description="Run a saved policy greedily on fresh episodes of its task.",
+    )
+    p.add_argument("--policy", type=Path, required=True, help="policy.json written by `crmgrasp learn`")
+    p.add_argument("--task", default=None, help="task name (default: the one the policy names)")
+    p.add_argument("--episodes", type=int, default=1000, help="episodes (default 1000)")
+    p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of text")
+
     sub.add_parser("tasks", help="list registered tasks", description="List the registered tasks.")
     return parser
+
+
+_AGENT_FLAGS = (
+    ("--alpha", _number, "learning rate (default 0.3)"),
+    ("--gamma", _number, "discount factor (default 0.9)"),
+    ("--epsilon", _number, "exploration probability (default 0: greedy)"),
+    ("--q0", _number, "initial Q value (default 0: optimistic)"),
+    ("--lam", _number, "sarsa-lambda: trace decay lambda (default 0.9)"),
+    ("--trace", str, "sarsa-lambda: replacing or accumulating"),
+    ("--n-planning", int, "dyna-q: planning updates (sample) or max sweeps (sweep) per step"),
+    ("--planning", str, "dyna-q: sample or sweep"),
+)
 
 
 def _scene(args: argparse.Namespace) -> tuple[Task, Config, CRM | None, SensorNoise, np.random.Generator]:
@@ -204,6 +244,73 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_learn(args: argparse.Namespace) -> int:
+    from .experiments.learning import LearnerSpec, learn, write_learn_outputs
+
+    task = make_task(args.task)
+    params = {
+        flag.lstrip("-").replace("-", "_"): getattr(args, flag.lstrip("-").replace("-", "_"))
+        for flag, _, _ in _AGENT_FLAGS
+    }
+    params = {k: v for k, v in params.items() if v is not None}
+    if args.k < 0:
+        raise CrmgraspError(f"--k must be >= 0, got {args.k}")
+    run = learn(
+        task,
+        LearnerSpec(args.agent, args.k, params),
+        trials=args.trials,
+        episodes=args.episodes,
+        seed=args.seed,
+        eval_episodes=args.eval_episodes,
+    )
+    paths = write_learn_outputs(task, run, args.out)
+    s = run.summary
+    print(f"{s['label']} on {task.name}: {s['trials']} trials x {s['episodes']} episodes in {s['seconds']} s")
+    print(
+        f"  final_mean_steps={s['final_mean_steps']:.3f}  greedy_mean_steps={s['greedy_mean_steps']:.3f}"
+        f"  episodes_to_5pct={s['episodes_to_5pct']}"
+    )
+    for path in paths:
+        print(f"  wrote {path.resolve()}")
+    return 0
+
+
+def _cmd_evaluate(args: argparse.Namespace) -> int:
+    from .agents import GreedyPolicy, evaluate
+
+    if args.episodes < 1:
+        raise CrmgraspError(f"--episodes must be >= 1, got {args.episodes}")
+    name = args.task
+    if name is None:
+        try:
+            doc = json.loads(args.policy.read_text(encoding="utf-8"))
+            name = doc["task"] if isinstance(doc, dict) and isinstance(doc.get("task"), str) else "paper-box"
+        except (OSError, ValueError):
+            name = "paper-box"  # GreedyPolicy.load reports the real problem
+    task = make_task(name)
+    policy = GreedyPolicy.load(args.policy, task)
+    steps, success = evaluate(task, policy, policy.encoder, args.episodes, np.random.default_rng(args.seed))
+    half = 1.96 * float(steps.std(ddof=1)) / math.sqrt(len(steps)) if len(steps) > 1 else 0.0
+    result = {
+        "task": task.name,
+        "policy": str(args.policy),
+        "episodes": args.episodes,
+        "seed": args.seed,
+        "mean_steps": float(steps.mean()),
+        "ci95": [float(steps.mean()) - half, float(steps.mean()) + half],
+        "success_rate": float(success.mean()),
+    }
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        print(
+            f"{args.policy} on {task.name}: {result['mean_steps']:.3f} CRMs per episode "
+            f"(95% CI {result['ci95'][0]:.3f}-{result['ci95'][1]:.3f}), success {result['success_rate']:.1%} "
+            f"over {args.episodes} episodes"
+        )
+    return 0
+
+
 def _cmd_tasks(args: argparse.Namespace) -> int:
     for name in task_names():
         print(f"{name}: {make_task(name).description}")
@@ -214,12 +321,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    handlers = {"crm": _cmd_crm, "show": _cmd_show, "reproduce": _cmd_reproduce, "tasks": _cmd_tasks}
+    handlers = {
+        "crm": _cmd_crm,
+        "show": _cmd_show,
+        "reproduce": _cmd_reproduce,
+        "tasks": _cmd_tasks,
+        "learn": _cmd_learn,
+        "evaluate": _cmd_evaluate,
+    }
     try:
         return handlers[args.command](args)
     except CrmgraspError as exc:
         print(f"crmgrasp {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # output piped into e.g. `head`
+        sys.stderr.close()
+        return 0
     except OSError as exc:
         print(
             f"crmgrasp {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), file=sys.stderr

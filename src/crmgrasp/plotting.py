@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 from matplotlib.axes import Axes
@@ -125,4 +126,117 @@ def friction_histogram(values: Sequence[float], failures: int, title: str) -> Fi
     ax.set_ylabel("grasps")
     note = f"n = {len(values)}" + (f", {failures} failed (no contact / error)" if failures else "")
     ax.set_title(f"{title}\n{note}", fontsize=10)
+    return fig
+
+
+def learning_curve_figure(
+    curves: dict[str, tuple[np.ndarray, np.ndarray]],
+    reference: float | None,
+    title: str,
+    *,
+    highlight: str | None = None,
+    paper: tuple[float, float] | None = None,
+    smooth: int = 10,
+) -> Figure:
+    """Mean CRMs per episode vs episode, one line per learner with a standard-error
+    band, the task's reference optimum as a dashed line, optionally the paper's
+    reported (episode, CRMs) point. Curves and bands are ``smooth``-episode moving
+    averages (plotted at the window's last episode); log-scaled episode axis."""
+    fig = Figure(figsize=(7.5, 4.5), layout="constrained")
+    ax = fig.add_subplot()
+    for name, (mean, sem) in curves.items():
+        if smooth > 1 and len(mean) >= smooth:
+            kernel = np.ones(smooth) / smooth
+            mean = np.convolve(mean, kernel, mode="valid")
+            sem = np.convolve(sem, kernel, mode="valid")
+        ep = np.arange(len(curves[name][0]) - len(mean) + 1, len(curves[name][0]) + 1)
+        lw = 2.2 if name == highlight else 1.2
+        (line,) = ax.plot(ep, mean, lw=lw, label=name)
+        ax.fill_between(ep, mean - sem, mean + sem, color=line.get_color(), alpha=0.2, lw=0)
+    if reference:
+        ax.axhline(reference, color="k", ls="--", lw=1, label=f"belief-space optimum {reference:g}")
+        ax.axhline(1.05 * reference, color="k", ls=":", lw=0.8, label="optimum + 5%")
+    if paper:
+        ax.plot(*paper, "k*", ms=12, label=f"paper: {paper[1]:g} CRMs at ~{paper[0]:g} episodes")
+    ax.set_xscale("log")
+    ax.set_xlabel("episode")
+    ax.set_ylabel(
+        f"CRMs per episode (mean over trials, {smooth}-episode moving average)"
+        if smooth > 1
+        else "CRMs per episode (mean over trials)"
+    )
+    ax.set_ylim(bottom=0)
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=7, loc="upper right")
+    return fig
+
+
+def rollout_panels(
+    obj: Shape, hand: Hand, rows: Sequence[tuple[str, Sequence[Any]]], action_names: Sequence[str]
+) -> Figure:
+    """One row per rollout, one panel per CRM: the configuration before it, the goal
+    line, the moving contact's path and the result (paper Fig. 8)."""
+    ncols = max(len(steps) for _, steps in rows)
+    fig = Figure(figsize=(3.6 * ncols, 3.2 * len(rows)), layout="constrained")
+    axes = fig.subplots(len(rows), ncols, squeeze=False)
+    for r, (label, steps) in enumerate(rows):
+        for c in range(ncols):
+            ax = axes[r][c]
+            if c >= len(steps):
+                ax.set_axis_off()
+                continue
+            st = steps[c]
+            title = f"{label}\n" if c == 0 else "\n"
+            title += f"CRM {c + 1}: {action_names[st.action]} -> {st.outcome.error.name.lower()}"
+            draw_scene(ax, obj, hand, st.config, st.outcome, title=title)
+            if st.outcome.error == 0 and st.min_friction == 0.0:
+                ax.text(0.02, 0.04, "grasp (min friction 0)", transform=ax.transAxes, fontsize=8, color="tab:green")
+    return fig
+
+
+def rollout_animation(obj: Shape, hand: Hand, steps: Sequence[Any], action_names: Sequence[str], path: Any) -> None:
+    """Animated GIF of one rollout: the moving contact travels each CRM's path."""
+    from matplotlib.animation import FuncAnimation, PillowWriter
+
+    frames: list[tuple[int, int]] = []
+    for i, st in enumerate(steps):
+        frames += [(i, j) for j in range(1, len(st.outcome.path) + 1)]
+    frames.append((len(steps) - 1, -1))
+    fig = Figure(figsize=(6, 4.5), layout="constrained")
+    ax = fig.add_subplot()
+
+    def draw(frame: tuple[int, int]) -> list[Any]:
+        i, j = frame
+        st = steps[i]
+        ax.clear()
+        title = f"CRM {i + 1}: {action_names[st.action]}"
+        if j == -1:
+            draw_scene(
+                ax, obj, hand, st.config, st.outcome, title=title + f" -> {st.outcome.error.name.lower()} (done)"
+            )
+            return []
+        partial = st.outcome._replace(
+            path=st.outcome.path[:j], error=1 if j < len(st.outcome.path) else st.outcome.error
+        )
+        draw_scene(ax, obj, hand, st.config, partial, title=title)
+        x, y = st.outcome.path[j - 1]
+        ax.plot(x, y, "o", color="tab:purple", ms=10, zorder=5)
+        return []
+
+    anim = FuncAnimation(fig, draw, frames=frames, blit=False)
+    anim.save(str(path), writer=PillowWriter(fps=2))
+
+
+def cluster_figure(groups: dict[str, np.ndarray], title: str, xlabel: str, ylabel: str) -> Figure:
+    """Scatter of labelled point groups (paper Fig. 9)."""
+    fig = Figure(figsize=(5.5, 4.5), layout="constrained")
+    ax = fig.add_subplot()
+    for (label, pts), marker in zip(groups.items(), "o^s*"):
+        pts = np.asarray(pts).reshape(-1, 2)
+        ax.scatter(pts[:, 0], pts[:, 1], marker=marker, s=45, label=f"{label} ({len(pts)})", alpha=0.8)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
     return fig

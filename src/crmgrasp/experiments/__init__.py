@@ -1,71 +1,146 @@
 """The paper's experiments, one function per figure, and the ``reproduce`` driver.
 
 Each experiment writes its data (CSV), figure (PNG) and the configuration it ran
-with (JSON) into its own folder; :func:`reproduce` runs them all into one output
-folder and writes an index ``README.md`` beside them.
+with (JSON) into its own folder; :func:`reproduce` runs them into one output
+folder and writes an index ``README.md`` that shows every figure and compares our
+numbers with the paper's.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 from .._io import atomic_write_text
 from .._validation import CrmgraspError
 from .figure4 import Figure4Config, figure_4_opposition_quality
+from .figure7 import Figure7Config, figure_7_learning_curve
+from .figure8 import Figure8Config, figure_8_strategies
+from .figure9 import Figure9Config, figure_9_robonaut_trials
 
-__all__ = ["EXPERIMENTS", "reproduce", "figure_4_opposition_quality", "Figure4Config"]
+__all__ = [
+    "EXPERIMENTS",
+    "reproduce",
+    "figure_4_opposition_quality",
+    "figure_7_learning_curve",
+    "figure_8_strategies",
+    "figure_9_robonaut_trials",
+    "Figure4Config",
+    "Figure7Config",
+    "Figure8Config",
+    "Figure9Config",
+]
+
+Row = tuple[str, object, str]
+Runner = Callable[[Path, int, bool, dict[str, Any]], tuple[dict[str, Any], list[Row]]]
 
 
-def _figure4(out: Path, seed: int, quick: bool) -> dict[str, object]:
-    return figure_4_opposition_quality(out, Figure4Config(seed=seed))
+def _figure4(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    s = figure_4_opposition_quality(out, Figure4Config(seed=seed))
+    return s, [
+        ("opposition grasps", f"{s['trials'] - s['failures']} of {s['trials']}", "30 of 30"),
+        (
+            "median / max min_friction",
+            f"{s['median_min_friction']:.3f} / {s['max_min_friction']:.3f}",
+            "histogram concentrated below ~0.1",
+        ),
+    ]
 
 
-EXPERIMENTS: dict[str, tuple[str, Callable[[Path, int, bool], dict[str, object]]]] = {
+def _figure7(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    cfg = Figure7Config(seed=seed)
+    if quick:
+        cfg = replace(cfg, trials=5, episodes=300, eval_episodes=200)
+    s = figure_7_learning_curve(out, cfg)
+    if not quick:
+        ctx["policy"] = str(out / "policy.json")
+    return s, [
+        ("paper SARSA: greedy CRMs per episode", s["paper_sarsa_greedy_mean_steps"], "1.8 (learning curve)"),
+        ("paper SARSA: final training CRMs per episode", s["paper_sarsa_final_mean_steps"], "1.8"),
+        (
+            "paper SARSA: episodes to within 5% of optimum",
+            s["paper_sarsa_episodes_to_5pct"],
+            "about 60 (to its own plateau)",
+        ),
+        ("best learner: episodes to within 5%", f"{s['best_episodes_to_5pct']} ({s['best_learner']})", "-"),
+        ("SARSA k=0 (memoryless) greedy CRMs", s["sarsa_k0_greedy_mean_steps"], "(not run; k = 2 used)"),
+    ]
+
+
+def _figure8(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    s = figure_8_strategies(out, Figure8Config(seed=seed, policy=ctx.get("policy")))
+    labels = list(s)
+    return s, [
+        (
+            "aliased near-corner starts",
+            f"{s[labels[0]]} | {s[labels[1]]}",
+            "oppose one contact; on failure oppose the other",
+        ),
+        ("long-side contact far from the corner", s[labels[2]], "move it toward the corner (C3/C4), then oppose it"),
+    ]
+
+
+def _figure9(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    s = figure_9_robonaut_trials(out, Figure9Config(seed=seed, policy=ctx.get("policy")))
+    return s, [
+        ("grasps / trials", f"{s['successes']} / {s['trials']}", "11 / 11"),
+        ("CRMs per trial", s["mean_crms"], "2"),
+        (
+            "cluster centroids (rho, |m|)",
+            "; ".join(str(v) for k, v in s.items() if k.startswith("centroid")),
+            "(0.7, 1.2); (0.5, 1.2); (~0, ~0) in the paper's units",
+        ),
+    ]
+
+
+EXPERIMENTS: dict[str, tuple[str, Runner]] = {
     "figure4": ("Fig. 4: min-friction histogram of 30 opposition CRMs under sensing noise", _figure4),
+    "figure7": ("Fig. 7: CRMs per episode vs episode, 20 trials, SARSA and the other learners", _figure7),
+    "figure8": ("Fig. 8: the learned strategies on aliased and far-from-corner starts", _figure8),
+    "figure9": ("Fig. 9: the learned policy, 11 noisy trials, in the (rho, moment) plane", _figure9),
 }
-"""Experiment name -> (description, runner(out_dir, seed, quick))."""
+"""Experiment name -> (description, runner(out_dir, seed, quick, context))."""
 
-PAPER_NUMBERS = {
-    "figure4": "histogram of 30 Robonaut grasps, most below 0.1 (read off the paper's Fig. 4)",
+IMAGES = {
+    "figure4": ["figure4.png"],
+    "figure7": ["figure7.png", "figure7_k_ablation.png"],
+    "figure8": ["figure8.png", "figure8.gif"],
+    "figure9": ["figure9.png"],
 }
 
 
 def reproduce(
     out_dir: str | Path, names: list[str] | None = None, *, seed: int = 0, quick: bool = False
-) -> dict[str, dict[str, object]]:
+) -> dict[str, dict[str, Any]]:
     """Run the named experiments (all by default) into ``out_dir/<name>/`` and write
-    ``out_dir/README.md`` indexing every figure with our numbers beside the paper's."""
+    ``out_dir/README.md`` with every figure and our numbers beside the paper's."""
     names = list(EXPERIMENTS) if not names else names
     unknown = [n for n in names if n not in EXPERIMENTS]
     if unknown:
         raise CrmgraspError(f"unknown experiment {unknown[0]!r}; known: {', '.join(EXPERIMENTS)}")
     out = Path(out_dir)
-    results: dict[str, dict[str, object]] = {}
-    lines = ["# crmgrasp reproduction", "", f"seed {seed}, quick={quick}", ""]
-    for name in names:
+    results: dict[str, dict[str, Any]] = {}
+    ctx: dict[str, Any] = {}
+    lines = [
+        "# crmgrasp reproduction",
+        "",
+        f"seed {seed}, quick={quick}. Regenerate with `crmgrasp reproduce{' --quick' if quick else ''} --seed {seed}`.",
+        "",
+        "| figure | quantity | ours | paper |",
+        "| --- | --- | --- | --- |",
+    ]
+    body: list[str] = []
+    for name in sorted(names, key=list(EXPERIMENTS).index):
         desc, run = EXPERIMENTS[name]
         t0 = time.perf_counter()
-        summary = run(out / name, seed, quick)
+        summary, rows = run(out / name, seed, quick, ctx)
         summary["seconds"] = round(time.perf_counter() - t0, 3)
         results[name] = summary
-        lines += [
-            f"## {name}",
-            "",
-            desc,
-            "",
-            f"![{name}]({name}/{name}.png)",
-            "",
-            "| quantity | ours | paper |",
-            "| --- | --- | --- |",
-        ]
-        lines += [f"| {k} | {v} | |" for k, v in summary.items()]
-        lines += [
-            f"| (paper) | | {PAPER_NUMBERS.get(name, '')} |",
-            "",
-            f"Files: `{name}/data.csv`, `{name}/{name}.png`, `{name}/config.json`.",
-            "",
-        ]
-    atomic_write_text(out / "README.md", "\n".join(lines))
+        lines += [f"| {name} | {q} | {ours} | {paper} |" for q, ours, paper in rows]
+        body += [f"## {name}", "", desc, ""] + [f"![{name}]({name}/{img})" for img in IMAGES[name]]
+        body += ["", f"Data and config: `{name}/` ({summary['seconds']} s).", ""]
+    atomic_write_text(out / "README.md", "\n".join([*lines, "", *body]))
     return results

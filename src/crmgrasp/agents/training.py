@@ -1,0 +1,228 @@
+"""Training and evaluation loops on the pure task dynamics (:mod:`crmgrasp.sim`).
+
+Seeding: a run's seed feeds a :class:`numpy.random.SeedSequence`; trial ``i`` gets
+child ``i``, which spawns three generators: the environment's (starts and sensing),
+the agent's (tie-breaking, exploration, planning) and the evaluation's. With the
+environment stream separate, every learner sees the same start sequence for the
+same seed (common random numbers).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from .._validation import CrmgraspError
+from ..contacts import Config
+from ..hand import Outcome
+from ..history import KOrderEncoder
+from ..sensing import Error, Observation, observe
+from ..sim import SimState, reset, step
+from ..tasks import Task
+from .base import Agent
+from .baselines import FixedSequence, RandomAgent
+from .tabular import DynaQ, QLearning, Sarsa, SarsaLambda
+
+__all__ = [
+    "AGENTS",
+    "make_agent",
+    "encoder_for",
+    "run_episode",
+    "evaluate",
+    "trial_generators",
+    "TrialResult",
+    "train_trials",
+    "episodes_to_within",
+    "RolloutStep",
+    "rollout",
+]
+
+AGENTS: dict[str, Callable[..., Agent]] = {
+    "sarsa": Sarsa,
+    "q": QLearning,
+    "sarsa-lambda": SarsaLambda,
+    "dyna-q": DynaQ,
+    "random": RandomAgent,
+    "fixed": FixedSequence,
+}
+"""Agent name -> constructor ``(n_actions, **params)``."""
+
+
+def make_agent(name: str, n_actions: int, **params: object) -> Agent:
+    """Build a registered agent; unknown names or parameters give a one-line error."""
+    try:
+        cls = AGENTS[name]
+    except KeyError:
+        raise CrmgraspError(f"unknown agent {name!r}; known agents: {', '.join(AGENTS)}") from None
+    try:
+        return cls(n_actions, **params)
+    except TypeError as exc:
+        raise CrmgraspError(f"bad parameter for agent {name!r}: {exc}") from None
+
+
+def encoder_for(task: Task, k: int) -> KOrderEncoder:
+    """The k-order encoder of a task's discretized observations and actions."""
+    return KOrderEncoder(task.discretizer.size, len(task.actions), k)
+
+
+def run_episode(
+    task: Task,
+    agent: Agent,
+    encoder: KOrderEncoder,
+    env_rng: np.random.Generator,
+    agent_rng: np.random.Generator,
+    *,
+    learn: bool = True,
+) -> tuple[int, bool]:
+    """One episode; returns (CRMs executed, success). ``learn=False`` acts greedily
+    and does not update."""
+    state, _, index = reset(task, env_rng)
+    hist = encoder.start(index)
+    s = encoder.encode(hist)
+    agent.begin_episode()
+    pick = agent.act if learn else agent.greedy
+    a = pick(s, agent_rng)
+    while True:
+        res = step(task, state, a, env_rng)
+        hist = encoder.push(hist, a, res.obs_index)
+        s2 = encoder.encode(hist)
+        if res.terminated:
+            if learn:
+                agent.update(s, a, res.reward, s2, None, True, agent_rng)
+            return res.state.steps, True
+        a2 = pick(s2, agent_rng)
+        if learn:
+            agent.update(s, a, res.reward, s2, a2, False, agent_rng)
+        if res.truncated:
+            return res.state.steps, False
+        s, a, state = s2, a2, res.state
+
+
+def evaluate(
+    task: Task, agent: Agent, encoder: KOrderEncoder, episodes: int, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
+    """Greedy evaluation: CRMs per episode and success flags over ``episodes`` fresh starts."""
+    steps = np.empty(episodes, dtype=np.int64)
+    success = np.empty(episodes, dtype=bool)
+    for i in range(episodes):
+        steps[i], success[i] = run_episode(task, agent, encoder, rng, rng, learn=False)
+    return steps, success
+
+
+def trial_generators(seed: int, trials: int) -> list[tuple[np.random.Generator, ...]]:
+    """``(env, agent, eval)`` generators of each trial, from one seed."""
+    children = np.random.SeedSequence(seed).spawn(trials)
+    return [tuple(np.random.default_rng(s) for s in child.spawn(3)) for child in children]
+
+
+@dataclass
+class TrialResult:
+    """Learning curves ``(trials, episodes)``, greedy evaluation, and the trained agents."""
+
+    steps: np.ndarray
+    success: np.ndarray
+    greedy_steps: np.ndarray
+    greedy_success: np.ndarray
+    agents: list[Agent]
+
+    @property
+    def curve(self) -> np.ndarray:
+        """Mean CRMs per episode over trials."""
+        return self.steps.mean(axis=0)
+
+    @property
+    def sem(self) -> np.ndarray:
+        """Standard error of the mean over trials (0 for a single trial)."""
+        n = self.steps.shape[0]
+        return self.steps.std(axis=0, ddof=1) / np.sqrt(n) if n > 1 else np.zeros(self.steps.shape[1])
+
+
+def train_trials(
+    task: Task,
+    agent: str,
+    *,
+    trials: int,
+    episodes: int,
+    seed: int,
+    k: int = 2,
+    eval_episodes: int = 1000,
+    params: dict[str, object] | None = None,
+) -> TrialResult:
+    """Train ``trials`` independent agents for ``episodes`` each, then evaluate each
+    greedily on ``eval_episodes`` fresh episodes."""
+    for name, v in (("trials", trials), ("episodes", episodes)):
+        if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+            raise CrmgraspError(f"{name} must be an integer >= 1, got {v!r}")
+    if isinstance(eval_episodes, bool) or not isinstance(eval_episodes, int) or eval_episodes < 0:
+        raise CrmgraspError(f"eval_episodes must be an integer >= 0, got {eval_episodes!r}")
+    encoder = encoder_for(task, k)
+    steps = np.empty((trials, episodes), dtype=np.int64)
+    success = np.empty((trials, episodes), dtype=bool)
+    gsteps = np.empty((trials, eval_episodes), dtype=np.int64)
+    gsucc = np.empty((trials, eval_episodes), dtype=bool)
+    agents = []
+    for t, (env_rng, agent_rng, eval_rng) in enumerate(trial_generators(seed, trials)):
+        ag = make_agent(agent, len(task.actions), **(params or {}))
+        for e in range(episodes):
+            steps[t, e], success[t, e] = run_episode(task, ag, encoder, env_rng, agent_rng)
+        gsteps[t], gsucc[t] = evaluate(task, ag, encoder, eval_episodes, eval_rng)
+        agents.append(ag)
+    return TrialResult(steps, success, gsteps, gsucc, agents)
+
+
+def episodes_to_within(curve: np.ndarray, reference: float, factor: float = 1.05, window: int = 10) -> int | None:
+    """First episode (1-based) after which the ``window``-episode moving average of
+    ``curve`` stays at or below ``factor * reference``; ``None`` if it never does.
+
+    The moving average at episode ``e`` covers episodes ``e - window + 1 .. e``.
+
+    Examples
+    --------
+    >>> episodes_to_within(np.array([5.0] * 20 + [1.0] * 30), 1.0, window=10)
+    30
+    """
+    if len(curve) < window:
+        return None
+    ma = np.convolve(curve, np.ones(window) / window, mode="valid")  # ma[j] ends at episode j + window
+    ok = ma <= factor * reference + 1e-12
+    if not ok[-1]:
+        return None
+    bad = np.flatnonzero(~ok)
+    first = 0 if len(bad) == 0 else bad[-1] + 1
+    return int(first + window)
+
+
+class RolloutStep(NamedTuple):
+    """One CRM of a rollout: the configuration and observation before it, the action,
+    its outcome, and the observation after it."""
+
+    config: Config
+    observation: Observation
+    action: int
+    outcome: Outcome
+    next_observation: Observation
+    obs_index: int
+    min_friction: float
+
+
+def rollout(
+    task: Task, agent: Agent, encoder: KOrderEncoder, start: Config, rng: np.random.Generator
+) -> tuple[list[RolloutStep], bool]:
+    """Run the agent's greedy policy from ``start``; returns the steps and success."""
+    sensed = task.noise.sense(start, rng)
+    state = SimState(start, sensed, 0)
+    obs = observe(sensed)
+    hist = encoder.start(task.discretizer.index(obs, Error.NONE))
+    agent.begin_episode()
+    steps: list[RolloutStep] = []
+    while True:
+        a = agent.greedy(encoder.encode(hist), rng)
+        res = step(task, state, a, rng)
+        steps.append(RolloutStep(state.config, obs, a, res.outcome, res.observation, res.obs_index, res.min_friction))
+        hist = encoder.push(hist, a, res.obs_index)
+        state, obs = res.state, res.observation
+        if res.terminated or res.truncated:
+            return steps, res.terminated

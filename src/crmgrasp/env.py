@@ -1,0 +1,193 @@
+"""Gymnasium environments: ``CRMGraspEnv`` for any task, and the k-order history wrapper.
+
+``crmgrasp/PaperBox-v0`` is registered with :func:`gymnasium.register` when
+``crmgrasp`` is imported.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from ._validation import CrmgraspError
+from .hand import Outcome
+from .history import KOrderEncoder
+from .plotting import scene_figure
+from .quality import min_friction
+from .sensing import Error, observe
+from .sim import SimState, reset, step
+from .tasks import Task, make_task
+
+__all__ = ["CRMGraspEnv", "KOrderHistory", "ENV_ID"]
+
+ENV_ID = "crmgrasp/PaperBox-v0"
+
+
+class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
+    """A two-contact hand grasping an unseen planar object by CRMs (Platt).
+
+    ## Description
+    The hand starts touching the object (the task's start sampler) and may only
+    execute the task's CRMs. After each CRM it senses force-derived quantities and
+    an error flag. The goal is a grasp in as few CRMs as possible.
+
+    ## Action Space
+    ``Discrete(len(task.actions))``: action ``i`` executes ``task.actions[i]``. For
+    paper-box: 0 = C1 (a,b,0), 1 = C2 (b,a,0), 2 = C3 (a,a,+0.08), 3 = C4 (b,b,-0.08).
+
+    ## Observation Space
+    A ``Dict``, computed from the sensed contacts (SPEC section 4):
+
+    | key | meaning | min | max |
+    | --- | --- | --- | --- |
+    | ``rho`` | squared frictionless force residual ``|n_a + n_b|^2`` | 0 | 4 |
+    | ``m_a`` | frictionless moment about contact a, m | -2A | 2A |
+    | ``m_b`` | frictionless moment about contact b, m | -2A | 2A |
+    | ``error`` | error of the last CRM: 0 none, 1 aperture, 2 palm | 0 | 2 |
+
+    (A is the hand aperture; sensed values are clipped into the box.) ``info``
+    carries ``obs_index`` (the task's discretized observation, 24 values for
+    paper-box), ``config`` (the true configuration), ``min_friction`` and ``steps``.
+
+    ## Rewards
+    -1 per CRM.
+
+    ## Starting State
+    Drawn by the task's sampler from ``self.np_random`` (paper-box: a random corner,
+    one contact uniform on each side meeting there, a fair coin for the labels,
+    resampled until feasible and not a grasp).
+
+    ## Episode End
+    ``terminated`` when the true configuration is a grasp (``min_friction <=
+    mu_goal``, 0.05 for paper-box); ``truncated`` after ``task.max_steps`` CRMs (10).
+
+    ## Arguments
+    ``task``: a :class:`~crmgrasp.tasks.Task` or a registered task name;
+    ``render_mode``: ``None`` or ``"rgb_array"``.
+
+    ## Version History
+    * v0: initial version (SPEC sections 1-7).
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 2}
+
+    def __init__(self, task: Task | str = "paper-box", render_mode: str | None = None) -> None:
+        self.task = make_task(task) if isinstance(task, str) else task
+        if not isinstance(self.task, Task):
+            raise CrmgraspError(f"task must be a Task or a registered name, got {task!r}")
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise CrmgraspError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        self.render_mode = render_mode
+        self.action_space = spaces.Discrete(len(self.task.actions))
+        m = 2.0 * self.task.hand.aperture
+        self._m_bound = m
+        self.observation_space = spaces.Dict(
+            {
+                "rho": spaces.Box(0.0, 4.0, shape=(1,), dtype=np.float64),
+                "m_a": spaces.Box(-m, m, shape=(1,), dtype=np.float64),
+                "m_b": spaces.Box(-m, m, shape=(1,), dtype=np.float64),
+                "error": spaces.Discrete(len(Error)),
+            }
+        )
+        self._state: SimState | None = None
+        self._last: tuple[SimState, Outcome] | None = None
+
+    def _obs(self, rho: float, m_a: float, m_b: float, error: Error) -> dict[str, Any]:
+        b = self._m_bound
+        return {
+            "rho": np.array([min(max(rho, 0.0), 4.0)]),
+            "m_a": np.array([min(max(m_a, -b), b)]),
+            "m_b": np.array([min(max(m_b, -b), b)]),
+            "error": int(error),
+        }
+
+    def _info(self, obs_index: int, mu: float) -> dict[str, Any]:
+        assert self._state is not None
+        return {"obs_index": obs_index, "config": self._state.config, "min_friction": mu, "steps": self._state.steps}
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, Any], dict[str, Any]]:
+        """Start an episode. ``options={"config": Config}`` starts from a given configuration."""
+        super().reset(seed=seed)
+        if options and "config" in options:
+            cfg = options["config"]
+            sensed = self.task.noise.sense(cfg, self.np_random)
+            self._state = SimState(cfg, sensed, 0)
+            obs = observe(sensed)
+            index = self.task.discretizer.index(obs, Error.NONE)
+        else:
+            self._state, obs, index = reset(self.task, self.np_random)
+        self._last = None
+        return self._obs(*obs, Error.NONE), self._info(index, min_friction(self._state.config))
+
+    def step(self, action: Any) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
+        """Execute the CRM ``task.actions[action]``."""
+        if self._state is None:
+            raise CrmgraspError("call reset() before step()")
+        if not self.action_space.contains(action):
+            raise CrmgraspError(f"action must be an integer in [0, {self.action_space.n}), got {action!r}")
+        res = step(self.task, self._state, int(action), self.np_random)
+        self._last = (self._state, res.outcome)
+        self._state = res.state
+        obs = self._obs(*res.observation, res.error)
+        return obs, res.reward, res.terminated, res.truncated, self._info(res.obs_index, res.min_friction)
+
+    def render(self) -> np.ndarray | None:  # type: ignore[override]
+        """An RGB image of the scene (``render_mode="rgb_array"``), else ``None``."""
+        if self.render_mode != "rgb_array" or self._state is None:
+            return None
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+        title = f"{self.task.name}: after {self._state.steps} CRMs"
+        if self._last is None:
+            fig = scene_figure(self.task.obj, self.task.hand, self._state.config, None, title)
+        else:
+            prev, outcome = self._last
+            fig = scene_figure(
+                self.task.obj, self.task.hand, prev.config, outcome, f"{title} ({outcome.error.name.lower()})"
+            )
+        canvas = FigureCanvasAgg(fig)
+        canvas.draw()
+        return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
+
+
+class KOrderHistory(gym.Wrapper[int, np.int64, dict[str, Any], np.int64]):
+    """Replace the observation by the k-order history state of SPEC section 6.
+
+    The observation becomes ``Discrete(encoder.size)``: the integer code of
+    ``(o_t, a_{t-1}, o_{t-1}, ..., a_{t-k})`` over the task's discretized
+    observations (``info["obs_index"]``), padded at the episode start. ``k = 0``
+    is the current discretized observation alone.
+    """
+
+    def __init__(self, env: gym.Env, k: int = 2) -> None:
+        super().__init__(env)
+        task = env.unwrapped.task  # type: ignore[attr-defined]
+        self.encoder = KOrderEncoder(task.discretizer.size, len(task.actions), k)
+        self.observation_space = spaces.Discrete(self.encoder.size)
+        self._history: tuple[int, ...] = ()
+
+    def reset(self, **kwargs: Any) -> tuple[int, dict[str, Any]]:  # type: ignore[override]
+        _, info = self.env.reset(**kwargs)
+        self._history = self.encoder.start(info["obs_index"])
+        info["history"] = self._history
+        return self.encoder.encode(self._history), info
+
+    def step(self, action: Any) -> tuple[int, float, bool, bool, dict[str, Any]]:  # type: ignore[override]
+        _, reward, terminated, truncated, info = self.env.step(action)
+        self._history = self.encoder.push(self._history, int(action), info["obs_index"])
+        info["history"] = self._history
+        return self.encoder.encode(self._history), float(reward), terminated, truncated, info
+
+
+def register() -> None:
+    """Register ``crmgrasp/PaperBox-v0`` (idempotent)."""
+    if ENV_ID not in gym.registry:
+        gym.register(id=ENV_ID, entry_point="crmgrasp.env:CRMGraspEnv", kwargs={"task": "paper-box"})
+
+
+register()

@@ -1,0 +1,20 @@
+"""The learned policy that Figures 8 and 9 execute."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..agents import GreedyPolicy
+from ..tasks import Task
+from .learning import LearnerSpec, best_policy, learn
+
+
+def learned_policy(task: Task, policy_path: str | Path | None, seed: int, trials: int, episodes: int) -> GreedyPolicy:
+    """Load ``policy_path`` if given, else train the paper's SARSA (``trials`` trials of
+    ``episodes`` episodes from ``seed``) and take the best trial's greedy policy."""
+    if policy_path is not None:
+        return GreedyPolicy.load(policy_path, task)
+    run = learn(task, LearnerSpec("sarsa", 2), trials=trials, episodes=episodes, seed=seed, eval_episodes=200)
+    policy = best_policy(task, run)
+    assert policy is not None
+    return policy

@@ -1,0 +1,124 @@
+"""Paper Figure 7: mean CRMs per episode versus episode, averaged over trials.
+
+The paper's SARSA (k = 2, alpha 0.3, gamma 0.9, Q0 = 0, greedy) with a standard
+error band, and on the same axes the other learners: Q-learning, SARSA(lambda),
+Dyna-Q with sampled planning, Dyna-Q with value-iteration sweeps (k = 1), and the
+random and fixed-sequence baselines. Every trial's final greedy policy is then
+evaluated on fresh episodes. A second panel is the history-order ablation
+(SARSA with k = 0, 1, 2, 3): memoryless policies cannot resolve the aliasing.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from .._io import save_figure, write_csv, write_json
+from ..plotting import learning_curve_figure
+from ..tasks import make_task
+from .learning import LearnerSpec, LearnRun, best_policy, learn
+
+__all__ = ["Figure7Config", "figure_7_learning_curve", "DEFAULT_LEARNERS", "PAPER_LEARNER"]
+
+PAPER_LEARNER = LearnerSpec("sarsa", 2, {}, "SARSA k=2 (paper)")
+
+DEFAULT_LEARNERS: tuple[LearnerSpec, ...] = (
+    PAPER_LEARNER,
+    LearnerSpec("q", 2, {}, "Q-learning k=2"),
+    LearnerSpec("sarsa-lambda", 2, {"lam": 0.9, "trace": "replacing"}, "SARSA(0.9) k=2"),
+    LearnerSpec("dyna-q", 2, {"n_planning": 20}, "Dyna-Q k=2 (20 samples)"),
+    LearnerSpec("dyna-q", 1, {"planning": "sweep", "n_planning": 50}, "Dyna-Q k=1 (VI sweeps)"),
+    LearnerSpec("fixed", 2, {}, "fixed sequence"),
+    LearnerSpec("random", 2, {}, "random"),
+)
+
+
+@dataclass(frozen=True)
+class Figure7Config:
+    """Parameters of Figure 7."""
+
+    task: str = "paper-box"
+    trials: int = 20
+    """Independent trials per learner (the paper: 20)."""
+    episodes: int = 2000
+    """Training episodes per trial."""
+    eval_episodes: int = 1000
+    """Greedy evaluation episodes per trial."""
+    seed: int = 0
+    learners: tuple[LearnerSpec, ...] = DEFAULT_LEARNERS
+    ablation_ks: tuple[int, ...] = (0, 1, 2, 3)
+    """History orders of the SARSA ablation."""
+
+
+def figure_7_learning_curve(out_dir: str | Path, config: Figure7Config = Figure7Config()) -> dict[str, Any]:
+    """Run every learner; write ``curves.csv``, ``learners.csv``, ``figure7.png``,
+    ``figure7_k_ablation.png``, ``policy.json`` (the paper SARSA's best trial) and
+    ``config.json``."""
+    task = make_task(config.task)
+    out = Path(out_dir)
+    kw = dict(trials=config.trials, episodes=config.episodes, seed=config.seed, eval_episodes=config.eval_episodes)
+    runs: list[LearnRun] = [learn(task, spec, **kw) for spec in config.learners]
+    ablation = [learn(task, LearnerSpec("sarsa", k, {}, f"SARSA k={k}"), **kw) for k in config.ablation_ks]
+    everything = runs + [r for r in ablation if r.spec.k not in {s.k for s in config.learners if s.agent == "sarsa"}]
+
+    header = ["episode"] + [f"{r.spec.name} {q}" for r in everything for q in ("mean", "sem")]
+    rows = (
+        [e + 1] + [float(v) for r in everything for v in (r.result.curve[e], r.result.sem[e])]
+        for e in range(config.episodes)
+    )
+    write_csv(out / "curves.csv", header, rows)
+    cols = [
+        "label",
+        "agent",
+        "k",
+        "final_mean_steps",
+        "greedy_mean_steps",
+        "greedy_sem_steps",
+        "greedy_success_rate",
+        "episodes_to_5pct",
+        "seconds",
+    ]
+    write_csv(out / "learners.csv", cols, ([r.summary[c] for c in cols] for r in everything))
+
+    ref = task.reference_mean_steps
+    paper_name = runs[0].spec.name
+    fig = learning_curve_figure(
+        {r.spec.name: (r.result.curve, r.result.sem) for r in runs},
+        ref,
+        f"{task.name}: CRMs per episode, mean of {config.trials} trials (paper Fig. 7)",
+        highlight=paper_name,
+        paper=(60.0, 1.8),
+    )
+    save_figure(fig, out / "figure7.png", dpi=120)
+    fig = learning_curve_figure(
+        {r.spec.name: (r.result.curve, r.result.sem) for r in ablation},
+        ref,
+        f"History order ablation (SARSA, {config.trials} trials)",
+    )
+    save_figure(fig, out / "figure7_k_ablation.png", dpi=120)
+    policy = best_policy(task, runs[0])
+    if policy is not None:
+        policy.save(out / "policy.json")
+
+    summary: dict[str, Any] = {
+        "paper_sarsa_greedy_mean_steps": round(runs[0].summary["greedy_mean_steps"], 3),
+        "paper_sarsa_final_mean_steps": round(runs[0].summary["final_mean_steps"], 3),
+        "paper_sarsa_episodes_to_5pct": runs[0].summary["episodes_to_5pct"],
+    }
+    best = min(everything, key=lambda r: r.summary["episodes_to_5pct"] or float("inf"))
+    summary["best_learner"] = best.spec.name
+    summary["best_episodes_to_5pct"] = best.summary["episodes_to_5pct"]
+    summary["best_greedy_mean_steps"] = round(best.summary["greedy_mean_steps"], 3)
+    for r in ablation:
+        summary[f"sarsa_k{r.spec.k}_greedy_mean_steps"] = round(r.summary["greedy_mean_steps"], 3)
+    write_json(
+        out / "config.json",
+        {
+            "experiment": "figure7",
+            "config": {**asdict(config), "learners": [asdict(s) for s in config.learners]},
+            "learners": [r.summary for r in everything],
+            "summary": summary,
+        },
+    )
+    return summary

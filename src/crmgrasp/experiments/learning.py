@@ -1,0 +1,131 @@
+"""One learning run (a learner on a task over many trials) and its files.
+
+Used by ``crmgrasp learn`` and by Figure 7. Files written to the output folder:
+
+* ``curve.csv``: ``episode,mean_steps,sem_steps`` (CRMs per training episode,
+  mean and standard error over trials);
+* ``summary.json``: agent, task, k, parameters, trials, episodes, seed,
+  ``final_mean_steps`` (mean of the last 10 points of the curve),
+  ``greedy_mean_steps`` (greedy evaluation on ``eval_episodes`` fresh episodes,
+  averaged over trials), ``greedy_success_rate``, ``episodes_to_5pct`` (first
+  episode after which the 10-episode moving average stays at or below 1.05 x the
+  task's ``reference_mean_steps``), wall time;
+* ``policy.json``: the greedy policy of the trial with the best greedy score;
+* ``learning_curve.png``.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._io import save_figure, write_csv, write_json
+from ..agents import GreedyPolicy, TabularAgent, episodes_to_within, train_trials
+from ..agents.training import TrialResult
+from ..tasks import Task
+
+__all__ = ["LearnerSpec", "LearnRun", "learn", "write_learn_outputs"]
+
+
+@dataclass(frozen=True)
+class LearnerSpec:
+    """A learner to run: registered agent name, history order and parameters."""
+
+    agent: str
+    k: int = 2
+    params: dict[str, Any] = field(default_factory=dict)
+    label: str = ""
+
+    @property
+    def name(self) -> str:
+        """Display name (``label`` or ``agent k=K``)."""
+        return self.label or f"{self.agent} k={self.k}"
+
+
+@dataclass
+class LearnRun:
+    """A finished learning run."""
+
+    spec: LearnerSpec
+    result: TrialResult
+    summary: dict[str, Any]
+
+
+def learn(
+    task: Task, spec: LearnerSpec, *, trials: int, episodes: int, seed: int, eval_episodes: int = 1000
+) -> LearnRun:
+    """Train ``trials`` independent agents and summarise them."""
+    t0 = time.perf_counter()
+    res = train_trials(
+        task,
+        spec.agent,
+        trials=trials,
+        episodes=episodes,
+        seed=seed,
+        k=spec.k,
+        eval_episodes=eval_episodes,
+        params=spec.params,
+    )
+    curve = res.curve
+    ref = task.reference_mean_steps
+    per_trial = res.greedy_steps.mean(axis=1) if eval_episodes else np.full(trials, np.nan)
+    params = getattr(res.agents[0], "params", lambda: {})()
+    summary = {
+        "agent": spec.agent,
+        "label": spec.name,
+        "task": task.name,
+        "k": spec.k,
+        "params": params,
+        "trials": trials,
+        "episodes": episodes,
+        "seed": seed,
+        "eval_episodes": eval_episodes,
+        "final_mean_steps": float(curve[-10:].mean()),
+        "greedy_mean_steps": float(per_trial.mean()),
+        "greedy_sem_steps": float(per_trial.std(ddof=1) / np.sqrt(trials)) if trials > 1 else 0.0,
+        "greedy_success_rate": float(res.greedy_success.mean()) if eval_episodes else float("nan"),
+        "reference_mean_steps": ref,
+        "episodes_to_5pct": episodes_to_within(curve, ref) if ref else None,
+        "seconds": round(time.perf_counter() - t0, 3),
+    }
+    return LearnRun(spec, res, summary)
+
+
+def best_policy(task: Task, run: LearnRun) -> GreedyPolicy | None:
+    """Greedy policy of the trial with the lowest greedy mean (tabular agents only)."""
+    agents = run.result.agents
+    if not isinstance(agents[0], TabularAgent):
+        return None
+    best = int(np.argmin(run.result.greedy_steps.mean(axis=1))) if run.result.greedy_steps.size else 0
+    return GreedyPolicy.from_agent(task, run.spec.k, agents[best])  # type: ignore[arg-type]
+
+
+def write_learn_outputs(task: Task, run: LearnRun, out_dir: str | Path) -> list[Path]:
+    """Write ``curve.csv``, ``summary.json``, ``policy.json`` (tabular learners) and
+    ``learning_curve.png``; return the paths."""
+    from ..plotting import learning_curve_figure
+
+    out = Path(out_dir)
+    res = run.result
+    paths = [
+        write_csv(
+            out / "curve.csv",
+            ["episode", "mean_steps", "sem_steps"],
+            ([e + 1, float(m), float(s)] for e, (m, s) in enumerate(zip(res.curve, res.sem))),
+        ),
+        write_json(out / "summary.json", run.summary),
+    ]
+    policy = best_policy(task, run)
+    if policy is not None:
+        paths.append(policy.save(out / "policy.json"))
+    fig = learning_curve_figure(
+        {run.spec.name: (res.curve, res.sem)},
+        task.reference_mean_steps,
+        f"{run.spec.name} on {task.name}, {run.summary['trials']} trials",
+    )
+    paths.append(save_figure(fig, out / "learning_curve.png", dpi=120))
+    return paths

@@ -1,0 +1,115 @@
+"""k-order internal state (paper Eq. 5, SPEC section 6).
+
+``s_t = (o_t, a_{t-1}, o_{t-1}, ..., o_{t-k+1}, a_{t-k})``: the current discretized
+observation, the last ``k`` actions and the ``k - 1`` observations between them.
+History missing at the episode start takes a distinct padding value
+(``n_actions`` for actions, ``n_obs`` for observations).
+
+The integer code is mixed-radix, current observation most significant:
+``code = (((o_t * (nA+1) + a_{t-1}) * (nO+1) + o_{t-1}) * (nA+1) + a_{t-2}) ...``.
+Of the ``size`` codes, ``n_obs * n_actions**k * n_obs**(k-1)`` have no padding.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ._validation import CrmgraspError
+
+__all__ = ["KOrderEncoder"]
+
+History = tuple[int, ...]
+
+
+@dataclass(frozen=True)
+class KOrderEncoder:
+    """Encode k-order histories of discrete observations and actions as integers.
+
+    Examples
+    --------
+    >>> enc = KOrderEncoder(n_obs=24, n_actions=4, k=2)
+    >>> enc.size, enc.unpadded_size
+    (15000, 9216)
+    >>> h = enc.start(5)                     # (o_0, pad, pad, pad)
+    >>> h
+    (5, 4, 24, 4)
+    >>> h = enc.push(h, 2, 17)               # took action 2, observed 17
+    >>> h
+    (17, 2, 5, 4)
+    >>> enc.decode(enc.encode(h)) == h
+    True
+    """
+
+    n_obs: int
+    n_actions: int
+    k: int
+
+    def __post_init__(self) -> None:
+        for name in ("n_obs", "n_actions", "k"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < (0 if name == "k" else 1):
+                raise CrmgraspError(f"{name} must be an integer >= {0 if name == 'k' else 1}, got {v!r}")
+
+    @property
+    def radices(self) -> tuple[int, ...]:
+        """Radix of each history slot, most significant first."""
+        out = [self.n_obs]
+        for i in range(self.k):
+            out.append(self.n_actions + 1)
+            if i < self.k - 1:
+                out.append(self.n_obs + 1)
+        return tuple(out)
+
+    @property
+    def size(self) -> int:
+        """Number of codes, padded histories included."""
+        n = 1
+        for r in self.radices:
+            n *= r
+        return n
+
+    @property
+    def unpadded_size(self) -> int:
+        """Number of conceivable histories without padding."""
+        return self.n_obs * self.n_actions**self.k * self.n_obs ** max(self.k - 1, 0)
+
+    def start(self, obs: int) -> History:
+        """History at the episode start: ``obs`` followed by padding."""
+        self._check_obs(obs)
+        pads = []
+        for i in range(self.k):
+            pads.append(self.n_actions)
+            if i < self.k - 1:
+                pads.append(self.n_obs)
+        return (obs, *pads)
+
+    def push(self, history: History, action: int, obs: int) -> History:
+        """History after taking ``action`` and observing ``obs``."""
+        if self.k == 0:
+            return (obs,)
+        return (obs, action, *history[: 2 * self.k - 2])
+
+    def encode(self, history: History) -> int:
+        """Integer code of a history."""
+        code = 0
+        for value, radix in zip(history, self.radices, strict=True):
+            code = code * radix + value
+        return code
+
+    def decode(self, code: int) -> History:
+        """Inverse of :meth:`encode`."""
+        if not 0 <= code < self.size:
+            raise CrmgraspError(f"history code {code} is outside [0, {self.size})")
+        out = []
+        for radix in reversed(self.radices):
+            code, v = divmod(code, radix)
+            out.append(v)
+        return tuple(reversed(out))
+
+    def is_padded(self, history: History) -> bool:
+        """True if any slot holds the padding value."""
+        return any(v == r - 1 for v, r in zip(history[1:], self.radices[1:]))
+
+    def _check_obs(self, obs: int) -> None:
+        if not 0 <= obs < self.n_obs:
+            raise CrmgraspError(f"observation index {obs} is outside [0, {self.n_obs})")

@@ -1,0 +1,77 @@
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import crmgrasp
+from crmgrasp import CRMGraspEnv, CrmgraspError, KOrderHistory
+from crmgrasp.env import ENV_ID
+
+
+def test_check_env_passes_without_warnings():
+    env = gym.make(ENV_ID)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_env(env.unwrapped)
+
+
+def _trajectory(seed):
+    env = gym.make(ENV_ID)
+    obs, info = env.reset(seed=seed)
+    out = [(obs["rho"].item(), obs["m_a"].item(), info["obs_index"])]
+    rng = np.random.default_rng(seed)
+    for _ in range(30):
+        obs, r, term, trunc, info = env.step(int(rng.integers(4)))
+        out.append((obs["rho"].item(), obs["m_a"].item(), obs["error"], r, term, trunc, info["obs_index"]))
+        if term or trunc:
+            obs, info = env.reset()
+    return out
+
+
+def test_deterministic_under_seed():
+    assert _trajectory(5) == _trajectory(5)
+    assert _trajectory(5) != _trajectory(6)
+
+
+def test_success_terminates_and_failures_truncate(task):
+    env = CRMGraspEnv(task)
+    near = task.hand.contact(task.obj, (-0.15, -0.02), (-0.10, -0.05))
+    obs, info = env.reset(seed=0, options={"config": near})
+    assert info["obs_index"] == task.discretizer.index(crmgrasp.observe(near), 0)
+    obs, r, term, trunc, info = env.step(0)
+    assert (r, term, trunc) == (-1.0, True, False) and info["min_friction"] == 0.0
+    env.reset(seed=0, options={"config": near})
+    for i in range(task.max_steps):
+        obs, r, term, trunc, info = env.step(1)  # C2 is an aperture error every time
+        assert obs["error"] == 1 and not term
+        assert trunc == (i == task.max_steps - 1)
+    assert info["config"] == near
+
+
+def test_render_and_bad_actions(task):
+    env = CRMGraspEnv(task, render_mode="rgb_array")
+    env.reset(seed=0)
+    img = env.render()
+    assert img.shape[2] == 3 and img.dtype == np.uint8
+    env.step(0)
+    assert env.render().shape == img.shape
+    with pytest.raises(CrmgraspError, match="action must be an integer in"):
+        env.step(7)
+    with pytest.raises(CrmgraspError, match="reset"):
+        CRMGraspEnv(task).step(0)
+    with pytest.raises(CrmgraspError, match="render_mode"):
+        CRMGraspEnv(task, render_mode="human")
+
+
+def test_k_order_wrapper(task):
+    env = KOrderHistory(gym.make(ENV_ID), k=2)
+    assert env.observation_space.n == 15000 and env.encoder.unpadded_size == 9216
+    s, info = env.reset(seed=3)
+    assert env.encoder.decode(s) == (info["obs_index"], 4, 24, 4)
+    s2, _, _, _, info2 = env.step(2)
+    assert env.encoder.decode(s2) == (info2["obs_index"], 2, info["obs_index"], 4)
+    e0 = KOrderHistory(gym.make(ENV_ID), k=0)
+    s, info = e0.reset(seed=3)
+    assert s == info["obs_index"] and e0.observation_space.n == 24
