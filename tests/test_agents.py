@@ -155,3 +155,16 @@ def test_episodes_to_within():
     assert episodes_to_within(np.array([3.0] * 10 + [1.0] * 20), 1.0) == 20
     assert episodes_to_within(np.array([1.0] * 30), 1.0) == 10
     assert episodes_to_within(np.array([1.0] * 30 + [9.0]), 1.0) is None
+
+
+def test_checkpoints_use_the_same_starts(task):
+    from crmgrasp.agents.training import checkpoint_generators
+
+    a, b = checkpoint_generators(7), checkpoint_generators(7)
+    assert [task.sample_start(a[0]) for _ in range(5)] == [task.sample_start(b[0]) for _ in range(5)]
+    res = train_trials(task, "sarsa", trials=2, episodes=30, seed=7, eval_episodes=10, checkpoints=(10, 30, 99))
+    assert res.checkpoints.tolist() == [10, 30] and res.checkpoint_steps.shape == (2, 2)
+    # a random policy evaluated twice on the checkpoint starts sees identical starts
+    r1 = evaluate(task, make_agent("fixed", 4, sequence=(0, 1)), encoder_for(task, 2), 20, *checkpoint_generators(3))
+    r2 = evaluate(task, make_agent("fixed", 4, sequence=(0, 1)), encoder_for(task, 2), 20, *checkpoint_generators(3))
+    np.testing.assert_array_equal(r1[0], r2[0])

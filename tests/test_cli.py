@@ -103,7 +103,7 @@ def test_learn_then_evaluate(tmp_path, capsys):
         str(out),
     ]
     assert main(args) == 0
-    for name in ("curve.csv", "summary.json", "policy.json", "learning_curve.png"):
+    for name in ("curve.csv", "checkpoints.csv", "summary.json", "policy.json", "learning_curve.png"):
         assert (out / name).exists()
     summary = json.loads((out / "summary.json").read_text())
     for key in (

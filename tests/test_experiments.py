@@ -67,12 +67,24 @@ def test_figure7_small(tmp_path):
         ablation_ks=(0, 2),
     )
     s = figure_7_learning_curve(tmp_path, cfg)
-    for name in ("curves.csv", "learners.csv", "figure7.png", "figure7_k_ablation.png", "policy.json", "config.json"):
+    for name in (
+        "curves.csv",
+        "checkpoints.csv",
+        "learners.csv",
+        "figure7.png",
+        "figure7_greedy.png",
+        "figure7_k_ablation.png",
+        "policy.json",
+        "config.json",
+    ):
         assert (tmp_path / name).exists(), name
     with open(tmp_path / "curves.csv") as fh:
         rows = list(csv.reader(fh))
     assert len(rows) == 41 and rows[0][:3] == ["episode", "SARSA k=2 (paper) mean", "SARSA k=2 (paper) sem"]
-    assert "sarsa_k0_greedy_mean_steps" in s
+    assert "sarsa_k0_greedy_mean_steps" in s and "best_greedy_episodes_to_5pct" in s
+    with open(tmp_path / "checkpoints.csv") as fh:
+        ck = list(csv.reader(fh))
+    assert [int(r[0]) for r in ck[1:]] == [5, 10, 15, 20, 30, 40]
     assert figure_7_learning_curve(tmp_path / "again", cfg) == s
 
 

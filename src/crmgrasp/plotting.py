@@ -240,3 +240,22 @@ def cluster_figure(groups: dict[str, np.ndarray], title: str, xlabel: str, ylabe
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     return fig
+
+
+def checkpoint_figure(
+    checkpoints: np.ndarray, curves: dict[str, tuple[np.ndarray, np.ndarray]], reference: float | None, title: str
+) -> Figure:
+    """Greedy-policy CRMs per episode at training checkpoints, mean and standard error."""
+    fig = Figure(figsize=(7.5, 4.5), layout="constrained")
+    ax = fig.add_subplot()
+    for name, (mean, sem) in curves.items():
+        ax.errorbar(checkpoints, mean, yerr=sem, marker="o", ms=3, lw=1.2, capsize=2, label=name)
+    if reference:
+        ax.axhline(reference, color="k", ls="--", lw=1, label=f"belief-space optimum {reference:g}")
+        ax.axhline(1.05 * reference, color="k", ls=":", lw=0.8, label="optimum + 5%")
+    ax.set_xscale("log")
+    ax.set_xlabel("training episodes")
+    ax.set_ylabel("greedy CRMs per episode")
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=7)
+    return fig

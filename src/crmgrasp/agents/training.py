@@ -36,6 +36,9 @@ __all__ = [
     "TrialResult",
     "train_trials",
     "episodes_to_within",
+    "checkpoints_to_within",
+    "checkpoint_generators",
+    "DEFAULT_CHECKPOINTS",
     "RolloutStep",
     "rollout",
 ]
@@ -102,14 +105,35 @@ def run_episode(
 
 
 def evaluate(
-    task: Task, agent: Agent, encoder: KOrderEncoder, episodes: int, rng: np.random.Generator
+    task: Task,
+    agent: Agent,
+    encoder: KOrderEncoder,
+    episodes: int,
+    rng: np.random.Generator,
+    agent_rng: np.random.Generator | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Greedy evaluation: CRMs per episode and success flags over ``episodes`` fresh starts."""
+    """Greedy evaluation: CRMs per episode and success flags over ``episodes`` fresh
+    starts. Starts (and sensing) draw from ``rng``, tie-breaking from ``agent_rng``
+    (default: ``rng`` too); separate streams give every policy the same starts."""
     steps = np.empty(episodes, dtype=np.int64)
     success = np.empty(episodes, dtype=bool)
     for i in range(episodes):
-        steps[i], success[i] = run_episode(task, agent, encoder, rng, rng, learn=False)
+        steps[i], success[i] = run_episode(task, agent, encoder, rng, agent_rng or rng, learn=False)
     return steps, success
+
+
+DEFAULT_CHECKPOINTS = (5, 10, 15, 20, 30, 40, 50, 60, 80, 100, 150, 200, 300, 500, 1000, 1500, 2000)
+"""Training episodes after which :func:`train_trials` evaluates the greedy policy."""
+
+_CHECKPOINT_KEY = 2**31  # spawn key of the checkpoint streams; trial streams use 0 .. trials-1
+
+
+def checkpoint_generators(seed: int) -> tuple[np.random.Generator, np.random.Generator]:
+    """Fresh (starts, tie-breaking) generators for a checkpoint evaluation: identical
+    at every checkpoint, for every trial and every learner of a run with this seed."""
+    return tuple(  # type: ignore[return-value]
+        np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(_CHECKPOINT_KEY, i))) for i in range(2)
+    )
 
 
 def trial_generators(seed: int, trials: int) -> list[tuple[np.random.Generator, ...]]:
@@ -120,13 +144,16 @@ def trial_generators(seed: int, trials: int) -> list[tuple[np.random.Generator, 
 
 @dataclass
 class TrialResult:
-    """Learning curves ``(trials, episodes)``, greedy evaluation, and the trained agents."""
+    """Learning curves ``(trials, episodes)``, greedy evaluation, greedy checkpoints
+    ``(trials, len(checkpoints))``, and the trained agents."""
 
     steps: np.ndarray
     success: np.ndarray
     greedy_steps: np.ndarray
     greedy_success: np.ndarray
     agents: list[Agent]
+    checkpoints: np.ndarray
+    checkpoint_steps: np.ndarray
 
     @property
     def curve(self) -> np.ndarray:
@@ -150,9 +177,16 @@ def train_trials(
     k: int = 2,
     eval_episodes: int = 1000,
     params: dict[str, object] | None = None,
+    checkpoints: tuple[int, ...] = (),
+    checkpoint_episodes: int = 100,
 ) -> TrialResult:
     """Train ``trials`` independent agents for ``episodes`` each, then evaluate each
-    greedily on ``eval_episodes`` fresh episodes."""
+    greedily on ``eval_episodes`` fresh episodes.
+
+    After each training episode listed in ``checkpoints`` the greedy policy is also
+    evaluated on ``checkpoint_episodes`` episodes whose starts are the same at every
+    checkpoint (:func:`checkpoint_generators`): a learning curve of the policy itself,
+    free of exploration and of start-to-start noise."""
     for name, v in (("trials", trials), ("episodes", episodes)):
         if isinstance(v, bool) or not isinstance(v, int) or v < 1:
             raise CrmgraspError(f"{name} must be an integer >= 1, got {v!r}")
@@ -163,14 +197,39 @@ def train_trials(
     success = np.empty((trials, episodes), dtype=bool)
     gsteps = np.empty((trials, eval_episodes), dtype=np.int64)
     gsucc = np.empty((trials, eval_episodes), dtype=bool)
+    ckpts = np.array(sorted({c for c in checkpoints if 1 <= c <= episodes}), dtype=np.int64)
+    csteps = np.empty((trials, len(ckpts)))
     agents = []
     for t, (env_rng, agent_rng, eval_rng) in enumerate(trial_generators(seed, trials)):
         ag = make_agent(agent, len(task.actions), **(params or {}))
+        j = 0
         for e in range(episodes):
             steps[t, e], success[t, e] = run_episode(task, ag, encoder, env_rng, agent_rng)
+            if j < len(ckpts) and ckpts[j] == e + 1:
+                starts_rng, ties_rng = checkpoint_generators(seed)
+                csteps[t, j] = evaluate(task, ag, encoder, checkpoint_episodes, starts_rng, ties_rng)[0].mean()
+                j += 1
         gsteps[t], gsucc[t] = evaluate(task, ag, encoder, eval_episodes, eval_rng)
         agents.append(ag)
-    return TrialResult(steps, success, gsteps, gsucc, agents)
+    return TrialResult(steps, success, gsteps, gsucc, agents, ckpts, csteps)
+
+
+def checkpoints_to_within(
+    checkpoints: np.ndarray, values: np.ndarray, reference: float, factor: float = 1.05
+) -> int | None:
+    """First checkpoint from which every later checkpoint's value is at or below
+    ``factor * reference``; ``None`` if the last one is above.
+
+    Examples
+    --------
+    >>> checkpoints_to_within(np.array([10, 20, 50, 100]), np.array([3.0, 1.0, 1.2, 1.0]), 1.0, 1.05)
+    100
+    """
+    ok = np.asarray(values) <= factor * reference + 1e-12
+    if len(ok) == 0 or not ok[-1]:
+        return None
+    bad = np.flatnonzero(~ok)
+    return int(checkpoints[0 if len(bad) == 0 else bad[-1] + 1])
 
 
 def episodes_to_within(curve: np.ndarray, reference: float, factor: float = 1.05, window: int = 10) -> int | None:

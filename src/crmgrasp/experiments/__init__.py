@@ -53,7 +53,7 @@ def _figure4(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
 def _figure7(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
     cfg = Figure7Config(seed=seed)
     if quick:
-        cfg = replace(cfg, trials=5, episodes=300, eval_episodes=200)
+        cfg = replace(cfg, trials=5, episodes=300, eval_episodes=200, checkpoint_episodes=50)
     s = figure_7_learning_curve(out, cfg)
     if not quick:
         ctx["policy"] = str(out / "policy.json")
@@ -66,6 +66,12 @@ def _figure7(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
             "about 60 (to its own plateau)",
         ),
         ("best learner: episodes to within 5%", f"{s['best_episodes_to_5pct']} ({s['best_learner']})", "-"),
+        ("paper SARSA: greedy policy within 5% after", s["paper_sarsa_greedy_episodes_to_5pct"], "-"),
+        (
+            "best learner: greedy policy within 5% after",
+            f"{s['best_greedy_episodes_to_5pct']} ({s['best_greedy_learner']})",
+            "about 60 (SARSA)",
+        ),
         ("SARSA k=0 (memoryless) greedy CRMs", s["sarsa_k0_greedy_mean_steps"], "(not run; k = 2 used)"),
     ]
 
@@ -76,7 +82,7 @@ def _figure8(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
     return s, [
         (
             "aliased near-corner starts",
-            f"{s[labels[0]]} | {s[labels[1]]}",
+            f"{s[labels[0]]}; mirror: {s[labels[1]]}",
             "oppose one contact; on failure oppose the other",
         ),
         ("long-side contact far from the corner", s[labels[2]], "move it toward the corner (C3/C4), then oppose it"),
@@ -106,10 +112,15 @@ EXPERIMENTS: dict[str, tuple[str, Runner]] = {
 
 IMAGES = {
     "figure4": ["figure4.png"],
-    "figure7": ["figure7.png", "figure7_k_ablation.png"],
+    "figure7": ["figure7.png", "figure7_greedy.png", "figure7_k_ablation.png"],
     "figure8": ["figure8.png", "figure8.gif"],
     "figure9": ["figure9.png"],
 }
+
+
+def _cell(value: object) -> str:
+    """Markdown table cell: pipes escaped."""
+    return str(value).replace("|", "\\|")
 
 
 def reproduce(
@@ -139,7 +150,7 @@ def reproduce(
         summary, rows = run(out / name, seed, quick, ctx)
         summary["seconds"] = round(time.perf_counter() - t0, 3)
         results[name] = summary
-        lines += [f"| {name} | {q} | {ours} | {paper} |" for q, ours, paper in rows]
+        lines += [f"| {name} | {_cell(q)} | {_cell(ours)} | {_cell(paper)} |" for q, ours, paper in rows]
         body += [f"## {name}", "", desc, ""] + [f"![{name}]({name}/{img})" for img in IMAGES[name]]
         body += ["", f"Data and config: `{name}/` ({summary['seconds']} s).", ""]
     atomic_write_text(out / "README.md", "\n".join([*lines, "", *body]))

@@ -14,7 +14,15 @@ def learned_policy(task: Task, policy_path: str | Path | None, seed: int, trials
     ``episodes`` episodes from ``seed``) and take the best trial's greedy policy."""
     if policy_path is not None:
         return GreedyPolicy.load(policy_path, task)
-    run = learn(task, LearnerSpec("sarsa", 2), trials=trials, episodes=episodes, seed=seed, eval_episodes=200)
+    run = learn(
+        task,
+        LearnerSpec("sarsa", 2),
+        trials=trials,
+        episodes=episodes,
+        seed=seed,
+        eval_episodes=200,
+        checkpoint_episodes=0,
+    )
     policy = best_policy(task, run)
     assert policy is not None
     return policy

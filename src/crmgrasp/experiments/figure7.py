@@ -15,9 +15,9 @@ from pathlib import Path
 from typing import Any
 
 from .._io import save_figure, write_csv, write_json
-from ..plotting import learning_curve_figure
+from ..plotting import checkpoint_figure, learning_curve_figure
 from ..tasks import make_task
-from .learning import LearnerSpec, LearnRun, best_policy, learn
+from .learning import LearnerSpec, LearnRun, _mean_sem, best_policy, learn
 
 __all__ = ["Figure7Config", "figure_7_learning_curve", "DEFAULT_LEARNERS", "PAPER_LEARNER"]
 
@@ -49,15 +49,33 @@ class Figure7Config:
     learners: tuple[LearnerSpec, ...] = DEFAULT_LEARNERS
     ablation_ks: tuple[int, ...] = (0, 1, 2, 3)
     """History orders of the SARSA ablation."""
+    checkpoint_episodes: int = 100
+    """Fixed evaluation starts per greedy checkpoint (the same starts at every
+    checkpoint, for every trial and learner)."""
+
+    @property
+    def checkpoint_note(self) -> int:
+        """Number of fixed starts per checkpoint (for titles)."""
+        return self.checkpoint_episodes
+
+
+def _ms(run: LearnRun) -> tuple[Any, Any]:
+    return _mean_sem(run.result.checkpoint_steps)
 
 
 def figure_7_learning_curve(out_dir: str | Path, config: Figure7Config = Figure7Config()) -> dict[str, Any]:
-    """Run every learner; write ``curves.csv``, ``learners.csv``, ``figure7.png``,
-    ``figure7_k_ablation.png``, ``policy.json`` (the paper SARSA's best trial) and
-    ``config.json``."""
+    """Run every learner; write ``curves.csv``, ``checkpoints.csv``, ``learners.csv``,
+    ``figure7.png``, ``figure7_greedy.png``, ``figure7_k_ablation.png``,
+    ``policy.json`` (the paper SARSA's best trial) and ``config.json``."""
     task = make_task(config.task)
     out = Path(out_dir)
-    kw = dict(trials=config.trials, episodes=config.episodes, seed=config.seed, eval_episodes=config.eval_episodes)
+    kw = dict(
+        trials=config.trials,
+        episodes=config.episodes,
+        seed=config.seed,
+        eval_episodes=config.eval_episodes,
+        checkpoint_episodes=config.checkpoint_episodes,
+    )
     runs: list[LearnRun] = [learn(task, spec, **kw) for spec in config.learners]
     ablation = [learn(task, LearnerSpec("sarsa", k, {}, f"SARSA k={k}"), **kw) for k in config.ablation_ks]
     everything = runs + [r for r in ablation if r.spec.k not in {s.k for s in config.learners if s.agent == "sarsa"}]
@@ -97,6 +115,19 @@ def figure_7_learning_curve(out_dir: str | Path, config: Figure7Config = Figure7
         f"History order ablation (SARSA, {config.trials} trials)",
     )
     save_figure(fig, out / "figure7_k_ablation.png", dpi=120)
+    ckpt = runs[0].result.checkpoints
+    write_csv(
+        out / "checkpoints.csv",
+        ["episode"] + [f"{r.spec.name} {q}" for r in everything for q in ("mean", "sem")],
+        ([int(c)] + [float(v) for r in everything for v in (_ms(r)[0][j], _ms(r)[1][j])] for j, c in enumerate(ckpt)),
+    )
+    fig = checkpoint_figure(
+        ckpt,
+        {r.spec.name: _ms(r) for r in everything if r.spec.agent not in ("random", "fixed")},
+        ref,
+        f"Greedy policy after N training episodes, on {config.checkpoint_note} fixed starts x {config.trials} trials",
+    )
+    save_figure(fig, out / "figure7_greedy.png", dpi=120)
     policy = best_policy(task, runs[0])
     if policy is not None:
         policy.save(out / "policy.json")
@@ -106,10 +137,14 @@ def figure_7_learning_curve(out_dir: str | Path, config: Figure7Config = Figure7
         "paper_sarsa_final_mean_steps": round(runs[0].summary["final_mean_steps"], 3),
         "paper_sarsa_episodes_to_5pct": runs[0].summary["episodes_to_5pct"],
     }
+    summary["paper_sarsa_greedy_episodes_to_5pct"] = runs[0].summary["greedy_episodes_to_5pct"]
     best = min(everything, key=lambda r: r.summary["episodes_to_5pct"] or float("inf"))
     summary["best_learner"] = best.spec.name
     summary["best_episodes_to_5pct"] = best.summary["episodes_to_5pct"]
     summary["best_greedy_mean_steps"] = round(best.summary["greedy_mean_steps"], 3)
+    gbest = min(everything, key=lambda r: r.summary["greedy_episodes_to_5pct"] or float("inf"))
+    summary["best_greedy_learner"] = gbest.spec.name
+    summary["best_greedy_episodes_to_5pct"] = gbest.summary["greedy_episodes_to_5pct"]
     for r in ablation:
         summary[f"sarsa_k{r.spec.k}_greedy_mean_steps"] = round(r.summary["greedy_mean_steps"], 3)
     write_json(

@@ -9,7 +9,11 @@ Used by ``crmgrasp learn`` and by Figure 7. Files written to the output folder:
   ``greedy_mean_steps`` (greedy evaluation on ``eval_episodes`` fresh episodes,
   averaged over trials), ``greedy_success_rate``, ``episodes_to_5pct`` (first
   episode after which the 10-episode moving average stays at or below 1.05 x the
-  task's ``reference_mean_steps``), wall time;
+  task's ``reference_mean_steps``), ``greedy_episodes_to_5pct`` (first
+  checkpoint from which the greedy policy, evaluated on the same fixed starts at
+  every checkpoint and averaged over trials, stays at or below that bound), wall
+  time;
+* ``checkpoints.csv``: ``episode,greedy_mean_steps,greedy_sem_steps``;
 * ``policy.json``: the greedy policy of the trial with the best greedy score;
 * ``learning_curve.png``.
 """
@@ -25,7 +29,7 @@ import numpy as np
 
 from .._io import save_figure, write_csv, write_json
 from ..agents import GreedyPolicy, TabularAgent, episodes_to_within, train_trials
-from ..agents.training import TrialResult
+from ..agents.training import DEFAULT_CHECKPOINTS, TrialResult, checkpoints_to_within
 from ..tasks import Task
 
 __all__ = ["LearnerSpec", "LearnRun", "learn", "write_learn_outputs"]
@@ -56,7 +60,14 @@ class LearnRun:
 
 
 def learn(
-    task: Task, spec: LearnerSpec, *, trials: int, episodes: int, seed: int, eval_episodes: int = 1000
+    task: Task,
+    spec: LearnerSpec,
+    *,
+    trials: int,
+    episodes: int,
+    seed: int,
+    eval_episodes: int = 1000,
+    checkpoint_episodes: int = 100,
 ) -> LearnRun:
     """Train ``trials`` independent agents and summarise them."""
     t0 = time.perf_counter()
@@ -69,6 +80,8 @@ def learn(
         k=spec.k,
         eval_episodes=eval_episodes,
         params=spec.params,
+        checkpoints=DEFAULT_CHECKPOINTS if checkpoint_episodes else (),
+        checkpoint_episodes=checkpoint_episodes,
     )
     curve = res.curve
     ref = task.reference_mean_steps
@@ -90,6 +103,10 @@ def learn(
         "greedy_success_rate": float(res.greedy_success.mean()) if eval_episodes else float("nan"),
         "reference_mean_steps": ref,
         "episodes_to_5pct": episodes_to_within(curve, ref) if ref else None,
+        "greedy_episodes_to_5pct": (
+            checkpoints_to_within(res.checkpoints, res.checkpoint_steps.mean(axis=0), ref) if ref else None
+        ),
+        "checkpoint_episodes": checkpoint_episodes,
         "seconds": round(time.perf_counter() - t0, 3),
     }
     return LearnRun(spec, res, summary)
@@ -118,6 +135,11 @@ def write_learn_outputs(task: Task, run: LearnRun, out_dir: str | Path) -> list[
             ([e + 1, float(m), float(s)] for e, (m, s) in enumerate(zip(res.curve, res.sem))),
         ),
         write_json(out / "summary.json", run.summary),
+        write_csv(
+            out / "checkpoints.csv",
+            ["episode", "greedy_mean_steps", "greedy_sem_steps"],
+            ([int(c), float(m), float(v)] for c, m, v in zip(res.checkpoints, *_mean_sem(res.checkpoint_steps))),
+        ),
     ]
     policy = best_policy(task, run)
     if policy is not None:
@@ -129,3 +151,10 @@ def write_learn_outputs(task: Task, run: LearnRun, out_dir: str | Path) -> list[
     )
     paths.append(save_figure(fig, out / "learning_curve.png", dpi=120))
     return paths
+
+
+def _mean_sem(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and standard error over the first axis (trials)."""
+    n = values.shape[0]
+    sem = values.std(axis=0, ddof=1) / np.sqrt(n) if n > 1 else np.zeros(values.shape[1:])
+    return values.mean(axis=0), sem
