@@ -85,6 +85,9 @@ def test_figure7_small(tmp_path):
     with open(tmp_path / "checkpoints.csv") as fh:
         ck = list(csv.reader(fh))
     assert [int(r[0]) for r in ck[1:]] == [5, 10, 15, 20, 30, 40]
+    with open(tmp_path / "learners.csv") as fh:
+        learners = list(csv.DictReader(fh))
+    assert {"episodes_to_5pct", "greedy_episodes_to_5pct"} <= set(learners[0])
     assert figure_7_learning_curve(tmp_path / "again", cfg) == s
 
 

@@ -53,6 +53,14 @@ class Figure4Config:
     error, because a misaligned landing tilts one normal toward the palm by a hair."""
 
 
+def noisy_execution(task: Task, sigma_n_deg: float, sigma_p: float, palm_tolerance_deg: float) -> Task:
+    """``task`` with sensing noise (degrees, metres) and a fingertip palm tolerance
+    (``Hand.palm_normal_tol = sin(palm_tolerance_deg)``): how the noisy experiments
+    (Figures 4 and 9) execute CRMs."""
+    hand = dataclasses.replace(task.hand, palm_normal_tol=math.sin(math.radians(palm_tolerance_deg)))
+    return dataclasses.replace(task, hand=hand, noise=SensorNoise(math.radians(sigma_n_deg), sigma_p))
+
+
 def _long_side_contact(task: Task, cfg: Config) -> str | None:
     """Label of the contact on the longer of the two touched edges (None if equal)."""
     obj = task.obj
@@ -85,15 +93,14 @@ def figure_4_opposition_quality(out_dir: str | Path, config: Figure4Config = Fig
     if config.trials < 1:
         raise CrmgraspError(f"trials must be >= 1, got {config.trials}")
     task = make_task(config.task)
-    hand = dataclasses.replace(task.hand, palm_normal_tol=math.sin(math.radians(config.palm_tolerance_deg)))
-    noise = SensorNoise(math.radians(config.sigma_n_deg), config.sigma_p)
+    noisy = noisy_execution(task, config.sigma_n_deg, config.sigma_p, config.palm_tolerance_deg)
     rng = np.random.default_rng(config.seed)
     rows, values, failures = [], [], 0
     for trial in range(config.trials):
         start, fingers = long_side_start(task, rng, config.max_corner_distance)
         thumb = "b" if fingers == "a" else "a"
         crm = CRM(thumb, fingers, 0.0)
-        outcome = hand.execute(task.obj, start, crm, noise=noise, rng=rng)
+        outcome = noisy.hand.execute(task.obj, start, crm, noise=noisy.noise, rng=rng)
         mu = min_friction(outcome.config) if outcome.error == Error.NONE else math.inf
         failures += outcome.error != Error.NONE
         values.append(mu)

@@ -95,6 +95,7 @@ def figure_7_learning_curve(out_dir: str | Path, config: Figure7Config = Figure7
         "greedy_sem_steps",
         "greedy_success_rate",
         "episodes_to_5pct",
+        "greedy_episodes_to_5pct",
         "seconds",
     ]
     write_csv(out / "learners.csv", cols, ([r.summary[c] for c in cols] for r in everything))

@@ -27,9 +27,10 @@ from ..agents.training import rollout
 from ..contacts import Config
 from ..geometry import Polygon
 from ..plotting import cluster_figure
-from ..sensing import Observation, SensorNoise
+from ..sensing import Observation
 from ..tasks import Task, make_task
 from ._policy import learned_policy
+from .figure4 import noisy_execution
 
 __all__ = ["Figure9Config", "figure_9_robonaut_trials", "thumb_far_start"]
 
@@ -84,9 +85,8 @@ def figure_9_robonaut_trials(out_dir: str | Path, config: Figure9Config = Figure
     """Run the trials and plot the three clusters."""
     base = make_task(config.task)
     policy = learned_policy(base, config.policy, config.seed, config.train_trials, config.train_episodes)
-    hand = dataclasses.replace(base.hand, palm_normal_tol=math.sin(math.radians(config.palm_tolerance_deg)))
-    noise = SensorNoise(math.radians(config.sigma_n_deg), config.sigma_p)
-    task = dataclasses.replace(base, hand=hand, noise=noise, mu_goal=config.mu_goal)
+    noisy = noisy_execution(base, config.sigma_n_deg, config.sigma_p, config.palm_tolerance_deg)
+    task = dataclasses.replace(noisy, mu_goal=config.mu_goal)
     rng = np.random.default_rng(config.seed)
     groups: dict[str, list[tuple[float, float]]] = {"before CRM 1": [], "before CRM 2": [], "after last CRM": []}
     rows, crms, successes, tight = [], [], 0, 0
