@@ -168,3 +168,15 @@ def test_checkpoints_use_the_same_starts(task):
     r1 = evaluate(task, make_agent("fixed", 4, sequence=(0, 1)), encoder_for(task, 2), 20, *checkpoint_generators(3))
     r2 = evaluate(task, make_agent("fixed", 4, sequence=(0, 1)), encoder_for(task, 2), 20, *checkpoint_generators(3))
     np.testing.assert_array_equal(r1[0], r2[0])
+
+
+def test_greedy_prefers_tried_actions():
+    rng = np.random.default_rng(0)
+    agent = make_agent("sarsa", 3)
+    agent.update(5, 1, -1.0, 6, None, True, rng)  # only action 1 tried in state 5: Q = -0.3
+    assert agent.act(5, rng) in (0, 2)  # behaviour explores the optimistic untried actions
+    assert all(agent.greedy(5, rng) == 1 for _ in range(10))  # the learned policy uses what it knows
+    task = make_task("paper-box")
+    agent4 = make_agent("q", 4)
+    agent4.update(7, 2, -1.0, 8, None, True, rng)
+    assert GreedyPolicy.from_agent(task, 2, agent4).table[7] == (2,)

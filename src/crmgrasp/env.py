@@ -82,6 +82,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             raise CrmgraspError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         self.render_mode = render_mode
         self.action_space = spaces.Discrete(len(self.task.actions))
+        self._n_actions = len(self.task.actions)
         m = 2.0 * self.task.hand.aperture
         self._m_bound = m
         self.observation_space = spaces.Dict(
@@ -97,12 +98,13 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
 
     def _obs(self, rho: float, m_a: float, m_b: float, error: Error) -> dict[str, Any]:
         b = self._m_bound
-        return {
-            "rho": np.array([min(max(rho, 0.0), 4.0)]),
-            "m_a": np.array([min(max(m_a, -b), b)]),
-            "m_b": np.array([min(max(m_b, -b), b)]),
-            "error": int(error),
-        }
+        if not (0.0 <= rho <= 4.0):
+            rho = 0.0 if rho < 0.0 else 4.0
+        if not (-b <= m_a <= b):
+            m_a = -b if m_a < -b else b
+        if not (-b <= m_b <= b):
+            m_b = -b if m_b < -b else b
+        return {"rho": np.array([rho]), "m_a": np.array([m_a]), "m_b": np.array([m_b]), "error": int(error)}
 
     def _info(self, obs_index: int, mu: float) -> dict[str, Any]:
         assert self._state is not None
@@ -128,12 +130,16 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         """Execute the CRM ``task.actions[action]``."""
         if self._state is None:
             raise CrmgraspError("call reset() before step()")
-        if not self.action_space.contains(action):
-            raise CrmgraspError(f"action must be an integer in [0, {self.action_space.n}), got {action!r}")
-        res = step(self.task, self._state, int(action), self.np_random)
+        if type(action) is not int:
+            if not isinstance(action, (np.integer, np.ndarray)) or np.ndim(action) != 0:
+                raise CrmgraspError(f"action must be an integer in [0, {self.action_space.n}), got {action!r}")
+            action = int(action)
+        if not 0 <= action < self._n_actions:
+            raise CrmgraspError(f"action must be an integer in [0, {self._n_actions}), got {action!r}")
+        res = step(self.task, self._state, action, self.np_random)
         self._last = (self._state, res.outcome)
         self._state = res.state
-        obs = self._obs(*res.observation, res.error)
+        obs = self._obs(res.observation.rho, res.observation.m_a, res.observation.m_b, res.error)
         return obs, res.reward, res.terminated, res.truncated, self._info(res.obs_index, res.min_friction)
 
     def render(self) -> np.ndarray | None:  # type: ignore[override]

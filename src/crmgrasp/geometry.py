@@ -185,6 +185,12 @@ class Polygon:
         return tuple(out)
 
     @cached_property
+    def convex(self) -> bool:
+        """True if every vertex turns left (CCW convex; collinear vertices allowed)."""
+        e = self.edges
+        return all(e[i][2] * e[(i + 1) % len(e)][3] - e[i][3] * e[(i + 1) % len(e)][2] >= 0.0 for i in range(len(e)))
+
+    @cached_property
     def _edge_arrays(self) -> Array:
         return np.array(self.edges, dtype=np.float64)  # (E, 7)
 
@@ -293,8 +299,17 @@ class Polygon:
 
     # --------------------------------------------------------------- inside
     def contains(self, p: ArrayLike) -> bool:
-        """True if ``p`` is strictly inside (farther than :data:`EPS` from the boundary)."""
+        """True if ``p`` is strictly inside (farther than :data:`EPS` from the boundary).
+
+        Convex polygons test the signed distance to every edge's line; others count
+        crossings of a ray toward +x and then check the distance to the boundary.
+        """
         px, py = (p[0], p[1]) if isinstance(p, tuple) else as_point(p, "point")
+        if self.convex:  # strictly inside iff farther than EPS inside every edge's line
+            for ax, ay, _, _, _, nx, ny in self.edges:
+                if (px - ax) * nx + (py - ay) * ny <= EPS:
+                    return False
+            return True
         inside = False
         for ax, ay, ex, ey, _, _, _ in self.edges:
             by = ay + ey
@@ -316,6 +331,8 @@ class Polygon:
         px, py = pts[:, :1], pts[:, 1:]
         e = self._edge_arrays
         ax, ay, ex, ey, l2 = e[:, 0], e[:, 1], e[:, 2], e[:, 3], e[:, 4]
+        if self.convex:
+            return np.all((px - ax) * e[:, 5] + (py - ay) * e[:, 6] > EPS, axis=1)
         by = ay + ey
         straddle = (ay > py) != (by > py)
         with np.errstate(all="ignore"):

@@ -31,14 +31,14 @@ contact and the stationary contact's reach are in the true world.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ._validation import CrmgraspError, finite, non_negative, positive
-from .contacts import LABELS, Config, Contact, label_index
+from .contacts import Config, Contact, label_index
 from .geometry import Shape
 from .sensing import Error, SensorNoise
 
@@ -72,10 +72,14 @@ class CRM:
     c: str
     f: str
     r: float = 0.0
+    ci: int = field(init=False, repr=False, compare=False)
+    """Index of ``c`` (0 for a, 1 for b)."""
+    fi: int = field(init=False, repr=False, compare=False)
+    """Index of ``f``."""
 
     def __post_init__(self) -> None:
-        label_index(self.c)
-        label_index(self.f)
+        object.__setattr__(self, "ci", label_index(self.c))
+        object.__setattr__(self, "fi", label_index(self.f))
         object.__setattr__(self, "r", finite(self.r, "CRM offset r"))
 
     def __repr__(self) -> str:
@@ -249,7 +253,7 @@ def goal_line(crm: CRM, sensed: Config, still: Contact, aperture: float) -> Goal
     Solves ``|base + t n_f - x_still|^2 = A^2`` for ``t``; ``None`` if the line
     misses the disc of radius A around the stationary contact.
     """
-    f = sensed[crm.f]
+    f = sensed.b if crm.fi else sensed.a
     base = (f.x + crm.r * f.ny, f.y - crm.r * f.nx)
     wx, wy = base[0] - still.x, base[1] - still.y
     qa = f.nx * f.nx + f.ny * f.ny
@@ -270,8 +274,7 @@ def execute_crm(obj: Shape, hand: Hand, config: Config, crm: CRM, sensed: Config
     """
     if sensed is None:
         sensed = config
-    mover = config[crm.c]
-    still = config[LABELS[1 - label_index(crm.c)]]
+    mover, still = (config.b, config.a) if crm.ci else (config.a, config.b)
     origin = (mover.x, mover.y)
     backed = (mover.x - hand.backoff * mover.nx, mover.y - hand.backoff * mover.ny)
     line = goal_line(crm, sensed, still, hand.aperture)
@@ -288,7 +291,7 @@ def execute_crm(obj: Shape, hand: Hand, config: Config, crm: CRM, sensed: Config
     if entry is None:
         return Outcome(config, Error.APERTURE, (origin, backed, start, line.at(t1), origin), line)
     moved = Contact(entry.point[0], entry.point[1], entry.normal[0], entry.normal[1])
-    new = config.replace(crm.c, moved)
+    new = Config(config.a, moved) if crm.ci else Config(moved, config.b)
     err = feasible(obj, hand, new)
     if err is not Error.NONE:
         return Outcome(config, err, (origin, backed, start, entry.point, origin), line)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from bisect import bisect_right
 from dataclasses import dataclass, field
 from enum import IntEnum
 from typing import NamedTuple
@@ -186,11 +187,7 @@ class Discretizer:
     def bins(self, obs: Observation) -> tuple[int, int, int]:
         """Bin of each of ``rho``, ``m_a``, ``m_b``."""
         ma, mb = (abs(obs.m_a), abs(obs.m_b)) if self.abs_moments else (obs.m_a, obs.m_b)
-        return (
-            sum(obs.rho >= t for t in self.rho),
-            sum(ma >= t for t in self.m_a),
-            sum(mb >= t for t in self.m_b),
-        )
+        return (bisect_right(self.rho, obs.rho), bisect_right(self.m_a, ma), bisect_right(self.m_b, mb))
 
     def index(self, obs: Observation, error: Error | int) -> int:
         """Integer in ``[0, size)`` for an observation and error flag."""

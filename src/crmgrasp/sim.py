@@ -64,7 +64,8 @@ def step(task: Task, state: SimState, action: int, rng: np.random.Generator) -> 
     mu_goal``); ``truncated`` when ``max_steps`` CRMs have been executed without.
     """
     out = execute_crm(task.obj, task.hand, state.config, task.actions[action], state.sensed)
-    sensed = task.noise.sense(out.config, rng)
+    noise = task.noise
+    sensed = noise.sense(out.config, rng) if noise.sigma_n or noise.sigma_p else out.config
     obs = observe(sensed)
     mu = min_friction(out.config)
     steps = state.steps + 1

@@ -50,22 +50,16 @@ def _edge_contact(obj: Polygon, edge: int, frac: float) -> Contact:
     return Contact(ax + frac * ex, ay + frac * ey, nx, ny)
 
 
-def _open_unit(rng: np.random.Generator) -> float:
-    """Uniform on the open interval (0, 1), so contacts never sit on a vertex."""
-    while True:
-        u = float(rng.random())
-        if u > 0.0:
-            return u
-
-
 @dataclass(frozen=True)
 class CornerStarts:
     """SPEC section 7 starts: a random polygon corner, one contact uniform on each
     of the two sides meeting there, a fair coin for which contact is ``a``;
     resampled until feasible and not already a grasp (``min_friction > mu_goal``).
 
-    Draw order per attempt: corner index, fraction along the incoming side,
-    fraction along the outgoing side, coin.
+    Each attempt draws four uniforms in one call: corner (``floor(u n)``), fraction
+    along the incoming side, fraction along the outgoing side, coin (a is the
+    incoming-side contact when ``u < 0.5``). A fraction of exactly 0 (a vertex) is
+    rejected.
     """
 
     max_tries: int = 10_000
@@ -75,10 +69,13 @@ class CornerStarts:
             raise CrmgraspError(f"corner starts need a polygon, got {type(obj).__name__}")
         n = len(obj.vertices)
         for _ in range(self.max_tries):
-            k = int(rng.integers(n))
-            first = _edge_contact(obj, (k - 1) % n, _open_unit(rng))
-            second = _edge_contact(obj, k, _open_unit(rng))
-            cfg = Config(first, second) if rng.random() < 0.5 else Config(second, first)
+            u_corner, u_in, u_out, u_coin = rng.random(4).tolist()
+            if u_in == 0.0 or u_out == 0.0:  # a vertex: normal undefined
+                continue
+            k = int(u_corner * n)
+            first = _edge_contact(obj, (k - 1) % n, u_in)
+            second = _edge_contact(obj, k, u_out)
+            cfg = Config(first, second) if u_coin < 0.5 else Config(second, first)
             if _acceptable(obj, hand, mu_goal, cfg):
                 return cfg
         raise CrmgraspError(f"no feasible corner start found in {self.max_tries} tries")

@@ -54,11 +54,13 @@ class GreedyPolicy:
 
     @classmethod
     def from_agent(cls, task: Task, k: int, agent: TabularAgent) -> GreedyPolicy:
-        """The greedy policy of a tabular agent over the states it has visited."""
+        """The greedy policy of a tabular agent over the states it has visited: in
+        each, the best of the actions it has tried (all ties kept)."""
         table = {}
         for s, row in agent.q.items():
-            best = max(row)
-            table[s] = tuple(i for i, v in enumerate(row) if v == best)
+            acts = sorted(agent.tried.get(s) or range(len(row)))
+            best = max(row[a] for a in acts)
+            table[s] = tuple(a for a in acts if row[a] == best)
         return cls(task, k, table, agent.name)
 
     def begin_episode(self) -> None:

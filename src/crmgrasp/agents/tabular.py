@@ -50,6 +50,7 @@ class TabularAgent:
         self.epsilon = _unit(epsilon, "epsilon")
         self.q0 = finite(q0, "q0")
         self.q: dict[int, list[float]] = {}
+        self.tried: dict[int, set[int]] = {}
 
     def params(self) -> dict[str, float]:
         """Hyperparameters, for saving with results."""
@@ -70,14 +71,29 @@ class TabularAgent:
         """Nothing to reset for one-step methods."""
 
     def greedy(self, state: int, rng: np.random.Generator) -> int:
-        """Greedy action with random tie-breaking."""
-        return greedy_choice(self.value(state), rng)
+        """The learned policy: the best action among those tried in ``state`` (random
+        tie-breaking); every action if none was tried. Untried actions keep their
+        optimistic ``q0``, which drives exploration in :meth:`act` but is no estimate."""
+        tried = self.tried.get(state)
+        row = self.value(state)
+        if not tried or len(tried) == self.n_actions:
+            return greedy_choice(row, rng)
+        acts = sorted(tried)
+        return acts[greedy_choice([row[a] for a in acts], rng)]
 
     def act(self, state: int, rng: np.random.Generator) -> int:
-        """Epsilon-greedy action (no draw for exploration when epsilon is 0)."""
+        """Behaviour: epsilon-greedy on all values, untried actions at their optimistic
+        ``q0`` (no draw for exploration when epsilon is 0)."""
         if self.epsilon > 0.0 and rng.random() < self.epsilon:
             return int(rng.integers(self.n_actions))
-        return self.greedy(state, rng)
+        return greedy_choice(self.value(state), rng)
+
+    def _mark(self, s: int, a: int) -> None:
+        t = self.tried.get(s)
+        if t is None:
+            self.tried[s] = {a}
+        else:
+            t.add(a)
 
     def _target(self, s2: int, a2: int | None) -> float:
         raise NotImplementedError
@@ -86,6 +102,7 @@ class TabularAgent:
         self, s: int, a: int, r: float, s2: int, a2: int | None, terminal: bool, rng: np.random.Generator
     ) -> None:
         """One-step TD update toward ``r + gamma * target(s2, a2)`` (``r`` if terminal)."""
+        self._mark(s, a)
         row = self.row(s)
         target = r if terminal else r + self.gamma * self._target(s2, a2)
         row[a] += self.alpha * (target - row[a])
@@ -134,6 +151,7 @@ class SarsaLambda(TabularAgent):
         self, s: int, a: int, r: float, s2: int, a2: int | None, terminal: bool, rng: np.random.Generator
     ) -> None:
         """Trace update over every pair visited this episode."""
+        self._mark(s, a)
         target = r if terminal else r + self.gamma * self.value(s2)[a2]  # type: ignore[index]
         delta = target - self.row(s)[a]
         if self.trace == "replacing":
@@ -187,6 +205,7 @@ class DynaQ(TabularAgent):
         self, s: int, a: int, r: float, s2: int, a2: int | None, terminal: bool, rng: np.random.Generator
     ) -> None:
         """Real Q-learning update, model update, then planning."""
+        self._mark(s, a)
         self._backup(s, a, r, s2, terminal)
         outcome = (r, s2, terminal)
         counts = self.model.get((s, a))
