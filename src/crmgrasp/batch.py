@@ -44,24 +44,24 @@ def _check_configs(configs: ArrayLike, name: str) -> F64:
 
 def feasible_batch(obj: Shape, hand: Hand, configs: F64) -> NDArray[np.int8]:
     """Vectorised :func:`crmgrasp.hand.feasible`: an :class:`Error` code per row."""
-    cf = configs
-    dx, dy = cf[:, 4] - cf[:, 0], cf[:, 5] - cf[:, 1]
-    dist = np.sqrt(dx * dx + dy * dy)
+    c = configs
     with np.errstate(all="ignore"):
-        ux, uy = dy / dist, -dx / dist
+        return _feasible(obj, hand, c[:, 0], c[:, 1], c[:, 2], c[:, 3], c[:, 4], c[:, 5], c[:, 6], c[:, 7])
+
+
+def _feasible(
+    obj: Shape, hand: Hand, ax: F64, ay: F64, anx: F64, any_: F64, bx: F64, by: F64, bnx: F64, bny: F64
+) -> NDArray[np.int8]:
+    """Feasibility on columns (same expressions as the scalar path)."""
+    dx, dy = bx - ax, by - ay
+    dist = np.sqrt(dx * dx + dy * dy)
+    ux, uy = dy / dist, -dx / dist
     tol = hand.palm_normal_tol
-    facing = (cf[:, 2] * ux + cf[:, 3] * uy > tol) | (cf[:, 6] * ux + cf[:, 7] * uy > tol)
-    palm = np.stack(
-        [0.5 * (cf[:, 0] + cf[:, 4]) + hand.palm_depth * ux, 0.5 * (cf[:, 1] + cf[:, 5]) + hand.palm_depth * uy],
-        axis=1,
-    )
-    out = np.zeros(len(cf), dtype=np.int8)
-    check = dist > 0.0
-    blocked = np.zeros(len(cf), dtype=bool)
-    blocked[check] = obj.contains_batch(palm[check]) if np.any(check) else blocked[check]
-    out[(dist == 0.0) | facing | blocked] = Error.PALM
-    out[dist > hand.aperture] = Error.APERTURE
-    return out
+    facing = (anx * ux + any_ * uy > tol) | (bnx * ux + bny * uy > tol)
+    h = hand.palm_depth
+    blocked = obj.contains_xy(0.5 * (ax + bx) + h * ux, 0.5 * (ay + by) + h * uy)
+    out = np.where((dist == 0.0) | facing | blocked, np.int8(Error.PALM), np.int8(Error.NONE))
+    return np.where(dist > hand.aperture, np.int8(Error.APERTURE), out).astype(np.int8)
 
 
 def execute_batch(
@@ -91,44 +91,56 @@ def execute_batch(
         raise CrmgraspError("contact indices c and f must be 0 (a) or 1 (b)")
     if not np.all(np.isfinite(rr)) or np.any(np.abs(rr) > hand.r_max):  # type: ignore[operator]
         raise CrmgraspError(f"CRM offsets r must be finite and within r_max = {hand.r_max:g}")
-    rows = np.arange(n)
-    fcol, scol = 4 * fi, 4 * (1 - ci)
-    fx, fy = sen[rows, fcol], sen[rows, fcol + 1]
-    fnx, fny = sen[rows, fcol + 2], sen[rows, fcol + 3]
-    sx, sy = cfg[rows, scol], cfg[rows, scol + 1]
-    # 1-2. goal line and its chord within the aperture of the stationary contact
+    cols = np.ascontiguousarray(cfg.T)
+    scols = cols if sensed is None else np.ascontiguousarray(sen.T)
+    with np.errstate(all="ignore"):
+        new, errors = execute_columns(obj, hand, cols, scols, ci == 1, fi == 1, rr)
+    return np.ascontiguousarray(new.T), errors
+
+
+def execute_columns(
+    obj: Shape, hand: Hand, cfg: F64, sen: F64, c_is_b: NDArray[np.bool_], f_is_b: NDArray[np.bool_], rr: F64
+) -> tuple[F64, NDArray[np.int8]]:
+    """The kernel of :func:`execute_batch` on column blocks of shape ``(8, N)`` (row
+    ``k`` is column ``k`` of the ``(N, 8)`` layout), without input checks: for
+    trusted callers such as the vector environment. Returns the new ``(8, N)``
+    block and the error codes. Call inside ``np.errstate(all="ignore")``."""
+    # 1-2. goal line in the sensed frame of f; chord within the aperture of the stationary contact
+    fx = np.where(f_is_b, sen[4], sen[0])
+    fy = np.where(f_is_b, sen[5], sen[1])
+    fnx = np.where(f_is_b, sen[6], sen[2])
+    fny = np.where(f_is_b, sen[7], sen[3])
+    sx = np.where(c_is_b, cfg[0], cfg[4])
+    sy = np.where(c_is_b, cfg[1], cfg[5])
     bx, by = fx + rr * fny, fy - rr * fnx
     wx, wy = bx - sx, by - sy
     qa = fnx * fnx + fny * fny
     qb = wx * fnx + wy * fny
     qc = wx * wx + wy * wy - hand.aperture * hand.aperture
     disc = qb * qb - qa * qc
-    reach = disc >= 0.0
-    with np.errstate(all="ignore"):
-        root = np.sqrt(disc)
+    root = np.sqrt(disc)
     t_lo, t_hi = (-qb - root) / qa, (-qb + root) / qa
-    # 3-4. start point, approach, first entry
-    same = ci == fi
+    # 3-4. start point (inside: aperture error), approach, first entry
+    same = c_is_b == f_is_b
     t0, t1 = np.where(same, t_lo, t_hi), np.where(same, t_hi, t_lo)
-    start = np.stack([bx + t0 * fnx, by + t0 * fny], axis=1)
+    x0, y0 = bx + t0 * fnx, by + t0 * fny
     sign = np.where(same, 1.0, -1.0)
-    direction = np.stack([sign * fnx, sign * fny], axis=1)
-    ok = reach.copy()
-    ok[reach] = ~obj.contains_batch(start[reach]) if np.any(reach) else ok[reach]
-    u, pts, normals = obj.ray_entry_batch(start, direction, np.abs(t1 - t0))
-    entered = ok & np.isfinite(u)
-    # 5. new contact; 6. palm
-    new = cfg.copy()
-    mcol = 4 * ci[entered]
-    erows = rows[entered]
-    new[erows, mcol] = pts[entered, 0]
-    new[erows, mcol + 1] = pts[entered, 1]
-    new[erows, mcol + 2] = normals[entered, 0]
-    new[erows, mcol + 3] = normals[entered, 1]
-    errors = np.full(n, Error.APERTURE, dtype=np.int8)
-    if np.any(entered):
-        errors[entered] = feasible_batch(obj, hand, new[entered])
-    # 7. any error leaves the configuration unchanged
-    failed = errors != Error.NONE
-    new[failed] = cfg[failed]
+    ok = (disc >= 0.0) & ~obj.contains_xy(x0, y0)
+    u, px, py, nx, ny = obj.ray_entry_xy(x0, y0, sign * fnx, sign * fny, np.abs(t1 - t0))
+    entered = ok & (u != np.inf)
+    # 5. the new contact replaces the mover's columns
+    ma, mb = entered & ~c_is_b, entered & c_is_b
+    cols = [
+        np.where(ma, px, cfg[0]),
+        np.where(ma, py, cfg[1]),
+        np.where(ma, nx, cfg[2]),
+        np.where(ma, ny, cfg[3]),
+        np.where(mb, px, cfg[4]),
+        np.where(mb, py, cfg[5]),
+        np.where(mb, nx, cfg[6]),
+        np.where(mb, ny, cfg[7]),
+    ]
+    # 6. palm; 7. any error leaves the configuration unchanged
+    errors = np.where(entered, _feasible(obj, hand, *cols), np.int8(Error.APERTURE)).astype(np.int8)
+    new = np.where(errors != Error.NONE, cfg, np.stack(cols))
     return new, errors

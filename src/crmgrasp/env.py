@@ -193,7 +193,12 @@ class KOrderHistory(gym.Wrapper[int, np.int64, dict[str, Any], np.int64]):
 def register() -> None:
     """Register ``crmgrasp/PaperBox-v0`` (idempotent)."""
     if ENV_ID not in gym.registry:
-        gym.register(id=ENV_ID, entry_point="crmgrasp.env:CRMGraspEnv", kwargs={"task": "paper-box"})
+        gym.register(
+            id=ENV_ID,
+            entry_point="crmgrasp.env:CRMGraspEnv",
+            vector_entry_point="crmgrasp.vector:CRMGraspVectorEnv",
+            kwargs={"task": "paper-box"},
+        )
 
 
 register()

@@ -84,6 +84,12 @@ class Shape(Protocol):
 
     def ray_entry_batch(self, origin: Array, direction: Array, u_max: Array) -> tuple[Array, Array, Array]: ...
 
+    def contains_xy(self, x: Array, y: Array) -> NDArray[np.bool_]: ...
+
+    def ray_entry_xy(
+        self, ox: Array, oy: Array, dx: Array, dy: Array, u_max: Array
+    ) -> tuple[Array, Array, Array, Array, Array]: ...
+
     def bounds(self) -> tuple[float, float, float, float]: ...
 
 
@@ -328,15 +334,23 @@ class Polygon:
     def contains_batch(self, p: ArrayLike) -> NDArray[np.bool_]:
         """Vectorised :meth:`contains` over points of shape ``(N, 2)``."""
         pts = _points(p)
-        px, py = pts[:, :1], pts[:, 1:]
+        with np.errstate(all="ignore"):
+            return self.contains_xy(pts[:, 0], pts[:, 1])
+
+    def contains_xy(self, x: Array, y: Array) -> NDArray[np.bool_]:
+        """:meth:`contains` on coordinate columns (no validation; NaN is outside).
+        Call inside ``np.errstate(all="ignore")``."""
+        if self.convex:  # one whole-column pass per edge (a short-axis reduction is slower)
+            inside = np.ones(len(x), dtype=bool)
+            for ax, ay, _, _, _, nx, ny in self.edges:
+                inside &= (x - ax) * nx + (y - ay) * ny > EPS
+            return inside
+        px, py = x[:, None], y[:, None]
         e = self._edge_arrays
         ax, ay, ex, ey, l2 = e[:, 0], e[:, 1], e[:, 2], e[:, 3], e[:, 4]
-        if self.convex:
-            return np.all((px - ax) * e[:, 5] + (py - ay) * e[:, 6] > EPS, axis=1)
         by = ay + ey
         straddle = (ay > py) != (by > py)
-        with np.errstate(all="ignore"):
-            xint = ax + (py - ay) * ex / ey
+        xint = ax + (py - ay) * ex / ey
         inside = (np.count_nonzero(straddle & (px < xint), axis=1) % 2) == 1
         t = np.minimum(1.0, np.maximum(0.0, ((px - ax) * ex + (py - ay) * ey) / l2))
         dx, dy = ax + t * ex - px, ay + t * ey - py
@@ -376,26 +390,30 @@ class Polygon:
         Returns ``u`` of shape ``(N,)`` (``inf`` where the segment never enters),
         entry points ``(N, 2)`` and inward normals ``(N, 2)`` (NaN where none).
         """
-        ox, oy = origin[:, :1], origin[:, 1:]
-        dx, dy = direction[:, :1], direction[:, 1:]
-        e = self._edge_arrays
-        ax, ay, ex, ey, l2, nx, ny = (e[:, j] for j in range(7))
-        denom = dx * nx + dy * ny
         with np.errstate(all="ignore"):
+            u, px, py, nx, ny = self.ray_entry_xy(origin[:, 0], origin[:, 1], direction[:, 0], direction[:, 1], u_max)
+        return u, np.stack([px, py], axis=1), np.stack([nx, ny], axis=1)
+
+    def ray_entry_xy(
+        self, ox: Array, oy: Array, dx: Array, dy: Array, u_max: Array
+    ) -> tuple[Array, Array, Array, Array, Array]:
+        """:meth:`ray_entry` on columns: ``u`` (``inf`` if none), entry ``x``, ``y`` and
+        normal ``nx``, ``ny`` (NaN if none). Call inside ``np.errstate(all="ignore")``."""
+        u_best = np.full(len(ox), np.inf)
+        bnx, bny = np.full(len(ox), np.nan), np.full(len(ox), np.nan)
+        hi = u_max + EPS
+        for ax, ay, ex, ey, l2, nx, ny in self.edges:  # running minimum; ties keep the earlier edge
+            denom = dx * nx + dy * ny
             u = ((ax - ox) * nx + (ay - oy) * ny) / denom
             s = (((ox + u * dx) - ax) * ex + ((oy + u * dy) - ay) * ey) / l2
-        ok = (denom > 0.0) & (u >= -EPS) & (u <= u_max[:, None] + EPS) & (s >= -_S_TOL) & (s <= 1.0 + _S_TOL)
-        u = np.where(ok, u, np.inf)
-        k = np.argmin(u, axis=1)
-        rows = np.arange(len(k))
-        u_best = u[rows, k]
-        hit = np.isfinite(u_best)
-        with np.errstate(all="ignore"):
-            pts = np.stack([origin[:, 0] + u_best * direction[:, 0], origin[:, 1] + u_best * direction[:, 1]], axis=1)
-        normals = np.stack([nx[k], ny[k]], axis=1)
-        pts[~hit] = np.nan
-        normals[~hit] = np.nan
-        return u_best, pts, normals
+            better = (denom > 0.0) & (u >= -EPS) & (u <= hi) & (s >= -_S_TOL) & (s <= 1.0 + _S_TOL) & (u < u_best)
+            u_best = np.where(better, u, u_best)
+            bnx = np.where(better, nx, bnx)
+            bny = np.where(better, ny, bny)
+        hit = u_best != np.inf
+        px = np.where(hit, ox + u_best * dx, np.nan)
+        py = np.where(hit, oy + u_best * dy, np.nan)
+        return u_best, px, py, bnx, bny
 
 
 def _check_simple(pts: list[tuple[float, float]]) -> None:
@@ -500,7 +518,12 @@ class Disc:
     def contains_batch(self, p: ArrayLike) -> NDArray[np.bool_]:
         """Vectorised :meth:`contains`."""
         pts = _points(p)
-        vx, vy = pts[:, 0] - self.center[0], pts[:, 1] - self.center[1]
+        with np.errstate(all="ignore"):
+            return self.contains_xy(pts[:, 0], pts[:, 1])
+
+    def contains_xy(self, x: Array, y: Array) -> NDArray[np.bool_]:
+        """:meth:`contains` on coordinate columns (NaN is outside)."""
+        vx, vy = x - self.center[0], y - self.center[1]
         return np.sqrt(vx * vx + vy * vy) < self.radius - EPS
 
     def ray_entry(self, origin: tuple[float, float], direction: tuple[float, float], u_max: float) -> Entry | None:
@@ -528,25 +551,33 @@ class Disc:
 
     def ray_entry_batch(self, origin: Array, direction: Array, u_max: Array) -> tuple[Array, Array, Array]:
         """Vectorised :meth:`ray_entry` (``inf``/NaN where there is no entry)."""
-        ox, oy, dx, dy = origin[:, 0], origin[:, 1], direction[:, 0], direction[:, 1]
+        with np.errstate(all="ignore"):
+            u, px, py, nx, ny = self.ray_entry_xy(origin[:, 0], origin[:, 1], direction[:, 0], direction[:, 1], u_max)
+        return u, np.stack([px, py], axis=1), np.stack([nx, ny], axis=1)
+
+    def ray_entry_xy(
+        self, ox: Array, oy: Array, dx: Array, dy: Array, u_max: Array
+    ) -> tuple[Array, Array, Array, Array, Array]:
+        """:meth:`ray_entry` on columns. Call inside ``np.errstate(all="ignore")``."""
         wx, wy = ox - self.center[0], oy - self.center[1]
         qa = dx * dx + dy * dy
         qb = wx * dx + wy * dy
         qc = wx * wx + wy * wy - self.radius * self.radius
         disc = qb * qb - qa * qc
-        with np.errstate(all="ignore"):
-            u = (-qb - np.sqrt(disc)) / qa
+        u = (-qb - np.sqrt(disc)) / qa
         ok = (disc > 0.0) & (u >= -EPS) & (u <= u_max + EPS)
         u = np.where(ok, u, np.inf)
-        with np.errstate(all="ignore"):
-            px, py = ox + u * dx, oy + u * dy
-            nx, ny = self.center[0] - px, self.center[1] - py
-            norm = np.sqrt(nx * nx + ny * ny)
-            normals = np.stack([nx / norm, ny / norm], axis=1)
-        pts = np.stack([px, py], axis=1)
-        pts[~ok] = np.nan
-        normals[~ok] = np.nan
-        return u, pts, normals
+        px, py = ox + u * dx, oy + u * dy
+        nx, ny = self.center[0] - px, self.center[1] - py
+        norm = np.sqrt(nx * nx + ny * ny)
+        nan = np.nan
+        return (
+            u,
+            np.where(ok, px, nan),
+            np.where(ok, py, nan),
+            np.where(ok, nx / norm, nan),
+            np.where(ok, ny / norm, nan),
+        )
 
 
 def Rectangle(length: float, width: float) -> Polygon:  # noqa: N802 - reads as a type

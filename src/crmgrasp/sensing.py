@@ -197,11 +197,11 @@ class Discretizer:
 
     def index_batch(self, obs: NDArray[np.float64], error: NDArray[np.integer]) -> NDArray[np.int64]:
         """Vectorised :meth:`index`: ``obs`` of shape ``(N, 3)``, ``error`` of shape ``(N,)``."""
-        vals = np.abs(obs[:, 1:]) if self.abs_moments else obs[:, 1:]
-        r = np.searchsorted(np.asarray(self.rho), obs[:, 0], side="right")
-        a = np.searchsorted(np.asarray(self.m_a), vals[:, 0], side="right")
-        b = np.searchsorted(np.asarray(self.m_b), vals[:, 1], side="right")
+        ma, mb = (np.abs(obs[:, 1]), np.abs(obs[:, 2])) if self.abs_moments else (obs[:, 1], obs[:, 2])
         _, na, nb = self._sizes
+        r = _count_at_or_above(obs[:, 0], self.rho)
+        a = _count_at_or_above(ma, self.m_a)
+        b = _count_at_or_above(mb, self.m_b)
         return (((r * na + a) * nb + b) * len(Error) + np.asarray(error)).astype(np.int64)
 
     def decode(self, index: int) -> tuple[int, int, int, Error]:
@@ -228,6 +228,16 @@ class Discretizer:
     def to_dict(self) -> dict[str, object]:
         """JSON-friendly form (round-trips through ``Discretizer(**d)``)."""
         return {"rho": list(self.rho), "m_a": list(self.m_a), "m_b": list(self.m_b), "abs_moments": self.abs_moments}
+
+
+def _count_at_or_above(values: NDArray[np.float64], thresholds: tuple[float, ...]) -> NDArray[np.int64]:
+    """Per value, the number of thresholds ``t`` with ``value >= t`` (its bin)."""
+    if len(thresholds) <= 3:  # a few comparisons beat searchsorted's overhead
+        out = np.zeros(len(values), dtype=np.int64)
+        for t in thresholds:
+            out += values >= t
+        return out
+    return np.searchsorted(np.asarray(thresholds), values, side="right")
 
 
 def _bin_text(name: str, thresholds: tuple[float, ...], k: int) -> str:

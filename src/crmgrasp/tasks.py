@@ -80,6 +80,48 @@ class CornerStarts:
                 return cfg
         raise CrmgraspError(f"no feasible corner start found in {self.max_tries} tries")
 
+    def batch(self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator, n: int) -> np.ndarray:
+        """``n`` starts as an ``(8, n)`` column block, drawn in vectorised rounds.
+
+        Same distribution as :meth:`__call__` (each candidate uses four uniforms the
+        same way and the same acceptance test), not the same stream. The tests run
+        as a cascade, cheapest first, each on the survivors of the last.
+        """
+        from .batch import _feasible
+        from .quality import min_friction_batch
+
+        if not isinstance(obj, Polygon):
+            raise CrmgraspError(f"corner starts need a polygon, got {type(obj).__name__}")
+        e = obj._edge_arrays
+        nv = len(e)
+        out = np.empty((8, n))
+        filled, rounds, rate = 0, 0, 0.2
+        while filled < n:
+            rounds += 1
+            if rounds > self.max_tries:
+                raise CrmgraspError(f"no feasible corner start found in {self.max_tries} rounds")
+            m = int((n - filled) / rate * 1.2) + 32
+            u = rng.random((4, m))
+            k = (u[0] * nv).astype(np.int64)
+            ki = (k - 1) % nv
+            x1, y1 = e[ki, 0] + u[1] * e[ki, 2], e[ki, 1] + u[1] * e[ki, 3]
+            x2, y2 = e[k, 0] + u[2] * e[k, 2], e[k, 1] + u[2] * e[k, 3]
+            dx, dy = x2 - x1, y2 - y1
+            keep = np.flatnonzero((u[1] > 0.0) & (u[2] > 0.0) & (np.sqrt(dx * dx + dy * dy) <= hand.aperture))
+            a_first = u[3, keep] < 0.5
+            p1 = (x1[keep], y1[keep], e[ki[keep], 5], e[ki[keep], 6])
+            p2 = (x2[keep], y2[keep], e[k[keep], 5], e[k[keep], 6])
+            cols = np.stack([np.where(a_first, p, q) for p, q in zip(p1 + p2, p2 + p1)])
+            with np.errstate(all="ignore"):
+                ok = _feasible(obj, hand, *cols) == Error.NONE
+            cols = cols[:, ok]
+            cols = cols[:, min_friction_batch(cols.T) > mu_goal]
+            rate = max(0.02, 0.5 * rate + 0.5 * cols.shape[1] / m)
+            take = min(cols.shape[1], n - filled)
+            out[:, filled : filled + take] = cols[:, :take]
+            filled += take
+        return out
+
 
 @dataclass(frozen=True)
 class UniformStarts:
@@ -164,6 +206,14 @@ class Task:
     def sample_start(self, rng: np.random.Generator) -> Config:
         """A start configuration drawn from ``rng``."""
         return self.starts(self.obj, self.hand, self.mu_goal, rng)
+
+    def sample_starts(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """``n`` starts as an ``(8, n)`` column block: the sampler's vectorised
+        ``batch`` method if it has one, else ``n`` scalar draws."""
+        batch = getattr(self.starts, "batch", None)
+        if batch is not None:
+            return batch(self.obj, self.hand, self.mu_goal, rng, n)
+        return np.array([list(c.a) + list(c.b) for c in (self.sample_start(rng) for _ in range(n))]).reshape(n, 8).T
 
     def is_success(self, config: Config) -> bool:
         """SPEC section 5: ``min_friction(config) <= mu_goal``."""

@@ -1,0 +1,166 @@
+"""A Gymnasium vector environment of N independent CRM grasping episodes, stepped
+with the batched simulator (:func:`crmgrasp.batch.execute_columns`).
+
+``gymnasium.make_vec("crmgrasp/PaperBox-v0", num_envs=1024,
+vectorization_mode="vector_entry_point")`` builds it. Observations are the single
+environment's ``Dict`` batched (``rho``, ``m_a``, ``m_b`` of shape ``(N, 1)``,
+``error`` of shape ``(N,)``); ``info`` holds arrays ``obs_index``,
+``min_friction``, ``steps`` and ``config`` (``(N, 8)``).
+
+Autoreset is ``NEXT_STEP`` (Gymnasium's default): the step after an episode ends
+resets that sub-environment, ignores its action and returns the new start's
+observation with reward 0, ``terminated`` and ``truncated`` false. Starts are
+drawn in blocks of 4,096 with the task sampler's vectorised ``batch`` method from
+``self.np_random``: the same distribution as :class:`~crmgrasp.env.CRMGraspEnv`,
+not the same stream.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from ._validation import CrmgraspError
+from .batch import execute_columns
+from .sensing import Error
+from .tasks import Task, make_task
+
+__all__ = ["CRMGraspVectorEnv"]
+
+
+class CRMGraspVectorEnv(VectorEnv):
+    """``num_envs`` independent episodes of a task, batched (see the module docstring)."""
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
+
+    def __init__(self, num_envs: int = 1, task: Task | str = "paper-box", render_mode: str | None = None) -> None:
+        if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
+            raise CrmgraspError(f"num_envs must be an integer >= 1, got {num_envs!r}")
+        if render_mode is not None:
+            raise CrmgraspError("the vector environment does not render; use CRMGraspEnv")
+        self.task = make_task(task) if isinstance(task, str) else task
+        self.num_envs = num_envs
+        self.render_mode = None
+        t = self.task
+        n_actions = len(t.actions)
+        self._c_is_b = np.array([a.ci == 1 for a in t.actions])
+        self._f_is_b = np.array([a.fi == 1 for a in t.actions])
+        self._r = np.array([a.r for a in t.actions])
+        self._bound = 2.0 * t.hand.aperture
+        self.single_action_space = spaces.Discrete(n_actions)
+        self.action_space = batch_space(self.single_action_space, num_envs)
+        b = self._bound
+        self.single_observation_space = spaces.Dict(
+            {
+                "rho": spaces.Box(0.0, 4.0, shape=(1,), dtype=np.float64),
+                "m_a": spaces.Box(-b, b, shape=(1,), dtype=np.float64),
+                "m_b": spaces.Box(-b, b, shape=(1,), dtype=np.float64),
+                "error": spaces.Discrete(len(Error)),
+            }
+        )
+        self.observation_space = batch_space(self.single_observation_space, num_envs)
+        self._cfg = np.zeros((8, num_envs))
+        self._sensed = self._cfg
+        self._steps = np.zeros(num_envs, dtype=np.int64)
+        self._prev_done = np.zeros(num_envs, dtype=bool)
+        self._ready = False
+        self._buffer = np.empty((8, 0))
+        self._next = 0
+
+    def _starts(self, n: int) -> np.ndarray:
+        """``n`` fresh starts, served from a block drawn ``max(4096, n)`` at a time
+        (starts are i.i.d., so block draws change cost, not distribution)."""
+        if self._next + n > self._buffer.shape[1]:
+            block = self.task.sample_starts(self.np_random, max(4096, n))
+            self._buffer = np.concatenate([self._buffer[:, self._next :], block], axis=1)
+            self._next = 0
+        out = self._buffer[:, self._next : self._next + n]
+        self._next += n
+        return out
+
+    def _sense(self, cols: np.ndarray) -> np.ndarray:
+        noise = self.task.noise
+        if not noise.active:
+            return cols
+        return np.ascontiguousarray(noise.sense_batch(cols.T, self.np_random).T)
+
+    def _observe(
+        self, errors: np.ndarray, rows: np.ndarray | None = None
+    ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+        s, c = self._sensed, self._cfg
+        with np.errstate(all="ignore"):
+            sx, sy = s[2] + s[6], s[3] + s[7]
+            dx, dy = s[4] - s[0], s[5] - s[1]
+            rho = sx * sx + sy * sy
+            m_a = dx * s[7] - dy * s[6]
+            m_b = -dx * s[3] + dy * s[2]
+            mu = np.zeros(self.num_envs)
+            for i, j in ((0, 4), (4, 0)):
+                ex, ey = c[j] - c[i], c[j + 1] - c[i + 1]
+                dot = c[i + 2] * ex + c[i + 3] * ey
+                tan = np.where(dot > 0.0, np.abs(c[i + 2] * ey - c[i + 3] * ex) / dot, np.inf)
+                mu = np.maximum(mu, np.where(tan < 1e-12, 0.0, tan))
+        index = self.task.discretizer.index_batch(np.stack([rho, m_a, m_b], axis=1), errors)
+        b = self._bound
+        obs = {
+            "rho": np.clip(rho, 0.0, 4.0)[:, None],
+            "m_a": np.clip(m_a, -b, b)[:, None],
+            "m_b": np.clip(m_b, -b, b)[:, None],
+            "error": errors.astype(np.int64),
+        }
+        return obs, index, mu
+
+    def _info(self, index: np.ndarray, mu: np.ndarray) -> dict[str, Any]:
+        return {"obs_index": index, "min_friction": mu, "steps": self._steps.copy(), "config": self._cfg.T.copy()}
+
+    def reset(
+        self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """Reset every sub-environment (``seed`` seeds the shared generator)."""
+        if isinstance(seed, list):
+            raise CrmgraspError("the vector environment takes one integer seed for its generator")
+        super().reset(seed=seed)
+        self._buffer, self._next = np.empty((8, 0)), 0
+        self._cfg = np.array(self._starts(self.num_envs))
+        self._sensed = self._sense(self._cfg)
+        self._steps[:] = 0
+        self._prev_done[:] = False
+        self._ready = True
+        obs, index, mu = self._observe(np.zeros(self.num_envs, dtype=np.int8))
+        return obs, self._info(index, mu)
+
+    def step(self, actions: Any) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        """One CRM in every sub-environment (or a reset where the last step ended it)."""
+        if not self._ready:
+            raise CrmgraspError("call reset() before step()")
+        a = np.asarray(actions)
+        if a.shape != (self.num_envs,) or a.dtype.kind not in "iu":
+            raise CrmgraspError(f"actions must be {self.num_envs} integers, got shape {a.shape} dtype {a.dtype}")
+        if np.any((a < 0) | (a >= len(self.task.actions))):
+            raise CrmgraspError(f"actions must be in [0, {len(self.task.actions)})")
+        with np.errstate(all="ignore"):
+            new, errors = execute_columns(
+                self.task.obj, self.task.hand, self._cfg, self._sensed, self._c_is_b[a], self._f_is_b[a], self._r[a]
+            )
+        self._cfg = new
+        self._sensed = self._sense(new)
+        self._steps += 1
+        done = self._prev_done
+        if done.any():
+            rows = np.flatnonzero(done)
+            self._cfg[:, rows] = self._starts(len(rows))
+            self._sensed = self._sense(self._cfg) if self.task.noise.active else self._cfg
+            self._steps[rows] = 0
+            errors[rows] = Error.NONE
+        obs, index, mu = self._observe(errors)
+        terminated = mu <= self.task.mu_goal
+        truncated = ~terminated & (self._steps >= self.task.max_steps)
+        reward = np.where(done, 0.0, -1.0)
+        terminated[done] = False
+        truncated[done] = False
+        self._prev_done = terminated | truncated
+        return obs, reward, terminated, truncated, self._info(index, mu)
