@@ -13,3 +13,16 @@ def test_bench_core_smoke(capsys):
     res = mod.main(["--smoke"])
     assert res["execute_us"] > 0 and res["cartpole_step_us"] > 0 and res["batch_us_per_crm"] > 0
     assert '"execute_ratio_vs_cartpole_step"' in capsys.readouterr().out
+
+
+def test_run_py_smoke(capsys):
+    import json
+
+    from crmgrasp.cli import main
+
+    assert main(["bench", "--smoke"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    for key in ("step_ratio_vs_cartpole", "batch_ratio_vs_cartpole_vec", "sarsa_fig7_seconds", "batch_peak_mb"):
+        assert res[key] > 0
+    run = BENCH.parent / "run.py"
+    assert "crmgrasp.bench" in run.read_text()

@@ -58,7 +58,7 @@ def test_step_matches_the_scalar_simulator(task):
     _, info = env.reset(seed=2)
     before = info["config"].copy()
     actions = np.random.default_rng(0).integers(4, size=64)
-    obs, rew, term, trunc, info = env.step(actions)
+    obs, rew, term, _, info = env.step(actions)
     for i in range(64):
         cfg = Config(Contact(*before[i, :4]), Contact(*before[i, 4:]))
         out = execute_crm(task.obj, task.hand, cfg, task.actions[actions[i]], cfg)

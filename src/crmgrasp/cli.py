@@ -141,6 +141,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--eval-episodes", type=int, default=1000, help="greedy evaluation episodes per trial")
     p.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
     p.add_argument("--out", type=Path, required=True, help="output folder")
+    p.add_argument(
+        "--lockstep",
+        action="store_true",
+        help="step all trials together through the batched simulator (same results; faster from ~500 trials)",
+    )
     for flag, kind, text in _AGENT_FLAGS:
         p.add_argument(flag, type=kind, default=None, help=text)
 
@@ -154,6 +159,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--episodes", type=int, default=1000, help="episodes (default 1000)")
     p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
+
+    p = sub.add_parser(
+        "bench",
+        help="speed benchmarks against Gymnasium's CartPole",
+        description="Time paper-box against CartPole-v1 in one process; print one JSON object.",
+    )
+    p.add_argument("--smoke", action="store_true", help="tiny sizes (CI): no meaningful timings")
+    p.add_argument("--rounds", type=int, default=15, help="alternating rounds (default 15)")
+    p.add_argument("--seed", type=int, default=0)
 
     sub.add_parser("tasks", help="list registered tasks", description="List the registered tasks.")
     return parser
@@ -262,6 +276,7 @@ def _cmd_learn(args: argparse.Namespace) -> int:
         episodes=args.episodes,
         seed=args.seed,
         eval_episodes=args.eval_episodes,
+        lockstep=args.lockstep,
     )
     paths = write_learn_outputs(task, run, args.out)
     s = run.summary
@@ -311,6 +326,15 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from .bench import main as bench_main
+
+    if args.rounds < 1:
+        raise CrmgraspError(f"--rounds must be >= 1, got {args.rounds}")
+    bench_main((["--smoke"] if args.smoke else []) + ["--rounds", str(args.rounds), "--seed", str(args.seed)])
+    return 0
+
+
 def _cmd_tasks(args: argparse.Namespace) -> int:
     for name in task_names():
         print(f"{name}: {make_task(name).description}")
@@ -328,6 +352,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "tasks": _cmd_tasks,
         "learn": _cmd_learn,
         "evaluate": _cmd_evaluate,
+        "bench": _cmd_bench,
     }
     try:
         return handlers[args.command](args)

@@ -2,6 +2,7 @@
 
 from .base import Agent, greedy_choice
 from .baselines import FixedSequence, RandomAgent
+from .lockstep import train_trials_lockstep
 from .policy import GreedyPolicy
 from .tabular import DynaQ, QLearning, Sarsa, SarsaLambda, TabularAgent
 from .training import AGENTS, encoder_for, episodes_to_within, evaluate, make_agent, run_episode, train_trials
@@ -24,4 +25,5 @@ __all__ = [
     "make_agent",
     "run_episode",
     "train_trials",
+    "train_trials_lockstep",
 ]

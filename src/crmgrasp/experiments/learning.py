@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from .._io import save_figure, write_csv, write_json
-from ..agents import GreedyPolicy, TabularAgent, episodes_to_within, train_trials
+from ..agents import GreedyPolicy, TabularAgent, episodes_to_within, train_trials, train_trials_lockstep
 from ..agents.training import DEFAULT_CHECKPOINTS, TrialResult, checkpoints_to_within
 from ..tasks import Task
 
@@ -68,10 +68,12 @@ def learn(
     seed: int,
     eval_episodes: int = 1000,
     checkpoint_episodes: int = 100,
+    lockstep: bool = False,
 ) -> LearnRun:
     """Train ``trials`` independent agents and summarise them."""
     t0 = time.perf_counter()
-    res = train_trials(
+    trainer = train_trials_lockstep if lockstep else train_trials
+    res = trainer(
         task,
         spec.agent,
         trials=trials,
