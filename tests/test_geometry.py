@@ -118,10 +118,9 @@ def test_boundary_points_are_on_boundary_with_unit_inward_normal(obj, frac):
     step = 1e-6
     inner = (bp.point[0] + step * bp.normal[0], bp.point[1] + step * bp.normal[1])
     outer = (bp.point[0] - step * bp.normal[0], bp.point[1] - step * bp.normal[1])
-    assert not obj.contains(outer)
     near_vertex = isinstance(obj, Polygon) and min(math.dist(bp.point, v) for v in obj.vertices) < 1e-4
-    if not near_vertex:
-        assert obj.contains(inner)
+    if not near_vertex:  # at a vertex (convex or reflex) either side may cross the adjacent edge
+        assert obj.contains(inner) and not obj.contains(outer)
 
 
 @given(objects, st.lists(st.tuples(st.floats(-0.3, 0.3), st.floats(-0.3, 0.3)), min_size=1, max_size=30))
