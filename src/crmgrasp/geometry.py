@@ -104,6 +104,13 @@ def _points(p: ArrayLike, name: str = "points") -> Array:
     return arr
 
 
+def _ray_entry_rows(shape: Shape, origin: Array, direction: Array, u_max: Array) -> tuple[Array, Array, Array]:
+    """``ray_entry_batch`` on ``(N, 2)`` rows via the shape's column method."""
+    with np.errstate(all="ignore"):
+        u, px, py, nx, ny = shape.ray_entry_xy(origin[:, 0], origin[:, 1], direction[:, 0], direction[:, 1], u_max)
+    return u, np.stack([px, py], axis=1), np.stack([nx, ny], axis=1)
+
+
 def _segments_cross(p: tuple, q: tuple, r: tuple, s: tuple) -> bool:
     """True if closed segments pq and rs share a point (collinear overlap included)."""
 
@@ -390,9 +397,7 @@ class Polygon:
         Returns ``u`` of shape ``(N,)`` (``inf`` where the segment never enters),
         entry points ``(N, 2)`` and inward normals ``(N, 2)`` (NaN where none).
         """
-        with np.errstate(all="ignore"):
-            u, px, py, nx, ny = self.ray_entry_xy(origin[:, 0], origin[:, 1], direction[:, 0], direction[:, 1], u_max)
-        return u, np.stack([px, py], axis=1), np.stack([nx, ny], axis=1)
+        return _ray_entry_rows(self, origin, direction, u_max)
 
     def ray_entry_xy(
         self, ox: Array, oy: Array, dx: Array, dy: Array, u_max: Array
@@ -551,9 +556,7 @@ class Disc:
 
     def ray_entry_batch(self, origin: Array, direction: Array, u_max: Array) -> tuple[Array, Array, Array]:
         """Vectorised :meth:`ray_entry` (``inf``/NaN where there is no entry)."""
-        with np.errstate(all="ignore"):
-            u, px, py, nx, ny = self.ray_entry_xy(origin[:, 0], origin[:, 1], direction[:, 0], direction[:, 1], u_max)
-        return u, np.stack([px, py], axis=1), np.stack([nx, ny], axis=1)
+        return _ray_entry_rows(self, origin, direction, u_max)
 
     def ray_entry_xy(
         self, ox: Array, oy: Array, dx: Array, dy: Array, u_max: Array

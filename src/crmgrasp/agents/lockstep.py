@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validation import CrmgraspError
 from ..batch import execute_columns
 from ..contacts import Config, Contact
 from ..quality import min_friction_batch
@@ -22,6 +21,7 @@ from ..sim import reset
 from ..tasks import Task
 from .training import (
     TrialResult,
+    check_budget,
     checkpoint_generators,
     encoder_for,
     evaluate,
@@ -59,9 +59,7 @@ def train_trials_lockstep(
 ) -> TrialResult:
     """Lockstep version of :func:`~crmgrasp.agents.training.train_trials` (same
     arguments, same results); faster when ``trials`` is large (hundreds or more)."""
-    for name, v in (("trials", trials), ("episodes", episodes)):
-        if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-            raise CrmgraspError(f"{name} must be an integer >= 1, got {v!r}")
+    check_budget(trials, episodes, eval_episodes)
     encoder = encoder_for(task, k)
     disc, noise = task.discretizer, task.noise
     ckpts = np.array(sorted({c for c in checkpoints if 1 <= c <= episodes}), dtype=np.int64)

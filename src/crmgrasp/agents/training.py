@@ -167,6 +167,13 @@ class TrialResult:
         return self.steps.std(axis=0, ddof=1) / np.sqrt(n) if n > 1 else np.zeros(self.steps.shape[1])
 
 
+def check_budget(trials: int, episodes: int, eval_episodes: int) -> None:
+    """One-line errors for a bad training budget."""
+    for name, v, low in (("trials", trials, 1), ("episodes", episodes, 1), ("eval_episodes", eval_episodes, 0)):
+        if isinstance(v, bool) or not isinstance(v, int) or v < low:
+            raise CrmgraspError(f"{name} must be an integer >= {low}, got {v!r}")
+
+
 def train_trials(
     task: Task,
     agent: str,
@@ -187,11 +194,7 @@ def train_trials(
     evaluated on ``checkpoint_episodes`` episodes whose starts are the same at every
     checkpoint (:func:`checkpoint_generators`): a learning curve of the policy itself,
     free of exploration and of start-to-start noise."""
-    for name, v in (("trials", trials), ("episodes", episodes)):
-        if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-            raise CrmgraspError(f"{name} must be an integer >= 1, got {v!r}")
-    if isinstance(eval_episodes, bool) or not isinstance(eval_episodes, int) or eval_episodes < 0:
-        raise CrmgraspError(f"eval_episodes must be an integer >= 0, got {eval_episodes!r}")
+    check_budget(trials, episodes, eval_episodes)
     encoder = encoder_for(task, k)
     steps = np.empty((trials, episodes), dtype=np.int64)
     success = np.empty((trials, episodes), dtype=bool)

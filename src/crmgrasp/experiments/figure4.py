@@ -47,6 +47,10 @@ class Figure4Config:
     """Sensing noise on positions, metres (standard deviation per axis)."""
     max_corner_distance: float = 0.10
     """Largest distance of the fingers' contact from the corner, metres."""
+    min_corner_distance: float = 0.01
+    """Smallest distance of the fingers' contact from the corner, metres: five
+    standard deviations of the position noise, so the fingers are on the long side
+    (nearer, a noisy goal line can slide off the side past the corner)."""
     palm_tolerance_deg: float = 10.0
     """Angle a contact surface may face the palm side (``Hand.palm_normal_tol`` =
     sin of it). SPEC's 1e-9 would turn nearly every noisy opposition into a palm
@@ -72,9 +76,12 @@ def _long_side_contact(task: Task, cfg: Config) -> str | None:
     return "a" if la > lb else "b"
 
 
-def long_side_start(task: Task, rng: np.random.Generator, max_corner_distance: float) -> tuple[Config, str]:
-    """A task start whose long-side contact lies within ``max_corner_distance`` of the
-    nearest vertex; returns the configuration and that contact's label."""
+def long_side_start(
+    task: Task, rng: np.random.Generator, max_corner_distance: float, min_corner_distance: float = 0.0
+) -> tuple[Config, str]:
+    """A task start whose long-side contact lies ``min_corner_distance`` to
+    ``max_corner_distance`` from the nearest vertex; returns the configuration and
+    that contact's label."""
     for _ in range(10_000):
         cfg = task.sample_start(rng)
         lab = _long_side_contact(task, cfg)
@@ -82,7 +89,7 @@ def long_side_start(task: Task, rng: np.random.Generator, max_corner_distance: f
             continue
         c = cfg[lab]
         dist = min(math.hypot(c.x - vx, c.y - vy) for vx, vy in task.obj.vertices)  # type: ignore[attr-defined]
-        if dist <= max_corner_distance:
+        if min_corner_distance <= dist <= max_corner_distance:
             return cfg, lab
     raise CrmgraspError("no long-side start found within max_corner_distance")
 
@@ -97,7 +104,7 @@ def figure_4_opposition_quality(out_dir: str | Path, config: Figure4Config = Fig
     rng = np.random.default_rng(config.seed)
     rows, values, failures = [], [], 0
     for trial in range(config.trials):
-        start, fingers = long_side_start(task, rng, config.max_corner_distance)
+        start, fingers = long_side_start(task, rng, config.max_corner_distance, config.min_corner_distance)
         thumb = "b" if fingers == "a" else "a"
         crm = CRM(thumb, fingers, 0.0)
         outcome = noisy.hand.execute(task.obj, start, crm, noise=noisy.noise, rng=rng)

@@ -1,0 +1,43 @@
+"""How noisy is ``episodes_to_5pct``? Score a fixed, converged policy with it.
+
+Trains the paper's SARSA (5 trials x 3,000 episodes, seed 99), keeps the best
+trial's greedy policy, then runs that *fixed* policy (no learning) through the
+same 20-trial episode streams ``crmgrasp learn`` uses (seed 0) for 200 and for
+2,000 episodes, and applies the ``episodes_to_5pct`` rule to its curve. A policy
+that does not learn can only fail the rule by chance.
+
+Usage: ``python benchmarks/metric_noise.py``; prints one JSON object.
+"""
+
+import json
+
+import numpy as np
+
+from crmgrasp import paper_box
+from crmgrasp.agents import GreedyPolicy, episodes_to_within, train_trials
+from crmgrasp.agents.training import encoder_for, run_episode, trial_generators
+
+
+def main() -> dict:
+    task = paper_box()
+    res = train_trials(task, "sarsa", trials=5, episodes=3000, seed=99, eval_episodes=2000)
+    best = int(np.argmin(res.greedy_steps.mean(axis=1)))
+    policy = GreedyPolicy.from_agent(task, 2, res.agents[best])
+    enc = encoder_for(task, 2)
+    out = {"fixed_policy_greedy_mean_steps": float(res.greedy_steps[best].mean())}
+    for episodes in (200, 2000):
+        steps = np.zeros((20, episodes))
+        for t, (env_rng, agent_rng, _) in enumerate(trial_generators(0, 20)):
+            for e in range(episodes):
+                steps[t, e] = run_episode(task, policy, enc, env_rng, agent_rng, learn=False)[0]
+        curve = steps.mean(axis=0)
+        ma = np.convolve(curve, np.ones(10) / 10, mode="valid")
+        out[f"episodes_to_5pct_over_{episodes}"] = episodes_to_within(curve, task.reference_mean_steps)
+        out[f"max_10_episode_average_over_{episodes}"] = round(float(ma.max()), 3)
+        out[f"mean_over_{episodes}"] = round(float(curve.mean()), 3)
+    print(json.dumps(out, indent=2))
+    return out
+
+
+if __name__ == "__main__":
+    main()
