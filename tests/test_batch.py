@@ -14,11 +14,17 @@ from crmgrasp.hand import execute_crm, feasible
 from crmgrasp.quality import min_friction, min_friction_batch
 from crmgrasp.sensing import observe, observe_batch
 
-from .strategies import scenes
+from .strategies import BACKENDS, scenes, use_backend
 
 
+@pytest.mark.parametrize("backend", BACKENDS)
 @given(st.lists(scenes(), min_size=1, max_size=1), st.integers(2, 12), st.booleans(), st.integers(0, 2**32 - 1))
-def test_batch_matches_scalar(first, n, noisy, seed):
+def test_batch_matches_scalar(backend, first, n, noisy, seed):
+    with use_backend(backend):
+        _check_batch_matches_scalar(first, n, noisy, seed)
+
+
+def _check_batch_matches_scalar(first, n, noisy, seed):
     obj, hand, cfg0, _ = first[0]
     rng = np.random.default_rng(seed)
     # n random configurations on the same object, random CRMs
@@ -56,7 +62,13 @@ def test_batch_noise_stream_equals_scalar_stream(task):
     assert array_to_configs(batch)[0] == noise.sense(cfgs[0], np.random.default_rng(9))
 
 
-def test_batch_worked_cases(task):
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_batch_worked_cases(task, backend):
+    with use_backend(backend):
+        _worked(task)
+
+
+def _worked(task):
     near = task.hand.contact(task.obj, a=(-0.15, -0.02), b=(-0.10, -0.05))
     far = task.hand.contact(task.obj, a=(-0.15, -0.02), b=(0.00, -0.05))
     cfgs = configs_to_array([near, near, far, far])
@@ -76,3 +88,24 @@ def test_batch_input_errors(task):
         execute_batch(task.obj, task.hand, arr, 0, 1, 1.0)
     with pytest.raises(CrmgraspError, match="finite"):
         execute_batch(task.obj, task.hand, arr * np.nan, 0, 1, 0.0)
+
+
+def test_backends_agree_on_vector_env_and_starts():
+    """Results do not depend on whether the optional compiled kernel is installed."""
+    from crmgrasp.vector import CRMGraspVectorEnv
+
+    def run():
+        env = CRMGraspVectorEnv(256)
+        out = [env.reset(seed=9)[1]["config"]]
+        rng = np.random.default_rng(9)
+        for _ in range(20):
+            obs, rew, term, trunc, info = env.step(rng.integers(4, size=256))
+            out += [info["config"], obs["rho"], obs["m_a"], rew, term, trunc, info["obs_index"]]
+        return out
+
+    with use_backend("numpy"):
+        a = run()
+    with use_backend("numba"):
+        b = run()
+    for x, y in zip(a, b):
+        np.testing.assert_array_equal(x, y)

@@ -10,6 +10,8 @@ from crmgrasp import SensorNoise, make_task
 from crmgrasp.agents.lockstep import train_trials_lockstep
 from crmgrasp.agents.training import train_trials
 
+from .strategies import BACKENDS, use_backend
+
 
 @pytest.mark.parametrize(
     "agent, params, k, noisy",
@@ -22,13 +24,16 @@ from crmgrasp.agents.training import train_trials
         ("sarsa", {}, 2, True),
     ],
 )
-def test_lockstep_equals_sequential(agent, params, k, noisy):
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_lockstep_equals_sequential(agent, params, k, noisy, backend):
     task = make_task("paper-box")
     if noisy:
         hand = dataclasses.replace(task.hand, palm_normal_tol=math.sin(math.radians(10)))
         task = dataclasses.replace(task, noise=SensorNoise(math.radians(3), 0.002), hand=hand)
     kw = dict(trials=6, episodes=60, seed=11, k=k, eval_episodes=30, params=params, checkpoints=(5, 20, 60))
-    a, b = train_trials(task, agent, **kw), train_trials_lockstep(task, agent, **kw)
+    a = train_trials(task, agent, **kw)
+    with use_backend(backend):
+        b = train_trials_lockstep(task, agent, **kw)
     np.testing.assert_array_equal(a.steps, b.steps)
     np.testing.assert_array_equal(a.success, b.success)
     np.testing.assert_array_equal(a.greedy_steps, b.greedy_steps)

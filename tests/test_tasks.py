@@ -64,11 +64,15 @@ def test_registry_and_validation(task):
         Task("x", "box", task.hand, task.actions)
 
 
-def test_batched_corner_starts_match_the_scalar_distribution(task):
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_batched_corner_starts_match_the_scalar_distribution(task, backend):
     from scipy.stats import ks_2samp
+
+    from .strategies import use_backend
 
     rng = np.random.default_rng(0)
     scalar = np.array([np.asarray(task.sample_start(rng)).ravel() for _ in range(3000)])
-    batch = task.sample_starts(np.random.default_rng(1), 3000).T
+    with use_backend(backend):
+        batch = task.sample_starts(np.random.default_rng(1), 3000).T
     for col in range(8):  # every coordinate and normal component, two-sample KS test
         assert ks_2samp(scalar[:, col], batch[:, col]).pvalue > 1e-3, col

@@ -11,6 +11,8 @@ from crmgrasp.hand import execute_crm, feasible
 from crmgrasp.sensing import Error
 from crmgrasp.vector import CRMGraspVectorEnv
 
+from .strategies import BACKENDS, use_backend
+
 
 def test_make_vec_and_spaces():
     env = gym.make_vec(ENV_ID, num_envs=16, vectorization_mode="vector_entry_point")
@@ -53,7 +55,13 @@ def test_starts_are_valid_paper_box_starts(task):
     assert 0.2 < near < 0.8
 
 
-def test_step_matches_the_scalar_simulator(task):
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_step_matches_the_scalar_simulator(task, backend):
+    with use_backend(backend):
+        _step_matches(task)
+
+
+def _step_matches(task):
     env = CRMGraspVectorEnv(64)
     _, info = env.reset(seed=2)
     before = info["config"].copy()

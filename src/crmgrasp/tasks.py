@@ -15,6 +15,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from . import _numba
 from ._validation import CrmgraspError, non_negative
 from .contacts import Config, Contact
 from .geometry import Polygon, Rectangle, Shape
@@ -96,6 +97,22 @@ class CornerStarts:
         nv = len(e)
         out = np.empty((8, n))
         filled, rounds, rate = 0, 0, 0.2
+        if _numba.AVAILABLE:  # compiled filter over uniforms drawn here, from rng
+            while filled < n:
+                rounds += 1
+                if rounds > self.max_tries:
+                    raise CrmgraspError(f"no feasible corner start found in {self.max_tries} rounds")
+                m = int((n - filled) / rate * 1.2) + 32
+                u = rng.random((4, m))
+                got = np.empty((8, m))
+                count = _numba.corner_candidates(
+                    u, e, obj.convex, hand.aperture, hand.palm_depth, hand.palm_normal_tol, mu_goal, got
+                )
+                rate = max(0.02, 0.5 * rate + 0.5 * count / m)
+                take = min(count, n - filled)
+                out[:, filled : filled + take] = got[:, :take]
+                filled += take
+            return out
         while filled < n:
             rounds += 1
             if rounds > self.max_tries:

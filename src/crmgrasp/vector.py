@@ -24,6 +24,7 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from . import _numba
 from ._validation import CrmgraspError
 from .batch import execute_columns
 from .sensing import Error
@@ -92,6 +93,11 @@ class CRMGraspVectorEnv(VectorEnv):
         self, errors: np.ndarray, rows: np.ndarray | None = None
     ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
         s, c = self._sensed, self._cfg
+        if _numba.AVAILABLE:
+            n = self.num_envs
+            rho, m_a, m_b, mu = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+            _numba.observe_rows(np.ascontiguousarray(c), np.ascontiguousarray(s), rho, m_a, m_b, mu)
+            return self._pack(rho, m_a, m_b, mu, errors)
         with np.errstate(all="ignore"):
             sx, sy = s[2] + s[6], s[3] + s[7]
             dx, dy = s[4] - s[0], s[5] - s[1]
@@ -104,6 +110,11 @@ class CRMGraspVectorEnv(VectorEnv):
                 dot = c[i + 2] * ex + c[i + 3] * ey
                 tan = np.where(dot > 0.0, np.abs(c[i + 2] * ey - c[i + 3] * ex) / dot, np.inf)
                 mu = np.maximum(mu, np.where(tan < 1e-12, 0.0, tan))
+        return self._pack(rho, m_a, m_b, mu, errors)
+
+    def _pack(
+        self, rho: np.ndarray, m_a: np.ndarray, m_b: np.ndarray, mu: np.ndarray, errors: np.ndarray
+    ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
         index = self.task.discretizer.index_batch(np.stack([rho, m_a, m_b], axis=1), errors)
         b = self._bound
         obs = {
