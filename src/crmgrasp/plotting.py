@@ -160,11 +160,7 @@ def learning_curve_figure(
         ax.plot(*paper, "k*", ms=12, label=f"paper: {paper[1]:g} CRMs at ~{paper[0]:g} episodes")
     ax.set_xscale("log")
     ax.set_xlabel("episode")
-    ax.set_ylabel(
-        f"CRMs per episode (mean over trials, {smooth}-episode moving average)"
-        if smooth > 1
-        else "CRMs per episode (mean over trials)"
-    )
+    ax.set_ylabel(f"CRMs per episode ({smooth}-episode mean)" if smooth > 1 else "CRMs per episode")
     ax.set_ylim(bottom=0)
     ax.set_title(title, fontsize=10)
     ax.legend(fontsize=7, loc="upper right")
