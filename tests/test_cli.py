@@ -55,6 +55,7 @@ def test_crm_with_noise_is_seeded(capsys):
         (["learn", "--trials", "0", "--out", "x"], "trials must be"),
         (["learn", "--alpha", "2", "--trials", "1", "--episodes", "1", "--out", "x"], "alpha must be in"),
         (["learn", "--k", "-1", "--out", "x"], "--k must be >= 0"),
+        (["references", "--starts", "0"], "integer >= 1"),
         (["evaluate", "--policy", "missing.json"], "does not exist"),
         (["evaluate", "--policy", "missing.json", "--episodes", "0"], "--episodes must be >= 1"),
     ],
@@ -145,3 +146,10 @@ def test_learn_then_evaluate(tmp_path, capsys):
         )
         == 0
     )
+
+
+def test_references_command(capsys):
+    assert main(["references", "--starts", "300", "--seed", "2", "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert 1.0 <= res["clairvoyant_bound"] <= res["belief_optimum"] <= 2.5
+    assert res["aliasing_price"] == pytest.approx(res["belief_optimum"] - res["clairvoyant_bound"])

@@ -169,6 +169,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rounds", type=int, default=15, help="alternating rounds (default 15)")
     p.add_argument("--seed", type=int, default=0)
 
+    p = sub.add_parser(
+        "references",
+        help="clairvoyant bound and belief-space optimum of a task",
+        description="Exact reference values on sampled starts: the clairvoyant bound (full information) "
+        "and the belief-space optimum (observations only).",
+    )
+    p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
+    p.add_argument("--starts", type=int, default=4000, help="sampled starts (default 4000)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the starts (default 0)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of text")
+
     sub.add_parser("tasks", help="list registered tasks", description="List the registered tasks.")
     return parser
 
@@ -326,6 +337,30 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_references(args: argparse.Namespace) -> int:
+    from .references import belief_optimum, clairvoyant_bound, sample_starts
+
+    task = make_task(args.task)
+    starts = sample_starts(task, args.starts, args.seed)
+    clair, belief = clairvoyant_bound(task, starts), belief_optimum(task, starts)
+    res = {
+        "task": task.name,
+        "starts": args.starts,
+        "seed": args.seed,
+        "clairvoyant_bound": clair,
+        "belief_optimum": belief,
+        "aliasing_price": belief - clair,
+    }
+    if args.json:
+        print(json.dumps(res, indent=2))
+    else:
+        print(
+            f"{task.name}, {args.starts} starts (seed {args.seed}): clairvoyant bound {clair:.4f} CRMs, "
+            f"belief-space optimum {belief:.4f} CRMs, price of aliasing {belief - clair:.4f}"
+        )
+    return 0
+
+
 def _cmd_bench(args: argparse.Namespace) -> int:
     from .bench import main as bench_main
 
@@ -353,6 +388,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "learn": _cmd_learn,
         "evaluate": _cmd_evaluate,
         "bench": _cmd_bench,
+        "references": _cmd_references,
     }
     try:
         return handlers[args.command](args)

@@ -133,7 +133,12 @@ def figure_7_learning_curve(out_dir: str | Path, config: Figure7Config = Figure7
     if policy is not None:
         policy.save(out / "policy.json")
 
+    from ..references import belief_optimum, clairvoyant_bound, sample_starts
+
+    starts = sample_starts(task, 4000, config.seed)
     summary: dict[str, Any] = {
+        "belief_optimum_4000_starts": round(belief_optimum(task, starts), 4),
+        "clairvoyant_bound_4000_starts": round(clairvoyant_bound(task, starts), 4),
         "paper_sarsa_greedy_mean_steps": round(runs[0].summary["greedy_mean_steps"], 3),
         "paper_sarsa_final_mean_steps": round(runs[0].summary["final_mean_steps"], 3),
         "paper_sarsa_episodes_to_5pct": runs[0].summary["episodes_to_5pct"],

@@ -1,0 +1,61 @@
+"""Clairvoyant bound and exact belief-space optimum on sampled starts."""
+
+import numpy as np
+import pytest
+
+from crmgrasp import CRM, Config, Contact, CrmgraspError, Disc, Hand, Task, make_task
+from crmgrasp.agents import make_agent
+from crmgrasp.agents.training import encoder_for, rollout
+from crmgrasp.references import belief_optimum, clairvoyant_bound, clairvoyant_steps, sample_starts
+from crmgrasp.tasks import UniformStarts
+
+
+def test_aliased_pair_by_hand(task):
+    # the two mirror near-corner starts observe the same thing; one opposition works in each
+    a = task.hand.contact(task.obj, (-0.15, -0.02), (-0.10, -0.05))
+    b = task.hand.contact(task.obj, (0.10, -0.05), (0.15, -0.02))
+    assert task.discretizer.index(__import__("crmgrasp").observe(a), 0) == task.discretizer.index(
+        __import__("crmgrasp").observe(b), 0
+    )
+    assert clairvoyant_steps(task, a) == 1 and clairvoyant_steps(task, b) == 1
+    assert clairvoyant_bound(task, [a, b]) == 1.0
+    assert belief_optimum(task, [a, b]) == 1.5  # guess one opposition; on failure, the other
+
+
+def test_far_start_needs_two(task):
+    far = task.hand.contact(task.obj, (-0.15, -0.02), (-0.01, -0.05))
+    assert clairvoyant_steps(task, far) == 2
+    assert belief_optimum(task, [far]) == 2.0
+
+
+def test_one_crm_always_suffices_on_a_disc():
+    disc = Task("disc", Disc(0.04), Hand(0.16, 0.12), (CRM("a", "b", 0.0), CRM("a", "a", 0.02)), starts=UniformStarts())
+    starts = sample_starts(disc, 100, seed=0)
+    assert clairvoyant_bound(disc, starts) == 1.0
+    assert belief_optimum(disc, starts) == 1.0
+
+
+@pytest.mark.parametrize("agent", ["fixed", "random"])
+def test_no_policy_beats_the_optimum_on_its_starts(task, agent):
+    starts = sample_starts(task, 300, seed=1)
+    opt, clair = belief_optimum(task, starts), clairvoyant_bound(task, starts)
+    assert clair <= opt
+    policy = make_agent(agent, len(task.actions))
+    enc = encoder_for(task, 2)
+    rng = np.random.default_rng(0)
+    mean = np.mean([len(rollout(task, policy, enc, s, rng)[0]) for s in starts])
+    assert mean >= opt
+
+
+def test_paper_box_references_match_spec(task):
+    starts = sample_starts(task, 4000, seed=0)
+    assert clairvoyant_bound(task, starts) == pytest.approx(1.19, abs=0.02)
+    assert belief_optimum(task, starts) == pytest.approx(1.66, abs=0.02)
+
+
+def test_bad_reference_input(task):
+    with pytest.raises(CrmgraspError, match="at least one start"):
+        belief_optimum(task, [])
+    with pytest.raises(CrmgraspError, match="integer >= 1"):
+        sample_starts(make_task("paper-box"), 0, seed=0)
+    assert clairvoyant_steps(task, Config(Contact(-0.15, 0.0, 1.0, 0.0), Contact(0.15, 0.0, -1.0, 0.0))) >= 1
