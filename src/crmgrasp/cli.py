@@ -180,6 +180,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="seed of the starts (default 0)")
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
 
+    p = sub.add_parser(
+        "compare",
+        help="every method on one task, one table",
+        description="Learners, baselines, the grasp controller and the exact references on one task, "
+        "same seeds; writes compare.csv, compare.md and compare.png to --out.",
+    )
+    p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
+    p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    p.add_argument("--out", type=Path, required=True, help="output folder")
+    p.add_argument("--quick", action="store_true", help="small budgets (seconds)")
+
     sub.add_parser("tasks", help="list registered tasks", description="List the registered tasks.")
     return parser
 
@@ -361,6 +372,19 @@ def _cmd_references(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_compare(args: argparse.Namespace) -> int:
+    from .experiments.compare import CompareConfig, compare
+
+    make_task(args.task)  # a clear error for an unknown task before any work
+    cfg = CompareConfig.quick(args.task, args.seed) if args.quick else CompareConfig(task=args.task, seed=args.seed)
+    summary = compare(args.out, cfg)
+    print((args.out / "compare.md").read_text(encoding="utf-8"))
+    for key, value in summary.items():
+        print(f"{key}: {value}")
+    print(f"wrote {(args.out / 'compare.csv').resolve()}, compare.md, compare.png")
+    return 0
+
+
 def _cmd_bench(args: argparse.Namespace) -> int:
     from .bench import main as bench_main
 
@@ -389,6 +413,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "evaluate": _cmd_evaluate,
         "bench": _cmd_bench,
         "references": _cmd_references,
+        "compare": _cmd_compare,
     }
     try:
         return handlers[args.command](args)

@@ -137,6 +137,7 @@ def learning_curve_figure(
     highlight: str | None = None,
     paper: tuple[float, float] | None = None,
     smooth: int = 10,
+    hlines: dict[str, float] | None = None,
 ) -> Figure:
     """Mean CRMs per episode vs episode, one line per learner with a standard-error
     band, the task's reference optimum as a dashed line, optionally the paper's
@@ -156,6 +157,8 @@ def learning_curve_figure(
     if reference:
         ax.axhline(reference, color="k", ls="--", lw=1, label=f"belief-space optimum {reference:g}")
         ax.axhline(1.05 * reference, color="k", ls=":", lw=0.8, label="optimum + 5%")
+    for (label, value), style in zip((hlines or {}).items(), ["-.", (0, (5, 1)), (0, (1, 1)), "--"]):
+        ax.axhline(value, color="0.35", ls=style, lw=1.2, label=f"{label} {value:.3g}")
     if paper:
         ax.plot(*paper, "k*", ms=12, label=f"paper: {paper[1]:g} CRMs at ~{paper[0]:g} episodes")
     ax.set_xscale("log")

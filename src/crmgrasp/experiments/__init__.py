@@ -16,6 +16,7 @@ from typing import Any
 
 from .._io import atomic_write_text
 from .._validation import CrmgraspError
+from .compare import CompareConfig, compare
 from .figure4 import Figure4Config, figure_4_opposition_quality
 from .figure7 import Figure7Config, figure_7_learning_curve
 from .figure8 import Figure8Config, figure_8_strategies
@@ -104,11 +105,22 @@ def _figure9(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
     ]
 
 
+def _compare(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    cfg = CompareConfig.quick(seed=seed) if quick else CompareConfig(seed=seed)
+    s = compare(out, cfg)
+    return s, [
+        ("best learner, greedy CRMs", f"{s['best_learner_mean_crms']} ({s['best_learner']})", "1.8"),
+        ("belief-space optimum / clairvoyant bound", f"{s['belief_optimum']} / {s['clairvoyant_bound']}", "-"),
+        ("grasp controller (no learning), CRMs", s["grasp_controller_mean_crms"], "-"),
+    ]
+
+
 EXPERIMENTS: dict[str, tuple[str, Runner]] = {
     "figure4": ("Fig. 4: min-friction histogram of 30 opposition CRMs under sensing noise", _figure4),
     "figure7": ("Fig. 7: CRMs per episode vs episode, 20 trials, SARSA and the other learners", _figure7),
     "figure8": ("Fig. 8: the learned strategies on aliased and far-from-corner starts", _figure8),
     "figure9": ("Fig. 9: the learned policy, 11 noisy trials, in the (rho, moment) plane", _figure9),
+    "compare": ("Every method on paper-box: learners, baselines, grasp controller, exact references", _compare),
 }
 """Experiment name -> (description, runner(out_dir, seed, quick, context))."""
 
@@ -117,6 +129,7 @@ IMAGES = {
     "figure7": ["figure7.png", "figure7_greedy.png", "figure7_k_ablation.png"],
     "figure8": ["figure8.png", "figure8.gif"],
     "figure9": ["figure9.png"],
+    "compare": ["compare.png"],
 }
 
 

@@ -1,0 +1,73 @@
+"""The grasp-controller baseline and the compare command."""
+
+import csv
+import json
+
+import numpy as np
+
+from crmgrasp import Error, min_friction
+from crmgrasp.agents.controller import GraspController, run_controller
+from crmgrasp.cli import main
+from crmgrasp.experiments.compare import CompareConfig, compare
+from crmgrasp.experiments.learning import LearnerSpec
+from crmgrasp.hand import execute_crm
+
+
+def _episode(task, cfg):
+    ctl = GraspController(task)
+    ctl.begin_episode()
+    crms = []
+    for _ in range(task.max_steps):
+        crm = ctl.choose(cfg)
+        out = execute_crm(task.obj, task.hand, cfg, crm, cfg)
+        ctl.observe(crm, out.error)
+        crms.append((crm, out.error))
+        cfg = out.config
+        if min_friction(cfg) <= task.mu_goal:
+            return crms, True
+    return crms, False
+
+
+def test_controller_by_hand(task):
+    # far start: oppose with a (larger moment) -> palm error; slide b toward the corner by 0.08; oppose
+    far = task.hand.contact(task.obj, (-0.15, -0.02), (-0.01, -0.05))
+    crms, ok = _episode(task, far)
+    assert ok and [str(c) for c, _ in crms] == ["(a,b,0)", "(b,b,-0.08)", "(a,b,0)"]
+    assert [e for _, e in crms] == [Error.PALM, Error.NONE, Error.NONE]
+    # near start where a has the larger moment and opposing with a works at once
+    near = task.hand.contact(task.obj, (-0.15, -0.02), (-0.10, -0.05))
+    crms, ok = _episode(task, near)
+    assert ok and len(crms) == 1
+
+
+def test_controller_statistics(task):
+    steps, ok = run_controller(task, 500, np.random.default_rng(0))
+    assert ok.all() and 1.8 < steps.mean() < 2.6
+    again, _ = run_controller(task, 500, np.random.default_rng(0))
+    np.testing.assert_array_equal(steps, again)
+
+
+def test_compare_small(tmp_path):
+    cfg = CompareConfig(
+        trials=2,
+        episodes=40,
+        eval_episodes=30,
+        reference_starts=300,
+        learners=(LearnerSpec("sarsa", 2, {}, "SARSA"), LearnerSpec("random", 2, {}, "random")),
+    )
+    s = compare(tmp_path, cfg)
+    with open(tmp_path / "compare.csv") as fh:
+        rows = {r["method"]: r for r in csv.DictReader(fh)}
+    assert set(rows) == {"SARSA", "random", "grasp controller", "belief-space optimum", "clairvoyant bound"}
+    assert float(rows["clairvoyant bound"]["mean_crms"]) <= float(rows["belief-space optimum"]["mean_crms"])
+    assert float(rows["random"]["ci95_low"]) <= float(rows["random"]["mean_crms"]) <= float(rows["random"]["ci95_high"])
+    assert "| grasp controller | baseline |" in (tmp_path / "compare.md").read_text()
+    assert (tmp_path / "compare.png").stat().st_size > 1000
+    assert json.loads((tmp_path / "config.json").read_text())["summary"] == s
+
+
+def test_compare_cli_quick(tmp_path, capsys):
+    assert main(["compare", "--quick", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "belief-space optimum" in out and "grasp controller" in out
+    assert main(["compare", "--task", "nope", "--out", str(tmp_path)]) == 2
