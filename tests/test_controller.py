@@ -58,7 +58,14 @@ def test_compare_small(tmp_path):
     s = compare(tmp_path, cfg)
     with open(tmp_path / "compare.csv") as fh:
         rows = {r["method"]: r for r in csv.DictReader(fh)}
-    assert set(rows) == {"SARSA", "random", "grasp controller", "belief-space optimum", "clairvoyant bound"}
+    assert set(rows) == {
+        "SARSA",
+        "random",
+        "grasp controller",
+        "belief-space optimum",
+        "clairvoyant bound",
+        "belief-space policy, executed",
+    }
     assert float(rows["clairvoyant bound"]["mean_crms"]) <= float(rows["belief-space optimum"]["mean_crms"])
     assert float(rows["random"]["ci95_low"]) <= float(rows["random"]["mean_crms"]) <= float(rows["random"]["ci95_high"])
     assert "| grasp controller | baseline |" in (tmp_path / "compare.md").read_text()

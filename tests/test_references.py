@@ -59,3 +59,14 @@ def test_bad_reference_input(task):
     with pytest.raises(CrmgraspError, match="integer >= 1"):
         sample_starts(make_task("paper-box"), 0, seed=0)
     assert clairvoyant_steps(task, Config(Contact(-0.15, 0.0, 1.0, 0.0), Contact(0.15, 0.0, -1.0, 0.0))) >= 1
+
+
+def test_belief_policy_executes_its_own_value(task):
+    from crmgrasp.references import BeliefPolicy
+
+    starts = sample_starts(task, 300, seed=4)
+    policy = BeliefPolicy(task, starts)
+    executed = [policy.run(c) for c in starts]
+    assert np.mean([n for n, _ in executed]) == pytest.approx(belief_optimum(task, starts), abs=1e-12)
+    fresh = [policy.run(c) for c in sample_starts(task, 300, seed=5)]
+    assert all(ok for _, ok in fresh) and 1.3 < np.mean([n for n, _ in fresh]) < 2.0

@@ -34,7 +34,7 @@ from .quality import min_friction
 from .sensing import Error, observe
 from .tasks import Task
 
-__all__ = ["clairvoyant_steps", "clairvoyant_bound", "belief_optimum", "sample_starts"]
+__all__ = ["clairvoyant_steps", "clairvoyant_bound", "belief_optimum", "sample_starts", "BeliefPolicy"]
 
 Step = tuple[Config, int, bool]  # next configuration, observation index, grasped
 
@@ -116,15 +116,17 @@ def belief_optimum(task: Task, starts: Sequence[Config], horizon: int | None = N
     return total / len(starts)
 
 
-def _value(model: _Model, belief: tuple[Config, ...], h: int, memo: dict) -> float:
-    """``V(B, h)``: expected further CRMs, mean over the starts in ``belief``."""
+def _value(model: _Model, belief: tuple[Config, ...], h: int, memo: dict, acts: dict | None = None) -> float:
+    """``V(B, h)``: expected further CRMs, mean over the starts in ``belief``; the
+    minimising action goes to ``acts[(belief, h)]`` when ``acts`` is given."""
     if h == 0 or not belief:
         return 0.0
     key = (belief, h)
-    if key in memo:
+    if key in memo and (acts is None or key in acts):
         return memo[key]
     n = len(belief)
     best = float(h)  # doing anything for h steps costs at most h
+    best_action = 0
     options = []
     for a in range(len(model.task.actions)):
         children: dict[int, list[Config]] = {}
@@ -134,8 +136,8 @@ def _value(model: _Model, belief: tuple[Config, ...], h: int, memo: dict) -> flo
                 children.setdefault(index, []).append(nxt)
         kids = [tuple(v) for v in children.values()]
         bound = 1.0 + sum(len(k) * _lower(model, k, h - 1) for k in kids) / n
-        options.append((bound, kids))
-    for bound, kids in sorted(options, key=lambda o: o[0]):
+        options.append((bound, a, kids))
+    for bound, a, kids in sorted(options, key=lambda o: o[0]):
         if bound >= best:
             break
         cost = 1.0
@@ -143,8 +145,11 @@ def _value(model: _Model, belief: tuple[Config, ...], h: int, memo: dict) -> flo
             cost += len(kid) * _value(model, kid, h - 1, memo) / n
             if cost >= best:
                 break
-        best = min(best, cost)
+        if cost < best:
+            best, best_action = cost, a
     memo[key] = best
+    if acts is not None:
+        acts[key] = best_action
     return best
 
 
@@ -154,3 +159,52 @@ def _lower(model: _Model, belief: tuple[Config, ...], h: int) -> float:
     if h == 0:
         return 0.0
     return float(np.mean([model.clairvoyant(c, h) for c in belief]))
+
+
+class BeliefPolicy:
+    """The belief-space optimal policy over a set of sample starts, executable on
+    fresh starts in the simulator.
+
+    The belief is the tuple of sample starts' configurations consistent with the
+    history (noise-free dynamics). Each step takes the minimising action of
+    ``V(B, h)``. When a fresh start produces an observation no sample start in the
+    belief produced (the belief empties), the belief restarts from the sample
+    starts whose first observation equals the current one, with the steps left.
+    """
+
+    def __init__(self, task: Task, starts: Sequence[Config]) -> None:
+        if not starts:
+            raise CrmgraspError("BeliefPolicy needs at least one start")
+        self.task = task
+        self._model = _Model(task)
+        self._memo: dict = {}
+        self._acts: dict = {}
+        self._groups: dict[int, tuple[Config, ...]] = {}
+        for c in starts:
+            k = task.discretizer.index(observe(c), Error.NONE)
+            self._groups[k] = (*self._groups.get(k, ()), c)
+
+    def _action(self, belief: tuple[Config, ...], h: int) -> int:
+        key = (belief, h)
+        if key not in self._acts:
+            _value(self._model, belief, h, self._memo, self._acts)
+        return self._acts[key]
+
+    def run(self, config: Config) -> tuple[int, bool]:
+        """Execute the policy from ``config``; return (CRMs, success)."""
+        t, model = self.task, self._model
+        obs = t.discretizer.index(observe(config), Error.NONE)
+        belief = self._groups.get(obs, ())
+        for n in range(1, t.max_steps + 1):
+            h = t.max_steps - n + 1
+            a = self._action(belief, h) if belief else 0
+            config, obs, grasped = model.step(config, a)
+            if grasped:
+                return n, True
+            nxt = []
+            for c in belief:
+                c2, o2, g2 = model.step(c, a)
+                if not g2 and o2 == obs:
+                    nxt.append(c2)
+            belief = tuple(nxt) or self._groups.get(obs, ())
+        return t.max_steps, False

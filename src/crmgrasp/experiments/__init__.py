@@ -112,6 +112,7 @@ def _compare(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
         ("best learner, greedy CRMs", f"{s['best_learner_mean_crms']} ({s['best_learner']})", "1.8"),
         ("belief-space optimum / clairvoyant bound", f"{s['belief_optimum']} / {s['clairvoyant_bound']}", "-"),
         ("grasp controller (no learning), CRMs", s["grasp_controller_mean_crms"], "-"),
+        ("belief-space policy executed on fresh starts, CRMs", s["belief_policy_executed_mean_crms"], "-"),
     ]
 
 
