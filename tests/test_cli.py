@@ -153,3 +153,13 @@ def test_references_command(capsys):
     res = json.loads(capsys.readouterr().out)
     assert 1.0 <= res["clairvoyant_bound"] <= res["belief_optimum"] <= 2.5
     assert res["aliasing_price"] == pytest.approx(res["belief_optimum"] - res["clairvoyant_bound"])
+
+
+def test_pomdp_command(tmp_path, capsys):
+    out = tmp_path / "box.pomdp"
+    assert (
+        main(["pomdp", "--cell", "0.02", "--samples", "5", "--starts", "300", "--episodes", "100", "--out", str(out)])
+        == 0
+    )
+    assert "model value" in capsys.readouterr().out and out.read_text().startswith("# crmgrasp POMDP")
+    assert main(["pomdp", "--cell", "-1", "--out", str(out)]) == 2

@@ -58,7 +58,7 @@ def test_compare_small(tmp_path):
     s = compare(tmp_path, cfg)
     with open(tmp_path / "compare.csv") as fh:
         rows = {r["method"]: r for r in csv.DictReader(fh)}
-    assert set(rows) == {
+    expected = {
         "SARSA",
         "random",
         "grasp controller",
@@ -66,6 +66,7 @@ def test_compare_small(tmp_path):
         "clairvoyant bound",
         "belief-space policy, executed",
     }
+    assert expected <= set(rows) and any(name.startswith("sampled POMDP") for name in rows)
     assert float(rows["clairvoyant bound"]["mean_crms"]) <= float(rows["belief-space optimum"]["mean_crms"])
     assert float(rows["random"]["ci95_low"]) <= float(rows["random"]["mean_crms"]) <= float(rows["random"]["ci95_high"])
     assert "| grasp controller | baseline |" in (tmp_path / "compare.md").read_text()

@@ -1,0 +1,209 @@
+"""Explicit discrete POMDPs: belief update, point-based value iteration, Cassandra files.
+
+A :class:`POMDP` has states ``S``, actions ``A``, observations ``O``, sparse
+transitions ``T[a][s, s'] = Pr(s' | s, a)``, observations
+``Z[a][s', o] = Pr(o | s', a)``, a start belief ``b0`` and a set of absorbing goal
+states. Every action costs 1 in a non-goal state and 0 in a goal state (reward
+-1 and 0), over a finite horizon: the value is minus the expected number of CRMs.
+
+Belief update (pomdp_py's notation): ``b'(s') = eta Z(o | s', a) sum_s T(s' | s, a) b(s)``.
+
+:func:`solve_pbvi` runs finite-horizon point-based value iteration (Pineau, Gordon
+and Thrun 2003) over a set of reachable beliefs: ``Gamma_t`` holds one alpha vector
+per belief point, with its action; ``alpha_{a}(s) = r_a(s) + sum_o argmax_{alpha in
+Gamma_{t-1}} b . g_{a,o}^alpha``, ``g_{a,o}^alpha = T_a (Z_a[:, o] * alpha)``.
+
+:func:`write_cassandra` and :func:`read_cassandra` handle Tony Cassandra's
+``.pomdp`` format (the subset written here: explicit ``T``, ``O`` entries, ``R``
+with wildcards), so external solvers (pomdp-solve, SARSOP) can cross-check.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy import sparse
+
+from ._io import atomic_write_text
+from ._validation import CrmgraspError
+
+__all__ = ["POMDP", "PBVIPolicy", "belief_update", "solve_pbvi", "collect_beliefs", "write_cassandra", "read_cassandra"]
+
+
+@dataclass
+class POMDP:
+    """A finite POMDP with unit action cost outside the goal states."""
+
+    n_states: int
+    n_actions: int
+    n_obs: int
+    T: list[sparse.csr_matrix]
+    Z: np.ndarray  # (A, S, O)
+    b0: np.ndarray
+    goal: np.ndarray  # bool (S,)
+    goal_obs: int | None = None
+    """Observation emitted only in goal states (the episode ends there), if any."""
+    counts: dict[str, int] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if len(self.T) != self.n_actions or self.Z.shape != (self.n_actions, self.n_states, self.n_obs):
+            raise CrmgraspError("POMDP: T and Z must match the numbers of actions, states and observations")
+        if self.b0.shape != (self.n_states,) or not np.isclose(self.b0.sum(), 1.0):
+            raise CrmgraspError("POMDP: the start belief must be a distribution over the states")
+
+    def reward(self) -> np.ndarray:
+        """``r(s)``: -1 outside the goal, 0 in it (the same for every action)."""
+        return np.where(self.goal, 0.0, -1.0)
+
+
+def belief_update(m: POMDP, b: np.ndarray, a: int, o: int) -> np.ndarray | None:
+    """``b'(s') = eta Z(o | s', a) sum_s T(s' | s, a) b(s)``; ``None`` if ``o`` has
+    probability 0 under ``b`` and ``a``."""
+    pred = m.T[a].T @ b
+    post = pred * m.Z[a][:, o]
+    total = post.sum()
+    return None if total <= 0.0 else post / total
+
+
+def collect_beliefs(m: POMDP, n: int, horizon: int, rng: np.random.Generator) -> np.ndarray:
+    """Up to ``n`` distinct beliefs reachable from ``b0`` under random actions."""
+    points = [m.b0]
+    seen = {m.b0.round(9).tobytes()}
+    for _ in range(50 * n):
+        if len(points) >= n:
+            break
+        b = m.b0
+        for _ in range(horizon):
+            a = int(rng.integers(m.n_actions))
+            pred = m.T[a].T @ b
+            p_obs = pred @ m.Z[a]
+            if m.goal_obs is not None:
+                p_obs[m.goal_obs] = 0.0  # the episode would end: nothing to plan for
+            if p_obs.sum() <= 0:
+                break
+            o = int(rng.choice(m.n_obs, p=p_obs / p_obs.sum()))
+            nb = belief_update(m, b, a, o)
+            if nb is None or nb[~m.goal].sum() <= 0:
+                break
+            nb = np.where(m.goal, 0.0, nb)
+            nb /= nb.sum()
+            key = nb.round(9).tobytes()
+            if key not in seen:
+                seen.add(key)
+                points.append(nb)
+            b = nb
+    return np.array(points)
+
+
+@dataclass
+class PBVIPolicy:
+    """Alpha vectors per steps-to-go ``t`` (``alphas[t]`` of shape ``(k, S)``) with
+    their actions."""
+
+    alphas: list[np.ndarray]
+    actions: list[np.ndarray]
+
+    def value(self, b: np.ndarray, t: int) -> float:
+        """``max_alpha b . alpha`` with ``t`` steps to go (minus expected CRMs)."""
+        return float(np.max(self.alphas[t] @ b))
+
+    def action(self, b: np.ndarray, t: int) -> int:
+        """The action of the best alpha vector at ``b`` with ``t`` steps to go."""
+        return int(self.actions[t][int(np.argmax(self.alphas[t] @ b))])
+
+
+def solve_pbvi(m: POMDP, beliefs: np.ndarray, horizon: int) -> PBVIPolicy:
+    """Finite-horizon point-based value iteration over ``beliefs`` (rows)."""
+    r = m.reward()
+    alphas = [np.zeros((1, m.n_states))]
+    acts = [np.zeros(1, dtype=np.int64)]
+    for _ in range(horizon):
+        prev = alphas[-1]  # (k, S)
+        best_vals = np.full(len(beliefs), -np.inf)
+        new_alpha = np.zeros((len(beliefs), m.n_states))
+        new_act = np.zeros(len(beliefs), dtype=np.int64)
+        for a in range(m.n_actions):
+            alpha_a = np.tile(r, (len(beliefs), 1))
+            for o in range(m.n_obs):
+                zo = m.Z[a][:, o]
+                if not zo.any():
+                    continue
+                g = (m.T[a] @ (zo[:, None] * prev.T)).T  # (k, S): g_{a,o}^alpha
+                pick = np.argmax(beliefs @ g.T, axis=1)  # best alpha per belief
+                alpha_a += g[pick]
+            vals = np.einsum("ij,ij->i", beliefs, alpha_a)
+            better = vals > best_vals
+            best_vals[better] = vals[better]
+            new_alpha[better] = alpha_a[better]
+            new_act[better] = a
+        keep = np.unique(new_alpha.round(12), axis=0, return_index=True)[1]
+        alphas.append(new_alpha[np.sort(keep)])
+        acts.append(new_act[np.sort(keep)])
+    return PBVIPolicy(alphas, acts)
+
+
+def write_cassandra(m: POMDP, path: str | os.PathLike[str]) -> Path:
+    """Write ``m`` in Cassandra's ``.pomdp`` format (discount 1, values reward)."""
+    lines = [
+        "# crmgrasp POMDP: reward -1 per CRM outside the goal states",
+        "discount: 1.0",
+        "values: reward",
+        f"states: {m.n_states}",
+        f"actions: {m.n_actions}",
+        f"observations: {m.n_obs}",
+        "start: " + " ".join(repr(float(p)) for p in m.b0),
+        "",
+    ]
+    for a in range(m.n_actions):
+        coo = m.T[a].tocoo()
+        lines += [
+            f"T: {a} : {s} : {s2} {float(p)!r}"
+            for s, s2, p in zip(coo.row.tolist(), coo.col.tolist(), coo.data.tolist())
+        ]
+    for a in range(m.n_actions):
+        s2s, os_ = np.nonzero(m.Z[a])
+        lines += [f"O: {a} : {s2} : {o} {float(m.Z[a][s2, o])!r}" for s2, o in zip(s2s.tolist(), os_.tolist())]
+    lines += [f"R: * : {s} : * : * {'0.0' if m.goal[s] else '-1.0'}" for s in range(m.n_states)]
+    return atomic_write_text(path, "\n".join(lines) + "\n")
+
+
+def read_cassandra(path: str | os.PathLike[str]) -> POMDP:
+    """Read a file written by :func:`write_cassandra` (that subset of the format)."""
+    head: dict[str, str] = {}
+    t_rows: list[tuple[int, int, int, float]] = []
+    o_rows: list[tuple[int, int, int, float]] = []
+    goal_states: list[int] = []
+    try:
+        for line in Path(path).read_text(encoding="utf-8").splitlines():
+            line = line.split("#", 1)[0].strip()
+            if not line:
+                continue
+            key, _, rest = line.partition(":")
+            if key in ("T", "O"):
+                a, s, tail = (x.strip() for x in rest.split(":"))
+                s2, p = tail.split()
+                (t_rows if key == "T" else o_rows).append((int(a), int(s), int(s2), float(p)))
+            elif key == "R":
+                parts = [x.strip() for x in rest.split(":")]
+                if float(parts[3].split()[-1]) == 0.0:
+                    goal_states.append(int(parts[1]))
+            else:
+                head[key.strip()] = rest.strip()
+        n_s, n_a, n_o = int(head["states"]), int(head["actions"]), int(head["observations"])
+        b0 = np.array([float(x) for x in head["start"].split()])
+    except (KeyError, ValueError, OSError) as exc:
+        raise CrmgraspError(f"cannot read POMDP file {str(path)!r}: {exc}") from None
+    trans = []
+    for a in range(n_a):
+        rows = [(s, s2, p) for aa, s, s2, p in t_rows if aa == a]
+        r, c, d = zip(*rows) if rows else ((), (), ())
+        trans.append(sparse.csr_matrix((d, (r, c)), shape=(n_s, n_s)))
+    obs = np.zeros((n_a, n_s, n_o))
+    for a, s2, o, p in o_rows:
+        obs[a, s2, o] = p
+    goal = np.zeros(n_s, dtype=bool)
+    goal[goal_states] = True
+    return POMDP(n_s, n_a, n_o, trans, obs, b0, goal)

@@ -1,0 +1,214 @@
+"""An explicit POMDP of a polygonal task, built by sampling the simulator.
+
+Hidden states are cells of contact configurations: contact a on edge ``i`` at an
+arclength fraction in bin ``k`` (bins of at most ``cell`` metres), contact b
+likewise, plus one absorbing goal state. Starting from the cells of ``n_starts``
+task starts, every reachable cell is expanded: ``samples`` configurations drawn
+uniformly inside the cell (feasible ones only) execute each CRM; the counts of
+next cells (or the goal) and of discretized observations give ``T`` and ``Z``
+(maximum-likelihood estimates; the counts are reported in ``model.counts``). The
+goal emits its own observation (index ``n_obs - 1``).
+
+:class:`POMDPAgent` runs the point-based policy in the real simulator by belief
+tracking; when an observation has probability 0 under the model, the belief falls
+back to the prediction without that observation.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import sparse
+
+from ._validation import CrmgraspError
+from .contacts import Config, Contact
+from .geometry import Polygon
+from .hand import execute_crm, feasible
+from .pomdp import POMDP, PBVIPolicy, belief_update, collect_beliefs, solve_pbvi
+from .quality import min_friction
+from .sensing import Error, observe
+from .tasks import Task
+
+__all__ = ["TaskPOMDP", "build_task_pomdp", "POMDPAgent"]
+
+Cell = tuple[int, int, int, int]
+
+
+class TaskPOMDP:
+    """A sampled POMDP of a task, with its cell index and initial-observation table."""
+
+    def __init__(self, task: Task, model: POMDP, cells: list[Cell], z0: np.ndarray, bins: list[int]) -> None:
+        self.task, self.model, self.cells, self.z0, self.bins = task, model, cells, z0, bins
+        self.index = {c: i for i, c in enumerate(cells)}
+
+    def cell_of(self, cfg: Config) -> Cell:
+        """The cell of a configuration."""
+        return _cell(self.task.obj, self.bins, cfg)
+
+
+def _cell(obj: Polygon, bins: list[int], cfg: Config) -> Cell:
+    out = []
+    for c in cfg:
+        e = obj.edge_index(c.point)
+        ax, ay, ex, ey, l2 = obj.edges[e][:5]
+        frac = ((c.x - ax) * ex + (c.y - ay) * ey) / l2
+        out += [e, min(bins[e] - 1, max(0, int(frac * bins[e])))]
+    return (out[0], out[1], out[2], out[3])
+
+
+def _sample_in(obj: Polygon, bins: list[int], cell: Cell, rng: np.random.Generator) -> Config:
+    contacts = []
+    for e, k in ((cell[0], cell[1]), (cell[2], cell[3])):
+        ax, ay, ex, ey, _, nx, ny = obj.edges[e]
+        frac = (k + rng.uniform(0.05, 0.95)) / bins[e]
+        contacts.append(Contact(ax + frac * ex, ay + frac * ey, nx, ny))
+    return Config(contacts[0], contacts[1])
+
+
+def build_task_pomdp(
+    task: Task,
+    *,
+    cell: float = 0.01,
+    samples: int = 20,
+    n_starts: int = 2000,
+    seed: int = 0,
+    max_states: int = 20000,
+) -> TaskPOMDP:
+    """Build the sampled POMDP of ``task`` (noise-free dynamics)."""
+    obj = task.obj
+    if not isinstance(obj, Polygon):
+        raise CrmgraspError(f"the sampled POMDP needs a polygonal object, got {type(obj).__name__}")
+    rng = np.random.default_rng(seed)
+    bins = [max(1, math.ceil(math.sqrt(e[4]) / cell)) for e in obj.edges]
+    n_obs = task.discretizer.size + 1
+    goal_obs = n_obs - 1
+    cells: list[Cell] = []
+    index: dict[Cell, int] = {}
+
+    def state(c: Cell) -> int:
+        if c not in index:
+            if len(cells) >= max_states:
+                raise CrmgraspError(f"more than {max_states} reachable cells; use a larger cell size")
+            index[c] = len(cells)
+            cells.append(c)
+        return index[c]
+
+    start_counts: dict[int, int] = {}
+    z0_counts: dict[tuple[int, int], int] = {}
+    for _ in range(n_starts):
+        cfg = task.sample_start(rng)
+        s = state(_cell(obj, bins, cfg))
+        start_counts[s] = start_counts.get(s, 0) + 1
+        o = task.discretizer.index(observe(cfg), Error.NONE)
+        z0_counts[(s, o)] = z0_counts.get((s, o), 0) + 1
+    t_counts: dict[tuple[int, int, int], int] = {}
+    z_counts: dict[tuple[int, int, int], int] = {}
+    done = 0
+    executed = 0
+    while done < len(cells):
+        c = cells[done]
+        configs = []
+        for _ in range(samples * 5):
+            cfg = _sample_in(obj, bins, c, rng)
+            if feasible(obj, task.hand, cfg) is Error.NONE and min_friction(cfg) > task.mu_goal:
+                configs.append(cfg)
+                if len(configs) == samples:
+                    break
+        if not configs:  # a cell only touched at its feasible edge: keep it, treat it as the sample seen
+            configs = [_sample_in(obj, bins, c, rng)]
+        for a, crm in enumerate(task.actions):
+            for cfg in configs:
+                out = execute_crm(obj, task.hand, cfg, crm, cfg)
+                executed += 1
+                if min_friction(out.config) <= task.mu_goal:
+                    s2, o = -1, goal_obs
+                else:
+                    s2 = state(_cell(obj, bins, out.config))
+                    o = task.discretizer.index(observe(out.config), out.error)
+                t_counts[(a, done, s2)] = t_counts.get((a, done, s2), 0) + 1
+                z_counts[(a, s2, o)] = z_counts.get((a, s2, o), 0) + 1
+        done += 1
+    n = len(cells) + 1  # the last state is the goal
+    g = n - 1
+    totals: dict[tuple[int, int], int] = {}
+    for (a, s, _), k in t_counts.items():
+        totals[(a, s)] = totals.get((a, s), 0) + k
+    trans = []
+    for a in range(len(task.actions)):
+        rows, cols, vals = [g], [g], [1.0]
+        for (aa, s, s2), k in t_counts.items():
+            if aa == a:
+                rows.append(s)
+                cols.append(g if s2 == -1 else s2)
+                vals.append(k / totals[(a, s)])
+        trans.append(sparse.csr_matrix((vals, (rows, cols)), shape=(n, n)))
+    obs_p = np.zeros((len(task.actions), n, n_obs))
+    for (a, s2, o), k in z_counts.items():
+        obs_p[a, g if s2 == -1 else s2, o] += k
+    for a in range(len(task.actions)):
+        obs_p[a, g, :] = 0.0
+        obs_p[a, g, goal_obs] = 1.0
+        seen = obs_p[a].sum(axis=1, keepdims=True)
+        obs_p[a] = np.divide(obs_p[a], seen, out=np.full_like(obs_p[a], 1.0 / n_obs), where=seen > 0)
+    b0 = np.zeros(n)
+    for s, k in start_counts.items():
+        b0[s] = k / n_starts
+    z0 = np.zeros((n, n_obs))
+    for (s, o), k in z0_counts.items():
+        z0[s, o] += k
+    rows = z0.sum(axis=1, keepdims=True)
+    z0 = np.divide(z0, rows, out=np.zeros_like(z0), where=rows > 0)  # Pr(first observation | start cell)
+    goal = np.zeros(n, dtype=bool)
+    goal[g] = True
+    counts = {"states": n, "start_samples": n_starts, "crm_samples": executed, "samples_per_cell": samples}
+    model = POMDP(n, len(task.actions), n_obs, trans, obs_p, b0, goal, goal_obs, counts)
+    return TaskPOMDP(task, model, [*cells, (-1, -1, -1, -1)], z0, bins)
+
+
+class POMDPAgent:
+    """Executes a PBVI policy of a :class:`TaskPOMDP` in the simulator."""
+
+    def __init__(self, tp: TaskPOMDP, n_beliefs: int = 300, seed: int = 0) -> None:
+        self.tp = tp
+        h = tp.task.max_steps
+        pts = collect_beliefs(tp.model, n_beliefs, h, np.random.default_rng(seed))
+        extra = [self._initial(o) for o in range(tp.model.n_obs)]
+        pts = np.vstack([pts] + [b[None] for b in extra if b is not None])
+        self.policy: PBVIPolicy = solve_pbvi(tp.model, pts, h)
+
+    def model_value(self) -> float:
+        """Expected CRMs predicted by the model: ``sum_o Pr(o_0) V(b0 | o_0)``."""
+        h = self.tp.task.max_steps
+        total = 0.0
+        for o in range(self.tp.model.n_obs):
+            p = float(self.tp.model.b0 @ self.tp.z0[:, o])
+            b = self._initial(o)
+            if p > 0 and b is not None:
+                total -= p * self.policy.value(b, h)
+        return total
+
+    def _initial(self, o: int) -> np.ndarray | None:
+        b = self.tp.model.b0 * self.tp.z0[:, o]
+        return None if b.sum() <= 0 else b / b.sum()
+
+    def run(self, config: Config) -> tuple[int, bool]:
+        """Execute from ``config`` (noise-free); return (CRMs, success)."""
+        t, m = self.tp.task, self.tp.model
+        o = t.discretizer.index(observe(config), Error.NONE)
+        b = self._initial(o)
+        if b is None:
+            b = m.b0
+        for n in range(1, t.max_steps + 1):
+            a = self.policy.action(b, t.max_steps - n + 1)
+            out = execute_crm(t.obj, t.hand, config, t.actions[a], config)
+            config = out.config
+            if min_friction(config) <= t.mu_goal:
+                return n, True
+            o = t.discretizer.index(observe(config), out.error)
+            nb = belief_update(m, b, a, o)
+            if nb is None or nb[~m.goal].sum() <= 0:
+                nb = m.T[a].T @ b
+            nb = np.where(m.goal, 0.0, nb)
+            b = nb / nb.sum() if nb.sum() > 0 else m.b0
+        return t.max_steps, False

@@ -1,0 +1,70 @@
+"""Explicit POMDPs: belief update, PBVI, Cassandra files, and the sampled task model."""
+
+import numpy as np
+import pytest
+from scipy import sparse
+
+from crmgrasp import CrmgraspError
+from crmgrasp.pomdp import POMDP, belief_update, collect_beliefs, read_cassandra, solve_pbvi, write_cassandra
+from crmgrasp.pomdp_task import POMDPAgent, build_task_pomdp
+from crmgrasp.references import sample_starts
+
+
+def aliased():
+    """States L, R (aliased: both observe 0) and goal G (observes 2). Action 0 grasps
+    from L, else errs (observes 1) and stays; action 1 grasps from R. Optimum: 1.5."""
+    t0 = sparse.csr_matrix(np.array([[0, 0, 1], [0, 1, 0], [0, 0, 1]], dtype=float))
+    t1 = sparse.csr_matrix(np.array([[1, 0, 0], [0, 0, 1], [0, 0, 1]], dtype=float))
+    z = np.zeros((2, 3, 3))
+    z[0] = [[0, 1, 0], [0, 1, 0], [0, 0, 1]]  # after action 0, a non-goal state reports the error
+    z[1] = [[0, 1, 0], [0, 1, 0], [0, 0, 1]]
+    return POMDP(3, 2, 3, [t0, t1], z, np.array([0.5, 0.5, 0.0]), np.array([False, False, True]), goal_obs=2)
+
+
+def test_belief_update_by_hand():
+    m = aliased()
+    # b0 = (1/2, 1/2, 0); action 0; error observed: only R is consistent
+    assert belief_update(m, m.b0, 0, 1).tolist() == [0.0, 1.0, 0.0]
+    assert belief_update(m, m.b0, 0, 2).tolist() == [0.0, 0.0, 1.0]
+    assert belief_update(m, m.b0, 0, 0) is None  # impossible observation
+
+
+def test_pbvi_solves_the_aliased_task():
+    m = aliased()
+    beliefs = collect_beliefs(m, 10, 3, np.random.default_rng(0))
+    policy = solve_pbvi(m, beliefs, horizon=3)
+    assert -policy.value(m.b0, 3) == pytest.approx(1.5)
+    assert -policy.value(np.array([1.0, 0.0, 0.0]), 3) == pytest.approx(1.0)
+    assert policy.action(np.array([0.0, 1.0, 0.0]), 3) == 1
+
+
+def test_cassandra_roundtrip(tmp_path):
+    m = aliased()
+    path = write_cassandra(m, tmp_path / "aliased.pomdp")
+    text = path.read_text()
+    assert "states: 3" in text and "T: 0 : 0 : 2 1.0" in text
+    back = read_cassandra(path)
+    assert (back.n_states, back.n_actions, back.n_obs) == (3, 2, 3)
+    np.testing.assert_array_equal(back.b0, m.b0)
+    np.testing.assert_array_equal(back.goal, m.goal)
+    np.testing.assert_array_equal(back.Z, m.Z)
+    for a in range(2):
+        np.testing.assert_array_equal(back.T[a].toarray(), m.T[a].toarray())
+    (tmp_path / "bad.pomdp").write_text("states: x\n")
+    with pytest.raises(CrmgraspError, match="cannot read POMDP file"):
+        read_cassandra(tmp_path / "bad.pomdp")
+
+
+def test_sampled_paper_box_pomdp(task, tmp_path):
+    tp = build_task_pomdp(task, cell=0.02, samples=10, n_starts=500, seed=0)
+    m = tp.model
+    assert m.counts["states"] == m.n_states and m.counts["crm_samples"] > 0
+    for a in range(m.n_actions):  # rows of T and Z are distributions
+        np.testing.assert_allclose(np.asarray(m.T[a].sum(axis=1)).ravel(), 1.0)
+        np.testing.assert_allclose(m.Z[a].sum(axis=1), 1.0)
+    agent = POMDPAgent(tp, n_beliefs=100)
+    runs = [agent.run(c) for c in sample_starts(task, 400, seed=3)]
+    assert all(ok for _, ok in runs) and np.mean([n for n, _ in runs]) < 1.75
+    assert 1.3 < agent.model_value() < 2.2
+    back = read_cassandra(write_cassandra(m, tmp_path / "box.pomdp"))
+    assert back.n_states == m.n_states
