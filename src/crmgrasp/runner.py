@@ -1,0 +1,146 @@
+"""Run a saved policy on a hand: the kinematic simulator or a real (or physics) hand.
+
+A hand implements :class:`HandInterface`: ``sense()`` returns the sensed contact
+configuration (or :class:`~crmgrasp.contact_sensing.NoContact`), ``execute(crm)``
+performs a CRM and returns its error flag. :class:`KinematicHand` is the
+simulator behind that interface. :class:`PolicyRunner` senses, discretizes,
+builds the k-order history, picks the policy's action, executes it, and logs every
+step (readings, observation, action, error) to a CSV file. It stops when the
+*sensed* configuration is a grasp (``min_friction(sensed) <= mu_goal``: all a real
+robot can check), when contact is lost, or after ``task.max_steps`` CRMs.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+from ._io import write_csv
+from ._validation import CrmgraspError
+from .agents.policy import GreedyPolicy
+from .contact_sensing import NoContact
+from .contacts import Config
+from .hand import CRM, execute_crm
+from .quality import min_friction
+from .sensing import Error, SensorNoise, observe
+from .tasks import Task
+
+__all__ = ["HandInterface", "KinematicHand", "PolicyRunner", "RunResult"]
+
+LOG_COLUMNS = [
+    "step",
+    "ax",
+    "ay",
+    "anx",
+    "any",
+    "bx",
+    "by",
+    "bnx",
+    "bny",
+    "rho",
+    "m_a",
+    "m_b",
+    "obs_index",
+    "observation",
+    "action",
+    "crm",
+    "error",
+    "raw",
+]
+
+
+@runtime_checkable
+class HandInterface(Protocol):
+    """What a hand must offer to run CRM policies."""
+
+    def sense(self) -> Config | NoContact: ...
+
+    def execute(self, crm: CRM) -> Error: ...
+
+
+class KinematicHand:
+    """The kinematic simulator as a hand: true state hidden, readings through ``noise``."""
+
+    def __init__(self, task: Task, start: Config, rng: np.random.Generator, noise: SensorNoise | None = None):
+        self.task, self.config, self.rng = task, start, rng
+        self.noise = task.noise if noise is None else noise
+        self._reading: Config | None = None
+
+    def sense(self) -> Config:
+        """One noisy reading of the current configuration."""
+        self._reading = self.noise.sense(self.config, self.rng)
+        return self._reading
+
+    def execute(self, crm: CRM) -> Error:
+        """Execute ``crm``; its goal line comes from the last reading."""
+        t = self.task
+        out = execute_crm(t.obj, t.hand, self.config, t.hand.check_crm(crm), self._reading or self.config)
+        self.config = out.config
+        return out.error
+
+    def raw_reading(self) -> dict[str, Any]:
+        """Raw sensor values behind the last reading (none beyond the reading here)."""
+        return {}
+
+
+@dataclass
+class RunResult:
+    """Outcome of one policy run."""
+
+    crms: int
+    grasped: bool
+    stopped: str
+    rows: list[list[Any]] = field(default_factory=list)
+
+
+class PolicyRunner:
+    """Drives a :class:`~crmgrasp.agents.policy.GreedyPolicy` on a :class:`HandInterface`."""
+
+    def __init__(self, policy: GreedyPolicy, task: Task | None = None) -> None:
+        """``task`` (default: the policy's) may be a variant, e.g. with noise or another
+        palm tolerance, but must keep the policy's name, CRM set and bins."""
+        self.policy = policy
+        self.task = policy.task if task is None else task
+        p = policy.task
+        if (self.task.name, self.task.actions, self.task.discretizer) != (p.name, p.actions, p.discretizer):
+            raise CrmgraspError(f"the policy was made for {p.name!r} with other CRMs or bins than this task")
+
+    def run(
+        self, hand: HandInterface, rng: np.random.Generator, log: str | os.PathLike[str] | None = None
+    ) -> RunResult:
+        """Run one episode; write the step log to ``log`` (CSV) if given."""
+        t, enc = self.task, self.policy.encoder
+        rows: list[list[Any]] = []
+        error, action, hist = Error.NONE, None, None
+        result = None
+        for step in range(t.max_steps + 1):
+            reading = hand.sense()
+            if isinstance(reading, NoContact):
+                result = RunResult(step, False, f"no contact: {reading.reason}")
+                break
+            obs = observe(reading)
+            index = t.discretizer.index(obs, error)
+            hist = enc.start(index) if hist is None else enc.push(hist, action, index)
+            raw = getattr(hand, "raw_reading", dict)()
+            row = [step, *reading.a, *reading.b, *obs, index, t.discretizer.label(index)]
+            if min_friction(reading) <= t.mu_goal:
+                rows.append([*row, "", "", "", json.dumps(raw)])
+                result = RunResult(step, True, "grasp sensed")
+                break
+            if step == t.max_steps:
+                rows.append([*row, "", "", "", json.dumps(raw)])
+                result = RunResult(step, False, "step limit")
+                break
+            action = self.policy.greedy(enc.encode(hist), rng)
+            crm = t.actions[action]
+            error = hand.execute(crm)
+            rows.append([*row, action, str(crm), error.name.lower(), json.dumps(raw)])
+        assert result is not None
+        result.rows = rows
+        if log is not None:
+            write_csv(log, LOG_COLUMNS, rows)
+        return result
