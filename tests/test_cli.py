@@ -163,3 +163,19 @@ def test_pomdp_command(tmp_path, capsys):
     )
     assert "model value" in capsys.readouterr().out and out.read_text().startswith("# crmgrasp POMDP")
     assert main(["pomdp", "--cell", "-1", "--out", str(out)]) == 2
+
+
+def test_run_command(tmp_path, capsys):
+    pol = tmp_path / "p"
+    assert main(["learn", "--trials", "2", "--episodes", "1500", "--eval-episodes", "50", "--out", str(pol)]) == 0
+    capsys.readouterr()
+    log = tmp_path / "run.csv"
+    assert (
+        main(
+            ["run", "--policy", str(pol / "policy.json"), "--a", "-0.15,-0.02", "--b", "-0.01,-0.05", "--log", str(log)]
+        )
+        == 0
+    )
+    out = capsys.readouterr().out
+    assert out.startswith("grasp sensed after 2 CRMs") and log.read_text().startswith("step,ax,ay")
+    assert main(["run", "--policy", str(tmp_path / "nope.json"), "--a", "0,0", "--b", "0,0", "--log", str(log)]) == 2
