@@ -117,41 +117,13 @@ def compare(out_dir: str | Path, config: CompareConfig = CompareConfig()) -> dic
     t0 = time.perf_counter()
     policy = BeliefPolicy(task, starts)
     fresh = sample_starts(task, config.trials * config.eval_episodes, config.seed + 1)
-    executed = [policy.run(c) for c in fresh]
-    bsteps = np.array([n for n, _ in executed])
-    m, lo, hi = _ci(bsteps)
-    rows.append(
-        [
-            "belief-space policy, executed",
-            "planner",
-            m,
-            lo,
-            hi,
-            float(np.mean([ok for _, ok in executed])),
-            None,
-            None,
-            round(time.perf_counter() - t0, 3),
-        ]
-    )
-    belief_executed = m
+    rows.append(_executed_row("belief-space policy, executed", policy.run, fresh, t0))
+    belief_executed = rows[-1][2]
     t0 = time.perf_counter()
     tp = build_task_pomdp(task, cell=0.01, samples=20, n_starts=config.reference_starts, seed=config.seed)
     agent = POMDPAgent(tp, n_beliefs=300, seed=config.seed)
-    executed = [agent.run(c) for c in fresh]
-    m, lo, hi = _ci(np.array([n for n, _ in executed]))
-    rows.append(
-        [
-            f"sampled POMDP ({tp.model.n_states} states), PBVI, executed",
-            "planner",
-            m,
-            lo,
-            hi,
-            float(np.mean([ok for _, ok in executed])),
-            None,
-            None,
-            round(time.perf_counter() - t0, 3),
-        ]
-    )
+    rows.append(_executed_row(f"sampled POMDP ({tp.model.n_states} states), PBVI, executed", agent.run, fresh, t0))
+    m = rows[-1][2]
     pomdp_executed, pomdp_value, pomdp_counts = m, agent.model_value(), tp.model.counts
     refs = {}
     for name, fn in (("belief-space optimum", belief_optimum), ("clairvoyant bound", clairvoyant_bound)):
@@ -190,6 +162,14 @@ def compare(out_dir: str | Path, config: CompareConfig = CompareConfig()) -> dic
         },
     )
     return summary
+
+
+def _executed_row(name: str, run: Any, starts: list, t0: float) -> list[Any]:
+    """A planner's table row: ``run(start) -> (CRMs, success)`` over ``starts``; time since ``t0``."""
+    executed = [run(c) for c in starts]
+    m, lo, hi = _ci(np.array([n for n, _ in executed]))
+    ok = float(np.mean([g for _, g in executed]))
+    return [name, "planner", m, lo, hi, ok, None, None, round(time.perf_counter() - t0, 3)]
 
 
 def _markdown(rows: list[list[Any]], config: CompareConfig) -> str:
