@@ -203,6 +203,15 @@ def rollout_animation(obj: Shape, hand: Hand, steps: Sequence[Any], action_names
     frames.append((len(steps) - 1, -1))
     fig = Figure(figsize=(6, 4.5), layout="constrained")
     ax = fig.add_subplot()
+    pts = np.array([p for st in steps for p in (*st.outcome.path, st.config.a.point, st.config.b.point)])
+    x0, y0, x1, y1 = obj.bounds()
+    pad = 0.25 * max(x1 - x0, y1 - y0)
+    limits = (
+        min(x0, pts[:, 0].min()) - pad,
+        max(x1, pts[:, 0].max()) + pad,
+        min(y0, pts[:, 1].min()) - pad,
+        max(y1, pts[:, 1].max()) + pad,
+    )
 
     def draw(frame: tuple[int, int]) -> list[Any]:
         i, j = frame
@@ -210,16 +219,17 @@ def rollout_animation(obj: Shape, hand: Hand, steps: Sequence[Any], action_names
         ax.clear()
         title = f"CRM {i + 1}: {action_names[st.action]}"
         if j == -1:
-            draw_scene(
-                ax, obj, hand, st.config, st.outcome, title=title + f" -> {st.outcome.error.name.lower()} (done)"
+            done = f" -> {st.outcome.error.name.lower()} (done)"
+            draw_scene(ax, obj, hand, st.config, st.outcome, title=title + done)
+        else:
+            partial = st.outcome._replace(
+                path=st.outcome.path[:j], error=1 if j < len(st.outcome.path) else st.outcome.error
             )
-            return []
-        partial = st.outcome._replace(
-            path=st.outcome.path[:j], error=1 if j < len(st.outcome.path) else st.outcome.error
-        )
-        draw_scene(ax, obj, hand, st.config, partial, title=title)
-        x, y = st.outcome.path[j - 1]
-        ax.plot(x, y, "o", color="tab:purple", ms=10, zorder=5)
+            draw_scene(ax, obj, hand, st.config, partial, title=title)
+            x, y = st.outcome.path[j - 1]
+            ax.plot(x, y, "o", color="tab:purple", ms=10, zorder=5)
+        ax.set_xlim(limits[0], limits[1])  # the same view in every frame
+        ax.set_ylim(limits[2], limits[3])
         return []
 
     anim = FuncAnimation(fig, draw, frames=frames, blit=False)
