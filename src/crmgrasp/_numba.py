@@ -26,7 +26,7 @@ try:  # pragma: no cover - depends on the optional extra
 except ImportError:  # pragma: no cover - depends on the optional extra
     AVAILABLE = False
 
-    def njit(*args, **kwargs):  # type: ignore[no-untyped-def]
+    def njit(*args, **kwargs):  # type: ignore[no-untyped-def, no-redef]
         """Stand-in so the module imports without numba; the kernels are unused then."""
 
         def wrap(fn):  # type: ignore[no-untyped-def]

@@ -95,14 +95,11 @@ def run_benchmarks(
         for key, fn in (("pb", pb_run), ("cp", cp_run), ("vpb", vpb_run), ("vcp", vcp_run)):
             best[key] = min(best[key], _timed(fn))
     task = paper_box()
-    sarsa = min(
-        _timed(
-            lambda: train_trials(
-                task, "sarsa", trials=sarsa_trials, episodes=sarsa_episodes, seed=seed, eval_episodes=0
-            )
-        )
-        for _ in range(sarsa_rounds)
-    )
+
+    def sarsa_run() -> None:
+        train_trials(task, "sarsa", trials=sarsa_trials, episodes=sarsa_episodes, seed=seed, eval_episodes=0)
+
+    sarsa = min(_timed(sarsa_run) for _ in range(sarsa_rounds))
     tracemalloc.start()
     env = gym.make_vec(ENV_ID, num_envs=num_envs, vectorization_mode="vector_entry_point")
     env.reset(seed=seed)

@@ -6,7 +6,7 @@
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -72,7 +72,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
     * v0: initial version (SPEC sections 1-7).
     """
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 2}
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 2}  # noqa: RUF012 - Gymnasium's convention
 
     def __init__(self, task: Task | str = "paper-box", render_mode: str | None = None) -> None:
         self.task = make_task(task) if isinstance(task, str) else task
@@ -132,7 +132,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             raise CrmgraspError("call reset() before step()")
         if type(action) is not int:
             if not isinstance(action, (np.integer, np.ndarray)) or np.ndim(action) != 0:
-                raise CrmgraspError(f"action must be an integer in [0, {self.action_space.n}), got {action!r}")
+                raise CrmgraspError(f"action must be an integer in [0, {self._n_actions}), got {action!r}")
             action = int(action)
         if not 0 <= action < self._n_actions:
             raise CrmgraspError(f"action must be an integer in [0, {self._n_actions}), got {action!r}")
@@ -174,7 +174,7 @@ class KOrderHistory(gym.Wrapper[int, np.int64, dict[str, Any], np.int64]):
         super().__init__(env)
         task = env.unwrapped.task  # type: ignore[attr-defined]
         self.encoder = KOrderEncoder(task.discretizer.size, len(task.actions), k)
-        self.observation_space = spaces.Discrete(self.encoder.size)
+        self.observation_space = spaces.Discrete(self.encoder.size)  # type: ignore[assignment]
         self._history: tuple[int, ...] = ()
 
     def reset(self, **kwargs: Any) -> tuple[int, dict[str, Any]]:  # type: ignore[override]

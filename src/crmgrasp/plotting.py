@@ -121,7 +121,7 @@ def friction_histogram(values: Sequence[float], failures: int, title: str) -> Fi
     ax = fig.add_subplot()
     vals = np.asarray([v for v in values if math.isfinite(v)])
     top = max(0.1, float(vals.max()) * 1.1) if len(vals) else 0.1
-    ax.hist(vals, bins=np.linspace(0.0, top, 16), color="tab:blue", edgecolor="white")
+    ax.hist(vals, bins=np.linspace(0.0, top, 16).tolist(), color="tab:blue", edgecolor="white")
     ax.set_xlabel("minimum friction coefficient for force closure")
     ax.set_ylabel("grasps")
     note = f"n = {len(values)}" + (f", {failures} failed (no contact / error)" if failures else "")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -61,7 +62,7 @@ class Polygon:
 
     def __init__(self, vertices: ArrayLike) -> None:
         try:
-            raw = list(vertices)  # type: ignore[call-overload]
+            raw: list[Any] = list(vertices)  # type: ignore[call-overload, arg-type]
         except TypeError:
             raise CrmgraspError(f"polygon vertices must be a sequence of (x, y), got {vertices!r}") from None
         if len(raw) < 3:
@@ -258,13 +259,13 @@ class Polygon:
             return inside
         px, py = x[:, None], y[:, None]
         e = self._edge_arrays
-        ax, ay, ex, ey, l2 = e[:, 0], e[:, 1], e[:, 2], e[:, 3], e[:, 4]
-        by = ay + ey
-        straddle = (ay > py) != (by > py)
-        xint = ax + (py - ay) * ex / ey
+        eax, eay, eex, eey, el2 = e[:, 0], e[:, 1], e[:, 2], e[:, 3], e[:, 4]
+        by = eay + eey
+        straddle = (eay > py) != (by > py)
+        xint = eax + (py - eay) * eex / eey
         inside = (np.count_nonzero(straddle & (px < xint), axis=1) % 2) == 1
-        t = np.minimum(1.0, np.maximum(0.0, ((px - ax) * ex + (py - ay) * ey) / l2))
-        dx, dy = ax + t * ex - px, ay + t * ey - py
+        t = np.minimum(1.0, np.maximum(0.0, ((px - eax) * eex + (py - eay) * eey) / el2))
+        dx, dy = eax + t * eex - px, eay + t * eey - py
         near = np.any(dx * dx + dy * dy <= EPS * EPS, axis=1)
         return inside & ~near
 

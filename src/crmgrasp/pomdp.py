@@ -183,9 +183,9 @@ def read_cassandra(path: str | os.PathLike[str]) -> POMDP:
                 continue
             key, _, rest = line.partition(":")
             if key in ("T", "O"):
-                a, s, tail = (x.strip() for x in rest.split(":"))
-                s2, p = tail.split()
-                (t_rows if key == "T" else o_rows).append((int(a), int(s), int(s2), float(p)))
+                act, src, tail = (x.strip() for x in rest.split(":"))
+                dst, prob = tail.split()
+                (t_rows if key == "T" else o_rows).append((int(act), int(src), int(dst), float(prob)))
             elif key == "R":
                 parts = [x.strip() for x in rest.split(":")]
                 if float(parts[3].split()[-1]) == 0.0:
@@ -198,12 +198,12 @@ def read_cassandra(path: str | os.PathLike[str]) -> POMDP:
         raise CrmgraspError(f"cannot read POMDP file {str(path)!r}: {exc}") from None
     trans = []
     for a in range(n_a):
-        rows = [(s, s2, p) for aa, s, s2, p in t_rows if aa == a]
-        r, c, d = zip(*rows) if rows else ((), (), ())
+        entries = [(s0, s1, pr) for aa, s0, s1, pr in t_rows if aa == a]
+        r, c, d = zip(*entries) if entries else ((), (), ())
         trans.append(sparse.csr_matrix((d, (r, c)), shape=(n_s, n_s)))
     obs = np.zeros((n_a, n_s, n_o))
-    for a, s2, o, p in o_rows:
-        obs[a, s2, o] = p
+    for a, s1, o, pr in o_rows:
+        obs[a, s1, o] = pr
     goal = np.zeros(n_s, dtype=bool)
     goal[goal_states] = True
     return POMDP(n_s, n_a, n_o, trans, obs, b0, goal)

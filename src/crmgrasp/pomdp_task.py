@@ -44,7 +44,9 @@ class TaskPOMDP:
 
     def cell_of(self, cfg: Config) -> Cell:
         """The cell of a configuration."""
-        return _cell(self.task.obj, self.bins, cfg)
+        obj = self.task.obj
+        assert isinstance(obj, Polygon)
+        return _cell(obj, self.bins, cfg)
 
 
 def _cell(obj: Polygon, bins: list[int], cfg: Config) -> Cell:

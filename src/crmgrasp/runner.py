@@ -124,8 +124,8 @@ class PolicyRunner:
                 break
             obs = observe(reading)
             index = t.discretizer.index(obs, error)
-            hist = enc.start(index) if hist is None else enc.push(hist, action, index)
-            raw = getattr(hand, "raw_reading", dict)()
+            hist = enc.start(index) if hist is None or action is None else enc.push(hist, action, index)
+            raw: dict[str, Any] = getattr(hand, "raw_reading", dict)()
             row = [step, *reading.a, *reading.b, *obs, index, t.discretizer.label(index)]
             if min_friction(reading) <= t.mu_goal:
                 rows.append([*row, "", "", "", json.dumps(raw)])

@@ -137,7 +137,7 @@ class SensorNoise:
 
 def _thresholds(value: object, name: str) -> tuple[float, ...]:
     try:
-        items = tuple(value)  # type: ignore[call-overload]
+        items: tuple[object, ...] = tuple(value)  # type: ignore[call-overload, arg-type]
     except TypeError:
         items = (value,)
     out = tuple(finite(v, f"{name} threshold") for v in items)

@@ -17,7 +17,7 @@ not the same stream.
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 from gymnasium import spaces
@@ -36,7 +36,7 @@ __all__ = ["CRMGraspVectorEnv"]
 class CRMGraspVectorEnv(VectorEnv):
     """``num_envs`` independent episodes of a task, batched (see the module docstring)."""
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
+    metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}  # noqa: RUF012 - Gymnasium's convention
 
     def __init__(self, num_envs: int = 1, task: Task | str = "paper-box", render_mode: str | None = None) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:

@@ -19,6 +19,7 @@ from ..quality import min_friction_batch
 from ..sensing import observe_batch
 from ..sim import reset
 from ..tasks import Task
+from .base import Agent
 from .training import (
     TrialResult,
     check_budget,
@@ -37,11 +38,15 @@ class _Trial:
 
     __slots__ = ("a", "agent", "agent_rng", "env_rng", "episode", "eval_rng", "hist", "next_checkpoint", "s", "steps")
 
-    def __init__(self, agent, gens):  # type: ignore[no-untyped-def]
+    def __init__(self, agent: Agent, gens: tuple[np.random.Generator, ...]) -> None:
         self.agent = agent
         self.env_rng, self.agent_rng, self.eval_rng = gens
         self.episode = 0
         self.next_checkpoint = 0
+        self.steps = 0
+        self.hist: tuple[int, ...] = ()
+        self.s = 0
+        self.a = 0
 
 
 def train_trials_lockstep(

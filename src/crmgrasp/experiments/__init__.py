@@ -40,7 +40,7 @@ Runner = Callable[[Path, int, bool, dict[str, Any]], tuple[dict[str, Any], list[
 
 
 def _figure4(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
-    s = figure_4_opposition_quality(out, Figure4Config(seed=seed))
+    s: dict[str, Any] = figure_4_opposition_quality(out, Figure4Config(seed=seed))
     return s, [
         ("opposition grasps", f"{s['trials'] - s['failures']} of {s['trials']}", "30 of 30"),
         (

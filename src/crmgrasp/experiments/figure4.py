@@ -15,6 +15,7 @@ import dataclasses
 import math
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -94,7 +95,7 @@ def long_side_start(
     raise CrmgraspError("no long-side start found within max_corner_distance")
 
 
-def figure_4_opposition_quality(out_dir: str | Path, config: Figure4Config = Figure4Config()) -> dict[str, object]:
+def figure_4_opposition_quality(out_dir: str | Path, config: Figure4Config = Figure4Config()) -> dict[str, Any]:
     """Run the experiment; write ``data.csv``, ``figure4.png`` and ``config.json`` to
     ``out_dir``; return a summary dict."""
     if config.trials < 1:
@@ -142,7 +143,7 @@ def figure_4_opposition_quality(out_dir: str | Path, config: Figure4Config = Fig
     fig = friction_histogram(values, failures, "Opposition CRM on the box under sensing noise (paper Fig. 4)")
     save_figure(fig, out / "figure4.png", dpi=120)
     finite = [v for v in values if math.isfinite(v)]
-    summary = {
+    summary: dict[str, Any] = {
         "trials": config.trials,
         "failures": failures,
         "median_min_friction": float(np.median(finite)) if finite else math.nan,

@@ -69,7 +69,7 @@ def figure_7_learning_curve(out_dir: str | Path, config: Figure7Config = Figure7
     ``policy.json`` (the paper SARSA's best trial) and ``config.json``."""
     task = make_task(config.task)
     out = Path(out_dir)
-    kw = dict(
+    kw: dict[str, Any] = dict(
         trials=config.trials,
         episodes=config.episodes,
         seed=config.seed,

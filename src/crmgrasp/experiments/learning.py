@@ -88,7 +88,7 @@ def learn(
     curve = res.curve
     ref = task.reference_mean_steps
     per_trial = res.greedy_steps.mean(axis=1) if eval_episodes else np.full(trials, np.nan)
-    params = getattr(res.agents[0], "params", lambda: {})()
+    params: dict[str, Any] = getattr(res.agents[0], "params", dict)()
     summary = {
         "agent": spec.agent,
         "label": spec.name,
