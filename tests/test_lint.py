@@ -17,3 +17,17 @@ def test_ruff_clean():
     ruff = shutil.which("ruff") or str(Path(sys.executable).parent / "ruff")
     res = subprocess.run([ruff, "check", "src", "tests", "benchmarks"], cwd=ROOT, capture_output=True, text=True)
     assert res.returncode == 0, res.stdout + res.stderr
+
+
+def _tool(name: str) -> str | None:
+    return shutil.which(name) or (
+        str(Path(sys.executable).parent / name) if (Path(sys.executable).parent / name).exists() else None
+    )
+
+
+@pytest.mark.skipif(_tool("mypy") is None, reason="mypy not installed")
+def test_mypy_clean():
+    res = subprocess.run(
+        [_tool("mypy"), "src/crmgrasp", "--cache-dir=/dev/null"], cwd=ROOT, capture_output=True, text=True
+    )
+    assert res.returncode == 0, res.stdout + res.stderr
