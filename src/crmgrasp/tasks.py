@@ -88,56 +88,52 @@ class CornerStarts:
         same way and the same acceptance test), not the same stream. The tests run
         as a cascade, cheapest first, each on the survivors of the last.
         """
-        from .batch import _feasible
-        from .quality import min_friction_batch
-
         if not isinstance(obj, Polygon):
             raise CrmgraspError(f"corner starts need a polygon, got {type(obj).__name__}")
-        e = obj._edge_arrays
-        nv = len(e)
         out = np.empty((8, n))
         filled, rounds, rate = 0, 0, 0.2
-        if _numba.AVAILABLE:  # compiled filter over uniforms drawn here, from rng
-            while filled < n:
-                rounds += 1
-                if rounds > self.max_tries:
-                    raise CrmgraspError(f"no feasible corner start found in {self.max_tries} rounds")
-                m = int((n - filled) / rate * 1.2) + 32
-                u = rng.random((4, m))
-                got = np.empty((8, m))
-                count = _numba.corner_candidates(
-                    u, e, obj.convex, hand.aperture, hand.palm_depth, hand.palm_normal_tol, mu_goal, got
-                )
-                rate = max(0.02, 0.5 * rate + 0.5 * count / m)
-                take = min(count, n - filled)
-                out[:, filled : filled + take] = got[:, :take]
-                filled += take
-            return out
         while filled < n:
             rounds += 1
             if rounds > self.max_tries:
                 raise CrmgraspError(f"no feasible corner start found in {self.max_tries} rounds")
             m = int((n - filled) / rate * 1.2) + 32
-            u = rng.random((4, m))
-            k = (u[0] * nv).astype(np.int64)
-            ki = (k - 1) % nv
-            x1, y1 = e[ki, 0] + u[1] * e[ki, 2], e[ki, 1] + u[1] * e[ki, 3]
-            x2, y2 = e[k, 0] + u[2] * e[k, 2], e[k, 1] + u[2] * e[k, 3]
-            dx, dy = x2 - x1, y2 - y1
-            keep = np.flatnonzero((u[1] > 0.0) & (u[2] > 0.0) & (np.sqrt(dx * dx + dy * dy) <= hand.aperture))
-            a_first = u[3, keep] < 0.5
-            p1 = (x1[keep], y1[keep], e[ki[keep], 5], e[ki[keep], 6])
-            p2 = (x2[keep], y2[keep], e[k[keep], 5], e[k[keep], 6])
-            cols = np.stack([np.where(a_first, p, q) for p, q in zip(p1 + p2, p2 + p1)])
-            with np.errstate(all="ignore"):
-                ok = _feasible(obj, hand, *cols) == Error.NONE
-            cols = cols[:, ok]
-            cols = cols[:, min_friction_batch(cols.T) > mu_goal]
+            cols = _corner_candidates(obj, hand, mu_goal, rng.random((4, m)))
             rate = max(0.02, 0.5 * rate + 0.5 * cols.shape[1] / m)
             take = min(cols.shape[1], n - filled)
             out[:, filled : filled + take] = cols[:, :take]
             filled += take
         return out
+
+
+def _corner_candidates(obj: Polygon, hand: Hand, mu_goal: float, u: np.ndarray) -> np.ndarray:
+    """The accepted corner-start candidates of the uniforms ``u`` (``(4, m)``: corner,
+    fraction in, fraction out, coin), in order, as an ``(8, k)`` block. The compiled
+    filter (numba) and the numpy cascade make the same decisions."""
+    from .batch import _feasible
+    from .quality import min_friction_batch
+
+    e = obj._edge_arrays
+    if _numba.AVAILABLE:
+        got = np.empty((8, u.shape[1]))
+        count = _numba.corner_candidates(
+            u, e, obj.convex, hand.aperture, hand.palm_depth, hand.palm_normal_tol, mu_goal, got
+        )
+        return got[:, :count]
+    nv = len(e)
+    k = (u[0] * nv).astype(np.int64)
+    ki = (k - 1) % nv
+    x1, y1 = e[ki, 0] + u[1] * e[ki, 2], e[ki, 1] + u[1] * e[ki, 3]
+    x2, y2 = e[k, 0] + u[2] * e[k, 2], e[k, 1] + u[2] * e[k, 3]
+    dx, dy = x2 - x1, y2 - y1
+    keep = np.flatnonzero((u[1] > 0.0) & (u[2] > 0.0) & (np.sqrt(dx * dx + dy * dy) <= hand.aperture))
+    a_first = u[3, keep] < 0.5
+    p1 = (x1[keep], y1[keep], e[ki[keep], 5], e[ki[keep], 6])
+    p2 = (x2[keep], y2[keep], e[k[keep], 5], e[k[keep], 6])
+    cols = np.stack([np.where(a_first, p, q) for p, q in zip(p1 + p2, p2 + p1)])
+    with np.errstate(all="ignore"):
+        ok = _feasible(obj, hand, *cols) == Error.NONE
+    cols = cols[:, ok]
+    return cols[:, min_friction_batch(cols.T) > mu_goal]
 
 
 @dataclass(frozen=True)

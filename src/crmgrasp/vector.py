@@ -27,7 +27,8 @@ from gymnasium.vector.utils import batch_space
 from . import _numba
 from ._validation import CrmgraspError
 from .batch import execute_columns
-from .sensing import Error
+from .quality import min_friction_batch
+from .sensing import Error, observe_batch
 from .tasks import Task, make_task
 
 __all__ = ["CRMGraspVectorEnv"]
@@ -89,9 +90,7 @@ class CRMGraspVectorEnv(VectorEnv):
             return cols
         return np.ascontiguousarray(noise.sense_batch(cols.T, self.np_random).T)
 
-    def _observe(
-        self, errors: np.ndarray, rows: np.ndarray | None = None
-    ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+    def _observe(self, errors: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
         s, c = self._sensed, self._cfg
         if _numba.AVAILABLE:
             n = self.num_envs
@@ -99,17 +98,9 @@ class CRMGraspVectorEnv(VectorEnv):
             _numba.observe_rows(np.ascontiguousarray(c), np.ascontiguousarray(s), rho, m_a, m_b, mu)
             return self._pack(rho, m_a, m_b, mu, errors)
         with np.errstate(all="ignore"):
-            sx, sy = s[2] + s[6], s[3] + s[7]
-            dx, dy = s[4] - s[0], s[5] - s[1]
-            rho = sx * sx + sy * sy
-            m_a = dx * s[7] - dy * s[6]
-            m_b = -dx * s[3] + dy * s[2]
-            mu = np.zeros(self.num_envs)
-            for i, j in ((0, 4), (4, 0)):
-                ex, ey = c[j] - c[i], c[j + 1] - c[i + 1]
-                dot = c[i + 2] * ex + c[i + 3] * ey
-                tan = np.where(dot > 0.0, np.abs(c[i + 2] * ey - c[i + 3] * ex) / dot, np.inf)
-                mu = np.maximum(mu, np.where(tan < 1e-12, 0.0, tan))
+            obs = observe_batch(s.T)
+            mu = min_friction_batch(c.T)
+        rho, m_a, m_b = obs[:, 0], obs[:, 1], obs[:, 2]
         return self._pack(rho, m_a, m_b, mu, errors)
 
     def _pack(

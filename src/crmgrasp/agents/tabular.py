@@ -96,16 +96,21 @@ class TabularAgent:
             t.add(a)
 
     def _target(self, s2: int, a2: int | None) -> float:
-        raise NotImplementedError
+        """Bootstrap value of ``s2``: ``max_b Q(s2, b)`` (Q-learning); SARSA overrides it."""
+        return max(self.value(s2))
+
+    def _td(self, s: int, a: int, r: float, s2: int, a2: int | None, terminal: bool) -> None:
+        """``Q(s,a) += alpha (r + gamma target(s2, a2) - Q(s,a))``, target ``r`` if terminal."""
+        row = self.row(s)
+        target = r if terminal else r + self.gamma * self._target(s2, a2)
+        row[a] += self.alpha * (target - row[a])
 
     def update(
         self, s: int, a: int, r: float, s2: int, a2: int | None, terminal: bool, rng: np.random.Generator
     ) -> None:
         """One-step TD update toward ``r + gamma * target(s2, a2)`` (``r`` if terminal)."""
         self._mark(s, a)
-        row = self.row(s)
-        target = r if terminal else r + self.gamma * self._target(s2, a2)
-        row[a] += self.alpha * (target - row[a])
+        self._td(s, a, r, s2, a2, terminal)
 
 
 class Sarsa(TabularAgent):
@@ -119,12 +124,9 @@ class Sarsa(TabularAgent):
 
 
 class QLearning(TabularAgent):
-    """Off-policy Q-learning."""
+    """Off-policy Q-learning (the base class's target, ``max_b Q(s', b)``)."""
 
     name = "q"
-
-    def _target(self, s2: int, a2: int | None) -> float:
-        return max(self.value(s2))
 
 
 class SarsaLambda(TabularAgent):
@@ -196,17 +198,12 @@ class DynaQ(TabularAgent):
     def params(self) -> dict[str, float | str]:  # type: ignore[override]
         return {**super().params(), "n_planning": self.n_planning, "planning": self.planning}
 
-    def _backup(self, s: int, a: int, r: float, s2: int, terminal: bool) -> None:
-        row = self.row(s)
-        target = r if terminal else r + self.gamma * max(self.value(s2))
-        row[a] += self.alpha * (target - row[a])
-
     def update(
         self, s: int, a: int, r: float, s2: int, a2: int | None, terminal: bool, rng: np.random.Generator
     ) -> None:
         """Real Q-learning update, model update, then planning."""
         self._mark(s, a)
-        self._backup(s, a, r, s2, terminal)
+        self._td(s, a, r, s2, None, terminal)
         outcome = (r, s2, terminal)
         counts = self.model.get((s, a))
         if counts is None:
@@ -225,7 +222,7 @@ class DynaQ(TabularAgent):
             ps, pa = self._pairs[int(u * len(self._pairs))]
             seen = self._samples[(ps, pa)]
             pr, ps2, pterm = seen[int(v * len(seen))]
-            self._backup(ps, pa, pr, ps2, pterm)
+            self._td(ps, pa, pr, ps2, None, pterm)
 
     def _sweep(self) -> None:
         gamma, q = self.gamma, self.q

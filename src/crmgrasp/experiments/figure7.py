@@ -53,11 +53,6 @@ class Figure7Config:
     """Fixed evaluation starts per greedy checkpoint (the same starts at every
     checkpoint, for every trial and learner)."""
 
-    @property
-    def checkpoint_note(self) -> int:
-        """Number of fixed starts per checkpoint (for titles)."""
-        return self.checkpoint_episodes
-
 
 def _ms(run: LearnRun) -> tuple[Any, Any]:
     return _mean_sem(run.result.checkpoint_steps)
@@ -126,7 +121,7 @@ def figure_7_learning_curve(out_dir: str | Path, config: Figure7Config = Figure7
         ckpt,
         {r.spec.name: _ms(r) for r in everything if r.spec.agent not in ("random", "fixed")},
         ref,
-        f"Greedy policy after N training episodes, on {config.checkpoint_note} fixed starts x {config.trials} trials",
+        f"Greedy policy after N training episodes, {config.checkpoint_episodes} fixed starts x {config.trials} trials",
     )
     save_figure(fig, out / "figure7_greedy.png", dpi=120)
     policy = best_policy(task, runs[0])
