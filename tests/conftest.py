@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import os
 
+os.environ.setdefault("MUJOCO_GL", "egl")  # headless; MuJoCo reads it at its first import
+
 import pytest
 from hypothesis import HealthCheck, settings
 

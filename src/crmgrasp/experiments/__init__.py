@@ -116,13 +116,54 @@ def _compare(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
     ]
 
 
+def _sensing_row(s: dict[str, Any]) -> Row:
+    cs = s["contact_sensing"]
+    return (
+        f"contact sensing vs MuJoCo contacts ({cs['contacts']} contacts): median position / normal error",
+        f"{cs['median_position_error_mm']} mm / {cs['median_normal_error_deg']} deg",
+        "(Robonaut load cells; not reported)",
+    )
+
+
+def _figure4_mujoco(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    from .mujoco import MujocoFigure4Config, figure_4_mujoco
+
+    s = figure_4_mujoco(out, MujocoFigure4Config(seed=seed, extra_starts=40 if quick else 100))
+    return s, [
+        ("MuJoCo opposition grasps", f"{s['trials'] - s['failures']} of {s['trials']}", "30 of 30 (Robonaut)"),
+        ("MuJoCo median / max true min_friction", f"{s['median_min_friction']} / {s['max_min_friction']}", "-"),
+        _sensing_row(s),
+        ("MuJoCo wall time per CRM, median / max", f"{s['median_crm_seconds']} / {s['max_crm_seconds']} s", "-"),
+    ]
+
+
+def _figure9_mujoco(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    from .mujoco import MujocoFigure9Config, figure_9_mujoco
+
+    s = figure_9_mujoco(out, MujocoFigure9Config(seed=seed, policy=ctx.get("policy")))
+    return s, [
+        ("MuJoCo grasps / trials (kinematic policy)", f"{s['successes']} / {s['trials']}", "11 / 11 (Robonaut)"),
+        ("CRMs per trial: MuJoCo / kinematic, same starts", f"{s['mean_crms_mujoco']} / {s['mean_crms_kinematic']}",
+         "2"),
+        ("most extra CRMs on MuJoCo in one trial", s["max_extra_crms"], "-"),
+        (
+            "MuJoCo cluster centroids (rho, |m|)",
+            "; ".join(str(v) for k, v in s.items() if k.startswith("centroid")),
+            "three clusters",
+        ),
+    ]
+
+
 EXPERIMENTS: dict[str, tuple[str, Runner]] = {
     "figure4": ("Fig. 4: min-friction histogram of 30 opposition CRMs under sensing noise", _figure4),
     "figure7": ("Fig. 7: CRMs per episode vs episode, 20 trials, SARSA and the other learners", _figure7),
     "figure8": ("Fig. 8: the learned strategies on aliased and far-from-corner starts", _figure8),
     "figure9": ("Fig. 9: the learned policy, 11 noisy trials, in the (rho, moment) plane", _figure9),
     "compare": ("Every method on paper-box: learners, baselines, grasp controller, exact references", _compare),
+    "figure4-mujoco": ("Fig. 4 on the MuJoCo stand-in hand, and intrinsic contact sensing accuracy", _figure4_mujoco),
+    "figure9-mujoco": ("Fig. 9 on the MuJoCo stand-in: the kinematic policy transferred, 11 trials", _figure9_mujoco),
 }
+NEEDS_MUJOCO = ("figure4-mujoco", "figure9-mujoco")
 """Experiment name -> (description, runner(out_dir, seed, quick, context))."""
 
 IMAGES = {
@@ -131,6 +172,8 @@ IMAGES = {
     "figure8": ["figure8.png", "figure8.gif"],
     "figure9": ["figure9.png"],
     "compare": ["compare.png"],
+    "figure4-mujoco": ["figure4_mujoco.png"],
+    "figure9-mujoco": ["figure9_mujoco.png", "figure9_mujoco.gif"],
 }
 
 
@@ -144,10 +187,19 @@ def reproduce(
 ) -> dict[str, dict[str, Any]]:
     """Run the named experiments (all by default) into ``out_dir/<name>/`` and write
     ``out_dir/README.md`` with every figure and our numbers beside the paper's."""
-    names = list(EXPERIMENTS) if not names else names
+    from ..physics import mujoco_available, require_mujoco
+
+    skipped: list[str] = []
+    if not names:
+        names = list(EXPERIMENTS)
+        if not mujoco_available():
+            skipped = [n for n in names if n in NEEDS_MUJOCO]
+            names = [n for n in names if n not in NEEDS_MUJOCO]
     unknown = [n for n in names if n not in EXPERIMENTS]
     if unknown:
         raise CrmgraspError(f"unknown experiment {unknown[0]!r}; known: {', '.join(EXPERIMENTS)}")
+    if any(n in NEEDS_MUJOCO for n in names):
+        require_mujoco()
     out = Path(out_dir)
     results: dict[str, dict[str, Any]] = {}
     ctx: dict[str, Any] = {}
@@ -167,7 +219,10 @@ def reproduce(
         summary["seconds"] = round(time.perf_counter() - t0, 3)
         results[name] = summary
         lines += [f"| {name} | {_cell(q)} | {_cell(ours)} | {_cell(paper)} |" for q, ours, paper in rows]
-        body += [f"## {name}", "", desc, ""] + [f"![{name}]({name}/{img})" for img in IMAGES[name]]
+        body += [f"## {name}", "", desc, ""] + [
+            f"![{name}]({name}/{img})" for img in IMAGES[name] if (out / name / img).exists()
+        ]
         body += ["", f"Data and config: `{name}/` ({summary['seconds']} s).", ""]
+    lines += [f"| {name} | skipped: needs `pip install 'crmgrasp[mujoco]'` | - | - |" for name in skipped]
     atomic_write_text(out / "README.md", "\n".join([*lines, "", *body]))
     return results

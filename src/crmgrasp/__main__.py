@@ -1,0 +1,7 @@
+"""``python -m crmgrasp``: the ``crmgrasp`` command."""
+
+import sys
+
+from .cli import main
+
+sys.exit(main())

@@ -1,0 +1,233 @@
+"""Argument parser of the ``crmgrasp`` command (one-line errors, negative-number values)."""
+
+from __future__ import annotations
+
+import argparse
+import re
+from pathlib import Path
+from typing import NoReturn
+
+from . import __version__
+from ._validation import CrmgraspError, as_point, finite
+from .hand import CRM
+from .tasks import Task
+
+__all__ = ["build_parser"]
+
+_NUMBERISH = re.compile(r"^-[\d.]")
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors and values such as ``-0.15,-0.02``."""
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+        self._negative_number_matcher = _NUMBERISH
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+
+
+def _point(text: str) -> tuple[float, float]:
+    parts = str(text).split(",")
+    if len(parts) != 2:
+        raise argparse.ArgumentTypeError(f"expected X,Y (two numbers), got {text!r}")
+    try:
+        return as_point(parts, "point")
+    except CrmgraspError as exc:
+        raise argparse.ArgumentTypeError(f"{exc} in {text!r}") from None
+
+
+def _number(text: str) -> float:
+    try:
+        return finite(text, "value")
+    except CrmgraspError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _resolve_crm(task: Task, text: str) -> CRM:
+    """``C1``..``Cn`` names the task's actions; anything else is parsed as ``c,f,r``."""
+    m = re.fullmatch(r"[Cc](\d+)", text.strip())
+    if m:
+        i = int(m.group(1))
+        if not 1 <= i <= len(task.actions):
+            raise CrmgraspError(f"task {task.name} has actions C1..C{len(task.actions)}, got {text!r}")
+        return task.actions[i - 1]
+    return task.hand.check_crm(CRM.parse(text))
+
+
+def _add_scene_args(p: argparse.ArgumentParser, crm_required: bool) -> None:
+    p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
+    p.add_argument(
+        "--a", type=_point, required=True, metavar="X,Y", help="point projected onto the boundary for contact a (m)"
+    )
+    p.add_argument(
+        "--b", type=_point, required=True, metavar="X,Y", help="point projected onto the boundary for contact b (m)"
+    )
+    p.add_argument(
+        "--crm",
+        required=crm_required,
+        metavar="C",
+        help="CRM as c,f,r (e.g. a,b,0 or b,b,-0.08) or a task action C1..Cn",
+    )
+    p.add_argument(
+        "--sigma-n", type=_number, default=0.0, metavar="DEG", help="normal sensing noise, degrees (default 0)"
+    )
+    p.add_argument(
+        "--sigma-p", type=_number, default=0.0, metavar="M", help="position sensing noise, metres (default 0)"
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of the sensing noise (default 0)")
+
+
+def _add_backend(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--backend",
+        choices=("kinematic", "mujoco"),
+        default="kinematic",
+        help="kinematic simulator (default) or the MuJoCo stand-in hand (extra crmgrasp[mujoco]; "
+        "fingertip palm tolerance 10 degrees, its own sensor noise)",
+    )
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``crmgrasp`` command."""
+    parser = _Parser(prog="crmgrasp", description="Grasp strategies composed of contact relative motions (Platt).")
+    parser.add_argument("--version", action="version", version=f"crmgrasp {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    p = sub.add_parser(
+        "crm",
+        help="execute one CRM and print the outcome",
+        description="Execute one CRM from the configuration given by --a and --b.",
+    )
+    _add_scene_args(p, crm_required=True)
+    p.add_argument("--json", action="store_true", help="print JSON instead of text")
+
+    p = sub.add_parser(
+        "show",
+        help="draw the scene (and a CRM) to an image",
+        description="Draw object, contacts with normals, palm point and, with --crm, the goal line and path.",
+    )
+    _add_scene_args(p, crm_required=False)
+    p.add_argument("--out", type=Path, required=True, help="image file (.png, .pdf, .svg; mujoco: .png or .gif)")
+    _add_backend(p)
+
+    p = sub.add_parser(
+        "reproduce",
+        help="run the paper's experiments",
+        description="Run the paper's experiments into one folder with an index README.md.",
+    )
+    p.add_argument("experiments", nargs="*", metavar="NAME", help="experiments to run (default: all)")
+    p.add_argument(
+        "--out", type=Path, default=Path("crmgrasp-results"), help="output folder (default: ./crmgrasp-results)"
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
+    p.add_argument("--quick", action="store_true", help="small budgets (under a minute on 2 cores)")
+
+    p = sub.add_parser(
+        "learn",
+        help="train a learner over independent trials",
+        description="Train a learner on a task; write curve.csv, summary.json, policy.json "
+        "and learning_curve.png to --out.",
+    )
+    p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
+    p.add_argument("--agent", default="sarsa", help="sarsa, q, sarsa-lambda, dyna-q, random or fixed")
+    p.add_argument("--k", type=int, default=2, help="history order of the state (default 2)")
+    p.add_argument("--trials", type=int, default=20, help="independent trials (default 20)")
+    p.add_argument("--episodes", type=int, default=2000, help="training episodes per trial (default 2000)")
+    p.add_argument("--eval-episodes", type=int, default=1000, help="greedy evaluation episodes per trial")
+    p.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
+    p.add_argument("--out", type=Path, required=True, help="output folder")
+    p.add_argument(
+        "--lockstep",
+        action="store_true",
+        help="step all trials together through the batched simulator (same results; faster from ~500 trials)",
+    )
+    for flag, kind, text in _AGENT_FLAGS:
+        p.add_argument(flag, type=kind, default=None, help=text)
+
+    p = sub.add_parser(
+        "evaluate",
+        help="evaluate a saved policy",
+        description="Run a saved policy greedily on fresh episodes of its task.",
+    )
+    p.add_argument("--policy", type=Path, required=True, help="policy.json written by `crmgrasp learn`")
+    p.add_argument("--task", default=None, help="task name (default: the one the policy names)")
+    p.add_argument("--episodes", type=int, default=1000, help="episodes (default 1000)")
+    p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of text")
+
+    p = sub.add_parser(
+        "bench",
+        help="speed benchmarks against Gymnasium's CartPole",
+        description="Time paper-box against CartPole-v1 in one process; print one JSON object.",
+    )
+    p.add_argument("--smoke", action="store_true", help="tiny sizes (CI): no meaningful timings")
+    p.add_argument("--rounds", type=int, default=15, help="alternating rounds (default 15)")
+    p.add_argument("--seed", type=int, default=0)
+
+    p = sub.add_parser(
+        "references",
+        help="clairvoyant bound and belief-space optimum of a task",
+        description="Exact reference values on sampled starts: the clairvoyant bound (full information) "
+        "and the belief-space optimum (observations only).",
+    )
+    p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
+    p.add_argument("--starts", type=int, default=4000, help="sampled starts (default 4000)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the starts (default 0)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of text")
+
+    p = sub.add_parser(
+        "compare",
+        help="every method on one task, one table",
+        description="Learners, baselines, the grasp controller and the exact references on one task, "
+        "same seeds; writes compare.csv, compare.md and compare.png to --out.",
+    )
+    p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
+    p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    p.add_argument("--out", type=Path, required=True, help="output folder")
+    p.add_argument("--quick", action="store_true", help="small budgets (seconds)")
+
+    p = sub.add_parser(
+        "pomdp",
+        help="build the sampled POMDP of a task, solve it, export it",
+        description="Build an explicit POMDP of a polygonal task by sampling the simulator, solve it by "
+        "point-based value iteration, write it in Cassandra's .pomdp format, and run its policy.",
+    )
+    p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
+    p.add_argument("--cell", type=_number, default=0.01, help="cell size along each edge, m (default 0.01)")
+    p.add_argument("--samples", type=int, default=20, help="CRM samples per cell and action (default 20)")
+    p.add_argument("--starts", type=int, default=4000, help="sampled starts for the start belief (default 4000)")
+    p.add_argument("--episodes", type=int, default=1000, help="fresh starts to execute the policy on")
+    p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    p.add_argument("--out", type=Path, required=True, help="the .pomdp file to write")
+
+    p = sub.add_parser(
+        "run",
+        help="run a saved policy on the kinematic hand, logging every step",
+        description="Run a saved policy through the hand interface (here: the kinematic simulator) from the "
+        "configuration given by --a and --b; write the step log to --log.",
+    )
+    p.add_argument("--policy", type=Path, required=True, help="policy.json written by `crmgrasp learn`")
+    p.add_argument("--a", type=_point, required=True, metavar="X,Y", help="start point for contact a (m)")
+    p.add_argument("--b", type=_point, required=True, metavar="X,Y", help="start point for contact b (m)")
+    p.add_argument("--log", type=Path, required=True, help="CSV step log to write")
+    p.add_argument("--sigma-n", type=_number, default=0.0, metavar="DEG", help="normal sensing noise, degrees")
+    p.add_argument("--sigma-p", type=_number, default=0.0, metavar="M", help="position sensing noise, metres")
+    p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    _add_backend(p)
+
+    sub.add_parser("tasks", help="list registered tasks", description="List the registered tasks.")
+    return parser
+
+
+_AGENT_FLAGS = (
+    ("--alpha", _number, "learning rate (default 0.3)"),
+    ("--gamma", _number, "discount factor (default 0.9)"),
+    ("--epsilon", _number, "exploration probability (default 0: greedy)"),
+    ("--q0", _number, "initial Q value (default 0: optimistic)"),
+    ("--lam", _number, "sarsa-lambda: trace decay lambda (default 0.9)"),
+    ("--trace", str, "sarsa-lambda: replacing or accumulating"),
+    ("--n-planning", int, "dyna-q: planning updates (sample) or max sweeps (sweep) per step"),
+    ("--planning", str, "dyna-q: sample or sweep"),
+)

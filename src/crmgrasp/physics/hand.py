@@ -1,0 +1,323 @@
+"""A MuJoCo-simulated two-fingertip hand that executes CRMs as real motions.
+
+:class:`MujocoHand` implements :class:`~crmgrasp.runner.HandInterface`. It knows
+its own kinematics (fingertip sensor poses) but not the object: ``sense()`` reads
+the two fingertip force/torque sensors (with white noise and a slow linear drift
+per channel), subtracts each sensor's tare (taken whenever that fingertip is
+free), averages ``sense_ticks`` control ticks, and turns each wrench into a
+contact by intrinsic contact sensing (:func:`~crmgrasp.contact_sensing.contact_from_wrench`
+on a :class:`~crmgrasp.contact_sensing.Circle` of the tip radius). MuJoCo's
+contact list is used only by :meth:`MujocoHand.true_config`, for evaluation.
+
+A CRM ``(c, f, r)`` runs as (SPEC section 3 made physical):
+
+1. the goal line and its reach chord from the *sensed* configuration (the
+   stationary contact's sensed position); no chord: aperture error, no motion;
+2. back off by ``hand.backoff`` along the moving contact's sensed outward
+   normal, tare its sensor, lift above the object, travel to above the chord's
+   start, lower to the contact plane. Contact felt while lowering means the start
+   is over (inside) the object: aperture error;
+3. switch the palm's collision geometry on (if it already overlaps the object:
+   palm error) and approach along the line at ``approach_speed`` until the
+   high-pass filtered force rises by ``contact_on`` (contact), the palm collides
+   (palm error), or the chord ends (aperture error);
+4. press with ``hold_force``, settle, sense; a sensed contact surface facing the
+   palm side by more than ``hand.palm_normal_tol`` (the fingertip cannot push
+   toward its own palm) is a palm error;
+5. on any error the fingertip goes back over the air to its original back-off
+   point and re-approaches along its original normal.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from .._validation import CrmgraspError
+from ..contact_sensing import Circle, ContactDetector, NoContact, contact_from_wrench
+from ..contacts import Config, Contact
+from ..hand import CRM, goal_line
+from ..sensing import Error
+from ..tasks import Task
+from . import require_mujoco
+from .model import PhysicsParams, mjcf
+
+__all__ = ["MujocoHand"]
+
+LABELS = ("a", "b")
+
+
+class MujocoHand:
+    """The MuJoCo stand-in hand holding ``task.obj`` from ``start`` (object frame = world).
+
+    Parameters
+    ----------
+    task
+        The task (object, hand limits, CRM set). Its hand's ``palm_normal_tol``
+        applies to the fingertips' pushing direction (use a noisy-execution task).
+    start
+        The true starting contacts; the fingertips are placed just outside them
+        and approach along the inward normals until contact is felt.
+    rng
+        Source of all sensor noise and drift.
+    params
+        Physical and controller parameters.
+    """
+
+    def __init__(
+        self, task: Task, start: Config, rng: np.random.Generator, params: PhysicsParams | None = None
+    ) -> None:
+        self.mj = require_mujoco()
+        params = PhysicsParams() if params is None else params
+        self.task, self.params, self.rng = task, params, rng
+        self.model = self.mj.MjModel.from_xml_string(mjcf(task, params))
+        self.data = self.mj.MjData(self.model)
+        m = self.model
+        self._tip_geom = [self.mj.mj_name2id(m, self.mj.mjtObj.mjOBJ_GEOM, f"tip_{x}") for x in LABELS]
+        self._site = [self.mj.mj_name2id(m, self.mj.mjtObj.mjOBJ_SITE, f"tip_{x}") for x in LABELS]
+        self._object = self.mj.mj_name2id(m, self.mj.mjtObj.mjOBJ_GEOM, "object")
+        self._palm = self.mj.mj_name2id(m, self.mj.mjtObj.mjOBJ_GEOM, "palm")
+        sd = np.array([params.force_noise] * 3 + [params.torque_noise] * 3)
+        bias = np.array([params.force_bias] * 3 + [params.torque_bias] * 3)
+        drift = np.array([params.force_drift] * 3 + [params.torque_drift] * 3)
+        self._noise_sd = sd
+        self._bias = rng.normal(0.0, 1.0, size=(2, 6)) * bias
+        self._rates = rng.normal(0.0, 1.0, size=(2, 6)) * drift
+        self._tare = np.zeros((2, 6))
+        self._raw = np.zeros((2, 6))
+        self._cmd = np.zeros((2, 3))
+        self._sensed: Config | None = None
+        self._palm_hit = False
+        self.tip = Circle(params.tip_radius)
+        self.crm_seconds: list[float] = []
+        """Wall time of each executed CRM, s."""
+        self.on_tick: Callable[[MujocoHand], None] | None = None
+        """Called after every control tick (e.g. to record animation frames)."""
+        self._place(start)
+
+    # -- low level -------------------------------------------------------------
+    def _tick(self) -> None:
+        """Place the palm at ``P`` of the fingertip centres, step, read the sensors."""
+        d, p = self.data, self.params
+        ta, tb = d.site_xpos[self._site[0]], d.site_xpos[self._site[1]]
+        dx, dy = tb[0] - ta[0], tb[1] - ta[1]
+        dist = math.hypot(dx, dy) or 1.0
+        h = self.task.hand.palm_depth
+        d.mocap_pos[0] = (0.5 * (ta[0] + tb[0]) + h * dy / dist, 0.5 * (ta[1] + tb[1]) - h * dx / dist, p.height / 2)
+        d.ctrl[:] = self._cmd.ravel()
+        self.mj.mj_step(self.model, d, nstep=p.control_steps)
+        for i, x in enumerate(LABELS):
+            wrench = np.concatenate([d.sensor(f"force_{x}").data, d.sensor(f"torque_{x}").data])
+            # the sensors report what the tip transmits to its carriage: the object's
+            # push on the fingertip is the negative
+            self._raw[i] = (
+                -wrench + self._bias[i] + self._rates[i] * d.time + self.rng.normal(0.0, 1.0, 6) * self._noise_sd
+            )
+        if self.model.geom_contype[self._palm] and d.ncon:
+            geoms = d.contact.geom
+            self._palm_hit |= bool(np.any(geoms == self._palm))
+        if self.on_tick is not None:
+            self.on_tick(self)
+
+    def _centre(self, i: int) -> np.ndarray:
+        """Fingertip centre, world frame (the robot's forward kinematics)."""
+        return np.array(self.data.site_xpos[self._site[i]])
+
+    def _to_cmd(self, world: np.ndarray) -> np.ndarray:
+        return np.array([world[0], world[1], world[2] - self.params.height / 2])
+
+    def _move(self, i: int, target: np.ndarray, speed: float, detect: bool = False, watch_palm: bool = False) -> str:
+        """Drive fingertip ``i``'s servo target in a straight line to ``target`` (world).
+
+        Returns ``"contact"`` at a detected onset, ``"palm"`` on a palm collision,
+        ``"end"`` when the target is reached (after the servo settles).
+        """
+        p = self.params
+        detector = ContactDetector(p.filter_tau, p.tick, p.contact_on, p.contact_off) if detect else None
+        if detector is not None:
+            detector(self._raw[i, :3])
+        start = self._cmd[i].copy()
+        goal = self._to_cmd(target)
+        n = max(1, math.ceil(float(np.linalg.norm(goal - start)) / (speed * p.tick)))
+        for k in range(1, n + 1 + p.settle_ticks // 2):
+            self._cmd[i] = start + (goal - start) * min(1.0, k / n)
+            self._tick()
+            if watch_palm and self._palm_hit:
+                return "palm"
+            if detector is not None and detector(self._raw[i, :3]):
+                return "contact"
+        return "end"
+
+    def _hold(self, i: int, direction: np.ndarray) -> None:
+        """Press fingertip ``i`` along ``direction`` with about ``hold_force``."""
+        push = self.params.hold_force / self.params.kp
+        self._cmd[i] = self._to_cmd(self._centre(i)) + push * np.array([direction[0], direction[1], 0.0])
+        for _ in range(self.params.settle_ticks):
+            self._tick()
+
+    def _set_palm(self, on: bool) -> bool:
+        """Switch the palm's collision geometry; False if it would start inside the object."""
+        m = self.model
+        self._palm_hit = False
+        if not on:
+            m.geom_contype[self._palm] = m.geom_conaffinity[self._palm] = 0
+            return True
+        if self.mj.mj_geomDistance(m, self.data, self._palm, self._object, 0.01, None) <= 0.0:
+            return False
+        m.geom_contype[self._palm] = m.geom_conaffinity[self._palm] = 2
+        return True
+
+    def _tare_tip(self, i: int) -> None:
+        acc = np.zeros(6)
+        for _ in range(self.params.sense_ticks):
+            self._tick()
+            acc += self._raw[i]
+        self._tare[i] = acc / self.params.sense_ticks
+
+    def _approach(self, i: int, point: np.ndarray, direction: np.ndarray, length: float) -> str:
+        """Approach from contact-point ``point`` along unit ``direction`` for ``length`` m."""
+        r = self.params.tip_radius
+        z = self.params.height / 2
+        c0 = np.array([point[0] - r * direction[0], point[1] - r * direction[1], z])
+        c1 = c0 + length * np.array([direction[0], direction[1], 0.0])
+        return self._move(i, c1, self.params.approach_speed, detect=True, watch_palm=True)
+
+    def _air(self, i: int, centre_xy: np.ndarray) -> str:
+        """Lift fingertip ``i``, travel over the object to ``centre_xy``, lower to the
+        contact plane; ``"contact"`` if the object is felt while lowering."""
+        p = self.params
+        self._set_palm(False)
+        up = p.height + p.tip_radius + p.lift
+        here = self._centre(i)
+        self._move(i, np.array([here[0], here[1], up]), p.travel_speed)
+        self._move(i, np.array([centre_xy[0], centre_xy[1], up]), p.travel_speed)
+        down = np.array([centre_xy[0], centre_xy[1], p.height / 2])
+        return self._move(i, down, p.approach_speed, detect=True)
+
+    # -- placement, sensing, truth -----------------------------------------------
+    def _place(self, start: Config) -> None:
+        p, d = self.params, self.data
+        gap = p.tip_radius + 0.005
+        for i, c in enumerate(start):
+            self._cmd[i] = (c.x - gap * c.nx, c.y - gap * c.ny, 0.0)
+            d.qpos[7 + 3 * i : 10 + 3 * i] = self._cmd[i]
+        self.mj.mj_forward(self.model, d)
+        for _ in range(10):
+            self._tick()
+        for i in range(2):
+            self._tare_tip(i)
+        for i, c in enumerate(start):
+            n = np.array(c.normal)
+            if self._approach(i, np.array(c.point) - 0.005 * n, n, 0.015) == "contact":
+                self._hold(i, n)
+        self._set_palm(True)
+
+    def sense(self) -> Config | NoContact:
+        """Both contacts from the tared, averaged fingertip wrenches (world frame)."""
+        p = self.params
+        acc = np.zeros((2, 6))
+        for _ in range(p.sense_ticks):
+            self._tick()
+            acc += self._raw
+        wrench = acc / p.sense_ticks - self._tare
+        contacts = []
+        for i, x in enumerate(LABELS):
+            got = contact_from_wrench(self.tip, wrench[i, :2], float(wrench[i, 5]), p.contact_threshold)
+            if isinstance(got, NoContact):
+                self._sensed = None
+                return NoContact(f"fingertip {x}: {got.reason}")
+            centre = self._centre(i)
+            contacts.append(Contact(centre[0] + got.point[0], centre[1] + got.point[1], *got.normal))
+        self._wrench = wrench
+        self._sensed = Config(*contacts)
+        return self._sensed
+
+    def raw_reading(self) -> dict[str, Any]:
+        """The tared wrench behind the last reading: ``f_x, f_y, m_z`` per fingertip (N, N m)."""
+        w = getattr(self, "_wrench", np.zeros((2, 6)))
+        return {x: [round(float(v), 6) for v in (w[i, 0], w[i, 1], w[i, 5])] for i, x in enumerate(LABELS)}
+
+    def true_config(self) -> Config | None:
+        """The true contacts from MuJoCo's contact list (world frame), None if a tip is free."""
+        d = self.data
+        found: list[Contact | None] = [None, None]
+        for k in range(d.ncon):
+            con = d.contact[k]
+            pair = (int(con.geom1), int(con.geom2))
+            for i, g in enumerate(self._tip_geom):
+                if pair == (g, self._object) or pair == (self._object, g):
+                    n = np.array(con.frame[:2]) * (1.0 if pair[0] == g else -1.0)
+                    n /= np.linalg.norm(n)
+                    found[i] = Contact(float(con.pos[0]), float(con.pos[1]), float(n[0]), float(n[1]))
+        if found[0] is None or found[1] is None:
+            return None
+        return Config(found[0], found[1])
+
+    def object_pose(self) -> tuple[float, float, float]:
+        """Object position ``(x, y)`` (m) and yaw (rad) in the world."""
+        q = self.data.qpos
+        return float(q[0]), float(q[1]), 2.0 * math.atan2(float(q[6]), float(q[3]))
+
+    # -- CRMs ------------------------------------------------------------------
+    def execute(self, crm: CRM) -> Error:
+        """Execute ``crm`` as a real motion; return its error flag."""
+        t0 = time.perf_counter()
+        try:
+            return self._execute(self.task.hand.check_crm(crm))
+        finally:
+            self.crm_seconds.append(time.perf_counter() - t0)
+
+    def _execute(self, crm: CRM) -> Error:
+        s = self._sensed if self._sensed is not None else self.sense()
+        if isinstance(s, NoContact):
+            raise CrmgraspError(f"cannot execute a CRM without contact ({s.reason})")
+        i = crm.ci
+        mover, still = s[i], s[1 - i]
+        line = goal_line(crm, s, still, self.task.hand.aperture)
+        if line is None:
+            return Error.APERTURE
+        same = crm.c == crm.f
+        t0, t1 = (line.t_lo, line.t_hi) if same else (line.t_hi, line.t_lo)
+        sign = 1.0 if same else -1.0
+        direction = np.array(line.direction) * sign
+        start = np.array(line.at(t0))
+        home = self._centre(i) - self.task.hand.backoff * np.array([mover.nx, mover.ny, 0.0])
+        self._set_palm(False)
+        self._move(i, home, self.params.travel_speed)
+        self._tare_tip(i)
+        self._sensed = None
+        centre = start - self.params.tip_radius * direction
+        if self._air(i, centre) == "contact":
+            return self._recover(i, mover, home, Error.APERTURE)
+        if not self._set_palm(True):
+            return self._recover(i, mover, home, Error.PALM)
+        outcome = self._approach(i, start, direction, abs(t1 - t0))
+        if outcome != "contact":
+            return self._recover(i, mover, home, Error.APERTURE if outcome == "end" else Error.PALM)
+        self._hold(i, direction)
+        new = self.sense()
+        if self._palm_hit or (isinstance(new, Config) and self._faces_palm(new)):
+            return self._recover(i, mover, home, Error.PALM)
+        return Error.NONE
+
+    def _faces_palm(self, cfg: Config) -> bool:
+        a, b = cfg
+        dist = math.hypot(b.x - a.x, b.y - a.y) or 1.0
+        ux, uy = (b.y - a.y) / dist, -(b.x - a.x) / dist
+        tol = self.task.hand.palm_normal_tol
+        return a.nx * ux + a.ny * uy > tol or b.nx * ux + b.ny * uy > tol
+
+    def _recover(self, i: int, original: Contact, home: np.ndarray, error: Error) -> Error:
+        """Go back over the air to the back-off point and re-establish the contact."""
+        self._set_palm(False)
+        self._air(i, home[:2])
+        n = np.array(original.normal)
+        self._set_palm(True)
+        if self._approach(i, home[:2] + self.params.tip_radius * n, n, 3 * self.task.hand.backoff + 0.01) == "contact":
+            self._hold(i, n)
+        self._sensed = None
+        return error
