@@ -54,6 +54,7 @@ def test_compare_small(tmp_path):
         eval_episodes=30,
         reference_starts=300,
         learners=(LearnerSpec("sarsa", 2, {}, "SARSA"), LearnerSpec("random", 2, {}, "random")),
+        deep=None,
     )
     s = compare(tmp_path, cfg)
     with open(tmp_path / "compare.csv") as fh:
@@ -72,6 +73,7 @@ def test_compare_small(tmp_path):
     assert "| grasp controller | baseline |" in (tmp_path / "compare.md").read_text()
     assert (tmp_path / "compare.png").stat().st_size > 1000
     assert json.loads((tmp_path / "config.json").read_text())["summary"] == s
+    assert s["deep_rl"] == "not run (deep=None)"
 
 
 def test_compare_cli_quick(tmp_path, capsys):

@@ -187,6 +187,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
     p.add_argument("--out", type=Path, required=True, help="output folder")
     p.add_argument("--quick", action="store_true", help="small budgets (seconds)")
+    p.add_argument(
+        "--deep-steps",
+        type=int,
+        default=None,
+        metavar="N",
+        help="RecurrentPPO training steps (default 120000, --quick 4096; 0 leaves the deep-RL peer out)",
+    )
 
     p = sub.add_parser(
         "pomdp",

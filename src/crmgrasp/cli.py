@@ -7,6 +7,7 @@ Every failure caused by the user's input prints one line,
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import os
@@ -214,10 +215,18 @@ def _cmd_references(args: argparse.Namespace) -> int:
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
+    from .agents.deep import RecurrentPPOConfig
     from .experiments.compare import CompareConfig, compare
 
     make_task(args.task)  # a clear error for an unknown task before any work
     cfg = CompareConfig.quick(args.task, args.seed) if args.quick else CompareConfig(task=args.task, seed=args.seed)
+    if args.deep_steps is not None:
+        if args.deep_steps < 0:
+            raise CrmgraspError(f"--deep-steps must be >= 0, got {args.deep_steps}")
+        deep = cfg.deep or RecurrentPPOConfig()
+        cfg = dataclasses.replace(
+            cfg, deep=dataclasses.replace(deep, total_steps=args.deep_steps) if args.deep_steps else None
+        )
     summary = compare(args.out, cfg)
     print((args.out / "compare.md").read_text(encoding="utf-8"))
     for key, value in summary.items():

@@ -21,6 +21,8 @@ import numpy as np
 
 from .._io import atomic_write_text, save_figure, write_csv, write_json
 from ..agents.controller import run_controller
+from ..agents.deep import RecurrentPPOConfig, deep_available, evaluate_recurrent, train_recurrent_ppo
+from ..agents.training import episodes_to_within
 from ..plotting import learning_curve_figure
 from ..pomdp_task import POMDPAgent, build_task_pomdp
 from ..references import BeliefPolicy, belief_optimum, clairvoyant_bound, sample_starts
@@ -36,6 +38,9 @@ COMPARE_LEARNERS: tuple[LearnerSpec, ...] = (
     LearnerSpec("fixed", 2, {}, "fixed sequence"),
     LearnerSpec("random", 2, {}, "random"),
 )
+
+DEFAULT_DEEP = RecurrentPPOConfig(total_steps=120_000)
+"""The deep-RL peer of the full comparison."""
 
 COLUMNS = [
     "method",
@@ -61,11 +66,15 @@ class CompareConfig:
     eval_episodes: int = 1000
     reference_starts: int = 4000
     learners: tuple[LearnerSpec, ...] = COMPARE_LEARNERS
+    deep: RecurrentPPOConfig | None = DEFAULT_DEEP
+    """The deep-RL peer (skipped when None or when the extra ``crmgrasp[deep]`` is missing)."""
 
     @classmethod
     def quick(cls, task: str = "paper-box", seed: int = 0) -> CompareConfig:
-        """Small budgets: 5 trials x 300 episodes, 200 evaluation episodes, 1,000 starts."""
-        return cls(task=task, seed=seed, trials=5, episodes=300, eval_episodes=200, reference_starts=1000)
+        """Small budgets: 5 trials x 300 episodes, 200 evaluation episodes, 1,000 starts,
+        RecurrentPPO for 4,096 steps."""
+        deep = RecurrentPPOConfig(total_steps=4096, checkpoint_episodes=50)
+        return cls(task=task, seed=seed, trials=5, episodes=300, eval_episodes=200, reference_starts=1000, deep=deep)
 
 
 def _ci(values: np.ndarray) -> tuple[float, float, float]:
@@ -114,9 +123,11 @@ def compare(out_dir: str | Path, config: CompareConfig = CompareConfig()) -> dic
     )
     controller = m
     starts = sample_starts(task, config.reference_starts, config.seed)
+    fresh = sample_starts(task, config.trials * config.eval_episodes, config.seed + 1)
+    deep = _deep_row(task, config, fresh, curves, controller, Path(out_dir))
+    rows += deep[0]
     t0 = time.perf_counter()
     policy = BeliefPolicy(task, starts)
-    fresh = sample_starts(task, config.trials * config.eval_episodes, config.seed + 1)
     rows.append(_executed_row("belief-space policy, executed", policy.run, fresh, t0))
     belief_executed = rows[-1][2]
     t0 = time.perf_counter()
@@ -152,6 +163,7 @@ def compare(out_dir: str | Path, config: CompareConfig = CompareConfig()) -> dic
         "pomdp_model_value": round(pomdp_value, 4),
         "pomdp_counts": pomdp_counts,
         "best_learner_vs_optimum_pct": round(100 * (best[2] / refs["belief-space optimum"] - 1), 2),
+        "deep_rl": deep[1],
     }
     write_json(
         out / "config.json",
@@ -162,6 +174,47 @@ def compare(out_dir: str | Path, config: CompareConfig = CompareConfig()) -> dic
         },
     )
     return summary
+
+
+def _deep_row(
+    task: Any, config: CompareConfig, fresh: list, curves: dict, controller: float, out: Path
+) -> tuple[list[list[Any]], str | dict]:
+    """RecurrentPPO's row (if it runs) and a summary of it; writes ``deep_curve.csv`` and
+    ``deep_checkpoints.csv`` and adds its curve (100-episode moving average: one run is
+    noisier than the tabular learners' trial means)."""
+    if config.deep is None:
+        return [], "not run (deep=None)"
+    if not deep_available():
+        return [], "skipped: needs pip install 'crmgrasp[deep]'"
+    t0 = time.perf_counter()
+    run = train_recurrent_ppo(task, config.seed, config.deep)
+    steps, ok = evaluate_recurrent(run.model, task, fresh, np.random.default_rng(config.seed + 1))
+    m, lo, hi = _ci(steps.astype(float))
+    ref = task.reference_mean_steps
+    to5 = episodes_to_within(run.episode_steps, ref) if ref else None
+    greedy5 = run.greedy_episodes_to_within(ref) if ref else None
+    name = f"RecurrentPPO (LSTM {config.deep.lstm_hidden}), {config.deep.total_steps} steps"
+    window = min(100, max(1, len(run.episode_steps)))
+    smooth = np.convolve(run.episode_steps, np.ones(window) / window, mode="valid")
+    curves[f"{name}, {window}-ep. avg"] = (
+        np.concatenate([np.full(window - 1, np.nan), smooth]),
+        np.zeros(len(run.episode_steps)),
+    )
+    write_csv(out / "deep_curve.csv", ["episode", "crms"], [[i + 1, int(v)] for i, v in enumerate(run.episode_steps)])
+    write_csv(
+        out / "deep_checkpoints.csv", ["episode", "greedy_mean_steps"], zip(run.checkpoints, run.checkpoint_steps)
+    )
+    above = np.flatnonzero(smooth > controller)
+    row = [name, "learner", m, lo, hi, float(ok.mean()), to5, greedy5, round(time.perf_counter() - t0, 3)]
+    info = {
+        "mean_crms": round(m, 3),
+        "failures": int((~ok).sum()),
+        "training_episodes": len(run.episode_steps),
+        "episodes_until_average_stays_below_controller": int(above[-1] + window + 1) if len(above) else window,
+        "greedy_episodes_to_5pct": greedy5,
+        "train_seconds": round(run.seconds, 2),
+    }
+    return [row], info
 
 
 def _executed_row(name: str, run: Any, starts: list, t0: float) -> list[Any]:

@@ -1,0 +1,221 @@
+"""Deep-RL peer: sb3-contrib's RecurrentPPO (an LSTM policy) on the continuous observation.
+
+Needs the optional extra ``crmgrasp[deep]`` (torch, stable-baselines3, sb3-contrib);
+this module imports them only when training or evaluating, and raises a one-line
+:class:`~crmgrasp._validation.CrmgraspError` naming the extra when they are missing.
+
+The policy sees what the tabular learners see before discretisation, as a float
+vector ``[rho / 4, m_a / (2A), m_b / (2A), one-hot(error)]`` (``A`` the hand
+aperture, values clipped as in :class:`~crmgrasp.env.CRMGraspEnv`); the LSTM
+carries the history that the k-order state spells out for the tabular learners.
+Training runs ``n_envs`` environments in a ``DummyVecEnv`` with one torch thread
+(deterministic for a seed on a given machine). The learning curve is the CRMs
+of every finished training episode in completion order; greedy (deterministic)
+checkpoints after each rollout use the same fixed starts as the tabular learners'
+checkpoints (:func:`~crmgrasp.agents.training.checkpoint_generators`).
+"""
+
+from __future__ import annotations
+
+import importlib
+import time
+from dataclasses import dataclass, fields
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from .._validation import CrmgraspError
+from ..contacts import Config
+from ..sensing import Error
+from ..sim import SimState, step
+from ..tasks import Task
+from .training import checkpoint_generators, checkpoints_to_within
+
+__all__ = [
+    "ContinuousObservation",
+    "RecurrentPPOConfig",
+    "DeepRun",
+    "deep_available",
+    "train_recurrent_ppo",
+    "evaluate_recurrent",
+]
+
+N_ERRORS = len(Error)
+
+
+def features(rho: float, m_a: float, m_b: float, error: int, aperture: float) -> np.ndarray:
+    """The policy's input vector (float32, length ``3 + len(Error)``)."""
+    v = np.zeros(3 + N_ERRORS, dtype=np.float32)
+    b = 2.0 * aperture
+    v[0] = min(max(rho, 0.0), 4.0) / 4.0
+    v[1] = min(max(m_a, -b), b) / b
+    v[2] = min(max(m_b, -b), b) / b
+    v[3 + int(error)] = 1.0
+    return v
+
+
+class ContinuousObservation(gym.ObservationWrapper):
+    """Flattens :class:`~crmgrasp.env.CRMGraspEnv`'s ``Dict`` observation into :func:`features`."""
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        self.aperture = float(env.unwrapped.task.hand.aperture)  # type: ignore[attr-defined]
+        self.observation_space = spaces.Box(-1.0, 1.0, (3 + N_ERRORS,), np.float32)
+
+    def observation(self, observation: dict[str, Any]) -> np.ndarray:
+        o = observation
+        return features(float(o["rho"][0]), float(o["m_a"][0]), float(o["m_b"][0]), int(o["error"]), self.aperture)
+
+
+@dataclass(frozen=True)
+class RecurrentPPOConfig:
+    """RecurrentPPO settings (small networks: the observation has 6 numbers)."""
+
+    total_steps: int = 60_000
+    """Environment steps (CRMs) of training."""
+    n_envs: int = 8
+    n_steps: int = 64
+    """Steps per environment per rollout (a rollout is ``n_envs * n_steps`` CRMs)."""
+    n_epochs: int = 4
+    learning_rate: float = 1e-3
+    gamma: float = 0.9
+    """The paper's discount."""
+    ent_coef: float = 0.01
+    lstm_hidden: int = 32
+    hidden: int = 32
+    checkpoint_episodes: int = 100
+    """Fixed starts of each greedy checkpoint (0: no checkpoints)."""
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v, low = getattr(self, f.name), 0 if f.name == "checkpoint_episodes" else 1e-300
+            integral = f.type in ("int", int)
+            if isinstance(v, bool) or not isinstance(v, int if integral else (int, float)) or not v >= low:
+                need = "an integer" if integral else "a number"
+                raise CrmgraspError(f"RecurrentPPO {f.name} must be {need} {'>= 0' if low == 0 else '> 0'}, got {v!r}")
+        if self.gamma > 1:
+            raise CrmgraspError(f"RecurrentPPO gamma must be <= 1, got {self.gamma}")
+
+
+@dataclass
+class DeepRun:
+    """A trained RecurrentPPO model, its curve, checkpoints and wall time."""
+
+    model: Any
+    episode_steps: np.ndarray
+    """CRMs of every finished training episode, in completion order."""
+    checkpoints: np.ndarray
+    """Training episodes completed at each greedy checkpoint."""
+    checkpoint_steps: np.ndarray
+    """Greedy mean CRMs on the fixed checkpoint starts."""
+    seconds: float
+
+    def greedy_episodes_to_within(self, reference: float, factor: float = 1.05) -> int | None:
+        """First checkpoint (in training episodes) from which the greedy policy stays within ``factor``."""
+        return checkpoints_to_within(self.checkpoints, self.checkpoint_steps, reference, factor)
+
+
+def _modules() -> tuple[Any, Any, Any, Any]:
+    try:
+        torch = importlib.import_module("torch")
+        contrib = importlib.import_module("sb3_contrib")
+        vec = importlib.import_module("stable_baselines3.common.vec_env")
+        callbacks = importlib.import_module("stable_baselines3.common.callbacks")
+    except ImportError as exc:
+        raise CrmgraspError(
+            f"the deep-RL peer needs the optional extra: pip install 'crmgrasp[deep]' ({exc})"
+        ) from None
+    return torch, contrib, vec, callbacks
+
+
+def deep_available() -> bool:
+    """True if torch, stable-baselines3 and sb3-contrib import."""
+    try:
+        _modules()
+    except CrmgraspError:
+        return False
+    return True
+
+
+def evaluate_recurrent(
+    model: Any, task: Task, starts: list[Config], rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
+    """Run the deterministic LSTM policy from every start, all episodes batched.
+
+    Returns CRMs per episode and success flags. ``rng`` drives sensing noise (if the task has any).
+    """
+    n = len(starts)
+    states = [SimState(c, task.noise.sense(c, rng), 0) for c in starts]
+    obs = np.stack([features(*_observe(s.sensed), 0, task.hand.aperture) for s in states])
+    steps, success = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=bool)
+    active = np.ones(n, dtype=bool)
+    lstm, first = None, np.ones(n, dtype=bool)
+    while active.any():
+        actions, lstm = model.predict(obs, state=lstm, episode_start=first, deterministic=True)
+        first[:] = False
+        for i in np.flatnonzero(active):
+            res = step(task, states[i], int(actions[i]), rng)
+            states[i], steps[i] = res.state, steps[i] + 1
+            obs[i] = features(*res.observation, int(res.error), task.hand.aperture)
+            if res.terminated or res.truncated:
+                active[i], success[i] = False, res.terminated
+    return steps, success
+
+
+def _observe(sensed: Config) -> tuple[float, float, float]:
+    from ..sensing import observe
+
+    return tuple(observe(sensed))  # type: ignore[return-value]
+
+
+def train_recurrent_ppo(task: Task, seed: int, config: RecurrentPPOConfig = RecurrentPPOConfig()) -> DeepRun:
+    """Train RecurrentPPO on ``task`` from ``seed``; return the model, curve and checkpoints."""
+    torch, contrib, vec, callbacks = _modules()
+    from ..env import CRMGraspEnv
+
+    c = config
+    starts_rng, _ = checkpoint_generators(seed)
+    ckpt_starts = [task.sample_start(starts_rng) for _ in range(c.checkpoint_episodes)]
+    lengths: list[int] = []
+    ckpts: list[tuple[int, float]] = []
+
+    class Track(callbacks.BaseCallback):  # type: ignore[misc, name-defined]
+        def _on_step(self) -> bool:
+            for done, info in zip(self.locals["dones"], self.locals["infos"]):
+                if done:
+                    lengths.append(int(info["steps"]))
+            return True
+
+        def _on_rollout_end(self) -> None:
+            if ckpt_starts:
+                rng = checkpoint_generators(seed)[1]  # the same noise stream at every checkpoint
+                ckpts.append((len(lengths), float(evaluate_recurrent(self.model, task, ckpt_starts, rng)[0].mean())))
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        env = vec.DummyVecEnv([lambda: ContinuousObservation(CRMGraspEnv(task)) for _ in range(c.n_envs)])
+        model = contrib.RecurrentPPO(
+            "MlpLstmPolicy",
+            env,
+            n_steps=c.n_steps,
+            batch_size=max(1, c.n_steps * c.n_envs // 4),
+            n_epochs=c.n_epochs,
+            learning_rate=c.learning_rate,
+            gamma=c.gamma,
+            ent_coef=c.ent_coef,
+            policy_kwargs={"lstm_hidden_size": c.lstm_hidden, "net_arch": [c.hidden]},
+            seed=seed,
+            device="cpu",
+            verbose=0,
+        )
+        t0 = time.perf_counter()
+        model.learn(c.total_steps, callback=Track())
+        seconds = time.perf_counter() - t0
+    finally:
+        torch.set_num_threads(threads)
+    cp = np.array([e for e, _ in ckpts], dtype=np.int64)
+    cv = np.array([v for _, v in ckpts], dtype=float)
+    return DeepRun(model, np.array(lengths, dtype=float), cp, cv, seconds)

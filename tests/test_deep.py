@@ -1,0 +1,108 @@
+"""The deep-RL peer: observation features, settings, and RecurrentPPO (extra ``crmgrasp[deep]``)."""
+
+import csv
+import sys
+
+import numpy as np
+import pytest
+
+from crmgrasp import make_task
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.agents.deep import (
+    ContinuousObservation,
+    RecurrentPPOConfig,
+    deep_available,
+    evaluate_recurrent,
+    features,
+    train_recurrent_ppo,
+)
+from crmgrasp.cli import main
+from crmgrasp.env import CRMGraspEnv
+from crmgrasp.experiments.compare import CompareConfig, compare
+from crmgrasp.experiments.learning import LearnerSpec
+
+TINY = RecurrentPPOConfig(total_steps=512, n_envs=2, n_steps=64, checkpoint_episodes=10)
+
+
+def test_features_scale_clip_and_one_hot():
+    v = features(2.0, 0.16, -1.0, 2, aperture=0.16)
+    np.testing.assert_allclose(v, [0.5, 0.5, -1.0, 0.0, 0.0, 1.0])
+    assert v.dtype == np.float32
+
+
+def test_continuous_observation_stays_in_its_space():
+    env = ContinuousObservation(CRMGraspEnv("paper-box"))
+    obs, _ = env.reset(seed=0)
+    assert env.observation_space.contains(obs) and obs[3] == 1.0  # no error at reset
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        obs, _, term, trunc, _ = env.step(int(rng.integers(4)))
+        assert env.observation_space.contains(obs) and obs[3:].sum() == 1.0
+        if term or trunc:
+            obs, _ = env.reset()
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"total_steps": 0}, "total_steps"),
+        ({"gamma": 1.5}, "gamma"),
+        ({"n_envs": 2.5}, "n_envs"),
+        ({"checkpoint_episodes": -1}, "checkpoint_episodes"),
+    ],
+)
+def test_config_validates(kwargs, match):
+    with pytest.raises(CrmgraspError, match=match):
+        RecurrentPPOConfig(**kwargs)
+
+
+def test_missing_extra_is_a_one_line_error(monkeypatch):
+    monkeypatch.setitem(sys.modules, "sb3_contrib", None)
+    assert not deep_available()
+    with pytest.raises(CrmgraspError, match=r"crmgrasp\[deep\]"):
+        train_recurrent_ppo(make_task("paper-box"), 0, TINY)
+
+
+needs_deep = pytest.mark.skipif(not deep_available(), reason="needs the extra: pip install 'crmgrasp[deep]'")
+
+
+@needs_deep
+def test_training_is_deterministic_and_evaluates():
+    task = make_task("paper-box")
+    runs = [train_recurrent_ppo(task, 3, TINY) for _ in range(2)]
+    np.testing.assert_array_equal(runs[0].episode_steps, runs[1].episode_steps)
+    np.testing.assert_array_equal(runs[0].checkpoint_steps, runs[1].checkpoint_steps)
+    assert runs[0].episode_steps.sum() <= TINY.total_steps and len(runs[0].checkpoints) == 4  # 512 / (2 * 64)
+    starts = [task.sample_start(np.random.default_rng(i)) for i in range(20)]
+    steps, ok = evaluate_recurrent(runs[0].model, task, starts, np.random.default_rng(0))
+    assert steps.shape == ok.shape == (20,) and ((steps >= 1) & (steps <= task.max_steps)).all()
+    assert (ok | (steps == task.max_steps)).all()
+
+
+@needs_deep
+def test_compare_has_the_deep_row(tmp_path):
+    cfg = CompareConfig(
+        trials=2,
+        episodes=20,
+        eval_episodes=20,
+        reference_starts=200,
+        learners=(LearnerSpec("random", 2, {}, "random"),),
+        deep=TINY,
+    )
+    s = compare(tmp_path, cfg)
+    with open(tmp_path / "compare.csv") as fh:
+        rows = {r["method"]: r for r in csv.DictReader(fh)}
+    row = rows["RecurrentPPO (LSTM 32), 512 steps"]
+    assert row["kind"] == "learner" and 1.0 <= float(row["mean_crms"]) <= task_max()
+    assert s["deep_rl"]["training_episodes"] > 0
+
+
+def task_max() -> int:
+    return make_task("paper-box").max_steps
+
+
+@needs_deep
+def test_compare_cli_deep_steps(tmp_path, capsys):
+    assert main(["compare", "--quick", "--deep-steps", "0", "--out", str(tmp_path)]) == 0
+    assert "not run" in capsys.readouterr().out
+    assert main(["compare", "--quick", "--deep-steps", "-5", "--out", str(tmp_path)]) == 2
