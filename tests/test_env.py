@@ -75,3 +75,46 @@ def test_k_order_wrapper(task):
     e0 = KOrderHistory(gym.make(ENV_ID), k=0)
     s, info = e0.reset(seed=3)
     assert s == info["obs_index"] and e0.observation_space.n == 24
+
+
+def _run(env, seed, n=3000):
+    rng = np.random.default_rng(seed)
+    obs, info = env.reset(seed=seed)
+    out = []
+    for _ in range(n):
+        obs, r, term, trunc, info = env.step(int(rng.integers(4)))
+        out.append(
+            (
+                obs["rho"].item(),
+                obs["m_a"].item(),
+                obs["m_b"].item(),
+                obs["error"],
+                r,
+                term,
+                trunc,
+                info["obs_index"],
+                info["min_friction"],
+                info["config"],
+                info["steps"],
+            )
+        )
+        if term or trunc:
+            obs, info = env.reset()
+    return out
+
+
+@pytest.mark.skipif(not crmgrasp._numba.AVAILABLE, reason="the compiled step needs the extra crmgrasp[fast]")
+def test_compiled_step_equals_the_python_step(task):
+    fast = CRMGraspEnv(task)
+    slow = CRMGraspEnv(task)
+    slow._fast = None  # force sim.step
+    assert fast._fast is not None
+    assert _run(fast, 3) == _run(slow, 3)
+
+
+def test_starts_come_in_blocks_but_reseeding_restarts_them(task):
+    env = CRMGraspEnv(task)
+    first = [env.reset(seed=1)[1]["config"]] + [env.reset()[1]["config"] for _ in range(100)]
+    again = [env.reset(seed=1)[1]["config"]] + [env.reset()[1]["config"] for _ in range(100)]
+    assert first == again and len(set(first)) == len(first)
+    assert all(task.hand.feasible(task.obj, c) == 0 and not task.is_success(c) for c in first)

@@ -39,7 +39,7 @@ EPS = 1e-9
 S_TOL = 1e-12
 ANTIPODAL_TOL = 1e-12
 
-__all__ = ["AVAILABLE", "execute_rows", "corner_candidates", "observe_rows"]
+__all__ = ["AVAILABLE", "execute_rows", "corner_candidates", "observe_rows", "step_one"]
 
 
 @njit(cache=True)
@@ -85,63 +85,76 @@ def _feasible(ax, ay, anx, any_, bx, by, bnx, bny, e, convex, aperture, palm_dep
 
 
 @njit(cache=True)
+def _execute_col(cfg, sen, j, c_is_b, f_is_b, r, e, convex, aperture, palm_depth, tol, new):  # type: ignore[no-untyped-def]
+    """CRM on column ``j``: writes ``new[:, j]``, returns the error code (0, 1, 2)."""
+    for k in range(8):
+        new[k, j] = cfg[k, j]
+    fo = 4 if f_is_b else 0
+    mo = 4 if c_is_b else 0
+    so = 4 - mo
+    fx, fy, fnx, fny = sen[fo, j], sen[fo + 1, j], sen[fo + 2, j], sen[fo + 3, j]
+    bx, by = fx + r * fny, fy - r * fnx
+    wx, wy = bx - cfg[so, j], by - cfg[so + 1, j]
+    qa = fnx * fnx + fny * fny
+    qb = wx * fnx + wy * fny
+    qc = wx * wx + wy * wy - aperture * aperture
+    disc = qb * qb - qa * qc
+    if disc < 0.0:
+        return 1
+    root = np.sqrt(disc)
+    t_lo, t_hi = (-qb - root) / qa, (-qb + root) / qa
+    same = c_is_b == f_is_b
+    t0, t1 = (t_lo, t_hi) if same else (t_hi, t_lo)
+    ox, oy = bx + t0 * fnx, by + t0 * fny
+    if _contains(ox, oy, e, convex):
+        return 1
+    sign = 1.0 if same else -1.0
+    dx, dy = sign * fnx, sign * fny
+    u_max = abs(t1 - t0)
+    best, px, py, nx, ny = np.inf, 0.0, 0.0, 0.0, 0.0
+    for i in range(e.shape[0]):
+        ax, ay, ex, ey, l2, enx, eny = e[i, 0], e[i, 1], e[i, 2], e[i, 3], e[i, 4], e[i, 5], e[i, 6]
+        denom = dx * enx + dy * eny
+        if denom <= 0.0:
+            continue
+        u = ((ax - ox) * enx + (ay - oy) * eny) / denom
+        if u < -EPS or u > u_max + EPS:
+            continue
+        qx, qy = ox + u * dx, oy + u * dy
+        s = ((qx - ax) * ex + (qy - ay) * ey) / l2
+        if s < -S_TOL or s > 1.0 + S_TOL:
+            continue
+        if u < best:
+            best, px, py, nx, ny = u, qx, qy, enx, eny
+    if best == np.inf:
+        return 1
+    c = (
+        (px, py, nx, ny, cfg[4, j], cfg[5, j], cfg[6, j], cfg[7, j])
+        if mo == 0
+        else (cfg[0, j], cfg[1, j], cfg[2, j], cfg[3, j], px, py, nx, ny)
+    )
+    code = _feasible(c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], e, convex, aperture, palm_depth, tol)
+    if code == 0:
+        for k in range(8):
+            new[k, j] = c[k]
+    return code
+
+
+@njit(cache=True)
 def execute_rows(cfg, sen, c_is_b, f_is_b, rr, e, convex, aperture, palm_depth, tol, new, err):  # type: ignore[no-untyped-def]
     """CRM per column of the ``(8, N)`` blocks ``cfg`` (true) and ``sen`` (sensed);
     writes ``new`` (``(8, N)``) and ``err`` (``(N,)``), as :func:`crmgrasp.hand.execute_crm`."""
-    n = cfg.shape[1]
-    c = np.empty(8)
-    for j in range(n):
-        for k in range(8):
-            new[k, j] = cfg[k, j]
-        fo = 4 if f_is_b[j] else 0
-        mo = 4 if c_is_b[j] else 0
-        so = 4 - mo
-        fx, fy, fnx, fny = sen[fo, j], sen[fo + 1, j], sen[fo + 2, j], sen[fo + 3, j]
-        r = rr[j]
-        bx, by = fx + r * fny, fy - r * fnx
-        wx, wy = bx - cfg[so, j], by - cfg[so + 1, j]
-        qa = fnx * fnx + fny * fny
-        qb = wx * fnx + wy * fny
-        qc = wx * wx + wy * wy - aperture * aperture
-        disc = qb * qb - qa * qc
-        err[j] = 1
-        if disc < 0.0:
-            continue
-        root = np.sqrt(disc)
-        t_lo, t_hi = (-qb - root) / qa, (-qb + root) / qa
-        same = c_is_b[j] == f_is_b[j]
-        t0, t1 = (t_lo, t_hi) if same else (t_hi, t_lo)
-        ox, oy = bx + t0 * fnx, by + t0 * fny
-        if _contains(ox, oy, e, convex):
-            continue
-        sign = 1.0 if same else -1.0
-        dx, dy = sign * fnx, sign * fny
-        u_max = abs(t1 - t0)
-        best, px, py, nx, ny = np.inf, 0.0, 0.0, 0.0, 0.0
-        for i in range(e.shape[0]):
-            ax, ay, ex, ey, l2, enx, eny = e[i, 0], e[i, 1], e[i, 2], e[i, 3], e[i, 4], e[i, 5], e[i, 6]
-            denom = dx * enx + dy * eny
-            if denom <= 0.0:
-                continue
-            u = ((ax - ox) * enx + (ay - oy) * eny) / denom
-            if u < -EPS or u > u_max + EPS:
-                continue
-            qx, qy = ox + u * dx, oy + u * dy
-            s = ((qx - ax) * ex + (qy - ay) * ey) / l2
-            if s < -S_TOL or s > 1.0 + S_TOL:
-                continue
-            if u < best:
-                best, px, py, nx, ny = u, qx, qy, enx, eny
-        if best == np.inf:
-            continue
-        for k in range(8):
-            c[k] = cfg[k, j]
-        c[mo], c[mo + 1], c[mo + 2], c[mo + 3] = px, py, nx, ny
-        code = _feasible(c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], e, convex, aperture, palm_depth, tol)
-        err[j] = code
-        if code == 0:
-            for k in range(8):
-                new[k, j] = c[k]
+    for j in range(cfg.shape[1]):
+        err[j] = _execute_col(cfg, sen, j, c_is_b[j], f_is_b[j], rr[j], e, convex, aperture, palm_depth, tol, new)
+
+
+@njit(cache=True)
+def step_one(cfg, c_is_b, f_is_b, r, e, convex, aperture, palm_depth, tol, out):  # type: ignore[no-untyped-def]
+    """One noise-free CRM on the ``(8, 1)`` block ``cfg``, in place; writes the new
+    configuration's ``rho, m_a, m_b, min_friction`` to ``out``; returns the error code."""
+    code = _execute_col(cfg, cfg, 0, c_is_b, f_is_b, r, e, convex, aperture, palm_depth, tol, cfg)
+    _observe_col(cfg, cfg, 0, out)
+    return code
 
 
 @njit(cache=True)
@@ -155,17 +168,24 @@ def _tan(x, y, nx, ny, ox, oy):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
+def _observe_col(cfg, sen, j, out):  # type: ignore[no-untyped-def]
+    sx, sy = sen[2, j] + sen[6, j], sen[3, j] + sen[7, j]
+    dx, dy = sen[4, j] - sen[0, j], sen[5, j] - sen[1, j]
+    out[0] = sx * sx + sy * sy
+    out[1] = dx * sen[7, j] - dy * sen[6, j]
+    out[2] = -dx * sen[3, j] + dy * sen[2, j]
+    ta = _tan(cfg[0, j], cfg[1, j], cfg[2, j], cfg[3, j], cfg[4, j], cfg[5, j])
+    tb = _tan(cfg[4, j], cfg[5, j], cfg[6, j], cfg[7, j], cfg[0, j], cfg[1, j])
+    out[3] = max(ta, tb)
+
+
+@njit(cache=True)
 def observe_rows(cfg, sen, rho, m_a, m_b, mu):  # type: ignore[no-untyped-def]
     """Observation of the sensed block and min friction of the true block, per column."""
+    out = np.empty(4)
     for j in range(cfg.shape[1]):
-        sx, sy = sen[2, j] + sen[6, j], sen[3, j] + sen[7, j]
-        dx, dy = sen[4, j] - sen[0, j], sen[5, j] - sen[1, j]
-        rho[j] = sx * sx + sy * sy
-        m_a[j] = dx * sen[7, j] - dy * sen[6, j]
-        m_b[j] = -dx * sen[3, j] + dy * sen[2, j]
-        ta = _tan(cfg[0, j], cfg[1, j], cfg[2, j], cfg[3, j], cfg[4, j], cfg[5, j])
-        tb = _tan(cfg[4, j], cfg[5, j], cfg[6, j], cfg[7, j], cfg[0, j], cfg[1, j])
-        mu[j] = max(ta, tb)
+        _observe_col(cfg, sen, j, out)
+        rho[j], m_a[j], m_b[j], mu[j] = out[0], out[1], out[2], out[3]
 
 
 @njit(cache=True)

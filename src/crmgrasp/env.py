@@ -12,18 +12,22 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from . import _numba
 from ._validation import CrmgraspError
-from .hand import Outcome
+from .contacts import Config, Contact
+from .geometry import Polygon
+from .hand import execute_crm
 from .history import KOrderEncoder
 from .plotting import scene_figure
 from .quality import min_friction
 from .sensing import Error, observe
-from .sim import SimState, reset, step
+from .sim import SimState, step
 from .tasks import Task, make_task
 
 __all__ = ["CRMGraspEnv", "KOrderHistory", "ENV_ID"]
 
 ENV_ID = "crmgrasp/PaperBox-v0"
+_ERRORS = tuple(Error)
 
 
 class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
@@ -94,7 +98,17 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             }
         )
         self._state: SimState | None = None
-        self._last: tuple[SimState, Outcome] | None = None
+        self._last: tuple[SimState, int] | None = None
+        self._starts = np.empty((8, 0))
+        self._next = 0
+        t = self.task
+        obj, hand = t.obj, t.hand
+        self._fast: tuple[np.ndarray, bool, float, float, float] | None = None
+        if _numba.AVAILABLE and isinstance(obj, Polygon) and not t.noise.active:
+            self._fast = (obj._edge_arrays, obj.convex, hand.aperture, hand.palm_depth, hand.palm_normal_tol)
+        self._crm_args = [(c.ci == 1, c.fi == 1, c.r) for c in t.actions]
+        self._cfg8 = np.zeros((8, 1))
+        self._out4 = np.zeros(4)
 
     def _obs(self, rho: float, m_a: float, m_b: float, error: Error) -> dict[str, Any]:
         b = self._m_bound
@@ -122,7 +136,14 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             obs = observe(sensed)
             index = self.task.discretizer.index(obs, Error.NONE)
         else:
-            self._state, obs, index = reset(self.task, self.np_random)
+            if seed is not None:
+                self._starts, self._next = np.empty((8, 0)), 0
+            cfg = self._next_start()
+            sensed = self.task.noise.sense(cfg, self.np_random)
+            self._state = SimState(cfg, sensed, 0)
+            obs = observe(sensed)
+            index = self.task.discretizer.index(obs, Error.NONE)
+        self._cfg8[:, 0] = (*self._state.config.a, *self._state.config.b)
         self._last = None
         return self._obs(*obs, Error.NONE), self._info(index, min_friction(self._state.config))
 
@@ -136,11 +157,44 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             action = int(action)
         if not 0 <= action < self._n_actions:
             raise CrmgraspError(f"action must be an integer in [0, {self._n_actions}), got {action!r}")
+        self._last = (self._state, action)
+        if self._fast is not None:
+            return self._step_compiled(action)
         res = step(self.task, self._state, action, self.np_random)
-        self._last = (self._state, res.outcome)
         self._state = res.state
         obs = self._obs(res.observation.rho, res.observation.m_a, res.observation.m_b, res.error)
         return obs, res.reward, res.terminated, res.truncated, self._info(res.obs_index, res.min_friction)
+
+    def _step_compiled(self, action: int) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
+        """Noise-free polygon tasks with numba: one compiled call on ``self._cfg8`` (kept
+        equal to the true configuration), the same numbers as :func:`crmgrasp.sim.step`
+        bit for bit (the tests check it)."""
+        state, t = self._state, self.task
+        assert state is not None and self._fast is not None
+        c_b, f_b, r = self._crm_args[action]
+        e, convex, aperture, depth, tol = self._fast
+        code = _numba.step_one(self._cfg8, c_b, f_b, r, e, convex, aperture, depth, tol, self._out4)
+        rho, m_a, m_b, mu = self._out4.tolist()
+        if code:
+            config = state.config
+        else:
+            v = self._cfg8[:, 0].tolist()
+            config = Config(Contact(v[0], v[1], v[2], v[3]), Contact(v[4], v[5], v[6], v[7]))
+        steps = state.steps + 1
+        self._state = SimState(config, config, steps)
+        terminated = mu <= t.mu_goal
+        truncated = (not terminated) and steps >= t.max_steps
+        index = t.discretizer.index_of(rho, m_a, m_b, code)
+        return self._obs(rho, m_a, m_b, _ERRORS[code]), -1.0, terminated, truncated, self._info(index, mu)
+
+    def _next_start(self) -> Config:
+        """The next start, from a block of 64 drawn by the task's vectorised sampler
+        (starts are i.i.d., so drawing them in blocks changes cost, not distribution)."""
+        if self._next >= self._starts.shape[1]:
+            self._starts, self._next = self.task.sample_starts(self.np_random, 64), 0
+        v = self._starts[:, self._next].tolist()
+        self._next += 1
+        return Config(Contact(v[0], v[1], v[2], v[3]), Contact(v[4], v[5], v[6], v[7]))
 
     def render(self) -> np.ndarray | None:  # type: ignore[override]
         """An RGB image of the scene (``render_mode="rgb_array"``), else ``None``."""
@@ -152,7 +206,8 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         if self._last is None:
             fig = scene_figure(self.task.obj, self.task.hand, self._state.config, None, title)
         else:
-            prev, outcome = self._last
+            prev, action = self._last
+            outcome = execute_crm(self.task.obj, self.task.hand, prev.config, self.task.actions[action], prev.sensed)
             fig = scene_figure(
                 self.task.obj, self.task.hand, prev.config, outcome, f"{title} ({outcome.error.name.lower()})"
             )

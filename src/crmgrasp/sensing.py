@@ -191,9 +191,15 @@ class Discretizer:
 
     def index(self, obs: Observation, error: Error | int) -> int:
         """Integer in ``[0, size)`` for an observation and error flag."""
-        r, a, b = self.bins(obs)
+        return self.index_of(obs.rho, obs.m_a, obs.m_b, int(error))
+
+    def index_of(self, rho: float, m_a: float, m_b: float, error: int) -> int:
+        """:meth:`index` from plain numbers (the environments' hot path)."""
+        if self.abs_moments:
+            m_a, m_b = abs(m_a), abs(m_b)
         _, na, nb = self._sizes
-        return ((r * na + a) * nb + b) * len(Error) + int(error)
+        r, a, b = bisect_right(self.rho, rho), bisect_right(self.m_a, m_a), bisect_right(self.m_b, m_b)
+        return ((r * na + a) * nb + b) * 3 + error
 
     def index_batch(self, obs: NDArray[np.float64], error: NDArray[np.integer]) -> NDArray[np.int64]:
         """Vectorised :meth:`index`: ``obs`` of shape ``(N, 3)``, ``error`` of shape ``(N,)``."""
