@@ -194,3 +194,29 @@ def test_figure_experiments_smoke(policy_file, tmp_path):
     s4 = figure_4_mujoco(tmp_path / "f4", MujocoFigure4Config(trials=3, extra_starts=2))
     assert s4["failures"] == 0 and s4["contact_sensing"]["contacts"] == 4 * 3 + 4 * 2
     assert s4["contact_sensing"]["median_position_error_mm"] < 1.0
+
+
+@pytest.mark.parametrize("kind", ["hexagon", "disc"])
+def test_other_convex_objects(kind):
+    import dataclasses
+
+    from crmgrasp.disc import Disc
+    from crmgrasp.geometry import regular_polygon
+    from crmgrasp.hand import execute_crm
+    from crmgrasp.tasks import UniformStarts
+
+    obj = regular_polygon(6, 0.06) if kind == "hexagon" else Disc(0.05)
+    base = make_task("paper-box")
+    task = hardware_task(dataclasses.replace(base, name=kind, obj=obj, starts=UniformStarts()))
+    rng = np.random.default_rng(0)
+    agree = 0
+    for k in range(4):
+        start = task.sample_start(rng)
+        hand = MujocoHand(task, start, rng)
+        sensed, true = hand.sense(), hand.true_config()
+        assert isinstance(sensed, Config) and true is not None
+        assert max(math.dist(s.point, t.point) for s, t in zip(sensed, true)) < 1e-3
+        crm = task.actions[k]
+        agree += hand.execute(crm) == execute_crm(task.obj, task.hand, start, crm).error
+        assert hand.true_config() is not None  # contact re-established or kept
+    assert agree >= 3
