@@ -26,3 +26,13 @@ def test_run_py_smoke(capsys):
         assert res[key] > 0
     run = BENCH.parent / "run.py"
     assert "crmgrasp.bench" in run.read_text()
+
+
+def test_learner_seeds_smoke():
+    spec = importlib.util.spec_from_file_location("learner_seeds", BENCH.parent / "learner_seeds.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    res = mod.main(episodes=20, seeds=2)
+    row = res["Dyna-Q k=1 (VI sweeps, mirror quotient)"]
+    assert len(row["episodes_to_5pct"]) == len(row["greedy_episodes_to_5pct"]) == 2
+    assert 1 <= row["median_greedy_episodes_to_5pct"] <= 21

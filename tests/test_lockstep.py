@@ -21,6 +21,8 @@ from .strategies import BACKENDS, use_backend
         ("sarsa-lambda", {"trace": "accumulating"}, 2, False),
         ("dyna-q", {"n_planning": 5}, 1, False),
         ("dyna-q", {"planning": "sweep", "n_planning": 10}, 1, False),
+        ("dyna-q", {"planning": "sweep", "n_planning": 10, "symmetric": True}, 1, False),
+        ("sarsa", {"symmetric": True}, 2, True),
         ("sarsa", {}, 2, True),
     ],
 )

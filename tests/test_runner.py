@@ -55,7 +55,7 @@ def test_runner_under_noise(policy):
 def test_runner_refuses_an_incompatible_task(policy):
     from crmgrasp import CRM, CrmgraspError
 
-    other = dataclasses.replace(policy.task, actions=(CRM("a", "b", 0.0),))
+    other = dataclasses.replace(policy.task, actions=(CRM("a", "b", 0.0),), symmetry=None)
     with pytest.raises(CrmgraspError, match="other CRMs or bins"):
         PolicyRunner(policy, task=other)
 

@@ -143,6 +143,11 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="step all trials together through the batched simulator (same results; faster from ~500 trials)",
     )
+    p.add_argument(
+        "--symmetric",
+        action="store_true",
+        help="learn on the mirror quotient of the task (tabular learners; the task must declare a symmetry)",
+    )
     for flag, kind, text in _AGENT_FLAGS:
         p.add_argument(flag, type=kind, default=None, help=text)
 

@@ -131,6 +131,8 @@ def _cmd_learn(args: argparse.Namespace) -> int:
         for flag, _, _ in _AGENT_FLAGS
     }
     params = {k: v for k, v in params.items() if v is not None}
+    if args.symmetric:
+        params["symmetric"] = True
     if args.k < 0:
         raise CrmgraspError(f"--k must be >= 0, got {args.k}")
     run = learn(

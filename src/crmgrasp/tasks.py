@@ -28,6 +28,7 @@ __all__ = [
     "CornerStarts",
     "UniformStarts",
     "Task",
+    "Symmetry",
     "paper_box",
     "make_task",
     "register_task",
@@ -157,6 +158,39 @@ class UniformStarts:
 
 
 @dataclass(frozen=True)
+class Symmetry:
+    """A mirror symmetry of a task, declared by its author.
+
+    Claim: some reflection of the plane maps the object onto itself and the start
+    distribution onto itself (with the labels ``a`` and ``b`` swapped, which puts
+    the palm back on the right). Then CRM ``(c, f, r)`` corresponds to
+    ``(c', f', -r)`` (primes: swapped labels), ``rho`` and the error flag are
+    unchanged and ``(m_a, m_b)`` becomes ``(-m_b, -m_a)``. ``actions[i]`` is the index
+    of the CRM that corresponds to CRM ``i``; :class:`Task` checks it against that
+    rule and the observation bins (moments binned by magnitude, the same thresholds
+    for both). Learners may use it to pool experience (``symmetric=True``).
+    """
+
+    actions: tuple[int, ...]
+
+
+def _check_symmetry(sym: Symmetry, actions: tuple[CRM, ...], disc: Discretizer) -> None:
+    perm = tuple(sym.actions)
+    n = len(actions)
+    if sorted(perm) != list(range(n)) or any(perm[perm[i]] != i for i in range(n)):
+        raise CrmgraspError(f"symmetry actions must be an involutive permutation of 0..{n - 1}, got {perm!r}")
+    swap = {"a": "b", "b": "a"}
+    for i, crm in enumerate(actions):
+        m = actions[perm[i]]
+        if (m.c, m.f, m.r) != (swap[crm.c], swap[crm.f], -crm.r):
+            raise CrmgraspError(
+                f"symmetry maps {crm} to {m}, but its mirror is ({swap[crm.c]},{swap[crm.f]},{-crm.r:g})"
+            )
+    if not disc.abs_moments or disc.m_a != disc.m_b:
+        raise CrmgraspError("a symmetric task needs moments binned by magnitude with the same m_a and m_b thresholds")
+
+
+@dataclass(frozen=True)
 class Task:
     """A grasping task.
 
@@ -183,6 +217,8 @@ class Task:
     reference_mean_steps
         Best achievable mean CRMs per episode for a learner on this task (the
         belief-space optimum where known), used to report ``episodes_to_5pct``.
+    symmetry
+        A declared mirror symmetry (:class:`Symmetry`), or None.
     """
 
     name: str
@@ -196,6 +232,7 @@ class Task:
     noise: SensorNoise = field(default_factory=SensorNoise)
     reference_mean_steps: float | None = None
     description: str = ""
+    symmetry: Symmetry | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.obj, Shape):
@@ -211,6 +248,15 @@ class Task:
         object.__setattr__(self, "mu_goal", non_negative(self.mu_goal, "mu_goal"))
         if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) or self.max_steps < 1:
             raise CrmgraspError(f"max_steps must be an integer >= 1, got {self.max_steps!r}")
+        if self.symmetry is not None:
+            if not isinstance(self.symmetry, Symmetry):
+                raise CrmgraspError(f"task symmetry must be a Symmetry, got {self.symmetry!r}")
+            try:
+                _check_symmetry(self.symmetry, actions, self.discretizer)
+            except CrmgraspError as exc:
+                raise CrmgraspError(
+                    f"{exc} (a task made from a symmetric one with other CRMs or bins needs symmetry=None)"
+                ) from None
         if self.reference_mean_steps is not None and not (
             math.isfinite(self.reference_mean_steps) and self.reference_mean_steps > 0
         ):
@@ -259,6 +305,7 @@ def paper_box() -> Task:
         max_steps=10,
         reference_mean_steps=1.66,
         description="0.30 x 0.10 m box, aperture 0.16 m, palm depth 0.12 m (Platt, Sec. III-C)",
+        symmetry=Symmetry((1, 0, 3, 2)),  # reflection x -> -x: C1 <-> C2, C3 <-> C4
     )
 
 

@@ -22,11 +22,11 @@ from ..tasks import Task
 from .base import Agent
 from .training import (
     TrialResult,
+    build_agent,
     check_budget,
     checkpoint_generators,
     encoder_for,
     evaluate,
-    make_agent,
     trial_generators,
 )
 
@@ -74,7 +74,7 @@ def train_trials_lockstep(
     c_is_b = np.array([c.ci == 1 for c in task.actions])
     f_is_b = np.array([c.fi == 1 for c in task.actions])
     r = np.array([c.r for c in task.actions])
-    runs = [_Trial(make_agent(agent, len(task.actions), **(params or {})), g) for g in trial_generators(seed, trials)]
+    runs = [_Trial(build_agent(task, encoder, agent, params), g) for g in trial_generators(seed, trials)]
 
     cfg = np.zeros((8, trials))  # true configurations, one column per trial
     sen = np.zeros((8, trials))  # their sensed readings

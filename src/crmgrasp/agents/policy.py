@@ -23,7 +23,7 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -32,6 +32,9 @@ from .._validation import CrmgraspError
 from ..history import KOrderEncoder
 from ..tasks import Task
 from .tabular import TabularAgent
+
+if TYPE_CHECKING:
+    from .symmetric import SymmetricAgent
 
 __all__ = ["GreedyPolicy", "FORMAT", "VERSION"]
 
@@ -53,7 +56,7 @@ class GreedyPolicy:
         self.agent = agent
 
     @classmethod
-    def from_agent(cls, task: Task, k: int, agent: TabularAgent) -> GreedyPolicy:
+    def from_agent(cls, task: Task, k: int, agent: TabularAgent | SymmetricAgent) -> GreedyPolicy:
         """The greedy policy of a tabular agent over the states it has visited: in
         each, the best of the actions it has tried (all ties kept)."""
         table = {}

@@ -29,6 +29,7 @@ from .tabular import DynaQ, QLearning, Sarsa, SarsaLambda
 __all__ = [
     "AGENTS",
     "make_agent",
+    "build_agent",
     "encoder_for",
     "run_episode",
     "evaluate",
@@ -64,6 +65,21 @@ def make_agent(name: str, n_actions: int, **params: object) -> Agent:
         return cls(n_actions, **params)
     except TypeError as exc:
         raise CrmgraspError(f"bad parameter for agent {name!r}: {exc}") from None
+
+
+def build_agent(task: Task, encoder: KOrderEncoder, name: str, params: dict[str, object] | None = None) -> Agent:
+    """:func:`make_agent`, wrapped in a :class:`~crmgrasp.agents.symmetric.SymmetricAgent`
+    when ``params`` has ``symmetric=True`` (the task must declare a symmetry)."""
+    p = dict(params or {})
+    symmetric = p.pop("symmetric", False)
+    if not isinstance(symmetric, bool):
+        raise CrmgraspError(f"symmetric must be true or false, got {symmetric!r}")
+    agent = make_agent(name, len(task.actions), **p)
+    if not symmetric:
+        return agent
+    from .symmetric import SymmetricAgent
+
+    return SymmetricAgent(agent, task, encoder)  # type: ignore[arg-type]
 
 
 def encoder_for(task: Task, k: int) -> KOrderEncoder:
@@ -204,7 +220,7 @@ def train_trials(
     csteps = np.empty((trials, len(ckpts)))
     agents = []
     for t, (env_rng, agent_rng, eval_rng) in enumerate(trial_generators(seed, trials)):
-        ag = make_agent(agent, len(task.actions), **(params or {}))
+        ag = build_agent(task, encoder, agent, params)
         j = 0
         for e in range(episodes):
             steps[t, e], success[t, e] = run_episode(task, ag, encoder, env_rng, agent_rng)

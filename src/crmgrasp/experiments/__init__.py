@@ -143,8 +143,11 @@ def _figure9_mujoco(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> t
     s = figure_9_mujoco(out, MujocoFigure9Config(seed=seed, policy=ctx.get("policy")))
     return s, [
         ("MuJoCo grasps / trials (kinematic policy)", f"{s['successes']} / {s['trials']}", "11 / 11 (Robonaut)"),
-        ("CRMs per trial: MuJoCo / kinematic, same starts", f"{s['mean_crms_mujoco']} / {s['mean_crms_kinematic']}",
-         "2"),
+        (
+            "CRMs per trial: MuJoCo / kinematic, same starts",
+            f"{s['mean_crms_mujoco']} / {s['mean_crms_kinematic']}",
+            "2",
+        ),
         ("most extra CRMs on MuJoCo in one trial", s["max_extra_crms"], "-"),
         (
             "MuJoCo cluster centroids (rho, |m|)",

@@ -27,7 +27,7 @@ from ..plotting import learning_curve_figure
 from ..pomdp_task import POMDPAgent, build_task_pomdp
 from ..references import BeliefPolicy, belief_optimum, clairvoyant_bound, sample_starts
 from ..tasks import make_task
-from .learning import LearnerSpec, learn
+from .learning import SYMMETRIC_DYNA_Q, LearnerSpec, learn, usable
 
 __all__ = ["CompareConfig", "compare", "COMPARE_LEARNERS"]
 
@@ -35,6 +35,7 @@ COMPARE_LEARNERS: tuple[LearnerSpec, ...] = (
     LearnerSpec("sarsa", 2, {}, "SARSA k=2 (paper)"),
     LearnerSpec("sarsa-lambda", 2, {"lam": 0.9, "trace": "replacing"}, "SARSA(0.9) k=2"),
     LearnerSpec("dyna-q", 1, {"planning": "sweep", "n_planning": 50}, "Dyna-Q k=1 (VI sweeps)"),
+    SYMMETRIC_DYNA_Q,
     LearnerSpec("fixed", 2, {}, "fixed sequence"),
     LearnerSpec("random", 2, {}, "random"),
 )
@@ -88,7 +89,7 @@ def compare(out_dir: str | Path, config: CompareConfig = CompareConfig()) -> dic
     task = make_task(config.task)
     rows: list[list[Any]] = []
     curves = {}
-    for spec in config.learners:
+    for spec in usable(task, config.learners):
         run = learn(
             task,
             spec,

@@ -17,7 +17,7 @@ from typing import Any
 from .._io import save_figure, write_csv, write_json
 from ..plotting import checkpoint_figure, learning_curve_figure
 from ..tasks import make_task
-from .learning import LearnerSpec, LearnRun, _mean_sem, best_policy, learn
+from .learning import SYMMETRIC_DYNA_Q, LearnerSpec, LearnRun, _mean_sem, best_policy, learn, usable
 
 __all__ = ["Figure7Config", "figure_7_learning_curve", "DEFAULT_LEARNERS", "PAPER_LEARNER"]
 
@@ -29,6 +29,7 @@ DEFAULT_LEARNERS: tuple[LearnerSpec, ...] = (
     LearnerSpec("sarsa-lambda", 2, {"lam": 0.9, "trace": "replacing"}, "SARSA(0.9) k=2"),
     LearnerSpec("dyna-q", 2, {"n_planning": 20}, "Dyna-Q k=2 (20 samples)"),
     LearnerSpec("dyna-q", 1, {"planning": "sweep", "n_planning": 50}, "Dyna-Q k=1 (VI sweeps)"),
+    SYMMETRIC_DYNA_Q,
     LearnerSpec("fixed", 2, {}, "fixed sequence"),
     LearnerSpec("random", 2, {}, "random"),
 )
@@ -71,7 +72,7 @@ def figure_7_learning_curve(out_dir: str | Path, config: Figure7Config = Figure7
         eval_episodes=config.eval_episodes,
         checkpoint_episodes=config.checkpoint_episodes,
     )
-    runs: list[LearnRun] = [learn(task, spec, **kw) for spec in config.learners]
+    runs: list[LearnRun] = [learn(task, spec, **kw) for spec in usable(task, config.learners)]
     ablation = [learn(task, LearnerSpec("sarsa", k, {}, f"SARSA k={k}"), **kw) for k in config.ablation_ks]
     everything = runs + [r for r in ablation if r.spec.k not in {s.k for s in config.learners if s.agent == "sarsa"}]
 

@@ -29,10 +29,11 @@ import numpy as np
 
 from .._io import save_figure, write_csv, write_json
 from ..agents import GreedyPolicy, TabularAgent, episodes_to_within, train_trials, train_trials_lockstep
+from ..agents.symmetric import SymmetricAgent
 from ..agents.training import DEFAULT_CHECKPOINTS, TrialResult, checkpoints_to_within
 from ..tasks import Task
 
-__all__ = ["LearnerSpec", "LearnRun", "learn", "write_learn_outputs"]
+__all__ = ["LearnerSpec", "LearnRun", "learn", "write_learn_outputs", "SYMMETRIC_DYNA_Q", "usable"]
 
 
 @dataclass(frozen=True)
@@ -48,6 +49,17 @@ class LearnerSpec:
     def name(self) -> str:
         """Display name (``label`` or ``agent k=K``)."""
         return self.label or f"{self.agent} k={self.k}"
+
+
+SYMMETRIC_DYNA_Q = LearnerSpec(
+    "dyna-q", 1, {"planning": "sweep", "n_planning": 50, "symmetric": True}, "Dyna-Q k=1 (VI sweeps, mirror quotient)"
+)
+"""The fastest learner on paper-box: Dyna-Q with value-iteration sweeps on the mirror quotient."""
+
+
+def usable(task: Task, specs: tuple[LearnerSpec, ...]) -> tuple[LearnerSpec, ...]:
+    """``specs`` without the symmetric learners when ``task`` declares no symmetry."""
+    return tuple(s for s in specs if task.symmetry is not None or not s.params.get("symmetric"))
 
 
 @dataclass
@@ -117,7 +129,7 @@ def learn(
 def best_policy(task: Task, run: LearnRun) -> GreedyPolicy | None:
     """Greedy policy of the trial with the lowest greedy mean (tabular agents only)."""
     agents = run.result.agents
-    if not isinstance(agents[0], TabularAgent):
+    if not isinstance(agents[0], (TabularAgent, SymmetricAgent)):
         return None
     best = int(np.argmin(run.result.greedy_steps.mean(axis=1))) if run.result.greedy_steps.size else 0
     return GreedyPolicy.from_agent(task, run.spec.k, agents[best])  # type: ignore[arg-type]
