@@ -28,7 +28,7 @@ from gymnasium import spaces
 
 from .._validation import CrmgraspError
 from ..contacts import Config
-from ..sensing import Error
+from ..sensing import Error, observe
 from ..sim import SimState, step
 from ..tasks import Task
 from .training import checkpoint_generators, checkpoints_to_within
@@ -148,7 +148,7 @@ def evaluate_recurrent(
     """
     n = len(starts)
     states = [SimState(c, task.noise.sense(c, rng), 0) for c in starts]
-    obs = np.stack([features(*_observe(s.sensed), 0, task.hand.aperture) for s in states])
+    obs = np.stack([features(*observe(s.sensed), 0, task.hand.aperture) for s in states])
     steps, success = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=bool)
     active = np.ones(n, dtype=bool)
     lstm, first = None, np.ones(n, dtype=bool)
@@ -162,12 +162,6 @@ def evaluate_recurrent(
             if res.terminated or res.truncated:
                 active[i], success[i] = False, res.terminated
     return steps, success
-
-
-def _observe(sensed: Config) -> tuple[float, float, float]:
-    from ..sensing import observe
-
-    return tuple(observe(sensed))  # type: ignore[return-value]
 
 
 def train_recurrent_ppo(task: Task, seed: int, config: RecurrentPPOConfig = RecurrentPPOConfig()) -> DeepRun:

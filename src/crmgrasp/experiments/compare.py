@@ -26,7 +26,7 @@ from ..agents.training import episodes_to_within
 from ..plotting import learning_curve_figure
 from ..pomdp_task import POMDPAgent, build_task_pomdp
 from ..references import BeliefPolicy, belief_optimum, clairvoyant_bound, sample_starts
-from ..tasks import make_task
+from ..tasks import Task, make_task
 from .learning import SYMMETRIC_DYNA_Q, LearnerSpec, learn, usable
 
 __all__ = ["CompareConfig", "compare", "COMPARE_LEARNERS"]
@@ -178,7 +178,7 @@ def compare(out_dir: str | Path, config: CompareConfig = CompareConfig()) -> dic
 
 
 def _deep_row(
-    task: Any, config: CompareConfig, fresh: list, curves: dict, controller: float, out: Path
+    task: Task, config: CompareConfig, fresh: list, curves: dict, controller: float, out: Path
 ) -> tuple[list[list[Any]], str | dict]:
     """RecurrentPPO's row (if it runs) and a summary of it; writes ``deep_curve.csv`` and
     ``deep_checkpoints.csv`` and adds its curve (100-episode moving average: one run is

@@ -32,7 +32,7 @@ from ..tasks import Task, make_task
 from ._policy import learned_policy
 from .figure4 import noisy_execution
 
-__all__ = ["Figure9Config", "figure_9_robonaut_trials", "thumb_far_start"]
+__all__ = ["Figure9Config", "figure_9_robonaut_trials", "thumb_far_start", "Clusters"]
 
 
 @dataclass(frozen=True)
@@ -81,6 +81,32 @@ def _point(obs: Observation, fingers: str) -> tuple[float, float]:
     return (obs.rho, abs(obs.m_a if fingers == "a" else obs.m_b))
 
 
+class Clusters:
+    """Figure 9's point groups: each run's reading before CRM 1, before CRM 2 (runs of
+    two or more CRMs) and after the last CRM, in the (rho, |moment|) plane."""
+
+    def __init__(self) -> None:
+        self.groups: dict[str, list[tuple[float, float]]] = {
+            "before CRM 1": [],
+            "before CRM 2": [],
+            "after last CRM": [],
+        }
+
+    def add(self, readings: list[tuple[float, float]]) -> None:
+        """One run's readings in order: one before each CRM, then the final one."""
+        self.groups["before CRM 1"].append(readings[0])
+        if len(readings) > 2:
+            self.groups["before CRM 2"].append(readings[1])
+        self.groups["after last CRM"].append(readings[-1])
+
+    def save(self, title: str, xlabel: str, path: Path) -> dict[str, list[float]]:
+        """Write the scatter plot; return each group's centroid, keyed ``centroid <group>``."""
+        arrays = {k: np.array(v) for k, v in self.groups.items()}
+        fig = cluster_figure(arrays, title, xlabel, "|frictionless moment about the fingers| (m)")
+        save_figure(fig, path, dpi=120)
+        return {f"centroid {k}": [round(float(x), 3) for x in v.mean(axis=0)] for k, v in arrays.items() if len(v)}
+
+
 def figure_9_robonaut_trials(out_dir: str | Path, config: Figure9Config = Figure9Config()) -> dict[str, Any]:
     """Run the trials and plot the three clusters."""
     base = make_task(config.task)
@@ -88,7 +114,7 @@ def figure_9_robonaut_trials(out_dir: str | Path, config: Figure9Config = Figure
     noisy = noisy_execution(base, config.sigma_n_deg, config.sigma_p, config.palm_tolerance_deg)
     task = dataclasses.replace(noisy, mu_goal=config.mu_goal)
     rng = np.random.default_rng(config.seed)
-    groups: dict[str, list[tuple[float, float]]] = {"before CRM 1": [], "before CRM 2": [], "after last CRM": []}
+    clusters = Clusters()
     rows, crms, successes, tight = [], [], 0, 0
     for trial in range(config.trials):
         start, fingers = thumb_far_start(base, rng, config.min_thumb_distance, config.max_thumb_distance)
@@ -96,14 +122,9 @@ def figure_9_robonaut_trials(out_dir: str | Path, config: Figure9Config = Figure
         successes += ok
         tight += steps[-1].min_friction <= base.mu_goal
         crms.append(len(steps))
-        points = [_point(steps[0].observation, fingers)]
-        if len(steps) > 1:
-            points.append(_point(steps[1].observation, fingers))
-        points.append(_point(steps[-1].next_observation, fingers))
-        groups["before CRM 1"].append(points[0])
-        if len(steps) > 1:
-            groups["before CRM 2"].append(points[1])
-        groups["after last CRM"].append(points[-1])
+        readings = [_point(st.observation, fingers) for st in steps] + [_point(steps[-1].next_observation, fingers)]
+        clusters.add(readings)
+        points = readings[:2] + readings[-1:] if len(steps) > 1 else readings
         actions = " ".join(task.action_names()[s.action].split()[0] for s in steps)
         rows.append([trial, fingers, actions, len(steps), bool(ok), steps[-1].min_friction, *np.ravel(points[:3])])
     out = Path(out_dir)
@@ -125,20 +146,17 @@ def figure_9_robonaut_trials(out_dir: str | Path, config: Figure9Config = Figure
         ],
         rows,
     )
-    arrays = {k: np.array(v) for k, v in groups.items()}
-    fig = cluster_figure(
-        arrays,
+    centroids = clusters.save(
         f"Learned policy, {config.trials} noisy trials (paper Fig. 9)",
         "frictionless force residual rho",
-        "|frictionless moment about the fingers| (m)",
+        out / "figure9.png",
     )
-    save_figure(fig, out / "figure9.png", dpi=120)
     summary = {
         "trials": config.trials,
         "successes": successes,
         "within_mu_0.05": tight,
         "mean_crms": float(np.mean(crms)),
-        **{f"centroid {k}": [round(float(x), 3) for x in v.mean(axis=0)] for k, v in arrays.items() if len(v)},
+        **centroids,
     }
     write_json(out / "config.json", {"experiment": "figure9", "config": asdict(config), "summary": summary})
     return summary

@@ -26,20 +26,21 @@ from typing import Any
 import numpy as np
 
 from .._io import save_figure, write_csv, write_json
+from .._validation import CrmgraspError
 from ..contact_sensing import NoContact
 from ..contacts import Config
 from ..hand import CRM, execute_crm
 from ..physics import hardware_task
 from ..physics.hand import MujocoHand
 from ..physics.model import PhysicsParams
-from ..plotting import cluster_figure, friction_histogram
+from ..plotting import friction_histogram
 from ..quality import min_friction
 from ..runner import KinematicHand, PolicyRunner
 from ..sensing import Error
 from ..tasks import Task, make_task
 from ._policy import learned_policy
 from .figure4 import long_side_start, noisy_execution
-from .figure9 import Figure9Config, thumb_far_start
+from .figure9 import Clusters, Figure9Config, thumb_far_start
 
 __all__ = ["MujocoFigure9Config", "MujocoFigure4Config", "figure_9_mujoco", "figure_4_mujoco", "SensingErrors"]
 
@@ -106,7 +107,6 @@ def _points(rows: list[list[Any]], fingers: str) -> list[tuple[float, float]]:
 
 def _animate(task: Task, start: Config, policy: Any, rng: np.random.Generator, path: Path) -> str:
     """Render one MuJoCo episode to a GIF; returns a note of what happened."""
-    from .._validation import CrmgraspError
     from ..physics.render import Recorder, save_gif
 
     hand = MujocoHand(task, start, rng)
@@ -133,7 +133,7 @@ def figure_9_mujoco(out_dir: str | Path, config: MujocoFigure9Config = MujocoFig
     rng = np.random.default_rng(c.seed)
     out = Path(out_dir)
     names = [n.split()[0] for n in task.action_names()]
-    groups: dict[str, list[tuple[float, float]]] = {"before CRM 1": [], "before CRM 2": [], "after last CRM": []}
+    clusters = Clusters()
     rows, errors, seconds, starts = [], SensingErrors(), [], []
     for trial in range(c.trials):
         start, fingers = thumb_far_start(base, rng, c.min_thumb_distance, c.max_thumb_distance)
@@ -145,10 +145,7 @@ def figure_9_mujoco(out_dir: str | Path, config: MujocoFigure9Config = MujocoFig
         mu = min_friction(true) if true is not None else math.inf
         kin = kin_runner.run(KinematicHand(kin_task, start, rng), rng)
         pts = _points(run.rows, fingers) or [(math.nan, math.nan)]
-        groups["before CRM 1"].append(pts[0])
-        if len(pts) > 2:
-            groups["before CRM 2"].append(pts[1])
-        groups["after last CRM"].append(pts[-1])
+        clusters.add(pts)
         pts = (pts + pts[-1:])[:2] + pts[-1:]
         seconds += hand.crm_seconds
         actions = " ".join(names[r[14]] for r in run.rows if r[14] != "")
@@ -173,14 +170,11 @@ def figure_9_mujoco(out_dir: str | Path, config: MujocoFigure9Config = MujocoFig
         ],
         rows,
     )
-    arrays = {k: np.array(v) for k, v in groups.items()}
-    fig = cluster_figure(
-        arrays,
+    centroids = clusters.save(
         f"Kinematic policy on the MuJoCo hand, {c.trials} trials (paper Fig. 9)",
         "frictionless force residual rho (sensed)",
-        "|frictionless moment about the fingers| (m)",
+        out / "figure9_mujoco.png",
     )
-    save_figure(fig, out / "figure9_mujoco.png", dpi=120)
     extra = {}
     if c.animate:
         extra["animation"] = _animate(
@@ -196,7 +190,7 @@ def figure_9_mujoco(out_dir: str | Path, config: MujocoFigure9Config = MujocoFig
         "median_true_min_friction": round(float(np.median([r[7] for r in rows])), 4),
         "median_crm_seconds": round(float(np.median(seconds)), 4) if seconds else None,
         "max_crm_seconds": round(float(np.max(seconds)), 4) if seconds else None,
-        **{f"centroid {k}": [round(float(x), 3) for x in v.mean(axis=0)] for k, v in arrays.items() if len(v)},
+        **centroids,
         "contact_sensing": errors.summary(),
         **extra,
     }

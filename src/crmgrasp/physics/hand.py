@@ -89,6 +89,8 @@ class MujocoHand:
         self._rates = rng.normal(0.0, 1.0, size=(2, 6)) * drift
         self._tare = np.zeros((2, 6))
         self._raw = np.zeros((2, 6))
+        self._wrench = np.zeros((2, 6))
+        self._sensors = [(int(m.sensor(f"force_{x}").adr[0]), int(m.sensor(f"torque_{x}").adr[0])) for x in LABELS]
         self._cmd = np.zeros((2, 3))
         self._sensed: Config | None = None
         self._palm_hit = False
@@ -110,8 +112,8 @@ class MujocoHand:
         d.mocap_pos[0] = (0.5 * (ta[0] + tb[0]) + h * dy / dist, 0.5 * (ta[1] + tb[1]) - h * dx / dist, p.height / 2)
         d.ctrl[:] = self._cmd.ravel()
         self.mj.mj_step(self.model, d, nstep=p.control_steps)
-        for i, x in enumerate(LABELS):
-            wrench = np.concatenate([d.sensor(f"force_{x}").data, d.sensor(f"torque_{x}").data])
+        for i, (fa, ta_) in enumerate(self._sensors):
+            wrench = np.concatenate([d.sensordata[fa : fa + 3], d.sensordata[ta_ : ta_ + 3]])
             # the sensors report what the tip transmits to its carriage: the object's
             # push on the fingertip is the negative
             self._raw[i] = (
@@ -238,7 +240,7 @@ class MujocoHand:
 
     def raw_reading(self) -> dict[str, Any]:
         """The tared wrench behind the last reading: ``f_x, f_y, m_z`` per fingertip (N, N m)."""
-        w = getattr(self, "_wrench", np.zeros((2, 6)))
+        w = self._wrench
         return {x: [round(float(v), 6) for v in (w[i, 0], w[i, 1], w[i, 5])] for i, x in enumerate(LABELS)}
 
     def true_config(self) -> Config | None:
