@@ -103,8 +103,7 @@ def _run(env, seed, n=3000):
     return out
 
 
-@pytest.mark.skipif(not crmgrasp._numba.AVAILABLE, reason="the compiled step needs the extra crmgrasp[fast]")
-def test_compiled_step_equals_the_python_step(task):
+def test_fused_step_equals_the_python_step(task):
     fast = CRMGraspEnv(task)
     slow = CRMGraspEnv(task)
     slow._fast = None  # force sim.step

@@ -39,7 +39,7 @@ EPS = 1e-9
 S_TOL = 1e-12
 ANTIPODAL_TOL = 1e-12
 
-__all__ = ["AVAILABLE", "execute_rows", "corner_candidates", "observe_rows", "step_one"]
+__all__ = ["AVAILABLE", "execute_rows", "corner_candidates", "observe_rows"]
 
 
 @njit(cache=True)
@@ -146,15 +146,6 @@ def execute_rows(cfg, sen, c_is_b, f_is_b, rr, e, convex, aperture, palm_depth, 
     writes ``new`` (``(8, N)``) and ``err`` (``(N,)``), as :func:`crmgrasp.hand.execute_crm`."""
     for j in range(cfg.shape[1]):
         err[j] = _execute_col(cfg, sen, j, c_is_b[j], f_is_b[j], rr[j], e, convex, aperture, palm_depth, tol, new)
-
-
-@njit(cache=True)
-def step_one(cfg, c_is_b, f_is_b, r, e, convex, aperture, palm_depth, tol, out):  # type: ignore[no-untyped-def]
-    """One noise-free CRM on the ``(8, 1)`` block ``cfg``, in place; writes the new
-    configuration's ``rho, m_a, m_b, min_friction`` to ``out``; returns the error code."""
-    code = _execute_col(cfg, cfg, 0, c_is_b, f_is_b, r, e, convex, aperture, palm_depth, tol, cfg)
-    _observe_col(cfg, cfg, 0, out)
-    return code
 
 
 @njit(cache=True)

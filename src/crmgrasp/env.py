@@ -12,7 +12,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from . import _numba
+from ._scalar import Edges, Vec8, crm_step, observe_mu
 from ._validation import CrmgraspError
 from .contacts import Config, Contact
 from .geometry import Polygon
@@ -27,7 +27,8 @@ from .tasks import Task, make_task
 __all__ = ["CRMGraspEnv", "KOrderHistory", "ENV_ID"]
 
 ENV_ID = "crmgrasp/PaperBox-v0"
-_ERRORS = tuple(Error)
+_empty = np.empty
+_FIRST_BLOCK, _MAX_BLOCK = 16, 1024
 
 
 class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
@@ -99,18 +100,21 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         )
         self._state: SimState | None = None
         self._last: tuple[SimState, int] | None = None
-        self._starts = np.empty((8, 0))
-        self._next = 0
+        self._starts: list[Vec8] = []
+        self._next, self._block = 0, _FIRST_BLOCK
         t = self.task
         obj, hand = t.obj, t.hand
-        self._fast: tuple[np.ndarray, bool, float, float, float] | None = None
-        if _numba.AVAILABLE and isinstance(obj, Polygon) and not t.noise.active:
-            self._fast = (obj._edge_arrays, obj.convex, hand.aperture, hand.palm_depth, hand.palm_normal_tol)
         self._crm_args = [(c.ci == 1, c.fi == 1, c.r) for c in t.actions]
-        self._cfg8 = np.zeros((8, 1))
-        self._out4 = np.zeros(4)
+        # Noise-free polygon tasks take the fused path: the true configuration as a flat
+        # 8-tuple ``self._v`` and its ``(rho, m_a, m_b, min_friction)`` in ``self._now``.
+        self._fast: tuple[Edges, bool, float, float, float] | None = None
+        if isinstance(obj, Polygon) and not t.noise.active:
+            self._fast = (obj.edges, obj.convex, hand.aperture, hand.palm_depth, hand.palm_normal_tol)
+        self._v: Vec8 = (0.0,) * 8  # type: ignore[assignment]
+        self._now = (0.0, 0.0, 0.0, 0.0)
+        self._mu_goal, self._max_steps, self._index_of = t.mu_goal, t.max_steps, t.discretizer.index_of
 
-    def _obs(self, rho: float, m_a: float, m_b: float, error: Error) -> dict[str, Any]:
+    def _obs(self, rho: float, m_a: float, m_b: float, error: Error | int) -> dict[str, Any]:
         b = self._m_bound
         if not (0.0 <= rho <= 4.0):
             rho = 0.0 if rho < 0.0 else 4.0
@@ -118,7 +122,9 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             m_a = -b if m_a < -b else b
         if not (-b <= m_b <= b):
             m_b = -b if m_b < -b else b
-        return {"rho": np.array([rho]), "m_a": np.array([m_a]), "m_b": np.array([m_b]), "error": int(error)}
+        r, a, c = _empty(1), _empty(1), _empty(1)
+        r[0], a[0], c[0] = rho, m_a, m_b
+        return {"rho": r, "m_a": a, "m_b": c, "error": int(error)}
 
     def _info(self, obs_index: int, mu: float) -> dict[str, Any]:
         assert self._state is not None
@@ -129,23 +135,24 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
     ) -> tuple[dict[str, Any], dict[str, Any]]:
         """Start an episode. ``options={"config": Config}`` starts from a given configuration."""
         super().reset(seed=seed)
+        self._last = None
         if options and "config" in options:
             cfg = options["config"]
-            sensed = self.task.noise.sense(cfg, self.np_random)
-            self._state = SimState(cfg, sensed, 0)
-            obs = observe(sensed)
-            index = self.task.discretizer.index(obs, Error.NONE)
         else:
             if seed is not None:
-                self._starts, self._next = np.empty((8, 0)), 0
+                self._starts, self._next, self._block = [], 0, _FIRST_BLOCK
             cfg = self._next_start()
-            sensed = self.task.noise.sense(cfg, self.np_random)
-            self._state = SimState(cfg, sensed, 0)
-            obs = observe(sensed)
-            index = self.task.discretizer.index(obs, Error.NONE)
-        self._cfg8[:, 0] = (*self._state.config.a, *self._state.config.b)
-        self._last = None
-        return self._obs(*obs, Error.NONE), self._info(index, min_friction(self._state.config))
+        if self._fast is not None:
+            self._state = SimState(cfg, cfg, 0)
+            self._v = (*cfg.a, *cfg.b)  # type: ignore[assignment]
+            self._now = rho, m_a, m_b, mu = observe_mu(self._v)
+            index = self.task.discretizer.index_of(rho, m_a, m_b, 0)
+            return self._obs(rho, m_a, m_b, 0), self._info(index, mu)
+        sensed = self.task.noise.sense(cfg, self.np_random)
+        self._state = SimState(cfg, sensed, 0)
+        obs = observe(sensed)
+        index = self.task.discretizer.index(obs, Error.NONE)
+        return self._obs(*obs, Error.NONE), self._info(index, min_friction(cfg))
 
     def step(self, action: Any) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
         """Execute the CRM ``task.actions[action]``."""
@@ -159,40 +166,44 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             raise CrmgraspError(f"action must be an integer in [0, {self._n_actions}), got {action!r}")
         self._last = (self._state, action)
         if self._fast is not None:
-            return self._step_compiled(action)
+            return self._step_fused(action)
         res = step(self.task, self._state, action, self.np_random)
         self._state = res.state
         obs = self._obs(res.observation.rho, res.observation.m_a, res.observation.m_b, res.error)
         return obs, res.reward, res.terminated, res.truncated, self._info(res.obs_index, res.min_friction)
 
-    def _step_compiled(self, action: int) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
-        """Noise-free polygon tasks with numba: one compiled call on ``self._cfg8`` (kept
-        equal to the true configuration), the same numbers as :func:`crmgrasp.sim.step`
-        bit for bit (the tests check it)."""
-        state, t = self._state, self.task
+    def _step_fused(self, action: int) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
+        """Noise-free polygon tasks: :func:`crmgrasp._scalar.crm_step` on the flat
+        configuration, the same numbers as :func:`crmgrasp.sim.step` bit for bit (the
+        tests check it); the observation is recomputed only when a contact moved."""
+        state = self._state
         assert state is not None and self._fast is not None
         c_b, f_b, r = self._crm_args[action]
-        e, convex, aperture, depth, tol = self._fast
-        code = _numba.step_one(self._cfg8, c_b, f_b, r, e, convex, aperture, depth, tol, self._out4)
-        rho, m_a, m_b, mu = self._out4.tolist()
-        if code:
-            config = state.config
-        else:
-            v = self._cfg8[:, 0].tolist()
-            config = Config(Contact(v[0], v[1], v[2], v[3]), Contact(v[4], v[5], v[6], v[7]))
+        code, v = crm_step(self._v, c_b, f_b, r, *self._fast)
+        config = state.config
+        if not code:
+            if c_b:
+                config = Config(config.a, Contact(v[4], v[5], v[6], v[7]))
+            else:
+                config = Config(Contact(v[0], v[1], v[2], v[3]), config.b)
+            self._v, self._now = v, observe_mu(v)
+        rho, m_a, m_b, mu = self._now
         steps = state.steps + 1
         self._state = SimState(config, config, steps)
-        terminated = mu <= t.mu_goal
-        truncated = (not terminated) and steps >= t.max_steps
-        index = t.discretizer.index_of(rho, m_a, m_b, code)
-        return self._obs(rho, m_a, m_b, _ERRORS[code]), -1.0, terminated, truncated, self._info(index, mu)
+        terminated = mu <= self._mu_goal
+        truncated = steps >= self._max_steps and not terminated
+        index = self._index_of(rho, m_a, m_b, code)
+        return self._obs(rho, m_a, m_b, code), -1.0, terminated, truncated, self._info(index, mu)
 
     def _next_start(self) -> Config:
-        """The next start, from a block of 64 drawn by the task's vectorised sampler
-        (starts are i.i.d., so drawing them in blocks changes cost, not distribution)."""
-        if self._next >= self._starts.shape[1]:
-            self._starts, self._next = self.task.sample_starts(self.np_random, 64), 0
-        v = self._starts[:, self._next].tolist()
+        """The next start, from blocks drawn by the task's vectorised sampler: 16 after
+        each seeding, doubling up to 1,024 (starts are i.i.d., so drawing them in
+        blocks changes cost, not distribution; a seeded reset stays cheap)."""
+        if self._next >= len(self._starts):
+            block = self.task.sample_starts(self.np_random, self._block)
+            self._starts, self._next = list(zip(*block.tolist())), 0  # type: ignore[arg-type]
+            self._block = min(2 * self._block, _MAX_BLOCK)
+        v = self._starts[self._next]
         self._next += 1
         return Config(Contact(v[0], v[1], v[2], v[3]), Contact(v[4], v[5], v[6], v[7]))
 

@@ -85,25 +85,71 @@ class CornerStarts:
     def batch(self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator, n: int) -> np.ndarray:
         """``n`` starts as an ``(8, n)`` column block, drawn in vectorised rounds.
 
-        Same distribution as :meth:`__call__` (each candidate uses four uniforms the
-        same way and the same acceptance test), not the same stream. The tests run
-        as a cascade, cheapest first, each on the survivors of the last.
+        Same distribution as :meth:`__call__`, not the same stream: candidates come
+        from a tighter proposal (:func:`_corner_proposal`) and pass the same
+        acceptance test as a cascade, cheapest first, each on the survivors of the last.
         """
         if not isinstance(obj, Polygon):
             raise CrmgraspError(f"corner starts need a polygon, got {type(obj).__name__}")
+        cum, c_in, c_out = _corner_boxes(obj, hand.aperture)
         out = np.empty((8, n))
-        filled, rounds, rate = 0, 0, 0.2
+        filled, rounds, rate = 0, 0, 0.5
         while filled < n:
             rounds += 1
             if rounds > self.max_tries:
                 raise CrmgraspError(f"no feasible corner start found in {self.max_tries} rounds")
             m = int((n - filled) / rate * 1.2) + 32
-            cols = _corner_candidates(obj, hand, mu_goal, rng.random((4, m)))
+            u = _corner_proposal(rng.random((4, m)), cum, c_in, c_out)
+            cols = _corner_candidates(obj, hand, mu_goal, u)
             rate = max(0.02, 0.5 * rate + 0.5 * cols.shape[1] / m)
             take = min(cols.shape[1], n - filled)
             out[:, filled : filled + take] = cols[:, :take]
             filled += take
         return out
+
+
+def _corner_boxes(obj: Polygon, aperture: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per corner ``k`` (vertex ``k``), the largest fractions of the incoming and the
+    outgoing side that a feasible pair can use, and the cumulative corner weights.
+
+    Two points at distances ``d_1``, ``d_2`` from a corner of interior angle
+    ``theta`` are ``d^2 = d_1^2 + d_2^2 - 2 d_1 d_2 cos(theta)`` apart, at least
+    ``d_1^2`` when ``cos(theta) <= 0`` and at least ``d_1^2 sin^2(theta)`` otherwise;
+    so ``d <= A`` needs ``d_i <= A / s`` with ``s = 1`` or ``sin(theta)``, i.e. a
+    fraction ``c = min(1, A / (s L))`` of a side of length ``L`` (widened by 1e-9 for
+    rounding). Corner ``k`` is proposed with probability proportional to its box
+    area ``c_in c_out``, which keeps the accepted distribution that of the uniform
+    proposal (each accepted candidate has the same density).
+    """
+    e = obj._edge_arrays
+    nv = len(e)
+    c_in, c_out = np.ones(nv), np.ones(nv)
+    for k in range(nv):
+        ki = (k - 1) % nv
+        l_in, l_out = math.sqrt(e[ki, 4]), math.sqrt(e[k, 4])
+        cos = -(e[ki, 2] * e[k, 2] + e[ki, 3] * e[k, 3]) / (l_in * l_out)
+        s = 1.0 if cos <= 0.0 else abs(e[ki, 2] * e[k, 3] - e[ki, 3] * e[k, 2]) / (l_in * l_out)
+        if s > 0.0:
+            c_in[k] = min(1.0, aperture / (s * l_in) * (1.0 + 1e-9))
+            c_out[k] = min(1.0, aperture / (s * l_out) * (1.0 + 1e-9))
+    w = np.cumsum(c_in * c_out)
+    return w / w[-1], c_in, c_out
+
+
+def _corner_proposal(w: np.ndarray, cum: np.ndarray, c_in: np.ndarray, c_out: np.ndarray) -> np.ndarray:
+    """Uniforms ``w`` (``(4, m)``) to candidates in :func:`_corner_candidates`'s
+    parametrisation: corner ``k`` with probability ``cum[k] - cum[k - 1]``, a contact
+    uniform within ``c_in[k]`` of the corner on the incoming side and within
+    ``c_out[k]`` on the outgoing side (a draw of exactly 0, the corner itself, is
+    marked rejected), the coin unchanged."""
+    nv = len(cum)
+    k = np.minimum(np.searchsorted(cum, w[0], side="right"), nv - 1)
+    u = np.empty_like(w)
+    u[0] = (k + 0.5) / nv
+    u[1] = np.where(w[1] == 0.0, 0.0, 1.0 - c_in[k] * w[1])
+    u[2] = c_out[k] * w[2]
+    u[3] = w[3]
+    return u
 
 
 def _corner_candidates(obj: Polygon, hand: Hand, mu_goal: float, u: np.ndarray) -> np.ndarray:

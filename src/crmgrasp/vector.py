@@ -10,7 +10,7 @@ environment's ``Dict`` batched (``rho``, ``m_a``, ``m_b`` of shape ``(N, 1)``,
 Autoreset is ``NEXT_STEP`` (Gymnasium's default): the step after an episode ends
 resets that sub-environment, ignores its action and returns the new start's
 observation with reward 0, ``terminated`` and ``truncated`` false. Starts are
-drawn in blocks of 4,096 with the task sampler's vectorised ``batch`` method from
+drawn in blocks of 2,048 with the task sampler's vectorised ``batch`` method from
 ``self.np_random``: the same distribution as :class:`~crmgrasp.env.CRMGraspEnv`,
 not the same stream.
 """
@@ -74,10 +74,10 @@ class CRMGraspVectorEnv(VectorEnv):
         self._next = 0
 
     def _starts(self, n: int) -> np.ndarray:
-        """``n`` fresh starts, served from a block drawn ``max(4096, n)`` at a time
+        """``n`` fresh starts, served from a block drawn ``max(2048, n)`` at a time
         (starts are i.i.d., so block draws change cost, not distribution)."""
         if self._next + n > self._buffer.shape[1]:
-            block = self.task.sample_starts(self.np_random, max(4096, n))
+            block = self.task.sample_starts(self.np_random, max(2048, n))
             self._buffer = np.concatenate([self._buffer[:, self._next :], block], axis=1)
             self._next = 0
         out = self._buffer[:, self._next : self._next + n]
