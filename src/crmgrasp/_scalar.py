@@ -17,10 +17,11 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["crm_step", "observe_mu", "Vec8", "Edges"]
+from ._geombase import _S_TOL as S_TOL
+from ._geombase import EPS
 
-EPS = 1e-9
-S_TOL = 1e-12
+__all__ = ["crm_step", "observe_mu", "contains", "first_entry", "tan_term", "Vec8", "Edges"]
+
 ANTIPODAL_TOL = 1e-12
 _INF = math.inf
 _sqrt = math.sqrt
@@ -29,8 +30,10 @@ Vec8 = tuple[float, float, float, float, float, float, float, float]
 Edges = tuple[tuple[float, float, float, float, float, float, float], ...]
 
 
-def _contains(px: float, py: float, edges: Edges, convex: bool) -> bool:
-    """:meth:`crmgrasp.geometry.Polygon.contains` on plain numbers."""
+def contains(px: float, py: float, edges: Edges, convex: bool) -> bool:
+    """Strictly inside (farther than ``EPS`` from the boundary): convex polygons test
+    the signed distance to every edge's line; others count crossings of a ray toward
+    +x, then check the distance to the boundary (:meth:`crmgrasp.geometry.Polygon.contains`)."""
     if convex:
         for ax, ay, _, _, _, nx, ny in edges:
             if (px - ax) * nx + (py - ay) * ny <= EPS:
@@ -48,6 +51,30 @@ def _contains(px: float, py: float, edges: Edges, convex: bool) -> bool:
         if dx * dx + dy * dy <= EPS * EPS:
             return False
     return True
+
+
+def first_entry(
+    ox: float, oy: float, dx: float, dy: float, u_max: float, edges: Edges
+) -> tuple[float, float, float, float, float] | None:
+    """First entry ``(u, x, y, nx, ny)`` of the segment ``o + u d``, ``0 <= u <= u_max``
+    (``EPS`` slack), through an edge it crosses inward (``d . n > 0``) within the edge
+    (``S_TOL`` slack); ties go to the lower edge index; ``None`` if it never enters."""
+    hi = u_max + EPS
+    best: tuple[float, float, float, float, float] | None = None
+    for ax, ay, ex, ey, l2, enx, eny in edges:
+        denom = dx * enx + dy * eny
+        if denom <= 0.0:
+            continue
+        u = ((ax - ox) * enx + (ay - oy) * eny) / denom
+        if u < -EPS or u > hi:
+            continue
+        qx, qy = ox + u * dx, oy + u * dy
+        s = ((qx - ax) * ex + (qy - ay) * ey) / l2
+        if s < -S_TOL or s > 1.0 + S_TOL:
+            continue
+        if best is None or u < best[0]:
+            best = (u, qx, qy, enx, eny)
+    return best
 
 
 def crm_step(
@@ -80,24 +107,12 @@ def crm_step(
     else:
         t0, t1, dx, dy = t_hi, t_lo, -1.0 * fnx, -1.0 * fny
     ox, oy = bx + t0 * fnx, by + t0 * fny
-    if _contains(ox, oy, edges, convex):
+    if contains(ox, oy, edges, convex):
         return 1, v
-    hi = abs(t1 - t0) + EPS
-    best, px, py, nx, ny = _INF, 0.0, 0.0, 0.0, 0.0
-    for ax, ay, ex, ey, l2, enx, eny in edges:
-        denom = dx * enx + dy * eny
-        if denom <= 0.0:
-            continue
-        u = ((ax - ox) * enx + (ay - oy) * eny) / denom
-        if u < -EPS or u > hi:
-            continue
-        qx, qy = ox + u * dx, oy + u * dy
-        s = ((qx - ax) * ex + (qy - ay) * ey) / l2
-        if s < -S_TOL or s > 1.0 + S_TOL or u >= best:
-            continue
-        best, px, py, nx, ny = u, qx, qy, enx, eny
-    if best == _INF:
+    hit = first_entry(ox, oy, dx, dy, abs(t1 - t0), edges)
+    if hit is None:
         return 1, v
+    _, px, py, nx, ny = hit
     new: Vec8 = (v[0], v[1], v[2], v[3], px, py, nx, ny) if c_is_b else (px, py, nx, ny, v[4], v[5], v[6], v[7])
     ax, ay, anx, any_, bx, by, bnx, bny = new
     dx, dy = bx - ax, by - ay
@@ -109,12 +124,12 @@ def crm_step(
     ux, uy = dy / dist, -dx / dist
     if anx * ux + any_ * uy > tol or bnx * ux + bny * uy > tol:
         return 2, v
-    if _contains(0.5 * (ax + bx) + depth * ux, 0.5 * (ay + by) + depth * uy, edges, convex):
+    if contains(0.5 * (ax + bx) + depth * ux, 0.5 * (ay + by) + depth * uy, edges, convex):
         return 2, v
     return 0, new
 
 
-def _tan(x: float, y: float, nx: float, ny: float, ox: float, oy: float) -> float:
+def tan_term(x: float, y: float, nx: float, ny: float, ox: float, oy: float) -> float:
     """``tan`` of the angle between the inward normal at ``(x, y)`` and the direction
     to ``(ox, oy)`` (:func:`crmgrasp.quality.min_friction`'s per-contact term)."""
     dx, dy = ox - x, oy - y
@@ -131,5 +146,5 @@ def observe_mu(v: Vec8) -> tuple[float, float, float, float]:
     ax, ay, anx, any_, bx, by, bnx, bny = v
     sx, sy = anx + bnx, any_ + bny
     dx, dy = bx - ax, by - ay
-    mu = max(_tan(ax, ay, anx, any_, bx, by), _tan(bx, by, bnx, bny, ax, ay))
+    mu = max(tan_term(ax, ay, anx, any_, bx, by), tan_term(bx, by, bnx, bny, ax, ay))
     return sx * sx + sy * sy, dx * bny - dy * bnx, -dx * any_ + dy * anx, mu

@@ -146,7 +146,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             self._state = SimState(cfg, cfg, 0)
             self._v = (*cfg.a, *cfg.b)  # type: ignore[assignment]
             self._now = rho, m_a, m_b, mu = observe_mu(self._v)
-            index = self.task.discretizer.index_of(rho, m_a, m_b, 0)
+            index = self._index_of(rho, m_a, m_b, 0)
             return self._obs(rho, m_a, m_b, 0), self._info(index, mu)
         sensed = self.task.noise.sense(cfg, self.np_random)
         self._state = SimState(cfg, sensed, 0)

@@ -11,6 +11,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._geombase import _S_TOL, EPS, Array, BoundaryPoint, Entry, _points, _ray_entry_rows
+from ._scalar import contains, first_entry
 from ._validation import CrmgraspError, as_point, finite
 
 __all__ = ["Polygon"]
@@ -223,25 +224,7 @@ class Polygon:
         crossings of a ray toward +x and then check the distance to the boundary.
         """
         px, py = (p[0], p[1]) if isinstance(p, tuple) else as_point(p, "point")
-        if self.convex:  # strictly inside iff farther than EPS inside every edge's line
-            for ax, ay, _, _, _, nx, ny in self.edges:
-                if (px - ax) * nx + (py - ay) * ny <= EPS:
-                    return False
-            return True
-        inside = False
-        for ax, ay, ex, ey, _, _, _ in self.edges:
-            by = ay + ey
-            if (ay > py) != (by > py):
-                if px < ax + (py - ay) * ex / ey:
-                    inside = not inside
-        if not inside:
-            return False
-        for ax, ay, ex, ey, l2, _, _ in self.edges:
-            t = min(1.0, max(0.0, ((px - ax) * ex + (py - ay) * ey) / l2))
-            dx, dy = ax + t * ex - px, ay + t * ey - py
-            if dx * dx + dy * dy <= EPS * EPS:
-                return False
-        return True
+        return contains(px, py, self.edges, self.convex)
 
     def contains_batch(self, p: ArrayLike) -> NDArray[np.bool_]:
         """Vectorised :meth:`contains` over points of shape ``(N, 2)``."""
@@ -278,23 +261,8 @@ class Polygon:
         ``None`` if the segment never enters the object. Ties (a ray through a
         vertex) go to the lower edge index.
         """
-        ox, oy = origin
-        dx, dy = direction
-        best: Entry | None = None
-        for ax, ay, ex, ey, l2, nx, ny in self.edges:
-            denom = dx * nx + dy * ny
-            if denom <= 0.0:
-                continue
-            u = ((ax - ox) * nx + (ay - oy) * ny) / denom
-            if u < -EPS or u > u_max + EPS:
-                continue
-            qx, qy = ox + u * dx, oy + u * dy
-            s = ((qx - ax) * ex + (qy - ay) * ey) / l2
-            if s < -_S_TOL or s > 1.0 + _S_TOL:
-                continue
-            if best is None or u < best.u:
-                best = Entry(u, (qx, qy), (nx, ny))
-        return best
+        hit = first_entry(origin[0], origin[1], direction[0], direction[1], u_max, self.edges)
+        return None if hit is None else Entry(hit[0], (hit[1], hit[2]), (hit[3], hit[4]))
 
     def ray_entry_batch(self, origin: Array, direction: Array, u_max: Array) -> tuple[Array, Array, Array]:
         """Vectorised :meth:`ray_entry` over ``N`` segments.

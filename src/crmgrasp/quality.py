@@ -31,6 +31,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linprog
 
+from ._scalar import ANTIPODAL_TOL as _ANTIPODAL_TOL
+from ._scalar import tan_term
 from ._validation import CrmgraspError, non_negative
 from .contacts import Config, Contact
 
@@ -39,17 +41,12 @@ __all__ = ["min_friction", "min_friction_batch", "is_force_closure", "force_clos
 LP_TOL = 1e-9
 """Margin the force-closure LP's optimum must exceed (unitless, wrenches normalised)."""
 
-ANTIPODAL_TOL = 1e-12
+ANTIPODAL_TOL = _ANTIPODAL_TOL
 """``tan(theta)`` below this is rounding error of an antipodal pair and counts as 0."""
 
 
 def _tan_angle(c: Contact, ox: float, oy: float) -> float:
-    dx, dy = ox - c.x, oy - c.y
-    dot = c.nx * dx + c.ny * dy
-    if dot <= 0.0:
-        return math.inf
-    tan = abs(c.nx * dy - c.ny * dx) / dot
-    return 0.0 if tan < ANTIPODAL_TOL else tan
+    return tan_term(c.x, c.y, c.nx, c.ny, ox, oy)
 
 
 def min_friction(config: Config) -> float:

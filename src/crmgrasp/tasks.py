@@ -112,8 +112,9 @@ def _corner_boxes(obj: Polygon, aperture: float) -> tuple[np.ndarray, np.ndarray
     """Per corner ``k`` (vertex ``k``), the largest fractions of the incoming and the
     outgoing side that a feasible pair can use, and the cumulative corner weights.
 
-    Two points at distances ``d_1``, ``d_2`` from a corner of interior angle
-    ``theta`` are ``d^2 = d_1^2 + d_2^2 - 2 d_1 d_2 cos(theta)`` apart, at least
+    Two points at distances ``d_1``, ``d_2`` from a corner whose sides meet at the
+    angle ``theta`` (at most 180 degrees, convex or reflex corner) are
+    ``d^2 = d_1^2 + d_2^2 - 2 d_1 d_2 cos(theta)`` apart, at least
     ``d_1^2`` when ``cos(theta) <= 0`` and at least ``d_1^2 sin^2(theta)`` otherwise;
     so ``d <= A`` needs ``d_i <= A / s`` with ``s = 1`` or ``sin(theta)``, i.e. a
     fraction ``c = min(1, A / (s L))`` of a side of length ``L`` (widened by 1e-9 for
