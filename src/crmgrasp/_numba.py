@@ -38,6 +38,7 @@ except ImportError:  # pragma: no cover - depends on the optional extra
 EPS = 1e-9
 S_TOL = 1e-12
 ANTIPODAL_TOL = 1e-12
+LINE_TOL = 1e-12
 
 __all__ = ["AVAILABLE", "execute_rows", "corner_candidates", "observe_rows"]
 
@@ -111,6 +112,19 @@ def _execute_col(cfg, sen, j, c_is_b, f_is_b, r, e, convex, aperture, palm_depth
     sign = 1.0 if same else -1.0
     dx, dy = sign * fnx, sign * fny
     u_max = abs(t1 - t0)
+    if convex:
+        k = _convex_edge(ox, oy, dx, dy, e)
+        if k < 0:
+            return 1
+        nx, ny = e[k, 5], e[k, 6]
+        denom = dx * nx + dy * ny
+        if not denom > 0.0:
+            return 1
+        best = ((e[k, 0] - ox) * nx + (e[k, 1] - oy) * ny) / denom
+        if not (best >= -EPS and best <= u_max + EPS):
+            return 1
+        px, py = ox + best * dx, oy + best * dy
+        return _finish(cfg, j, mo, px, py, nx, ny, e, convex, aperture, palm_depth, tol, new)
     best, px, py, nx, ny = np.inf, 0.0, 0.0, 0.0, 0.0
     for i in range(e.shape[0]):
         ax, ay, ex, ey, l2, enx, eny = e[i, 0], e[i, 1], e[i, 2], e[i, 3], e[i, 4], e[i, 5], e[i, 6]
@@ -128,6 +142,32 @@ def _execute_col(cfg, sen, j, c_is_b, f_is_b, r, e, convex, aperture, palm_depth
             best, px, py, nx, ny = u, qx, qy, enx, eny
     if best == np.inf:
         return 1
+    return _finish(cfg, j, mo, px, py, nx, ny, e, convex, aperture, palm_depth, tol, new)
+
+
+@njit(cache=True)
+def _line_side(c, tol):  # type: ignore[no-untyped-def]
+    return 1 if c > tol else (-1 if c < -tol else 0)
+
+
+@njit(cache=True)
+def _convex_edge(ox, oy, dx, dy, e):  # type: ignore[no-untyped-def]
+    """:func:`crmgrasp._scalar.convex_edge` (-1 if none)."""
+    n = e.shape[0]
+    tol = LINE_TOL * (abs(dx) + abs(dy))
+    s0 = _line_side(dx * (e[0, 1] - oy) - dy * (e[0, 0] - ox), tol)
+    s = s0
+    for i in range(n):
+        s1 = _line_side(dx * (e[i + 1, 1] - oy) - dy * (e[i + 1, 0] - ox), tol) if i + 1 < n else s0
+        if s >= 0 and s1 <= 0 and (s > 0 or s1 < 0):
+            return i
+        s = s1
+    return -1
+
+
+@njit(cache=True)
+def _finish(cfg, j, mo, px, py, nx, ny, e, convex, aperture, palm_depth, tol, new):  # type: ignore[no-untyped-def]
+    """Feasibility of column ``j`` with the mover at the entry; writes ``new[:, j]`` if feasible."""
     c = (
         (px, py, nx, ny, cfg[4, j], cfg[5, j], cfg[6, j], cfg[7, j])
         if mo == 0

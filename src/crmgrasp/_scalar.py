@@ -20,7 +20,18 @@ import math
 from ._geombase import _S_TOL as S_TOL
 from ._geombase import EPS
 
-__all__ = ["crm_step", "observe_mu", "contains", "first_entry", "tan_term", "Vec8", "Edges"]
+__all__ = [
+    "crm_step",
+    "observe_mu",
+    "contains",
+    "first_entry",
+    "convex_edge",
+    "convex_entry",
+    "LINE_TOL",
+    "tan_term",
+    "Vec8",
+    "Edges",
+]
 
 ANTIPODAL_TOL = 1e-12
 _INF = math.inf
@@ -77,6 +88,59 @@ def first_entry(
     return best
 
 
+LINE_TOL = 1e-12
+"""A vertex closer than this (metres) to a line counts as on it (:func:`convex_edge`)."""
+
+
+def _side(c: float, tol: float) -> int:
+    return 1 if c > tol else (-1 if c < -tol else 0)
+
+
+def convex_edge(ox: float, oy: float, dx: float, dy: float, edges: Edges) -> int:
+    """The edge through which the line ``o + u d`` enters a convex polygon, or -1.
+
+    Vertex ``j``'s side of the line is the sign of ``c_j = d x (v_j - o) = dx (v_jy -
+    oy) - dy (v_jx - ox)``: left (``c_j > tol``), right (``c_j < -tol``) or on the
+    line, with ``tol = LINE_TOL (|dx| + |dy|)``. Edge ``i`` (vertex ``i`` to ``i +
+    1``) is crossed inward when its start is not on the right, its end not on the
+    left, and not both are on the line; the first such edge is returned. A line
+    through a vertex, or along an edge, or missing a corner by less than
+    ``LINE_TOL``, thus enters at that vertex, as :func:`first_entry`'s slack does.
+    """
+    n = len(edges)
+    tol = LINE_TOL * (abs(dx) + abs(dy))
+    s0 = _side(dx * (edges[0][1] - oy) - dy * (edges[0][0] - ox), tol)
+    s = s0
+    for i in range(n):
+        s1 = _side(dx * (edges[i + 1][1] - oy) - dy * (edges[i + 1][0] - ox), tol) if i + 1 < n else s0
+        if s >= 0 and s1 <= 0 and (s > 0 or s1 < 0):
+            return i
+        s = s1
+    return -1
+
+
+def convex_entry(
+    ox: float, oy: float, dx: float, dy: float, u_max: float, edges: Edges
+) -> tuple[float, float, float, float, float] | None:
+    """:func:`first_entry` for a convex polygon: the entry edge from the vertices'
+    sides of the line (:func:`convex_edge`), then ``u = ((a_i - o) . n_i) / (d . n_i)``,
+    accepted when ``d . n_i > 0`` and ``-EPS <= u <= u_max + EPS``. Away from
+    vertices this is :func:`first_entry`'s edge and ``u``, bit for bit; the batched
+    path (:mod:`crmgrasp._columns`) evaluates the same rule without a loop over edges.
+    """
+    i = convex_edge(ox, oy, dx, dy, edges)
+    if i < 0:
+        return None
+    ax, ay, _, _, _, enx, eny = edges[i]
+    denom = dx * enx + dy * eny
+    if not denom > 0.0:
+        return None
+    u = ((ax - ox) * enx + (ay - oy) * eny) / denom
+    if not (u >= -EPS and u <= u_max + EPS):
+        return None
+    return (u, ox + u * dx, oy + u * dy, enx, eny)
+
+
 def crm_step(
     v: Vec8, c_is_b: bool, f_is_b: bool, r: float, edges: Edges, convex: bool, aperture: float, depth: float, tol: float
 ) -> tuple[int, Vec8]:
@@ -109,7 +173,7 @@ def crm_step(
     ox, oy = bx + t0 * fnx, by + t0 * fny
     if contains(ox, oy, edges, convex):
         return 1, v
-    hit = first_entry(ox, oy, dx, dy, abs(t1 - t0), edges)
+    hit = (convex_entry if convex else first_entry)(ox, oy, dx, dy, abs(t1 - t0), edges)
     if hit is None:
         return 1, v
     _, px, py, nx, ny = hit

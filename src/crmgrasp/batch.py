@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import _numba
+from ._columns import execute_convex
 from ._validation import CrmgraspError
 from .contacts import configs_to_array
 from .geometry import Polygon, Shape
@@ -126,6 +127,10 @@ def execute_columns(
             errors,
         )
         return new, errors
+    if isinstance(obj, Polygon) and obj.convex:
+        return execute_convex(
+            obj._columns, hand.aperture, hand.palm_depth, hand.palm_normal_tol, cfg, sen, c_is_b, f_is_b, rr
+        )
     # 1-2. goal line in the sensed frame of f; chord within the aperture of the stationary contact
     fx = np.where(f_is_b, sen[4], sen[0])
     fy = np.where(f_is_b, sen[5], sen[1])

@@ -10,8 +10,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._columns import ConvexColumns
 from ._geombase import _S_TOL, EPS, Array, BoundaryPoint, Entry, _points, _ray_entry_rows
-from ._scalar import contains, first_entry
+from ._scalar import contains, convex_entry, first_entry
 from ._validation import CrmgraspError, as_point, finite
 
 __all__ = ["Polygon"]
@@ -108,6 +109,11 @@ class Polygon:
         """True if every vertex turns left (CCW convex; collinear vertices allowed)."""
         e = self.edges
         return all(e[i][2] * e[(i + 1) % len(e)][3] - e[i][3] * e[(i + 1) % len(e)][2] >= 0.0 for i in range(len(e)))
+
+    @cached_property
+    def _columns(self) -> ConvexColumns:
+        """Whole-column constants for the convex fast paths (:mod:`crmgrasp._columns`)."""
+        return ConvexColumns(self.edges)
 
     @cached_property
     def _edge_arrays(self) -> Array:
@@ -236,10 +242,7 @@ class Polygon:
         """:meth:`contains` on coordinate columns (no validation; NaN is outside).
         Call inside ``np.errstate(all="ignore")``."""
         if self.convex:  # one whole-column pass per edge (a short-axis reduction is slower)
-            inside = np.ones(len(x), dtype=bool)
-            for ax, ay, _, _, _, nx, ny in self.edges:
-                inside &= (x - ax) * nx + (y - ay) * ny > EPS
-            return inside
+            return self._columns.contains(np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64))
         px, py = x[:, None], y[:, None]
         e = self._edge_arrays
         eax, eay, eex, eey, el2 = e[:, 0], e[:, 1], e[:, 2], e[:, 3], e[:, 4]
@@ -258,10 +261,15 @@ class Polygon:
         crosses the boundary from outside to inside (``direction . n > 0``).
 
         ``direction`` need not be unit length; ``u`` is in its units. Returns
-        ``None`` if the segment never enters the object. Ties (a ray through a
-        vertex) go to the lower edge index.
+        ``None`` if the segment never enters the object. On a convex polygon the
+        entry edge is found from the vertices' sides of the line
+        (:func:`crmgrasp._scalar.convex_entry`: a line through a vertex enters by
+        the edge ending there; one that only touches a vertex or runs along an
+        edge does not enter); otherwise the smallest ``u`` over the edges wins and
+        ties (a ray through a vertex) go to the lower edge index.
         """
-        hit = first_entry(origin[0], origin[1], direction[0], direction[1], u_max, self.edges)
+        entry = convex_entry if self.convex else first_entry
+        hit = entry(origin[0], origin[1], direction[0], direction[1], u_max, self.edges)
         return None if hit is None else Entry(hit[0], (hit[1], hit[2]), (hit[3], hit[4]))
 
     def ray_entry_batch(self, origin: Array, direction: Array, u_max: Array) -> tuple[Array, Array, Array]:
@@ -277,6 +285,11 @@ class Polygon:
     ) -> tuple[Array, Array, Array, Array, Array]:
         """:meth:`ray_entry` on columns: ``u`` (``inf`` if none), entry ``x``, ``y`` and
         normal ``nx``, ``ny`` (NaN if none). Call inside ``np.errstate(all="ignore")``."""
+        if self.convex:
+            out = np.empty((4, len(ox)))
+            ok, u = self._columns.entry(ox, oy, dx, dy, u_max + EPS, out)
+            hx, hy, hnx, hny = (np.where(ok, row, np.nan) for row in out)
+            return np.where(ok, u, np.inf), hx, hy, hnx, hny
         u_best = np.full(len(ox), np.inf)
         bnx, bny = np.full(len(ox), np.nan), np.full(len(ox), np.nan)
         hi = u_max + EPS

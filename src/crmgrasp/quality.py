@@ -36,7 +36,15 @@ from ._scalar import tan_term
 from ._validation import CrmgraspError, non_negative
 from .contacts import Config, Contact
 
-__all__ = ["min_friction", "min_friction_batch", "is_force_closure", "force_closure", "LP_TOL", "ANTIPODAL_TOL"]
+__all__ = [
+    "min_friction",
+    "min_friction_batch",
+    "observe_mu_columns",
+    "is_force_closure",
+    "force_closure",
+    "LP_TOL",
+    "ANTIPODAL_TOL",
+]
 
 LP_TOL = 1e-9
 """Margin the force-closure LP's optimum must exceed (unitless, wrenches normalised)."""
@@ -70,17 +78,48 @@ def min_friction(config: Config) -> float:
 
 def min_friction_batch(configs: NDArray[np.float64]) -> NDArray[np.float64]:
     """Vectorised :func:`min_friction` over ``(N, 8)`` configurations."""
-    c = configs
-    out = np.zeros(len(c))
-    for i, j in ((0, 4), (4, 0)):
-        dx, dy = c[:, j] - c[:, i], c[:, j + 1] - c[:, i + 1]
-        nx, ny = c[:, i + 2], c[:, i + 3]
-        dot = nx * dx + ny * dy
-        with np.errstate(all="ignore"):
-            tan = np.where(dot > 0.0, np.abs(nx * dy - ny * dx) / dot, np.inf)
-        tan[tan < ANTIPODAL_TOL] = 0.0
-        out = np.maximum(out, tan)
-    return out
+    with np.errstate(all="ignore"):
+        return observe_mu_columns(configs.T, configs.T)[3]
+
+
+F64 = NDArray[np.float64]
+
+
+def observe_mu_columns(cfg: F64, sen: F64) -> tuple[F64, F64, F64, F64]:
+    """``(rho, m_a, m_b)`` of the sensed block ``sen`` (:func:`crmgrasp.sensing.observe`)
+    and :func:`min_friction` of the true block ``cfg``, both ``(8, N)`` (rows ``ax, ay,
+    anx, any, bx, by, bnx, bny``), equal to the scalar functions bit for bit.
+
+    With ``d = x_b - x_a``, contact a's ``tan`` is ``|n_a x d| / (n_a . d)`` and
+    contact b's ``|n_b x d| / (-n_b . d)``; the cross products are ``|m_b|`` and
+    ``|m_a|`` of the same configuration (the same products, exactly), so when
+    ``sen is cfg`` they are shared. Snapping ``tan < 1e-12`` to 0 commutes with
+    the maximum. Call inside ``np.errstate(all="ignore")``.
+    """
+    ax, ay, anx, any_, bx, by, bnx, bny = sen
+    dx, dy = bx - ax, by - ay
+    sx, sy = anx + bnx, any_ + bny
+    m_a, m_b = dx * bny - dy * bnx, dy * anx - dx * any_  # -dx any + dy anx, the same bits
+    if sen is cfg:
+        mu = min_friction_xy(dx, dy, anx, any_, bnx, bny, (np.abs(m_b), np.abs(m_a)))
+    else:
+        ax, ay, anx, any_, bx, by, bnx, bny = cfg
+        mu = min_friction_xy(bx - ax, by - ay, anx, any_, bnx, bny)
+    return sx * sx + sy * sy, m_a, m_b, mu
+
+
+def min_friction_xy(
+    dx: F64, dy: F64, anx: F64, any_: F64, bnx: F64, bny: F64, cross: tuple[F64, F64] | None = None
+) -> F64:
+    """:func:`min_friction` on columns from ``d = x_b - x_a`` and the two normals;
+    ``cross`` optionally supplies ``(|n_a x d|, |n_b x d|)`` (``|m_b|``, ``|m_a|``).
+    Symmetric in the labels: swapping a and b (``d -> -d``) gives the same bits.
+    Call inside ``np.errstate(all="ignore")``."""
+    cross_a, cross_b = cross if cross is not None else (np.abs(anx * dy - any_ * dx), np.abs(bny * dx - bnx * dy))
+    dot_a, dot_b = anx * dx + any_ * dy, -(bnx * dx + bny * dy)
+    mu = np.maximum(cross_a / dot_a, cross_b / dot_b)
+    mu = np.where(mu < ANTIPODAL_TOL, 0.0, mu)
+    return np.where((dot_a > 0.0) & (dot_b > 0.0), mu, np.inf)
 
 
 def is_force_closure(config: Config, mu: float) -> bool:

@@ -15,7 +15,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from . import _numba
+from ._corners import _corner_boxes, _corner_candidates, _corner_proposal
 from ._validation import CrmgraspError, non_negative
 from .contacts import Config, Contact
 from .geometry import Polygon, Rectangle, Shape
@@ -106,82 +106,6 @@ class CornerStarts:
             out[:, filled : filled + take] = cols[:, :take]
             filled += take
         return out
-
-
-def _corner_boxes(obj: Polygon, aperture: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per corner ``k`` (vertex ``k``), the largest fractions of the incoming and the
-    outgoing side that a feasible pair can use, and the cumulative corner weights.
-
-    Two points at distances ``d_1``, ``d_2`` from a corner whose sides meet at the
-    angle ``theta`` (at most 180 degrees, convex or reflex corner) are
-    ``d^2 = d_1^2 + d_2^2 - 2 d_1 d_2 cos(theta)`` apart, at least
-    ``d_1^2`` when ``cos(theta) <= 0`` and at least ``d_1^2 sin^2(theta)`` otherwise;
-    so ``d <= A`` needs ``d_i <= A / s`` with ``s = 1`` or ``sin(theta)``, i.e. a
-    fraction ``c = min(1, A / (s L))`` of a side of length ``L`` (widened by 1e-9 for
-    rounding). Corner ``k`` is proposed with probability proportional to its box
-    area ``c_in c_out``, which keeps the accepted distribution that of the uniform
-    proposal (each accepted candidate has the same density).
-    """
-    e = obj._edge_arrays
-    nv = len(e)
-    c_in, c_out = np.ones(nv), np.ones(nv)
-    for k in range(nv):
-        ki = (k - 1) % nv
-        l_in, l_out = math.sqrt(e[ki, 4]), math.sqrt(e[k, 4])
-        cos = -(e[ki, 2] * e[k, 2] + e[ki, 3] * e[k, 3]) / (l_in * l_out)
-        s = 1.0 if cos <= 0.0 else abs(e[ki, 2] * e[k, 3] - e[ki, 3] * e[k, 2]) / (l_in * l_out)
-        if s > 0.0:
-            c_in[k] = min(1.0, aperture / (s * l_in) * (1.0 + 1e-9))
-            c_out[k] = min(1.0, aperture / (s * l_out) * (1.0 + 1e-9))
-    w = np.cumsum(c_in * c_out)
-    return w / w[-1], c_in, c_out
-
-
-def _corner_proposal(w: np.ndarray, cum: np.ndarray, c_in: np.ndarray, c_out: np.ndarray) -> np.ndarray:
-    """Uniforms ``w`` (``(4, m)``) to candidates in :func:`_corner_candidates`'s
-    parametrisation: corner ``k`` with probability ``cum[k] - cum[k - 1]``, a contact
-    uniform within ``c_in[k]`` of the corner on the incoming side and within
-    ``c_out[k]`` on the outgoing side (a draw of exactly 0, the corner itself, is
-    marked rejected), the coin unchanged."""
-    nv = len(cum)
-    k = np.minimum(np.searchsorted(cum, w[0], side="right"), nv - 1)
-    u = np.empty_like(w)
-    u[0] = (k + 0.5) / nv
-    u[1] = np.where(w[1] == 0.0, 0.0, 1.0 - c_in[k] * w[1])
-    u[2] = c_out[k] * w[2]
-    u[3] = w[3]
-    return u
-
-
-def _corner_candidates(obj: Polygon, hand: Hand, mu_goal: float, u: np.ndarray) -> np.ndarray:
-    """The accepted corner-start candidates of the uniforms ``u`` (``(4, m)``: corner,
-    fraction in, fraction out, coin), in order, as an ``(8, k)`` block. The compiled
-    filter (numba) and the numpy cascade make the same decisions."""
-    from .batch import _feasible
-    from .quality import min_friction_batch
-
-    e = obj._edge_arrays
-    if _numba.AVAILABLE:
-        got = np.empty((8, u.shape[1]))
-        count = _numba.corner_candidates(
-            u, e, obj.convex, hand.aperture, hand.palm_depth, hand.palm_normal_tol, mu_goal, got
-        )
-        return got[:, :count]
-    nv = len(e)
-    k = (u[0] * nv).astype(np.int64)
-    ki = (k - 1) % nv
-    x1, y1 = e[ki, 0] + u[1] * e[ki, 2], e[ki, 1] + u[1] * e[ki, 3]
-    x2, y2 = e[k, 0] + u[2] * e[k, 2], e[k, 1] + u[2] * e[k, 3]
-    dx, dy = x2 - x1, y2 - y1
-    keep = np.flatnonzero((u[1] > 0.0) & (u[2] > 0.0) & (np.sqrt(dx * dx + dy * dy) <= hand.aperture))
-    a_first = u[3, keep] < 0.5
-    p1 = (x1[keep], y1[keep], e[ki[keep], 5], e[ki[keep], 6])
-    p2 = (x2[keep], y2[keep], e[k[keep], 5], e[k[keep], 6])
-    cols = np.stack([np.where(a_first, p, q) for p, q in zip(p1 + p2, p2 + p1)])
-    with np.errstate(all="ignore"):
-        ok = _feasible(obj, hand, *cols) == Error.NONE
-    cols = cols[:, ok]
-    return cols[:, min_friction_batch(cols.T) > mu_goal]
 
 
 @dataclass(frozen=True)

@@ -27,8 +27,8 @@ from gymnasium.vector.utils import batch_space
 from . import _numba
 from ._validation import CrmgraspError
 from .batch import execute_columns
-from .quality import min_friction_batch
-from .sensing import Error, observe_batch
+from .quality import observe_mu_columns
+from .sensing import Error
 from .tasks import Task, make_task
 
 __all__ = ["CRMGraspVectorEnv"]
@@ -96,28 +96,23 @@ class CRMGraspVectorEnv(VectorEnv):
             n = self.num_envs
             rho, m_a, m_b, mu = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
             _numba.observe_rows(np.ascontiguousarray(c), np.ascontiguousarray(s), rho, m_a, m_b, mu)
-            return self._pack(rho, m_a, m_b, mu, errors)
-        with np.errstate(all="ignore"):
-            obs = observe_batch(s.T)
-            mu = min_friction_batch(c.T)
-        rho, m_a, m_b = obs[:, 0], obs[:, 1], obs[:, 2]
-        return self._pack(rho, m_a, m_b, mu, errors)
-
-    def _pack(
-        self, rho: np.ndarray, m_a: np.ndarray, m_b: np.ndarray, mu: np.ndarray, errors: np.ndarray
-    ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
-        index = self.task.discretizer.index_batch(np.stack([rho, m_a, m_b], axis=1), errors)
+        else:
+            with np.errstate(all="ignore"):
+                rho, m_a, m_b, mu = observe_mu_columns(c, s)
+        index = self.task.discretizer.index_columns(rho, m_a, m_b, errors)
         b = self._bound
         obs = {
-            "rho": np.clip(rho, 0.0, 4.0)[:, None],
-            "m_a": np.clip(m_a, -b, b)[:, None],
-            "m_b": np.clip(m_b, -b, b)[:, None],
+            "rho": np.minimum(np.maximum(rho, 0.0), 4.0)[:, None],
+            "m_a": np.minimum(np.maximum(m_a, -b), b)[:, None],
+            "m_b": np.minimum(np.maximum(m_b, -b), b)[:, None],
             "error": errors.astype(np.int64),
         }
         return obs, index, mu
 
     def _info(self, index: np.ndarray, mu: np.ndarray) -> dict[str, Any]:
-        return {"obs_index": index, "min_friction": mu, "steps": self._steps.copy(), "config": self._cfg.T.copy()}
+        config = self._cfg.T  # a read-only view: each step builds a new block
+        config.flags.writeable = False
+        return {"obs_index": index, "min_friction": mu, "steps": self._steps.copy(), "config": config}
 
     def reset(
         self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
@@ -142,7 +137,7 @@ class CRMGraspVectorEnv(VectorEnv):
         a = np.asarray(actions)
         if a.shape != (self.num_envs,) or a.dtype.kind not in "iu":
             raise CrmgraspError(f"actions must be {self.num_envs} integers, got shape {a.shape} dtype {a.dtype}")
-        if np.any((a < 0) | (a >= len(self.task.actions))):
+        if a.min() < 0 or a.max() >= len(self.task.actions):
             raise CrmgraspError(f"actions must be in [0, {len(self.task.actions)})")
         with np.errstate(all="ignore"):
             new, errors = execute_columns(
@@ -159,10 +154,8 @@ class CRMGraspVectorEnv(VectorEnv):
             self._steps[rows] = 0
             errors[rows] = Error.NONE
         obs, index, mu = self._observe(errors)
-        terminated = mu <= self.task.mu_goal
-        truncated = ~terminated & (self._steps >= self.task.max_steps)
-        reward = np.where(done, 0.0, -1.0)
-        terminated[done] = False
-        truncated[done] = False
+        terminated = (mu <= self.task.mu_goal) > done  # a reset row neither terminates nor truncates
+        truncated = (self._steps >= self.task.max_steps) > terminated  # its steps are 0 < max_steps
+        reward = done - 1.0  # 0 on a reset row, -1 per CRM
         self._prev_done = terminated | truncated
         return obs, reward, terminated, truncated, self._info(index, mu)
