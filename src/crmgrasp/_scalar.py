@@ -92,10 +92,6 @@ LINE_TOL = 1e-12
 """A vertex closer than this (metres) to a line counts as on it (:func:`convex_edge`)."""
 
 
-def _side(c: float, tol: float) -> int:
-    return 1 if c > tol else (-1 if c < -tol else 0)
-
-
 def convex_edge(ox: float, oy: float, dx: float, dy: float, edges: Edges) -> int:
     """The edge through which the line ``o + u d`` enters a convex polygon, or -1.
 
@@ -107,15 +103,20 @@ def convex_edge(ox: float, oy: float, dx: float, dy: float, edges: Edges) -> int
     through a vertex, or along an edge, or missing a corner by less than
     ``LINE_TOL``, thus enters at that vertex, as :func:`first_entry`'s slack does.
     """
-    n = len(edges)
     tol = LINE_TOL * (abs(dx) + abs(dy))
-    s0 = _side(dx * (edges[0][1] - oy) - dy * (edges[0][0] - ox), tol)
-    s = s0
-    for i in range(n):
-        s1 = _side(dx * (edges[i + 1][1] - oy) - dy * (edges[i + 1][0] - ox), tol) if i + 1 < n else s0
-        if s >= 0 and s1 <= 0 and (s > 0 or s1 < 0):
+    ntol = -tol
+    first = prev = 0.0
+    i = -1
+    for vx, vy, _, _, _, _, _ in edges:
+        c = dx * (vy - oy) - dy * (vx - ox)
+        if i < 0:
+            first = c
+        elif prev >= ntol and c <= tol and (prev > tol or c < ntol):  # start not right, end not left, not both on
             return i
-        s = s1
+        prev = c
+        i += 1
+    if prev >= ntol and first <= tol and (prev > tol or first < ntol):
+        return i
     return -1
 
 
