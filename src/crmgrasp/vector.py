@@ -91,20 +91,21 @@ class CRMGraspVectorEnv(VectorEnv):
         return np.ascontiguousarray(noise.sense_batch(cols.T, self.np_random).T)
 
     def _observe(self, errors: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+        """Observations (clipped to the space), bin indices and min friction; call
+        inside ``np.errstate(all="ignore")``."""
         s, c = self._sensed, self._cfg
         if _numba.AVAILABLE:
             n = self.num_envs
             rho, m_a, m_b, mu = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
             _numba.observe_rows(np.ascontiguousarray(c), np.ascontiguousarray(s), rho, m_a, m_b, mu)
         else:
-            with np.errstate(all="ignore"):
-                rho, m_a, m_b, mu = observe_mu_columns(c, s)
+            rho, m_a, m_b, mu = observe_mu_columns(c, s)
         index = self.task.discretizer.index_columns(rho, m_a, m_b, errors)
-        b = self._bound
+        b = self._bound  # rho = |n_a + n_b|^2 >= 0 needs no lower clip
         obs = {
-            "rho": np.minimum(np.maximum(rho, 0.0), 4.0)[:, None],
-            "m_a": np.minimum(np.maximum(m_a, -b), b)[:, None],
-            "m_b": np.minimum(np.maximum(m_b, -b), b)[:, None],
+            "rho": np.minimum(rho, 4.0, out=rho)[:, None],
+            "m_a": np.minimum(np.maximum(m_a, -b, out=m_a), b, out=m_a)[:, None],
+            "m_b": np.minimum(np.maximum(m_b, -b, out=m_b), b, out=m_b)[:, None],
             "error": errors.astype(np.int64),
         }
         return obs, index, mu
@@ -127,7 +128,8 @@ class CRMGraspVectorEnv(VectorEnv):
         self._steps[:] = 0
         self._prev_done[:] = False
         self._ready = True
-        obs, index, mu = self._observe(np.zeros(self.num_envs, dtype=np.int8))
+        with np.errstate(all="ignore"):
+            obs, index, mu = self._observe(np.zeros(self.num_envs, dtype=np.int8))
         return obs, self._info(index, mu)
 
     def step(self, actions: Any) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
@@ -135,27 +137,29 @@ class CRMGraspVectorEnv(VectorEnv):
         if not self._ready:
             raise CrmgraspError("call reset() before step()")
         a = np.asarray(actions)
+        n_actions = len(self._r)
         if a.shape != (self.num_envs,) or a.dtype.kind not in "iu":
             raise CrmgraspError(f"actions must be {self.num_envs} integers, got shape {a.shape} dtype {a.dtype}")
-        if a.min() < 0 or a.max() >= len(self.task.actions):
-            raise CrmgraspError(f"actions must be in [0, {len(self.task.actions)})")
+        if a.min() < 0 or a.max() >= n_actions:
+            raise CrmgraspError(f"actions must be in [0, {n_actions})")
+        task = self.task
+        done = self._prev_done
+        rows = done.nonzero()[0]  # these reset: their action is ignored
         with np.errstate(all="ignore"):
             new, errors = execute_columns(
-                self.task.obj, self.task.hand, self._cfg, self._sensed, self._c_is_b[a], self._f_is_b[a], self._r[a]
+                task.obj, task.hand, self._cfg, self._sensed, self._c_is_b[a], self._f_is_b[a], self._r[a]
             )
-        self._cfg = new
-        self._sensed = self._sense(new)
-        self._steps += 1
-        done = self._prev_done
-        if done.any():
-            rows = np.flatnonzero(done)
-            self._cfg[:, rows] = self._starts(len(rows))
-            self._sensed = self._sense(self._cfg) if self.task.noise.active else self._cfg
-            self._steps[rows] = 0
-            errors[rows] = Error.NONE
-        obs, index, mu = self._observe(errors)
-        terminated = (mu <= self.task.mu_goal) > done  # a reset row neither terminates nor truncates
-        truncated = (self._steps >= self.task.max_steps) > terminated  # its steps are 0 < max_steps
+            if len(rows):
+                new[:, rows] = self._starts(len(rows))
+                errors[rows] = 0
+            self._cfg = new
+            self._sensed = self._sense(new)
+            obs, index, mu = self._observe(errors)
+        steps = self._steps
+        steps += 1
+        steps[rows] = 0
+        terminated = (mu <= task.mu_goal) > done  # a reset row neither terminates nor truncates
+        truncated = (steps >= task.max_steps) > terminated  # its steps are 0 < max_steps
         reward = done - 1.0  # 0 on a reset row, -1 per CRM
         self._prev_done = terminated | truncated
         return obs, reward, terminated, truncated, self._info(index, mu)
