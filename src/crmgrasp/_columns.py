@@ -104,10 +104,10 @@ class ConvexColumns:
             if vx not in gx:
                 gx[vx] = dy * (vx - ox)
         cross = [gy[vy] - gx[vx] for vx, vy in self.verts]
-        tol = LINE_TOL * (np.abs(dx) + np.abs(dy))
-        near = np.abs(cross[0]) <= tol
+        closest = np.abs(cross[0])
         for c in cross[1:]:
-            near |= np.abs(c) <= tol
+            closest = np.minimum(closest, np.abs(c))
+        near = closest <= LINE_TOL * (np.abs(dx) + np.abs(dy))
         if self.table is None:
             left = np.stack([c > 0.0 for c in cross])
             hits = left & ~np.roll(left, -1, axis=0)

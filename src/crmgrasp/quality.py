@@ -118,7 +118,7 @@ def min_friction_xy(
     cross_a, cross_b = cross if cross is not None else (np.abs(anx * dy - any_ * dx), np.abs(bny * dx - bnx * dy))
     dot_a, dot_b = anx * dx + any_ * dy, -(bnx * dx + bny * dy)
     mu = np.maximum(cross_a / dot_a, cross_b / dot_b)
-    mu = np.where(mu < ANTIPODAL_TOL, 0.0, mu)
+    mu *= mu >= ANTIPODAL_TOL  # snap rounding of an antipodal pair to 0 (mu >= 0 here)
     return np.where((dot_a > 0.0) & (dot_b > 0.0), mu, np.inf)
 
 
