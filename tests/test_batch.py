@@ -90,17 +90,35 @@ def test_batch_input_errors(task):
         execute_batch(task.obj, task.hand, arr * np.nan, 0, 1, 0.0)
 
 
-def test_backends_agree_on_vector_env_and_starts():
-    """Results do not depend on whether the optional compiled kernel is installed."""
+def _odd_task():
+    """A hexagon, other bins (more than three thresholds, signed moments) and CRMs."""
+    from crmgrasp import CRM, Discretizer, Hand, Task, regular_polygon
+
+    disc = Discretizer((0.5, 1.0, 2.0, 3.0), tuple(np.linspace(-0.1, 0.1, 5)), (), abs_moments=False)
+    crms = (CRM("a", "b", 0.0), CRM("b", "a", 0.01), CRM("a", "a", 0.05), CRM("b", "b", -0.05))
+    return Task("hexagon", regular_polygon(6, 0.08), Hand(0.2, 0.05), crms, discretizer=disc)
+
+
+@pytest.mark.parametrize("which", ["paper-box", "hexagon", "noisy"])
+def test_backends_agree_on_vector_env_and_starts(which):
+    """Results do not depend on whether the optional compiled kernel is installed
+    (the noise-free polygon step runs as one compiled pass)."""
+    from dataclasses import replace
+
+    from crmgrasp import make_task
     from crmgrasp.vector import CRMGraspVectorEnv
 
+    task = _odd_task() if which == "hexagon" else make_task("paper-box")
+    if which == "noisy":
+        task = replace(task, noise=SensorNoise(0.05, 0.002))
+
     def run():
-        env = CRMGraspVectorEnv(256)
+        env = CRMGraspVectorEnv(256, task)
         out = [env.reset(seed=9)[1]["config"]]
         rng = np.random.default_rng(9)
         for _ in range(20):
             obs, rew, term, trunc, info = env.step(rng.integers(4, size=256))
-            out += [info["config"], obs["rho"], obs["m_a"], rew, term, trunc, info["obs_index"]]
+            out += [*obs.values(), rew, term, trunc, *info.values()]
         return out
 
     with use_backend("numpy"):
@@ -108,4 +126,5 @@ def test_backends_agree_on_vector_env_and_starts():
     with use_backend("numba"):
         b = run()
     for x, y in zip(a, b):
+        assert x.dtype == y.dtype and x.shape == y.shape
         np.testing.assert_array_equal(x, y)

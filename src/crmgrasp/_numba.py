@@ -40,7 +40,7 @@ S_TOL = 1e-12
 ANTIPODAL_TOL = 1e-12
 LINE_TOL = 1e-12
 
-__all__ = ["AVAILABLE", "execute_rows", "corner_candidates", "observe_rows"]
+__all__ = ["AVAILABLE", "execute_rows", "corner_candidates", "observe_rows", "step_rows"]
 
 
 @njit(cache=True)
@@ -217,6 +217,55 @@ def observe_rows(cfg, sen, rho, m_a, m_b, mu):  # type: ignore[no-untyped-def]
     for j in range(cfg.shape[1]):
         _observe_col(cfg, sen, j, out)
         rho[j], m_a[j], m_b[j], mu[j] = out[0], out[1], out[2], out[3]
+
+
+@njit(cache=True)
+def _bin(v, t):  # type: ignore[no-untyped-def]
+    """:func:`crmgrasp.sensing._bins` for one value (``searchsorted`` puts NaN last)."""
+    if t.shape[0] > 3 and v != v:
+        return t.shape[0]
+    k = 0
+    for i in range(t.shape[0]):
+        if v >= t[i]:
+            k += 1
+    return k
+
+
+@njit(cache=True)
+def _clip(x, lo, hi):  # type: ignore[no-untyped-def]
+    """``np.minimum(np.maximum(x, lo), hi)`` (NaN stays NaN)."""
+    y = lo if x < lo else x
+    return hi if y > hi else y
+
+
+@njit(cache=True)
+def step_rows(cfg, c_is_b, f_is_b, rr, reset, starts, e, convex, aperture, palm_depth, tol, bins, abs_m, bound, out):  # type: ignore[no-untyped-def]
+    """One noise-free vector-environment step in one pass: per column ``j`` of ``cfg``
+    (``(8, N)``), the next start (``starts[:, k]``, in order) where ``reset[j]``, else
+    the CRM ``(c_is_b, f_is_b, rr)[j]``; then its observation (clipped to the space),
+    bin index and min friction. ``bins`` holds the discretizer's thresholds
+    ``(rho, m_a, m_b)``; ``out`` the outputs ``(new, rho, m_a, m_b, error, index, mu)``."""
+    new, rho, m_a, m_b, error, index, mu = out
+    t_rho, t_ma, t_mb = bins
+    na, nb = t_ma.shape[0] + 1, t_mb.shape[0] + 1
+    obs = np.empty(4)
+    k = 0
+    for j in range(cfg.shape[1]):
+        if reset[j]:
+            for i in range(8):
+                new[i, j] = starts[i, k]
+            k += 1
+            code = 0
+        else:
+            code = _execute_col(cfg, cfg, j, c_is_b[j], f_is_b[j], rr[j], e, convex, aperture, palm_depth, tol, new)
+        _observe_col(new, new, j, obs)
+        ma, mb = (abs(obs[1]), abs(obs[2])) if abs_m else (obs[1], obs[2])
+        index[j] = ((_bin(obs[0], t_rho) * na + _bin(ma, t_ma)) * nb + _bin(mb, t_mb)) * 3 + code
+        rho[j, 0] = 4.0 if obs[0] > 4.0 else obs[0]
+        m_a[j, 0] = _clip(obs[1], -bound, bound)
+        m_b[j, 0] = _clip(obs[2], -bound, bound)
+        error[j] = code
+        mu[j] = obs[3]
 
 
 @njit(cache=True)

@@ -17,7 +17,7 @@ not the same stream.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from gymnasium import spaces
@@ -27,6 +27,7 @@ from gymnasium.vector.utils import batch_space
 from . import _numba
 from ._validation import CrmgraspError
 from .batch import execute_columns
+from .geometry import Polygon
 from .quality import observe_mu_columns
 from .sensing import Error
 from .tasks import Task, make_task
@@ -53,6 +54,8 @@ class CRMGraspVectorEnv(VectorEnv):
         self._f_is_b = np.array([a.fi == 1 for a in t.actions])
         self._r = np.array([a.r for a in t.actions])
         self._bound = 2.0 * t.hand.aperture
+        d = t.discretizer
+        self._bins = tuple(np.array(th, dtype=np.float64) for th in (d.rho, d.m_a, d.m_b))
         self.single_action_space = spaces.Discrete(n_actions)
         self.action_space = batch_space(self.single_action_space, num_envs)
         b = self._bound
@@ -145,6 +148,8 @@ class CRMGraspVectorEnv(VectorEnv):
         task = self.task
         done = self._prev_done
         rows = done.nonzero()[0]  # these reset: their action is ignored
+        if _numba.AVAILABLE and isinstance(task.obj, Polygon) and not task.noise.active:
+            return self._finish(*self._step_compiled(a, done, rows), done, rows)
         with np.errstate(all="ignore"):
             new, errors = execute_columns(
                 task.obj, task.hand, self._cfg, self._sensed, self._c_is_b[a], self._f_is_b[a], self._r[a]
@@ -155,11 +160,52 @@ class CRMGraspVectorEnv(VectorEnv):
             self._cfg = new
             self._sensed = self._sense(new)
             obs, index, mu = self._observe(errors)
+        return self._finish(obs, index, mu, done, rows)
+
+    def _step_compiled(
+        self, a: np.ndarray, done: np.ndarray, rows: np.ndarray
+    ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+        """The noise-free polygon step as one compiled pass (same results as the numpy path)."""
+        n, task = self.num_envs, self.task
+        starts = np.ascontiguousarray(self._starts(len(rows))) if len(rows) else np.empty((8, 0))
+        new = np.empty((8, n))
+        obs = {
+            "rho": np.empty((n, 1)),
+            "m_a": np.empty((n, 1)),
+            "m_b": np.empty((n, 1)),
+            "error": np.empty(n, dtype=np.int64),
+        }
+        index, mu = np.empty(n, dtype=np.int64), np.empty(n)
+        hand, obj = task.hand, cast(Polygon, task.obj)  # the caller checked
+        _numba.step_rows(
+            self._cfg,
+            self._c_is_b[a],
+            self._f_is_b[a],
+            self._r[a],
+            done,
+            starts,
+            obj._edge_arrays,
+            obj.convex,
+            hand.aperture,
+            hand.palm_depth,
+            hand.palm_normal_tol,
+            self._bins,
+            task.discretizer.abs_moments,
+            self._bound,
+            (new, obs["rho"], obs["m_a"], obs["m_b"], obs["error"], index, mu),
+        )
+        self._cfg = self._sensed = new
+        return obs, index, mu
+
+    def _finish(
+        self, obs: dict[str, np.ndarray], index: np.ndarray, mu: np.ndarray, done: np.ndarray, rows: np.ndarray
+    ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        """Step counters, termination, truncation, reward and ``info``."""
         steps = self._steps
         steps += 1
         steps[rows] = 0
-        terminated = (mu <= task.mu_goal) > done  # a reset row neither terminates nor truncates
-        truncated = (steps >= task.max_steps) > terminated  # its steps are 0 < max_steps
+        terminated = (mu <= self.task.mu_goal) > done  # a reset row neither terminates nor truncates
+        truncated = (steps >= self.task.max_steps) > terminated  # its steps are 0 < max_steps
         reward = done - 1.0  # 0 on a reset row, -1 per CRM
         self._prev_done = terminated | truncated
         return obs, reward, terminated, truncated, self._info(index, mu)
