@@ -166,8 +166,19 @@ def test_corner_filters_agree_across_backends(task):
     assert a.shape == b.shape and np.array_equal(a, b)
 
 
+@pytest.mark.parametrize("n", [3, 4, 8, 9, 12, 13, 20])
+def test_every_code_width_gives_the_scalar_edge(n):
+    """Byte codes (up to 8 edges), 16-bit codes (up to 12) and the argmax path (beyond)."""
+    poly = regular_polygon(n, 0.1, rotation=0.3)
+    ox, oy, dx, dy, _ = _rays(poly, np.random.default_rng(n), 2000)
+    idx = poly._columns.entry_edge(ox, oy, dx, dy)
+    want = [convex_edge(*map(float, v), poly.edges) for v in zip(ox, oy, dx, dy)]
+    assert idx.tolist() == [i if i >= 0 else n for i in want]
+    assert 0.5 < np.mean(idx < n) < 0.99  # both entering and missing rays occur
+
+
 def test_regular_polygon_with_many_edges_uses_the_argmax_path():
     poly = regular_polygon(20, 0.1)
     cc = ConvexColumns(poly.edges)
     assert cc.table is None and poly._columns.table is None
-    assert ConvexColumns(regular_polygon(10, 0.1).edges).table_dtype == np.uint16
+    assert len(ConvexColumns(regular_polygon(10, 0.1).edges).table) == 1 << 10

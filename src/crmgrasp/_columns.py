@@ -10,7 +10,9 @@ scalar path bit for bit because both evaluate the same expressions:
   skipped (``x * 1 == x``, ``x * -1 == -x`` and adding ``+-0`` never change a
   comparison with ``EPS``), e.g. two operations per edge of an axis-aligned box;
 - *first entry*: the vertices' sides of the line decide the entry edge
-  (:func:`crmgrasp._scalar.convex_entry`); one table look-up replaces the loop;
+  (:func:`crmgrasp._scalar.convex_entry`); a bit code of the strict sides and one
+  table look-up replace the loop over edges, and the rare rows with a vertex
+  within ``LINE_TOL`` of the line take the scalar rule;
 - *the CRM*: selections by the contact labels are made on ``(4, N)`` blocks, and
   the feasibility test works on the stationary and the moved contact directly
   (``b - a`` is ``+-(moved - stationary)``, and a product with ``+-1`` is exact).
@@ -82,7 +84,6 @@ class ConvexColumns:
         self.ax, self.ay = np.array([e[0] for e in edges] + pad), np.array([e[1] for e in edges] + pad)
         self.nx, self.ny = np.array([e[5] for e in edges] + pad), np.array([e[6] for e in edges] + pad)
         self.table = _transition_table(self.n) if self.n <= _TABLE_MAX else None
-        self.table_dtype: type[np.unsignedinteger] = np.uint8 if self.n <= 8 else np.uint16
 
     def contains(self, x: F64, y: F64) -> Bools:
         """Strictly inside: ``(x - a_i) . n_i > EPS`` for every edge ``i`` (NaN is outside)."""
@@ -112,10 +113,13 @@ class ConvexColumns:
             left = np.stack([c > 0.0 for c in cross])
             hits = left & ~np.roll(left, -1, axis=0)
             idx = np.where(hits.any(axis=0), hits.argmax(axis=0), self.n)
-        else:
-            code: NDArray[np.integer] = (cross[0] > 0.0).astype(self.table_dtype)
+        else:  # bit j of the code: vertex j is left (bytes are views of the booleans up to 8 edges)
+            wide = self.n > 8
+            code: NDArray[np.integer] = (cross[0] > 0.0).astype(np.uint16) if wide else (cross[0] > 0.0).view(np.uint8)
             for j in range(1, self.n):
-                bit: NDArray[np.integer] = (cross[j] > 0.0).astype(self.table_dtype)
+                bit: NDArray[np.integer] = (
+                    (cross[j] > 0.0).astype(np.uint16) if wide else (cross[j] > 0.0).view(np.uint8)
+                )
                 code |= bit << j
             idx = self.table.take(code)
         if near.any():
