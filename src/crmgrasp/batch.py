@@ -108,7 +108,8 @@ def execute_columns(
     trusted callers such as the vector environment. Returns the new ``(8, N)``
     block and the error codes. Call inside ``np.errstate(all="ignore")``.
 
-    Polygons use the compiled kernel when numba is installed (same results)."""
+    Polygons use the compiled kernel when numba is installed, convex ones otherwise
+    :func:`crmgrasp._columns.execute_convex` (same results)."""
     if _numba.AVAILABLE and isinstance(obj, Polygon):
         new = np.empty_like(cfg)
         errors = np.empty(cfg.shape[1], dtype=np.int8)
