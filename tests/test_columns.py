@@ -182,3 +182,13 @@ def test_regular_polygon_with_many_edges_uses_the_argmax_path():
     cc = ConvexColumns(poly.edges)
     assert cc.table is None and poly._columns.table is None
     assert len(ConvexColumns(regular_polygon(10, 0.1).edges).table) == 1 << 10
+
+
+def test_tasks_stay_picklable_after_the_column_constants_are_built(task):
+    import pickle
+
+    with np.errstate(all="ignore"):
+        task.obj.contains_xy(np.zeros(3), np.zeros(3))
+    again = pickle.loads(pickle.dumps(task))
+    assert again.obj == task.obj
+    assert again.obj.contains_xy(np.array([0.0, 1.0]), np.array([0.0, 0.0])).tolist() == [True, False]

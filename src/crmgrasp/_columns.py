@@ -25,6 +25,7 @@ ay, anx, any, bx, by, bnx, bny``) and are called inside
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
@@ -41,17 +42,46 @@ Contacts = F64 | tuple[F64, F64, F64, F64]  # rows x, y, nx, ny
 _TABLE_MAX = 12  # a look-up table of 2**E entries up to this many edges, argmax beyond
 
 
+def _x_minus(ax: float, x: F64, y: F64) -> F64:
+    return x - ax
+
+
+def _minus_x(ax: float, x: F64, y: F64) -> F64:
+    return ax - x
+
+
+def _y_minus(ay: float, x: F64, y: F64) -> F64:
+    return y - ay
+
+
+def _minus_y(ay: float, x: F64, y: F64) -> F64:
+    return ay - y
+
+
+def _x_scaled(ax: float, nx: float, x: F64, y: F64) -> F64:
+    return (x - ax) * nx
+
+
+def _y_scaled(ay: float, ny: float, x: F64, y: F64) -> F64:
+    return (y - ay) * ny
+
+
+def _general(ax: float, ay: float, nx: float, ny: float, x: F64, y: F64) -> F64:
+    return (x - ax) * nx + (y - ay) * ny
+
+
 def _side(ax: float, ay: float, nx: float, ny: float) -> Callable[[F64, F64], F64]:
-    """``(x, y) -> (x - a) . n`` with zero and unit factors dropped (same comparisons with ``EPS``)."""
+    """``(x, y) -> (x - a) . n`` with zero and unit factors dropped (same comparisons
+    with ``EPS``); partials of module functions, so polygons stay picklable."""
     if ny == 0.0 and nx in (1.0, -1.0):
-        return (lambda x, y: x - ax) if nx == 1.0 else (lambda x, y: ax - x)
+        return partial(_x_minus if nx == 1.0 else _minus_x, ax)
     if nx == 0.0 and ny in (1.0, -1.0):
-        return (lambda x, y: y - ay) if ny == 1.0 else (lambda x, y: ay - y)
+        return partial(_y_minus if ny == 1.0 else _minus_y, ay)
     if ny == 0.0:
-        return lambda x, y: (x - ax) * nx
+        return partial(_x_scaled, ax, nx)
     if nx == 0.0:
-        return lambda x, y: (y - ay) * ny
-    return lambda x, y: (x - ax) * nx + (y - ay) * ny
+        return partial(_y_scaled, ay, ny)
+    return partial(_general, ax, ay, nx, ny)
 
 
 def _transition_table(n: int) -> NDArray[np.intp]:
