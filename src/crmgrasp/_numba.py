@@ -17,6 +17,10 @@ import os
 
 import numpy as np
 
+# The scalar path's tolerances; numba freezes them into the compiled (and cached)
+# code, so clear ``__pycache__`` after changing one.
+from ._scalar import ANTIPODAL_TOL, EPS, LINE_TOL, S_TOL
+
 try:  # pragma: no cover - depends on the optional extra
     if os.environ.get("CRMGRASP_NUMBA", "1") == "0":
         raise ImportError("disabled by CRMGRASP_NUMBA=0")
@@ -34,11 +38,6 @@ except ImportError:  # pragma: no cover - depends on the optional extra
 
         return wrap
 
-
-EPS = 1e-9
-S_TOL = 1e-12
-ANTIPODAL_TOL = 1e-12
-LINE_TOL = 1e-12
 
 __all__ = ["AVAILABLE", "execute_rows", "corner_candidates", "observe_rows", "step_rows"]
 

@@ -181,14 +181,18 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
         "ci95": [float(steps.mean()) - half, float(steps.mean()) + half],
         "success_rate": float(success.mean()),
     }
-    if args.json:
-        print(json.dumps(result, indent=2))
-    else:
-        print(
-            f"{args.policy} on {task.name}: {result['mean_steps']:.3f} CRMs per episode "
-            f"(95% CI {result['ci95'][0]:.3f}-{result['ci95'][1]:.3f}), success {result['success_rate']:.1%} "
-            f"over {args.episodes} episodes"
-        )
+    return _print_result(
+        args,
+        result,
+        f"{args.policy} on {task.name}: {result['mean_steps']:.3f} CRMs per episode "
+        f"(95% CI {result['ci95'][0]:.3f}-{result['ci95'][1]:.3f}), success {result['success_rate']:.1%} "
+        f"over {args.episodes} episodes",
+    )
+
+
+def _print_result(args: argparse.Namespace, result: dict[str, Any], text: str) -> int:
+    """Print ``result`` as JSON with ``--json``, else the one-line ``text``; exit code 0."""
+    print(json.dumps(result, indent=2) if args.json else text)
     return 0
 
 
@@ -206,14 +210,12 @@ def _cmd_references(args: argparse.Namespace) -> int:
         "belief_optimum": belief,
         "aliasing_price": belief - clair,
     }
-    if args.json:
-        print(json.dumps(res, indent=2))
-    else:
-        print(
-            f"{task.name}, {args.starts} starts (seed {args.seed}): clairvoyant bound {clair:.4f} CRMs, "
-            f"belief-space optimum {belief:.4f} CRMs, price of aliasing {belief - clair:.4f}"
-        )
-    return 0
+    return _print_result(
+        args,
+        res,
+        f"{task.name}, {args.starts} starts (seed {args.seed}): clairvoyant bound {clair:.4f} CRMs, "
+        f"belief-space optimum {belief:.4f} CRMs, price of aliasing {belief - clair:.4f}",
+    )
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:

@@ -263,10 +263,11 @@ class Polygon:
         ``direction`` need not be unit length; ``u`` is in its units. Returns
         ``None`` if the segment never enters the object. On a convex polygon the
         entry edge is found from the vertices' sides of the line
-        (:func:`crmgrasp._scalar.convex_entry`: a line through a vertex enters by
-        the edge ending there; one that only touches a vertex or runs along an
-        edge does not enter); otherwise the smallest ``u`` over the edges wins and
-        ties (a ray through a vertex) go to the lower edge index.
+        (:func:`crmgrasp._scalar.convex_entry`: a line through a vertex, along an
+        edge, or passing a vertex closer than ``LINE_TOL`` enters at that vertex,
+        by the lower-index edge of those that qualify); otherwise the smallest
+        ``u`` over the edges wins and ties (a ray through a vertex) go to the lower
+        edge index.
         """
         entry = convex_entry if self.convex else first_entry
         hit = entry(origin[0], origin[1], direction[0], direction[1], u_max, self.edges)

@@ -175,7 +175,7 @@ class CRMGraspVectorEnv(VectorEnv):
     ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
         """The noise-free polygon step as one compiled pass (same results as the numpy path)."""
         n, task = self.num_envs, self.task
-        starts = np.ascontiguousarray(self._starts(len(rows))) if len(rows) else np.empty((8, 0))
+        starts = np.ascontiguousarray(self._starts(len(rows)))
         new = np.empty((8, n))
         obs = {
             "rho": np.empty((n, 1)),
