@@ -23,8 +23,8 @@ import time
 import gymnasium as gym
 import numpy as np
 
-from crmgrasp.batch import crm_arrays, execute_batch
 from crmgrasp.contacts import configs_to_array
+from crmgrasp.kernels import execute_batch
 from crmgrasp.tasks import paper_box
 
 
@@ -57,11 +57,13 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
             hand.execute(obj, cfg, crm)
 
     rows = configs_to_array(starts)[rng.integers(len(starts), size=args.batch)]
-    c, f, r = crm_arrays(task.actions)
+    c = np.array([m.ci for m in task.actions])
+    f = np.array([m.fi for m in task.actions])
+    r = np.array([m.r for m in task.actions])
     pick = rng.integers(len(task.actions), size=args.batch)
 
     def batch() -> None:
-        execute_batch(obj, hand, rows, c[pick], f[pick], r[pick])
+        execute_batch(obj, hand, rows, c[pick], f[pick], r[pick], backend="numba")
 
     env = gym.make("CartPole-v1")
     env.reset(seed=args.seed)

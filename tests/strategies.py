@@ -68,25 +68,5 @@ def assert_close_config(c1: Config, c2: Config, tol: float = 1e-9) -> None:
     np.testing.assert_allclose(np.asarray(c1).ravel(), np.asarray(c2).ravel(), atol=tol, rtol=0)
 
 
-BACKENDS = ["numpy", "numba"]
-
-
-class use_backend:  # noqa: N801 - used as a context manager
-    """Run a block with the numpy path or the compiled (numba) path of the batch kernels."""
-
-    def __init__(self, name: str) -> None:
-        import pytest
-
-        from crmgrasp import _numba
-
-        self.mod = _numba
-        if name == "numba" and not _numba.AVAILABLE:
-            pytest.skip("numba not installed (extra crmgrasp[fast])")
-        self.value = name == "numba"
-
-    def __enter__(self) -> None:
-        self.saved = self.mod.AVAILABLE
-        self.mod.AVAILABLE = self.value
-
-    def __exit__(self, *exc: object) -> None:
-        self.mod.AVAILABLE = self.saved
+BACKENDS = ["reference", "numba"]
+"""The kernel backends every equality test runs on (:func:`crmgrasp.kernels.kernel_for`)."""

@@ -103,11 +103,18 @@ def _run(env, seed, n=3000):
     return out
 
 
-def test_fused_step_equals_the_python_step(task):
-    fast = CRMGraspEnv(task)
-    slow = CRMGraspEnv(task)
-    slow._fast = None  # force sim.step
-    assert fast._fast is not None
+@pytest.mark.parametrize("noisy", [False, True])
+def test_every_backend_gives_the_same_episodes(task, noisy):
+    """The env on the compiled kernel and on the reference kernel (sim.step) agree."""
+    from dataclasses import replace
+
+    from crmgrasp import SensorNoise
+
+    if noisy:
+        task = replace(task, noise=SensorNoise(0.05, 0.002))
+    fast = CRMGraspEnv(task, backend="numba")
+    slow = CRMGraspEnv(task, backend="reference")
+    assert (fast.kernel.name, slow.kernel.name) == ("numba-polygon" + ("" if noisy else "-fused"), "reference")
     assert _run(fast, 3) == _run(slow, 3)
 
 

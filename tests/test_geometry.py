@@ -1,6 +1,5 @@
 import math
 
-import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
@@ -8,7 +7,7 @@ from hypothesis import strategies as st
 from crmgrasp import CrmgraspError, Disc, Polygon, Rectangle, regular_polygon
 from crmgrasp.geometry import EPS
 
-from .strategies import objects, star_polygons
+from .strategies import objects
 
 U_SHAPE = [(0, 0), (0.3, 0), (0.3, 0.2), (0.2, 0.2), (0.2, 0.05), (0.1, 0.05), (0.1, 0.2), (0, 0.2)]
 
@@ -121,45 +120,3 @@ def test_boundary_points_are_on_boundary_with_unit_inward_normal(obj, frac):
     near_vertex = isinstance(obj, Polygon) and min(math.dist(bp.point, v) for v in obj.vertices) < 1e-4
     if not near_vertex:  # at a vertex (convex or reflex) either side may cross the adjacent edge
         assert obj.contains(inner) and not obj.contains(outer)
-
-
-@given(objects, st.lists(st.tuples(st.floats(-0.3, 0.3), st.floats(-0.3, 0.3)), min_size=1, max_size=30))
-def test_contains_batch_matches_scalar(obj, pts):
-    expected = [obj.contains(p) for p in pts]
-    assert obj.contains_batch(np.array(pts)).tolist() == expected
-
-
-@given(
-    objects,
-    st.lists(
-        st.tuples(st.floats(-0.3, 0.3), st.floats(-0.3, 0.3), st.floats(0, 2 * math.pi), st.floats(0, 0.6)),
-        min_size=1,
-        max_size=30,
-    ),
-)
-def test_ray_entry_batch_matches_scalar_bitwise(obj, rays):
-    o = np.array([(x, y) for x, y, _, _ in rays])
-    d = np.array([(math.cos(a), math.sin(a)) for _, _, a, _ in rays])
-    umax = np.array([m for *_, m in rays])
-    u, pts, nrm = obj.ray_entry_batch(o, d, umax)
-    for i in range(len(rays)):
-        e = obj.ray_entry(tuple(map(float, o[i])), tuple(map(float, d[i])), float(umax[i]))
-        if e is None:
-            assert math.isinf(u[i])
-        else:
-            assert (e.u, *e.point, *e.normal) == (u[i], *pts[i], *nrm[i])
-
-
-@given(star_polygons(), st.floats(0, 1, exclude_max=True))
-def test_boundary_batch_matches_scalar(obj, frac):
-    s = frac * obj.perimeter
-    pts, nrm = obj.boundary_batch([s])
-    bp = obj.boundary(s)
-    assert tuple(pts[0]) == pytest.approx(bp.point) and tuple(nrm[0]) == bp.normal
-
-
-def test_batch_input_validation():
-    with pytest.raises(CrmgraspError, match=r"shape \(N, 2\)"):
-        Rectangle(0.3, 0.1).contains_batch(np.zeros((3, 3)))
-    with pytest.raises(CrmgraspError, match="finite"):
-        Disc(0.1).contains_batch([[np.nan, 0.0]])

@@ -10,7 +10,7 @@ from crmgrasp import SensorNoise, make_task
 from crmgrasp.agents.lockstep import train_trials_lockstep
 from crmgrasp.agents.training import train_trials
 
-from .strategies import BACKENDS, use_backend
+from .strategies import BACKENDS
 
 
 @pytest.mark.parametrize(
@@ -34,8 +34,7 @@ def test_lockstep_equals_sequential(agent, params, k, noisy, backend):
         task = dataclasses.replace(task, noise=SensorNoise(math.radians(3), 0.002), hand=hand)
     kw = dict(trials=6, episodes=60, seed=11, k=k, eval_episodes=30, params=params, checkpoints=(5, 20, 60))
     a = train_trials(task, agent, **kw)
-    with use_backend(backend):
-        b = train_trials_lockstep(task, agent, **kw)
+    b = train_trials_lockstep(task, agent, **kw, backend=backend)
     np.testing.assert_array_equal(a.steps, b.steps)
     np.testing.assert_array_equal(a.success, b.success)
     np.testing.assert_array_equal(a.greedy_steps, b.greedy_steps)

@@ -11,7 +11,7 @@ from crmgrasp.hand import execute_crm, feasible
 from crmgrasp.sensing import Error
 from crmgrasp.vector import CRMGraspVectorEnv
 
-from .strategies import BACKENDS, use_backend
+from .strategies import BACKENDS
 
 
 def test_make_vec_and_spaces():
@@ -57,12 +57,7 @@ def test_starts_are_valid_paper_box_starts(task):
 
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_step_matches_the_scalar_simulator(task, backend):
-    with use_backend(backend):
-        _step_matches(task)
-
-
-def _step_matches(task):
-    env = CRMGraspVectorEnv(64)
+    env = CRMGraspVectorEnv(64, backend=backend)
     _, info = env.reset(seed=2)
     before = info["config"].copy()
     actions = np.random.default_rng(0).integers(4, size=64)

@@ -4,9 +4,9 @@ from ._validation import CrmgraspError
 from .contacts import Config, Contact
 from .env import CRMGraspEnv, KOrderHistory  # registers crmgrasp/PaperBox-v0
 from .geometry import Disc, Polygon, Rectangle, regular_polygon
-from .hand import CRM, Hand, Outcome
+from .hand import CRM, Error, Hand, Outcome
 from .quality import force_closure, is_force_closure, min_friction
-from .sensing import Discretizer, Error, Observation, SensorNoise, observe
+from .sensing import Discretizer, Observation, SensorNoise, observe
 from .tasks import Task, make_task, paper_box, register_task
 
 __version__ = "0.1.0"

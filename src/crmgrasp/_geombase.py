@@ -1,6 +1,9 @@
 """Shared geometric primitives: tolerances, result types, the Shape protocol.
 
-See :mod:`crmgrasp.geometry` for the conventions.
+See :mod:`crmgrasp.geometry` for the conventions. The tolerances below are the
+only definitions of these numbers: the compiled kernels receive them as
+arguments at every call (:mod:`crmgrasp.kernels`), so a changed value can never
+meet stale compiled code.
 """
 
 from __future__ import annotations
@@ -10,12 +13,18 @@ from typing import NamedTuple, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._validation import CrmgraspError
+__all__ = ["EPS", "S_TOL", "LINE_TOL", "BoundaryPoint", "Entry", "Shape"]
 
 EPS = 1e-9
-"""Boundary tolerance in metres: points closer than this to the boundary are on it."""
+"""Boundary tolerance in metres: points closer than this to the boundary are on it;
+an entry up to this far beyond the end of a segment still counts."""
 
-_S_TOL = 1e-12  # relative edge-parameter slack so a ray through a vertex hits an edge
+S_TOL = 1e-12
+"""Relative slack on the edge parameter, so that a ray through a vertex hits an edge."""
+
+LINE_TOL = 1e-12
+"""A polygon vertex closer than this (metres per unit of direction) to a line counts as
+on it, when the entry edge of a convex polygon is decided by the vertices' sides."""
 
 Array = NDArray[np.float64]
 
@@ -38,47 +47,21 @@ class Entry(NamedTuple):
 
 @runtime_checkable
 class Shape(Protocol):
-    """What the hand model needs from an object (a closed planar region)."""
+    """What the hand model needs from an object (a closed planar region).
+
+    ``contains`` and ``ray_entry`` are the model's inside test and first-entry
+    rule; every other path (the compiled kernels) is tested equal to them.
+    """
 
     @property
     def perimeter(self) -> float: ...
 
     def boundary(self, s: float) -> BoundaryPoint: ...
 
-    def boundary_batch(self, s: ArrayLike) -> tuple[Array, Array]: ...
-
     def project(self, p: ArrayLike) -> BoundaryPoint: ...
 
     def contains(self, p: ArrayLike) -> bool: ...
 
-    def contains_batch(self, p: ArrayLike) -> NDArray[np.bool_]: ...
-
     def ray_entry(self, origin: tuple[float, float], direction: tuple[float, float], u_max: float) -> Entry | None: ...
 
-    def ray_entry_batch(self, origin: Array, direction: Array, u_max: Array) -> tuple[Array, Array, Array]: ...
-
-    def contains_xy(self, x: Array, y: Array) -> NDArray[np.bool_]: ...
-
-    def ray_entry_xy(
-        self, ox: Array, oy: Array, dx: Array, dy: Array, u_max: Array
-    ) -> tuple[Array, Array, Array, Array, Array]: ...
-
     def bounds(self) -> tuple[float, float, float, float]: ...
-
-
-def _points(p: ArrayLike, name: str = "points") -> Array:
-    arr = np.asarray(p, dtype=np.float64)
-    if arr.ndim == 1:
-        arr = arr[None, :]
-    if arr.ndim != 2 or arr.shape[1] != 2:
-        raise CrmgraspError(f"{name} must have shape (N, 2), got {np.shape(p)}")
-    if not np.all(np.isfinite(arr)):
-        raise CrmgraspError(f"{name} must be finite")
-    return arr
-
-
-def _ray_entry_rows(shape: Shape, origin: Array, direction: Array, u_max: Array) -> tuple[Array, Array, Array]:
-    """``ray_entry_batch`` on ``(N, 2)`` rows via the shape's column method."""
-    with np.errstate(all="ignore"):
-        u, px, py, nx, ny = shape.ray_entry_xy(origin[:, 0], origin[:, 1], direction[:, 0], direction[:, 1], u_max)
-    return u, np.stack([px, py], axis=1), np.stack([nx, ny], axis=1)

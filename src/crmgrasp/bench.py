@@ -32,7 +32,6 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from . import _numba
 from .agents import train_trials
 from .env import ENV_ID
 from .tasks import paper_box
@@ -116,7 +115,7 @@ def run_benchmarks(
         "paperbox_vec_steps_per_s": round(vec_steps * num_envs / best["vpb"]),
         "cartpole_vec_steps_per_s": round(vec_steps * num_envs / best["vcp"]),
         "batch_peak_mb": round(peak / 2**20, 2),
-        "backend": "numba" if _numba.AVAILABLE else "numpy",
+        "kernel": pb.unwrapped.kernel.name,  # type: ignore[attr-defined]
         "rounds": rounds,
         "num_envs": num_envs,
         "python": platform.python_version(),

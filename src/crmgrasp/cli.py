@@ -22,9 +22,9 @@ from ._cli_parser import _AGENT_FLAGS, _resolve_crm, build_parser
 from ._io import save_figure
 from ._validation import CrmgraspError
 from .contacts import Config
-from .hand import CRM
+from .hand import CRM, Error
 from .quality import min_friction
-from .sensing import Error, SensorNoise, observe
+from .sensing import SensorNoise, observe
 from .tasks import Task, make_task, task_names
 
 __all__ = ["main", "build_parser"]

@@ -5,10 +5,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-from ._geombase import EPS, Array, BoundaryPoint, Entry, _points, _ray_entry_rows
+from ._geombase import EPS, BoundaryPoint, Entry
 from ._validation import CrmgraspError, as_point, finite, positive
 
 __all__ = ["Disc"]
@@ -64,13 +63,6 @@ class Disc:
         c, si = math.cos(phi), math.sin(phi)
         return BoundaryPoint((self.center[0] + self.radius * c, self.center[1] + self.radius * si), (-c, -si), s)
 
-    def boundary_batch(self, s: ArrayLike) -> tuple[Array, Array]:
-        """Vectorised :meth:`boundary`."""
-        phi = np.mod(np.asarray(s, dtype=np.float64), self.perimeter) / self.radius
-        c, si = np.cos(phi), np.sin(phi)
-        pts = np.stack([self.center[0] + self.radius * c, self.center[1] + self.radius * si], axis=1)
-        return pts, np.stack([-c, -si], axis=1)
-
     def project(self, p: ArrayLike) -> BoundaryPoint:
         """Nearest boundary point to ``p`` (undefined at the centre: raises)."""
         px, py = as_point(p, "point")
@@ -94,17 +86,6 @@ class Disc:
         vx, vy = px - self.center[0], py - self.center[1]
         return math.sqrt(vx * vx + vy * vy) < self.radius - EPS
 
-    def contains_batch(self, p: ArrayLike) -> NDArray[np.bool_]:
-        """Vectorised :meth:`contains`."""
-        pts = _points(p)
-        with np.errstate(all="ignore"):
-            return self.contains_xy(pts[:, 0], pts[:, 1])
-
-    def contains_xy(self, x: Array, y: Array) -> NDArray[np.bool_]:
-        """:meth:`contains` on coordinate columns (NaN is outside)."""
-        vx, vy = x - self.center[0], y - self.center[1]
-        return np.sqrt(vx * vx + vy * vy) < self.radius - EPS
-
     def ray_entry(self, origin: tuple[float, float], direction: tuple[float, float], u_max: float) -> Entry | None:
         """First entry of ``origin + u direction`` (``0 <= u <= u_max``) into the disc.
 
@@ -127,31 +108,3 @@ class Disc:
         nx, ny = self.center[0] - px, self.center[1] - py
         norm = math.sqrt(nx * nx + ny * ny)
         return Entry(u, (px, py), (nx / norm, ny / norm))
-
-    def ray_entry_batch(self, origin: Array, direction: Array, u_max: Array) -> tuple[Array, Array, Array]:
-        """Vectorised :meth:`ray_entry` (``inf``/NaN where there is no entry)."""
-        return _ray_entry_rows(self, origin, direction, u_max)
-
-    def ray_entry_xy(
-        self, ox: Array, oy: Array, dx: Array, dy: Array, u_max: Array
-    ) -> tuple[Array, Array, Array, Array, Array]:
-        """:meth:`ray_entry` on columns. Call inside ``np.errstate(all="ignore")``."""
-        wx, wy = ox - self.center[0], oy - self.center[1]
-        qa = dx * dx + dy * dy
-        qb = wx * dx + wy * dy
-        qc = wx * wx + wy * wy - self.radius * self.radius
-        disc = qb * qb - qa * qc
-        u = (-qb - np.sqrt(disc)) / qa
-        ok = (disc > 0.0) & (u >= -EPS) & (u <= u_max + EPS)
-        u = np.where(ok, u, np.inf)
-        px, py = ox + u * dx, oy + u * dy
-        nx, ny = self.center[0] - px, self.center[1] - py
-        norm = np.sqrt(nx * nx + ny * ny)
-        nan = np.nan
-        return (
-            u,
-            np.where(ok, px, nan),
-            np.where(ok, py, nan),
-            np.where(ok, nx / norm, nan),
-            np.where(ok, ny / norm, nan),
-        )

@@ -12,22 +12,17 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from ._scalar import Edges, Vec8, crm_step, observe_mu
 from ._validation import CrmgraspError
 from .contacts import Config, Contact
-from .geometry import Polygon
-from .hand import execute_crm
+from .hand import Error, execute_crm
 from .history import KOrderEncoder
-from .plotting import scene_figure
-from .quality import min_friction
-from .sensing import Error, observe
-from .sim import SimState, step
+from .kernels import Kernel, OneStep, kernel_for
+from .sim import SimState, episode_end
 from .tasks import Task, make_task
 
 __all__ = ["CRMGraspEnv", "KOrderHistory", "ENV_ID"]
 
 ENV_ID = "crmgrasp/PaperBox-v0"
-_empty = np.empty
 _FIRST_BLOCK, _MAX_BLOCK = 16, 1024
 
 
@@ -71,7 +66,9 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
 
     ## Arguments
     ``task``: a :class:`~crmgrasp.tasks.Task` or a registered task name;
-    ``render_mode``: ``None`` or ``"rgb_array"``.
+    ``render_mode``: ``None`` or ``"rgb_array"``; ``backend``: ``"auto"``,
+    ``"numba"`` or ``"reference"`` (:func:`crmgrasp.kernels.kernel_for`; every
+    backend gives the same episodes).
 
     ## Version History
     * v0: initial version (SPEC sections 1-7).
@@ -79,17 +76,17 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 2}  # noqa: RUF012 - Gymnasium's convention
 
-    def __init__(self, task: Task | str = "paper-box", render_mode: str | None = None) -> None:
+    def __init__(self, task: Task | str = "paper-box", render_mode: str | None = None, backend: str = "auto") -> None:
         self.task = make_task(task) if isinstance(task, str) else task
         if not isinstance(self.task, Task):
             raise CrmgraspError(f"task must be a Task or a registered name, got {task!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise CrmgraspError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         self.render_mode = render_mode
+        self.kernel: Kernel = kernel_for(self.task, backend)
         self.action_space = spaces.Discrete(len(self.task.actions))
         self._n_actions = len(self.task.actions)
-        m = 2.0 * self.task.hand.aperture
-        self._m_bound = m
+        m = self.kernel.bound
         self.observation_space = spaces.Dict(
             {
                 "rho": spaces.Box(0.0, 4.0, shape=(1,), dtype=np.float64),
@@ -100,35 +97,28 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         )
         self._state: SimState | None = None
         self._last: tuple[SimState, int] | None = None
-        self._starts: list[Vec8] = []
+        self._starts: list[tuple[float, ...]] = []
         self._next, self._block = 0, _FIRST_BLOCK
-        t = self.task
-        obj, hand = t.obj, t.hand
-        self._crm_args = [(c.ci == 1, c.fi == 1, c.r) for c in t.actions]
-        # Noise-free polygon tasks take the fused path: the true configuration as a flat
-        # 8-tuple ``self._v`` and its ``(rho, m_a, m_b, min_friction)`` in ``self._now``.
-        self._fast: tuple[Edges, bool, float, float, float] | None = None
-        if isinstance(obj, Polygon) and not t.noise.active:
-            self._fast = (obj.edges, obj.convex, hand.aperture, hand.palm_depth, hand.palm_normal_tol)
-        self._v: Vec8 = (0.0,) * 8  # type: ignore[assignment]
-        self._now = (0.0, 0.0, 0.0, 0.0)
-        self._mu_goal, self._max_steps, self._index_of = t.mu_goal, t.max_steps, t.discretizer.index_of
 
-    def _obs(self, rho: float, m_a: float, m_b: float, error: Error | int) -> dict[str, Any]:
-        b = self._m_bound
+    def _emit(self, res: OneStep) -> tuple[dict[str, Any], dict[str, Any]]:
+        """The observation (clipped into the space) and ``info`` of a kernel's result."""
+        self._state = res.state
+        b = self.kernel.bound
+        rho, m_a, m_b = res.rho, res.m_a, res.m_b
         if not (0.0 <= rho <= 4.0):
             rho = 0.0 if rho < 0.0 else 4.0
         if not (-b <= m_a <= b):
             m_a = -b if m_a < -b else b
         if not (-b <= m_b <= b):
             m_b = -b if m_b < -b else b
-        r, a, c = _empty(1), _empty(1), _empty(1)
-        r[0], a[0], c[0] = rho, m_a, m_b
-        return {"rho": r, "m_a": a, "m_b": c, "error": int(error)}
-
-    def _info(self, obs_index: int, mu: float) -> dict[str, Any]:
-        assert self._state is not None
-        return {"obs_index": obs_index, "config": self._state.config, "min_friction": mu, "steps": self._state.steps}
+        obs = {"rho": np.array([rho]), "m_a": np.array([m_a]), "m_b": np.array([m_b]), "error": res.error}
+        info = {
+            "obs_index": res.obs_index,
+            "config": res.state.config,
+            "min_friction": res.min_friction,
+            "steps": res.state.steps,
+        }
+        return obs, info
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -142,20 +132,11 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             if seed is not None:
                 self._starts, self._next, self._block = [], 0, _FIRST_BLOCK
             cfg = self._next_start()
-        if self._fast is not None:
-            self._state = SimState(cfg, cfg, 0)
-            self._v = (*cfg.a, *cfg.b)  # type: ignore[assignment]
-            self._now = rho, m_a, m_b, mu = observe_mu(self._v)
-            index = self._index_of(rho, m_a, m_b, 0)
-            return self._obs(rho, m_a, m_b, 0), self._info(index, mu)
-        sensed = self.task.noise.sense(cfg, self.np_random)
-        self._state = SimState(cfg, sensed, 0)
-        obs = observe(sensed)
-        index = self.task.discretizer.index(obs, Error.NONE)
-        return self._obs(*obs, Error.NONE), self._info(index, min_friction(cfg))
+        return self._emit(self.kernel.begin(cfg, self.np_random))
 
     def step(self, action: Any) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
-        """Execute the CRM ``task.actions[action]``."""
+        """Execute the CRM ``task.actions[action]`` (:meth:`crmgrasp.kernels.Kernel.step_one`,
+        the kernel's form of :func:`crmgrasp.sim.step`)."""
         if self._state is None:
             raise CrmgraspError("call reset() before step()")
         if type(action) is not int:
@@ -165,43 +146,17 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         if not 0 <= action < self._n_actions:
             raise CrmgraspError(f"action must be an integer in [0, {self._n_actions}), got {action!r}")
         self._last = (self._state, action)
-        if self._fast is not None:
-            return self._step_fused(action)
-        res = step(self.task, self._state, action, self.np_random)
-        self._state = res.state
-        obs = self._obs(res.observation.rho, res.observation.m_a, res.observation.m_b, res.error)
-        return obs, res.reward, res.terminated, res.truncated, self._info(res.obs_index, res.min_friction)
-
-    def _step_fused(self, action: int) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
-        """Noise-free polygon tasks: :func:`crmgrasp._scalar.crm_step` on the flat
-        configuration, the same numbers as :func:`crmgrasp.sim.step` bit for bit (the
-        tests check it); the observation is recomputed only when a contact moved."""
-        state = self._state
-        assert state is not None and self._fast is not None
-        c_b, f_b, r = self._crm_args[action]
-        code, v = crm_step(self._v, c_b, f_b, r, *self._fast)
-        config = state.config
-        if not code:
-            if c_b:
-                config = Config(config.a, Contact(v[4], v[5], v[6], v[7]))
-            else:
-                config = Config(Contact(v[0], v[1], v[2], v[3]), config.b)
-            self._v, self._now = v, observe_mu(v)
-        rho, m_a, m_b, mu = self._now
-        steps = state.steps + 1
-        self._state = SimState(config, config, steps)
-        terminated = mu <= self._mu_goal
-        truncated = steps >= self._max_steps and not terminated
-        index = self._index_of(rho, m_a, m_b, code)
-        return self._obs(rho, m_a, m_b, code), -1.0, terminated, truncated, self._info(index, mu)
+        res = self.kernel.step_one(self._state, action, self.np_random)
+        terminated, truncated = episode_end(self.task, res.min_friction, res.state.steps)
+        obs, info = self._emit(res)
+        return obs, -1.0, terminated, truncated, info
 
     def _next_start(self) -> Config:
-        """The next start, from blocks drawn by the task's vectorised sampler: 16 after
+        """The next start, from blocks drawn by the kernel's vectorised sampler: 16 after
         each seeding, doubling up to 1,024 (starts are i.i.d., so drawing them in
         blocks changes cost, not distribution; a seeded reset stays cheap)."""
         if self._next >= len(self._starts):
-            block = self.task.sample_starts(self.np_random, self._block)
-            self._starts, self._next = list(zip(*block.tolist())), 0  # type: ignore[arg-type]
+            self._starts, self._next = self.kernel.sample_starts(self.np_random, self._block).tolist(), 0
             self._block = min(2 * self._block, _MAX_BLOCK)
         v = self._starts[self._next]
         self._next += 1
@@ -212,6 +167,8 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         if self.render_mode != "rgb_array" or self._state is None:
             return None
         from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+        from .plotting import scene_figure
 
         title = f"{self.task.name}: after {self._state.steps} CRMs"
         if self._last is None:

@@ -11,9 +11,11 @@ Conventions (SPEC section 1)
 * Arclength ``s`` runs counter-clockwise from vertex 0 (polygons) or from the
   point at angle 0 (discs), in ``[0, perimeter)``.
 
-Every operation has a scalar path on plain Python floats (readable, and fast for a
-single call) and a ``*_batch`` path over NumPy arrays. The two compute the same
-expressions in the same order, so they agree bit for bit.
+The inside test and the first-entry rule are defined here once, on plain Python
+floats (:meth:`Polygon.contains`, :meth:`Polygon.ray_entry` and the functions of
+:mod:`crmgrasp.polygon`; :meth:`Disc.contains`, :meth:`Disc.ray_entry`). Batched
+and compiled evaluations live in :mod:`crmgrasp.kernels` and are tested equal to
+these bit for bit.
 """
 
 from __future__ import annotations
@@ -22,13 +24,15 @@ import math
 
 import numpy as np
 
-from ._geombase import EPS, BoundaryPoint, Entry, Shape
+from ._geombase import EPS, LINE_TOL, S_TOL, BoundaryPoint, Entry, Shape
 from ._validation import CrmgraspError, as_point, finite, positive
 from .disc import Disc
 from .polygon import Polygon
 
 __all__ = [
     "EPS",
+    "S_TOL",
+    "LINE_TOL",
     "BoundaryPoint",
     "Entry",
     "Shape",

@@ -32,7 +32,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from enum import IntEnum
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -40,12 +41,22 @@ from numpy.typing import ArrayLike
 from ._validation import CrmgraspError, finite, non_negative, positive
 from .contacts import Config, Contact, label_index
 from .geometry import Shape
-from .sensing import Error, SensorNoise
+
+if TYPE_CHECKING:
+    from .sensing import SensorNoise
 
 __all__ = ["Hand", "CRM", "Error", "GoalLine", "Outcome", "palm_point", "feasible", "execute_crm"]
 
 PALM_NORMAL_TOL = 1e-9
 """Slack on ``n . u <= 0`` in the palm test (unitless)."""
+
+
+class Error(IntEnum):
+    """Error flag of a CRM (paper's epsilon_0, epsilon_1, epsilon_2), observed after it."""
+
+    NONE = 0
+    APERTURE = 1
+    PALM = 2
 
 
 @dataclass(frozen=True)

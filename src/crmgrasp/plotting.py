@@ -33,7 +33,7 @@ def draw_object(ax: Axes, obj: Shape) -> None:
     elif isinstance(obj, Disc):
         ax.add_patch(Circle(obj.center, obj.radius, **style))
     else:
-        pts, _ = obj.boundary_batch(np.linspace(0.0, obj.perimeter, 400, endpoint=False))
+        pts = np.array([obj.boundary(s).point for s in np.linspace(0.0, obj.perimeter, 400, endpoint=False).tolist()])
         ax.add_patch(PolygonPatch(pts, closed=True, **style))
 
 

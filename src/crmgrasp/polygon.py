@@ -8,14 +8,16 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-from ._columns import ConvexColumns
-from ._geombase import _S_TOL, EPS, Array, BoundaryPoint, Entry, _points, _ray_entry_rows
-from ._scalar import contains, convex_entry, first_entry
+from ._geombase import EPS, LINE_TOL, S_TOL, Array, BoundaryPoint, Entry
 from ._validation import CrmgraspError, as_point, finite
 
-__all__ = ["Polygon"]
+__all__ = ["Polygon", "Edges", "inside", "first_entry", "convex_edge", "convex_entry"]
+
+Edges = tuple[tuple[float, float, float, float, float, float, float], ...]
+"""Per edge ``(ax, ay, ex, ey, l2, nx, ny)``: start, edge vector, squared length,
+inward unit normal (:attr:`Polygon.edges`)."""
 
 
 def _segments_cross(p: tuple, q: tuple, r: tuple, s: tuple) -> bool:
@@ -111,13 +113,11 @@ class Polygon:
         return all(e[i][2] * e[(i + 1) % len(e)][3] - e[i][3] * e[(i + 1) % len(e)][2] >= 0.0 for i in range(len(e)))
 
     @cached_property
-    def _columns(self) -> ConvexColumns:
-        """Whole-column constants for the convex fast paths (:mod:`crmgrasp._columns`)."""
-        return ConvexColumns(self.edges)
-
-    @cached_property
-    def _edge_arrays(self) -> Array:
-        return np.array(self.edges, dtype=np.float64)  # (E, 7)
+    def edge_array(self) -> Array:
+        """:attr:`edges` as a read-only ``(E, 7)`` float array (for the compiled kernels)."""
+        arr = np.array(self.edges, dtype=np.float64)
+        arr.flags.writeable = False
+        return arr
 
     @cached_property
     def _cumlen(self) -> tuple[float, ...]:
@@ -162,16 +162,6 @@ class Polygon:
         ax, ay, ex, ey, l2, nx, ny = self.edges[i]
         frac = (s - cum[i]) / math.sqrt(l2)
         return BoundaryPoint((ax + frac * ex, ay + frac * ey), (nx, ny), s)
-
-    def boundary_batch(self, s: ArrayLike) -> tuple[Array, Array]:
-        """Vectorised :meth:`boundary`: points ``(N, 2)`` and normals ``(N, 2)``."""
-        s = np.mod(np.asarray(s, dtype=np.float64), self.perimeter)
-        cum = np.asarray(self._cumlen)
-        i = np.minimum(np.searchsorted(cum, s, side="right") - 1, len(self.edges) - 1)
-        e = self._edge_arrays[i]
-        frac = (s - cum[i]) / np.sqrt(e[:, 4])
-        pts = np.stack([e[:, 0] + frac * e[:, 2], e[:, 1] + frac * e[:, 3]], axis=1)
-        return pts, e[:, 5:7].copy()
 
     def project(self, p: ArrayLike) -> BoundaryPoint:
         """Nearest boundary point to ``p``, with its inward normal and arclength.
@@ -224,36 +214,10 @@ class Polygon:
 
     # --------------------------------------------------------------- inside
     def contains(self, p: ArrayLike) -> bool:
-        """True if ``p`` is strictly inside (farther than :data:`EPS` from the boundary).
-
-        Convex polygons test the signed distance to every edge's line; others count
-        crossings of a ray toward +x and then check the distance to the boundary.
-        """
+        """True if ``p`` is strictly inside (farther than :data:`EPS` from the boundary):
+        :func:`inside` on this polygon's edges."""
         px, py = (p[0], p[1]) if isinstance(p, tuple) else as_point(p, "point")
-        return contains(px, py, self.edges, self.convex)
-
-    def contains_batch(self, p: ArrayLike) -> NDArray[np.bool_]:
-        """Vectorised :meth:`contains` over points of shape ``(N, 2)``."""
-        pts = _points(p)
-        with np.errstate(all="ignore"):
-            return self.contains_xy(pts[:, 0], pts[:, 1])
-
-    def contains_xy(self, x: Array, y: Array) -> NDArray[np.bool_]:
-        """:meth:`contains` on coordinate columns (no validation; NaN is outside).
-        Call inside ``np.errstate(all="ignore")``."""
-        if self.convex:  # one whole-column pass per edge (a short-axis reduction is slower)
-            return self._columns.contains(np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64))
-        px, py = x[:, None], y[:, None]
-        e = self._edge_arrays
-        eax, eay, eex, eey, el2 = e[:, 0], e[:, 1], e[:, 2], e[:, 3], e[:, 4]
-        by = eay + eey
-        straddle = (eay > py) != (by > py)
-        xint = eax + (py - eay) * eex / eey
-        inside = (np.count_nonzero(straddle & (px < xint), axis=1) % 2) == 1
-        t = np.minimum(1.0, np.maximum(0.0, ((px - eax) * eex + (py - eay) * eey) / el2))
-        dx, dy = eax + t * eex - px, eay + t * eey - py
-        near = np.any(dx * dx + dy * dy <= EPS * EPS, axis=1)
-        return inside & ~near
+        return inside(px, py, self.edges, self.convex)
 
     # ------------------------------------------------------------ ray entry
     def ray_entry(self, origin: tuple[float, float], direction: tuple[float, float], u_max: float) -> Entry | None:
@@ -261,51 +225,16 @@ class Polygon:
         crosses the boundary from outside to inside (``direction . n > 0``).
 
         ``direction`` need not be unit length; ``u`` is in its units. Returns
-        ``None`` if the segment never enters the object. On a convex polygon the
-        entry edge is found from the vertices' sides of the line
-        (:func:`crmgrasp._scalar.convex_entry`: a line through a vertex, along an
-        edge, or passing a vertex closer than ``LINE_TOL`` enters at that vertex,
-        by the lower-index edge of those that qualify); otherwise the smallest
-        ``u`` over the edges wins and ties (a ray through a vertex) go to the lower
-        edge index.
+        ``None`` if the segment never enters the object. A convex polygon uses
+        :func:`convex_entry` (the entry edge from the vertices' sides of the line: a
+        line through a vertex, along an edge, or passing a vertex closer than
+        :data:`LINE_TOL` enters at that vertex, by the lower-index edge of those that
+        qualify); any other polygon :func:`first_entry` (the smallest ``u`` over the
+        edges; ties, a ray through a vertex, go to the lower edge index).
         """
         entry = convex_entry if self.convex else first_entry
         hit = entry(origin[0], origin[1], direction[0], direction[1], u_max, self.edges)
         return None if hit is None else Entry(hit[0], (hit[1], hit[2]), (hit[3], hit[4]))
-
-    def ray_entry_batch(self, origin: Array, direction: Array, u_max: Array) -> tuple[Array, Array, Array]:
-        """Vectorised :meth:`ray_entry` over ``N`` segments.
-
-        Returns ``u`` of shape ``(N,)`` (``inf`` where the segment never enters),
-        entry points ``(N, 2)`` and inward normals ``(N, 2)`` (NaN where none).
-        """
-        return _ray_entry_rows(self, origin, direction, u_max)
-
-    def ray_entry_xy(
-        self, ox: Array, oy: Array, dx: Array, dy: Array, u_max: Array
-    ) -> tuple[Array, Array, Array, Array, Array]:
-        """:meth:`ray_entry` on columns: ``u`` (``inf`` if none), entry ``x``, ``y`` and
-        normal ``nx``, ``ny`` (NaN if none). Call inside ``np.errstate(all="ignore")``."""
-        if self.convex:
-            out = np.empty((4, len(ox)))
-            ok, u = self._columns.entry(ox, oy, dx, dy, u_max + EPS, out)
-            hx, hy, hnx, hny = (np.where(ok, row, np.nan) for row in out)
-            return np.where(ok, u, np.inf), hx, hy, hnx, hny
-        u_best = np.full(len(ox), np.inf)
-        bnx, bny = np.full(len(ox), np.nan), np.full(len(ox), np.nan)
-        hi = u_max + EPS
-        for ax, ay, ex, ey, l2, nx, ny in self.edges:  # running minimum; ties keep the earlier edge
-            denom = dx * nx + dy * ny
-            u = ((ax - ox) * nx + (ay - oy) * ny) / denom
-            s = (((ox + u * dx) - ax) * ex + ((oy + u * dy) - ay) * ey) / l2
-            better = (denom > 0.0) & (u >= -EPS) & (u <= hi) & (s >= -_S_TOL) & (s <= 1.0 + _S_TOL) & (u < u_best)
-            u_best = np.where(better, u, u_best)
-            bnx = np.where(better, nx, bnx)
-            bny = np.where(better, ny, bny)
-        hit = u_best != np.inf
-        px = np.where(hit, ox + u_best * dx, np.nan)
-        py = np.where(hit, oy + u_best * dy, np.nan)
-        return u_best, px, py, bnx, bny
 
 
 def _check_simple(pts: list[tuple[float, float]]) -> None:
@@ -325,3 +254,107 @@ def _check_simple(pts: list[tuple[float, float]]) -> None:
                 continue
             if _segments_cross(p, q, pts[j], pts[(j + 1) % n]):
                 raise CrmgraspError(f"polygon is not simple: edges {i} and {j} intersect")
+
+
+# ------------------------------------------------------------------ the rules
+# Plain functions of a polygon's edge tuples: the readable definition of the inside
+# test and of first entry. The compiled kernels (crmgrasp.kernels) implement the
+# same expressions in the same order and are tested equal to these bit for bit.
+
+
+def inside(px: float, py: float, edges: Edges, convex: bool) -> bool:
+    """Strictly inside (farther than ``EPS`` from the boundary).
+
+    Convex polygons: ``(p - a_i) . n_i > EPS`` for every edge ``i``. Others: an odd
+    number of edges cross the ray from ``p`` toward +x, and no edge is within
+    ``EPS`` of ``p``.
+    """
+    if convex:
+        for ax, ay, _, _, _, nx, ny in edges:
+            if (px - ax) * nx + (py - ay) * ny <= EPS:
+                return False
+        return True
+    odd = False
+    for ax, ay, ex, ey, _, _, _ in edges:
+        if (ay > py) != (ay + ey > py) and px < ax + (py - ay) * ex / ey:
+            odd = not odd
+    if not odd:
+        return False
+    for ax, ay, ex, ey, l2, _, _ in edges:
+        t = min(1.0, max(0.0, ((px - ax) * ex + (py - ay) * ey) / l2))
+        dx, dy = ax + t * ex - px, ay + t * ey - py
+        if dx * dx + dy * dy <= EPS * EPS:
+            return False
+    return True
+
+
+def first_entry(
+    ox: float, oy: float, dx: float, dy: float, u_max: float, edges: Edges
+) -> tuple[float, float, float, float, float] | None:
+    """First entry ``(u, x, y, nx, ny)`` of the segment ``o + u d``, ``0 <= u <= u_max``
+    (``EPS`` slack), through an edge it crosses inward (``d . n > 0``) within the edge
+    (``S_TOL`` slack); ties go to the lower edge index; ``None`` if it never enters."""
+    hi = u_max + EPS
+    best: tuple[float, float, float, float, float] | None = None
+    for ax, ay, ex, ey, l2, enx, eny in edges:
+        denom = dx * enx + dy * eny
+        if denom <= 0.0:
+            continue
+        u = ((ax - ox) * enx + (ay - oy) * eny) / denom
+        if u < -EPS or u > hi:
+            continue
+        qx, qy = ox + u * dx, oy + u * dy
+        s = ((qx - ax) * ex + (qy - ay) * ey) / l2
+        if s < -S_TOL or s > 1.0 + S_TOL:
+            continue
+        if best is None or u < best[0]:
+            best = (u, qx, qy, enx, eny)
+    return best
+
+
+def convex_edge(ox: float, oy: float, dx: float, dy: float, edges: Edges) -> int:
+    """The edge through which the line ``o + u d`` enters a convex polygon, or -1.
+
+    Vertex ``j``'s side of the line is the sign of ``c_j = d x (v_j - o) = dx (v_jy -
+    oy) - dy (v_jx - ox)``: left (``c_j > tol``), right (``c_j < -tol``) or on the
+    line, with ``tol = LINE_TOL (|dx| + |dy|)``. Edge ``i`` (vertex ``i`` to ``i +
+    1``) is crossed inward when its start is not on the right, its end not on the
+    left, and not both are on the line; the first such edge is returned. A line
+    through a vertex, or along an edge, or missing a corner by less than
+    ``LINE_TOL``, thus enters at that vertex, as :func:`first_entry`'s slack does.
+    """
+    tol = LINE_TOL * (abs(dx) + abs(dy))
+    ntol = -tol
+    first = prev = 0.0
+    i = -1
+    for vx, vy, _, _, _, _, _ in edges:
+        c = dx * (vy - oy) - dy * (vx - ox)
+        if i < 0:
+            first = c
+        elif prev >= ntol and c <= tol and (prev > tol or c < ntol):  # start not right, end not left, not both on
+            return i
+        prev = c
+        i += 1
+    if prev >= ntol and first <= tol and (prev > tol or first < ntol):
+        return i
+    return -1
+
+
+def convex_entry(
+    ox: float, oy: float, dx: float, dy: float, u_max: float, edges: Edges
+) -> tuple[float, float, float, float, float] | None:
+    """:func:`first_entry` for a convex polygon: the entry edge from the vertices'
+    sides of the line (:func:`convex_edge`), then ``u = ((a_i - o) . n_i) / (d . n_i)``,
+    accepted when ``d . n_i > 0`` and ``-EPS <= u <= u_max + EPS``. Away from
+    vertices this is :func:`first_entry`'s edge and ``u``, bit for bit."""
+    i = convex_edge(ox, oy, dx, dy, edges)
+    if i < 0:
+        return None
+    ax, ay, _, _, _, enx, eny = edges[i]
+    denom = dx * enx + dy * eny
+    if not denom > 0.0:
+        return None
+    u = ((ax - ox) * enx + (ay - oy) * eny) / denom
+    if not (u >= -EPS and u <= u_max + EPS):
+        return None
+    return (u, ox + u * dx, oy + u * dy, enx, eny)

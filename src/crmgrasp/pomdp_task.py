@@ -24,10 +24,10 @@ from scipy import sparse
 from ._validation import CrmgraspError
 from .contacts import Config, Contact
 from .geometry import Polygon
-from .hand import execute_crm, feasible
+from .hand import Error, execute_crm, feasible
 from .pomdp import POMDP, PBVIPolicy, belief_update, collect_beliefs, solve_pbvi
 from .quality import min_friction
-from .sensing import Error, observe
+from .sensing import observe
 from .tasks import Task
 
 __all__ = ["TaskPOMDP", "build_task_pomdp", "POMDPAgent"]

@@ -28,18 +28,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import linprog
+from numpy.typing import ArrayLike
 
-from ._scalar import ANTIPODAL_TOL as _ANTIPODAL_TOL
-from ._scalar import tan_term
 from ._validation import CrmgraspError, non_negative
-from .contacts import Config, Contact
+from .contacts import Config
 
 __all__ = [
     "min_friction",
-    "min_friction_batch",
-    "observe_mu_columns",
+    "tan_term",
     "is_force_closure",
     "force_closure",
     "LP_TOL",
@@ -49,12 +45,20 @@ __all__ = [
 LP_TOL = 1e-9
 """Margin the force-closure LP's optimum must exceed (unitless, wrenches normalised)."""
 
-ANTIPODAL_TOL = _ANTIPODAL_TOL
+ANTIPODAL_TOL = 1e-12
 """``tan(theta)`` below this is rounding error of an antipodal pair and counts as 0."""
 
 
-def _tan_angle(c: Contact, ox: float, oy: float) -> float:
-    return tan_term(c.x, c.y, c.nx, c.ny, ox, oy)
+def tan_term(x: float, y: float, nx: float, ny: float, ox: float, oy: float) -> float:
+    """``tan`` of the angle between the inward normal ``n`` at ``(x, y)`` and the
+    direction ``d`` to ``(ox, oy)``: ``|n x d| / (n . d)``; ``inf`` when ``n . d <= 0``
+    (90 degrees or more), 0 below :data:`ANTIPODAL_TOL`."""
+    dx, dy = ox - x, oy - y
+    dot = nx * dx + ny * dy
+    if dot <= 0.0:
+        return math.inf
+    t = abs(nx * dy - ny * dx) / dot
+    return 0.0 if t < ANTIPODAL_TOL else t
 
 
 def min_friction(config: Config) -> float:
@@ -73,53 +77,7 @@ def min_friction(config: Config) -> float:
     inf
     """
     a, b = config
-    return max(_tan_angle(a, b.x, b.y), _tan_angle(b, a.x, a.y))
-
-
-def min_friction_batch(configs: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Vectorised :func:`min_friction` over ``(N, 8)`` configurations."""
-    with np.errstate(all="ignore"):
-        return observe_mu_columns(configs.T, configs.T)[3]
-
-
-F64 = NDArray[np.float64]
-
-
-def observe_mu_columns(cfg: F64, sen: F64) -> tuple[F64, F64, F64, F64]:
-    """``(rho, m_a, m_b)`` of the sensed block ``sen`` (:func:`crmgrasp.sensing.observe`)
-    and :func:`min_friction` of the true block ``cfg``, both ``(8, N)`` (rows ``ax, ay,
-    anx, any, bx, by, bnx, bny``), equal to the scalar functions bit for bit.
-
-    With ``d = x_b - x_a``, contact a's ``tan`` is ``|n_a x d| / (n_a . d)`` and
-    contact b's ``|n_b x d| / (-n_b . d)``; the cross products are ``|m_b|`` and
-    ``|m_a|`` of the same configuration (the same products, exactly), so when
-    ``sen is cfg`` they are shared. Snapping ``tan < 1e-12`` to 0 commutes with
-    the maximum. Call inside ``np.errstate(all="ignore")``.
-    """
-    ax, ay, anx, any_, bx, by, bnx, bny = sen
-    dx, dy = bx - ax, by - ay
-    sx, sy = anx + bnx, any_ + bny
-    m_a, m_b = dx * bny - dy * bnx, dy * anx - dx * any_  # -dx any + dy anx, the same bits
-    if sen is cfg:
-        mu = min_friction_xy(dx, dy, anx, any_, bnx, bny, (np.abs(m_b), np.abs(m_a)))
-    else:
-        ax, ay, anx, any_, bx, by, bnx, bny = cfg
-        mu = min_friction_xy(bx - ax, by - ay, anx, any_, bnx, bny)
-    return sx * sx + sy * sy, m_a, m_b, mu
-
-
-def min_friction_xy(
-    dx: F64, dy: F64, anx: F64, any_: F64, bnx: F64, bny: F64, cross: tuple[F64, F64] | None = None
-) -> F64:
-    """:func:`min_friction` on columns from ``d = x_b - x_a`` and the two normals;
-    ``cross`` optionally supplies ``(|n_a x d|, |n_b x d|)`` (``|m_b|``, ``|m_a|``).
-    Symmetric in the labels: swapping a and b (``d -> -d``) gives the same bits.
-    Call inside ``np.errstate(all="ignore")``."""
-    cross_a, cross_b = cross if cross is not None else (np.abs(anx * dy - any_ * dx), np.abs(bny * dx - bnx * dy))
-    dot_a, dot_b = anx * dx + any_ * dy, -(bnx * dx + bny * dy)
-    mu = np.maximum(cross_a / dot_a, cross_b / dot_b)
-    mu *= mu >= ANTIPODAL_TOL  # snap rounding of an antipodal pair to 0 (mu >= 0 here)
-    return np.where((dot_a > 0.0) & (dot_b > 0.0), mu, np.inf)
+    return max(tan_term(a.x, a.y, a.nx, a.ny, b.x, b.y), tan_term(b.x, b.y, b.nx, b.ny, a.x, a.y))
 
 
 def is_force_closure(config: Config, mu: float) -> bool:
@@ -146,6 +104,8 @@ def force_closure(points: ArrayLike, normals: ArrayLike, mu: float) -> bool:
     >>> force_closure([(0, 0.05), (0, -0.05)], [(0, -1), (0, 1)], 0.0)
     False
     """
+    from scipy.optimize import linprog  # heavy: imported where used
+
     p = np.asarray(points, dtype=np.float64)
     n = np.asarray(normals, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != 2 or n.shape != p.shape or len(p) == 0:

@@ -29,9 +29,9 @@ import numpy as np
 
 from ._validation import CrmgraspError
 from .contacts import Config
-from .hand import execute_crm
+from .hand import Error, execute_crm
 from .quality import min_friction
-from .sensing import Error, observe
+from .sensing import observe
 from .tasks import Task
 
 __all__ = ["clairvoyant_steps", "clairvoyant_bound", "belief_optimum", "sample_starts", "BeliefPolicy"]

@@ -24,9 +24,9 @@ from ._validation import CrmgraspError
 from .agents.policy import GreedyPolicy
 from .contact_sensing import NoContact
 from .contacts import Config
-from .hand import CRM, execute_crm
+from .hand import CRM, Error, execute_crm
 from .quality import min_friction
-from .sensing import Error, SensorNoise, observe
+from .sensing import SensorNoise, observe
 from .tasks import Task
 
 __all__ = ["HandInterface", "KinematicHand", "PolicyRunner", "RunResult"]

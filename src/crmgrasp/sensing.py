@@ -16,9 +16,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from bisect import bisect_right
 from dataclasses import dataclass, field
-from enum import IntEnum
 from typing import NamedTuple
 
 import numpy as np
@@ -26,23 +24,15 @@ from numpy.typing import NDArray
 
 from ._validation import CrmgraspError, finite, non_negative
 from .contacts import Config, Contact
+from .hand import Error
 
 __all__ = [
     "Error",
     "Observation",
     "observe",
-    "observe_batch",
     "SensorNoise",
     "Discretizer",
 ]
-
-
-class Error(IntEnum):
-    """Error flag observed after a CRM (paper's epsilon_0, epsilon_1, epsilon_2)."""
-
-    NONE = 0
-    APERTURE = 1
-    PALM = 2
 
 
 class Observation(NamedTuple):
@@ -67,14 +57,6 @@ def observe(config: Config) -> Observation:
     sx, sy = a.nx + b.nx, a.ny + b.ny
     dx, dy = b.x - a.x, b.y - a.y
     return Observation(sx * sx + sy * sy, dx * b.ny - dy * b.nx, -dx * a.ny + dy * a.nx)
-
-
-def observe_batch(configs: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Vectorised :func:`observe`: ``(N, 8)`` configurations to ``(N, 3)`` ``[rho, m_a, m_b]``."""
-    c = configs
-    sx, sy = c[:, 2] + c[:, 6], c[:, 3] + c[:, 7]
-    dx, dy = c[:, 4] - c[:, 0], c[:, 5] - c[:, 1]
-    return np.stack([sx * sx + sy * sy, dx * c[:, 7] - dy * c[:, 6], -dx * c[:, 3] + dy * c[:, 2]], axis=1)
 
 
 @dataclass(frozen=True)
@@ -119,19 +101,16 @@ class SensorNoise:
         )
 
     def sense_batch(self, configs: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.float64]:
-        """Vectorised :meth:`sense` over ``(N, 8)`` configurations (same draws, same order)."""
+        """:meth:`sense` of each row of ``(N, 8)`` configurations: one
+        ``standard_normal((N, 6))`` draw (the stream of ``N`` scalar readings), each row
+        perturbed by the scalar rule. Returns ``configs`` itself when inactive."""
         if not self.active:
             return configs
-        z = rng.standard_normal((len(configs), 6))
+        z = rng.standard_normal((len(configs), 6)).tolist()
         out = np.empty_like(configs)
-        for k, zk in ((0, 0), (4, 3)):
-            ang = self.sigma_n * z[:, zk]
-            co, si = np.cos(ang), np.sin(ang)
-            nx, ny = configs[:, k + 2], configs[:, k + 3]
-            out[:, k] = configs[:, k] + self.sigma_p * z[:, zk + 1]
-            out[:, k + 1] = configs[:, k + 1] + self.sigma_p * z[:, zk + 2]
-            out[:, k + 2] = co * nx - si * ny
-            out[:, k + 3] = si * nx + co * ny
+        for i, (row, zi) in enumerate(zip(configs.tolist(), z)):
+            out[i, :4] = self._perturb(Contact(*row[:4]), zi[0], zi[1], zi[2])
+            out[i, 4:] = self._perturb(Contact(*row[4:]), zi[3], zi[4], zi[5])
         return out
 
 
@@ -172,13 +151,11 @@ class Discretizer:
     m_b: tuple[float, ...] = (0.10,)
     abs_moments: bool = True
     _sizes: tuple[int, int, int] = field(init=False, repr=False, compare=False)
-    _codes: NDArray[np.int64] = field(init=False, repr=False, compare=False)  # bin code -> index of error none
 
     def __post_init__(self) -> None:
         for name in ("rho", "m_a", "m_b"):
             object.__setattr__(self, name, _thresholds(getattr(self, name), name))
         object.__setattr__(self, "_sizes", (len(self.rho) + 1, len(self.m_a) + 1, len(self.m_b) + 1))
-        object.__setattr__(self, "_codes", np.arange(self.size // len(Error), dtype=np.int64) * len(Error))
 
     @property
     def size(self) -> int:
@@ -187,9 +164,10 @@ class Discretizer:
         return r * a * b * len(Error)
 
     def bins(self, obs: Observation) -> tuple[int, int, int]:
-        """Bin of each of ``rho``, ``m_a``, ``m_b``."""
+        """Bin of each of ``rho``, ``m_a``, ``m_b``: the number of thresholds ``t`` with
+        ``value >= t`` (NaN is in bin 0)."""
         ma, mb = (abs(obs.m_a), abs(obs.m_b)) if self.abs_moments else (obs.m_a, obs.m_b)
-        return (bisect_right(self.rho, obs.rho), bisect_right(self.m_a, ma), bisect_right(self.m_b, mb))
+        return (_bin(obs.rho, self.rho), _bin(ma, self.m_a), _bin(mb, self.m_b))
 
     def index(self, obs: Observation, error: Error | int) -> int:
         """Integer in ``[0, size)`` for an observation and error flag."""
@@ -200,26 +178,7 @@ class Discretizer:
         if self.abs_moments:
             m_a, m_b = abs(m_a), abs(m_b)
         _, na, nb = self._sizes
-        r, a, b = bisect_right(self.rho, rho), bisect_right(self.m_a, m_a), bisect_right(self.m_b, m_b)
-        return ((r * na + a) * nb + b) * 3 + error
-
-    def index_batch(self, obs: NDArray[np.float64], error: NDArray[np.integer]) -> NDArray[np.int64]:
-        """Vectorised :meth:`index`: ``obs`` of shape ``(N, 3)``, ``error`` of shape ``(N,)``."""
-        return self.index_columns(obs[:, 0], obs[:, 1], obs[:, 2], error)
-
-    def index_columns(
-        self, rho: NDArray[np.float64], m_a: NDArray[np.float64], m_b: NDArray[np.float64], error: NDArray[np.integer]
-    ) -> NDArray[np.int64]:
-        """:meth:`index_batch` on columns: the bins' mixed-radix code (in bytes when
-        it fits), times 3 by table look-up, plus the error."""
-        if self.abs_moments:
-            m_a, m_b = np.abs(m_a), np.abs(m_b)
-        nr, na, nb = self._sizes
-        small = nr * na * nb <= 256  # the bin code fits a byte
-        code = _bins(rho, self.rho)
-        for values, thresholds, n in ((m_a, self.m_a, na), (m_b, self.m_b, nb)):
-            code = code * (np.uint8(n) if small else np.int64(n)) + _bins(values, thresholds)
-        return self._codes.take(code) + np.asarray(error)
+        return ((_bin(rho, self.rho) * na + _bin(m_a, self.m_a)) * nb + _bin(m_b, self.m_b)) * 3 + error
 
     def decode(self, index: int) -> tuple[int, int, int, Error]:
         """Inverse of :meth:`index`: ``(rho_bin, ma_bin, mb_bin, error)``."""
@@ -247,16 +206,13 @@ class Discretizer:
         return {"rho": list(self.rho), "m_a": list(self.m_a), "m_b": list(self.m_b), "abs_moments": self.abs_moments}
 
 
-def _bins(values: NDArray[np.float64], thresholds: tuple[float, ...]) -> NDArray[np.integer]:
-    """Per value, its bin: the number of thresholds ``t`` with ``value >= t``."""
-    if len(thresholds) == 1:
-        return (values >= thresholds[0]).view(np.uint8)
-    if len(thresholds) <= 3:  # a few comparisons beat searchsorted's overhead
-        out = np.zeros(len(values), dtype=np.uint8)
-        for t in thresholds:
-            out += values >= t
-        return out
-    return np.searchsorted(np.asarray(thresholds), values, side="right")
+def _bin(value: float, thresholds: tuple[float, ...]) -> int:
+    """The bin of ``value``: how many thresholds ``t`` satisfy ``value >= t``."""
+    k = 0
+    for t in thresholds:
+        if value >= t:
+            k += 1
+    return k
 
 
 def _bin_text(name: str, thresholds: tuple[float, ...], k: int) -> str:

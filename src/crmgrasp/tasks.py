@@ -11,20 +11,21 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Protocol, runtime_checkable
+from typing import Protocol, overload, runtime_checkable
 
 import numpy as np
+from numpy.typing import NDArray
 
-from ._corners import _corner_boxes, _corner_candidates, _corner_proposal
 from ._validation import CrmgraspError, non_negative
 from .contacts import Config, Contact
 from .geometry import Polygon, Rectangle, Shape
-from .hand import CRM, Hand, feasible
+from .hand import CRM, Error, Hand, feasible
 from .quality import min_friction
-from .sensing import Discretizer, Error, SensorNoise
+from .sensing import Discretizer, SensorNoise
 
 __all__ = [
     "StartSampler",
+    "StartFilter",
     "CornerStarts",
     "UniformStarts",
     "Task",
@@ -43,13 +44,95 @@ class StartSampler(Protocol):
     def __call__(self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator) -> Config: ...
 
 
-def _acceptable(obj: Shape, hand: Hand, mu_goal: float, config: Config) -> bool:
+StartFilter = Callable[[Shape, Hand, float, np.ndarray], np.ndarray]
+"""``(obj, hand, mu_goal, u) -> starts``: the accepted corner-start candidates of the
+uniforms ``u`` (``(4, m)``, see :meth:`CornerStarts.candidate`), in order, as ``(k, 8)``
+rows. :func:`accept_corner_candidates` is the reference; :mod:`crmgrasp.kernels`
+supplies a compiled one that makes the same decisions."""
+
+
+def acceptable(obj: Shape, hand: Hand, mu_goal: float, config: Config) -> bool:
+    """The start rule: feasible (SPEC section 2) and not already a grasp
+    (``min_friction > mu_goal``)."""
     return feasible(obj, hand, config) is Error.NONE and min_friction(config) > mu_goal
 
 
 def _edge_contact(obj: Polygon, edge: int, frac: float) -> Contact:
     ax, ay, ex, ey, _, nx, ny = obj.edges[edge]
     return Contact(ax + frac * ex, ay + frac * ey, nx, ny)
+
+
+def corner_candidate(obj: Polygon, u_corner: float, u_in: float, u_out: float, u_coin: float) -> Config | None:
+    """The corner-start candidate of four uniforms (``None`` on a vertex): corner
+    ``k = floor(u_corner n)``, a contact at fraction ``u_in`` along the side that ends
+    at vertex ``k``, one at ``u_out`` along the side that starts there; the first is
+    ``a`` when ``u_coin < 0.5``."""
+    if u_in == 0.0 or u_out == 0.0:  # a vertex: normal undefined
+        return None
+    n = len(obj.vertices)
+    k = int(u_corner * n)
+    first = _edge_contact(obj, (k - 1) % n, u_in)
+    second = _edge_contact(obj, k, u_out)
+    return Config(first, second) if u_coin < 0.5 else Config(second, first)
+
+
+def accept_corner_candidates(obj: Shape, hand: Hand, mu_goal: float, u: np.ndarray) -> np.ndarray:
+    """Reference :data:`StartFilter`: :func:`corner_candidate` and :func:`acceptable` per
+    column of ``u``."""
+    assert isinstance(obj, Polygon)
+    rows = []
+    for uc, ui, uo, coin in u.T.tolist():
+        cfg = corner_candidate(obj, uc, ui, uo, coin)
+        if cfg is not None and acceptable(obj, hand, mu_goal, cfg):
+            rows.append((*cfg.a, *cfg.b))
+    return np.array(rows, dtype=np.float64).reshape(len(rows), 8)
+
+
+def corner_boxes(obj: Polygon, aperture: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per corner ``k`` (vertex ``k``), the largest fractions of the incoming and the
+    outgoing side that a feasible pair can use, and the cumulative corner weights.
+
+    Two points at distances ``d_1``, ``d_2`` from a corner whose sides meet at the
+    angle ``theta`` (at most 180 degrees, convex or reflex corner) are
+    ``d^2 = d_1^2 + d_2^2 - 2 d_1 d_2 cos(theta)`` apart, at least
+    ``d_1^2`` when ``cos(theta) <= 0`` and at least ``d_1^2 sin^2(theta)`` otherwise;
+    so ``d <= A`` needs ``d_i <= A / s`` with ``s = 1`` or ``sin(theta)``, i.e. a
+    fraction ``c = min(1, A / (s L))`` of a side of length ``L`` (widened by 1e-9 for
+    rounding). Corner ``k`` is proposed with probability proportional to its box
+    area ``c_in c_out``, which keeps the accepted distribution that of the uniform
+    proposal (each accepted candidate has the same density).
+    """
+    e = obj.edges
+    nv = len(e)
+    c_in, c_out = np.ones(nv), np.ones(nv)
+    for k in range(nv):
+        ki = (k - 1) % nv
+        l_in, l_out = math.sqrt(e[ki][4]), math.sqrt(e[k][4])
+        cos = -(e[ki][2] * e[k][2] + e[ki][3] * e[k][3]) / (l_in * l_out)
+        s = 1.0 if cos <= 0.0 else abs(e[ki][2] * e[k][3] - e[ki][3] * e[k][2]) / (l_in * l_out)
+        if s > 0.0:
+            c_in[k] = min(1.0, aperture / (s * l_in) * (1.0 + 1e-9))
+            c_out[k] = min(1.0, aperture / (s * l_out) * (1.0 + 1e-9))
+    w = np.cumsum(c_in * c_out)
+    return w / w[-1], c_in, c_out
+
+
+def corner_proposal(w: np.ndarray, cum: np.ndarray, c_in: np.ndarray, c_out: np.ndarray) -> np.ndarray:
+    """Uniforms ``w`` (``(4, m)``) to candidates in :func:`corner_candidate`'s
+    parametrisation: corner ``k`` with probability ``cum[k] - cum[k - 1]``, a contact
+    uniform within ``c_in[k]`` of the corner on the incoming side and within
+    ``c_out[k]`` on the outgoing side (a draw of exactly 0, the corner itself, is
+    marked rejected), the coin unchanged."""
+    nv = len(cum)
+    k = np.zeros(w.shape[1], dtype=np.intp)  # the number of cum[j] <= w, j < nv - 1
+    for j in range(nv - 1):
+        k += w[0] >= cum[j]
+    u = np.empty_like(w)
+    u[0] = (k + 0.5) / nv
+    u[1] = np.where(w[1] == 0.0, 0.0, 1.0 - c_in.take(k) * w[1])
+    u[2] = c_out.take(k) * w[2]
+    u[3] = w[3]
+    return u
 
 
 @dataclass(frozen=True)
@@ -69,41 +152,43 @@ class CornerStarts:
     def __call__(self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator) -> Config:
         if not isinstance(obj, Polygon):
             raise CrmgraspError(f"corner starts need a polygon, got {type(obj).__name__}")
-        n = len(obj.vertices)
         for _ in range(self.max_tries):
-            u_corner, u_in, u_out, u_coin = rng.random(4).tolist()
-            if u_in == 0.0 or u_out == 0.0:  # a vertex: normal undefined
-                continue
-            k = int(u_corner * n)
-            first = _edge_contact(obj, (k - 1) % n, u_in)
-            second = _edge_contact(obj, k, u_out)
-            cfg = Config(first, second) if u_coin < 0.5 else Config(second, first)
-            if _acceptable(obj, hand, mu_goal, cfg):
+            cfg = corner_candidate(obj, *rng.random(4).tolist())
+            if cfg is not None and acceptable(obj, hand, mu_goal, cfg):
                 return cfg
         raise CrmgraspError(f"no feasible corner start found in {self.max_tries} tries")
 
-    def batch(self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator, n: int) -> np.ndarray:
-        """``n`` starts as an ``(8, n)`` column block, drawn in vectorised rounds.
+    def batch(
+        self,
+        obj: Shape,
+        hand: Hand,
+        mu_goal: float,
+        rng: np.random.Generator,
+        n: int,
+        accept: StartFilter = accept_corner_candidates,
+    ) -> np.ndarray:
+        """``n`` starts as ``(n, 8)`` rows, drawn in rounds of candidates.
 
         Same distribution as :meth:`__call__`, not the same stream: candidates come
-        from a tighter proposal (:func:`_corner_proposal`) and pass the same
-        acceptance test as a cascade, cheapest first, each on the survivors of the last.
+        from a tighter proposal (:func:`corner_proposal`) and pass :func:`acceptable`
+        through ``accept`` (the reference filter, or a compiled one making the same
+        decisions, so the stream does not depend on which).
         """
         if not isinstance(obj, Polygon):
             raise CrmgraspError(f"corner starts need a polygon, got {type(obj).__name__}")
-        cum, c_in, c_out = _corner_boxes(obj, hand.aperture)
-        out = np.empty((8, n))
+        cum, c_in, c_out = corner_boxes(obj, hand.aperture)
+        out = np.empty((n, 8))
         filled, rounds, rate = 0, 0, 0.5
         while filled < n:
             rounds += 1
             if rounds > self.max_tries:
                 raise CrmgraspError(f"no feasible corner start found in {self.max_tries} rounds")
             m = int((n - filled) / rate * 1.2) + 32
-            u = _corner_proposal(rng.random((4, m)), cum, c_in, c_out)
-            cols = _corner_candidates(obj, hand, mu_goal, u)
-            rate = max(0.02, 0.5 * rate + 0.5 * cols.shape[1] / m)
-            take = min(cols.shape[1], n - filled)
-            out[:, filled : filled + take] = cols[:, :take]
+            u = corner_proposal(rng.random((4, m)), cum, c_in, c_out)
+            got = accept(obj, hand, mu_goal, u)
+            rate = max(0.02, 0.5 * rate + 0.5 * len(got) / m)
+            take = min(len(got), n - filled)
+            out[filled : filled + take] = got[:take]
             filled += take
         return out
 
@@ -123,7 +208,7 @@ class UniformStarts:
                 continue
             pa, pb = obj.boundary(float(s[0])), obj.boundary(float(s[1]))
             cfg = Config(Contact(*pa.point, *pa.normal), Contact(*pb.point, *pb.normal))
-            if _acceptable(obj, hand, mu_goal, cfg):
+            if acceptable(obj, hand, mu_goal, cfg):
                 return cfg
         raise CrmgraspError(f"no feasible uniform start found in {self.max_tries} tries")
 
@@ -237,17 +322,28 @@ class Task:
         """A start configuration drawn from ``rng``."""
         return self.starts(self.obj, self.hand, self.mu_goal, rng)
 
-    def sample_starts(self, rng: np.random.Generator, n: int) -> np.ndarray:
-        """``n`` starts as an ``(8, n)`` column block: the sampler's vectorised
-        ``batch`` method if it has one, else ``n`` scalar draws."""
+    def sample_starts(self, rng: np.random.Generator, n: int, accept: StartFilter | None = None) -> np.ndarray:
+        """``n`` starts as ``(n, 8)`` rows: the sampler's ``batch`` method if it has one
+        (with ``accept``, a compiled start filter, when given), else ``n`` scalar draws."""
         batch = getattr(self.starts, "batch", None)
         if batch is not None:
-            return batch(self.obj, self.hand, self.mu_goal, rng, n)
-        return np.array([list(c.a) + list(c.b) for c in (self.sample_start(rng) for _ in range(n))]).reshape(n, 8).T
+            return batch(self.obj, self.hand, self.mu_goal, rng, n, *(() if accept is None else (accept,)))
+        return np.array([(*c.a, *c.b) for c in (self.sample_start(rng) for _ in range(n))]).reshape(n, 8)
+
+    @overload
+    def grasped(self, mu: float) -> bool: ...
+
+    @overload
+    def grasped(self, mu: NDArray[np.float64]) -> NDArray[np.bool_]: ...
+
+    def grasped(self, mu: float | NDArray[np.float64]) -> bool | NDArray[np.bool_]:
+        """The success rule (SPEC section 5) from a configuration's min friction:
+        ``mu <= mu_goal`` (elementwise on an array)."""
+        return mu <= self.mu_goal
 
     def is_success(self, config: Config) -> bool:
-        """SPEC section 5: ``min_friction(config) <= mu_goal``."""
-        return min_friction(config) <= self.mu_goal
+        """SPEC section 5: :meth:`grasped` of ``min_friction(config)``."""
+        return self.grasped(min_friction(config))
 
     def action_names(self) -> tuple[str, ...]:
         """``('C1 (a,b,0)', ...)``: readable action names in index order."""

@@ -28,9 +28,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..contacts import Config
-from ..hand import CRM, execute_crm
+from ..hand import CRM, Error, execute_crm
 from ..quality import min_friction
-from ..sensing import Error
 from ..tasks import Task
 
 __all__ = ["GraspController", "run_controller"]

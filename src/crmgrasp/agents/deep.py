@@ -28,7 +28,8 @@ from gymnasium import spaces
 
 from .._validation import CrmgraspError
 from ..contacts import Config
-from ..sensing import Error, observe
+from ..hand import Error
+from ..sensing import observe
 from ..sim import SimState, step
 from ..tasks import Task
 from .training import checkpoint_generators, checkpoints_to_within

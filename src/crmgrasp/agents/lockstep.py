@@ -4,19 +4,18 @@
 :func:`~crmgrasp.agents.training.train_trials` for the same arguments (the tests
 compare curves and Q tables): each trial keeps its own agent and its own three
 generators, and draws from them in the same order as the sequential loop; only
-the CRM executions of all trials that are mid-episode go through
-:func:`~crmgrasp.batch.execute_columns` together, which is bit-identical to the
-scalar path.
+the CRM executions of all trials that are mid-episode go through the task's
+kernel together (:meth:`crmgrasp.kernels.Kernel.execute` and
+:meth:`~crmgrasp.kernels.Kernel.observe`), which is bit-identical to
+:func:`crmgrasp.sim.step`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..batch import execute_columns
 from ..contacts import Config, Contact
-from ..quality import min_friction_batch
-from ..sensing import observe_batch
+from ..kernels import kernel_for
 from ..sim import reset
 from ..tasks import Task
 from .base import Agent
@@ -61,29 +60,27 @@ def train_trials_lockstep(
     params: dict[str, object] | None = None,
     checkpoints: tuple[int, ...] = (),
     checkpoint_episodes: int = 100,
+    backend: str = "auto",
 ) -> TrialResult:
     """Lockstep version of :func:`~crmgrasp.agents.training.train_trials` (same
     arguments, same results); faster when ``trials`` is large (hundreds or more)."""
     check_budget(trials, episodes, eval_episodes)
     encoder = encoder_for(task, k)
-    disc, noise = task.discretizer, task.noise
+    kernel = kernel_for(task, backend)
+    noise = task.noise
     ckpts = np.array(sorted({c for c in checkpoints if 1 <= c <= episodes}), dtype=np.int64)
     steps = np.empty((trials, episodes), dtype=np.int64)
     success = np.empty((trials, episodes), dtype=bool)
     csteps = np.empty((trials, len(ckpts)))
-    c_is_b = np.array([c.ci == 1 for c in task.actions])
-    f_is_b = np.array([c.fi == 1 for c in task.actions])
-    r = np.array([c.r for c in task.actions])
     runs = [_Trial(build_agent(task, encoder, agent, params), g) for g in trial_generators(seed, trials)]
 
-    cfg = np.zeros((8, trials))  # true configurations, one column per trial
-    sen = np.zeros((8, trials))  # their sensed readings
-    noisy = bool(noise.sigma_n or noise.sigma_p)
+    cfg = np.zeros((trials, 8))  # true configurations, one row per trial
+    sen = np.zeros((trials, 8))  # their sensed readings
 
     def begin(t: int, tr: _Trial) -> None:
         state, _, index = reset(task, tr.env_rng)
-        cfg[:, t] = (*state.config.a, *state.config.b)
-        sen[:, t] = (*state.sensed.a, *state.sensed.b)
+        cfg[t] = (*state.config.a, *state.config.b)
+        sen[t] = (*state.sensed.a, *state.sensed.b)
         tr.steps = 0
         tr.hist = encoder.start(index)
         tr.s = encoder.encode(tr.hist)
@@ -109,21 +106,18 @@ def train_trials_lockstep(
     active = np.arange(trials)
     while len(active):
         acts = np.array([runs[t].a for t in active])
-        with np.errstate(all="ignore"):
-            new, errors = execute_columns(
-                task.obj, task.hand, cfg[:, active], sen[:, active], c_is_b[acts], f_is_b[acts], r[acts]
-            )
-        cfg[:, active] = new
-        if noisy:  # one reading per trial, from the trial's own generator, in trial order
+        new, errors = kernel.execute(cfg[active], sen[active], acts)
+        cfg[active] = new
+        if noise.active:  # one reading per trial, from the trial's own generator, in trial order
             for i, t in enumerate(active.tolist()):
-                c = Config(Contact(*new[:4, i].tolist()), Contact(*new[4:, i].tolist()))
+                c = Config(Contact(*new[i, :4].tolist()), Contact(*new[i, 4:].tolist()))
                 sensed = noise.sense(c, runs[t].env_rng)
-                sen[:, t] = (*sensed.a, *sensed.b)
+                sen[t] = (*sensed.a, *sensed.b)
         else:
-            sen[:, active] = new
-        obs = observe_batch(sen[:, active].T)
-        index = disc.index_batch(obs, errors).tolist()
-        done = (min_friction_batch(new.T) <= task.mu_goal).tolist()
+            sen[active] = new
+        _, _, _, index_arr, mu = kernel.observe(new, sen[active], errors)
+        index = index_arr.tolist()
+        done = task.grasped(mu).tolist()
         still = []
         for i, t in enumerate(active.tolist()):
             tr = runs[t]

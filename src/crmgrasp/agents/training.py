@@ -17,9 +17,9 @@ import numpy as np
 
 from .._validation import CrmgraspError
 from ..contacts import Config
-from ..hand import Outcome
+from ..hand import Error, Outcome
 from ..history import KOrderEncoder
-from ..sensing import Error, Observation, observe
+from ..sensing import Observation, observe
 from ..sim import SimState, reset, step
 from ..tasks import Task
 from .base import Agent

@@ -23,10 +23,10 @@ from .._io import save_figure, write_csv, write_json
 from .._validation import CrmgraspError
 from ..contacts import Config
 from ..geometry import Polygon
-from ..hand import CRM
+from ..hand import CRM, Error
 from ..plotting import friction_histogram
 from ..quality import min_friction
-from ..sensing import Error, SensorNoise
+from ..sensing import SensorNoise
 from ..tasks import Task, make_task
 
 __all__ = ["Figure4Config", "figure_4_opposition_quality", "long_side_start"]

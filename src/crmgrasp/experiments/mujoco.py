@@ -29,14 +29,13 @@ from .._io import save_figure, write_csv, write_json
 from .._validation import CrmgraspError
 from ..contact_sensing import NoContact
 from ..contacts import Config
-from ..hand import CRM, execute_crm
+from ..hand import CRM, Error, execute_crm
 from ..physics import hardware_task
 from ..physics.hand import MujocoHand
 from ..physics.model import PhysicsParams
 from ..plotting import friction_histogram
 from ..quality import min_friction
 from ..runner import KinematicHand, PolicyRunner
-from ..sensing import Error
 from ..tasks import Task, make_task
 from ._policy import learned_policy
 from .figure4 import long_side_start, noisy_execution

@@ -40,8 +40,7 @@ import numpy as np
 from .._validation import CrmgraspError
 from ..contact_sensing import Circle, ContactDetector, NoContact, contact_from_wrench
 from ..contacts import Config, Contact
-from ..hand import CRM, goal_line
-from ..sensing import Error
+from ..hand import CRM, Error, goal_line
 from ..tasks import Task
 from . import require_mujoco
 from .model import PhysicsParams, mjcf

@@ -1,0 +1,101 @@
+"""Kernels: the one seam between the model's rules and their fast evaluation.
+
+:func:`kernel_for` is the only place that chooses a path, from the backend asked
+for, the shape of the task's object and its sensing noise:
+
+========================  ===========================  ==============================
+backend                   object                       kernel
+========================  ===========================  ==============================
+``"reference"``           any                          :class:`ReferenceKernel`
+``"auto"``                a shape without a kernel     :class:`ReferenceKernel`
+``"auto"``, ``"numba"``   polygon, sensing noise       ``PolygonKernel``
+``"auto"``, ``"numba"``   polygon, noise-free          ``FusedPolygonKernel``
+========================  ===========================  ==============================
+
+Every kernel gives the reference kernel's results bit for bit (the tests check
+each path). The compiled kernels (:mod:`crmgrasp.kernels.polygon`) import numba
+when first chosen, not when :mod:`crmgrasp` is imported.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import CrmgraspError
+from ..contacts import configs_to_array
+from ..geometry import Polygon, Shape
+from ..hand import CRM, Hand
+from ..tasks import Task
+from .base import BatchStep, Kernel, OneStep
+from .reference import ReferenceKernel
+
+__all__ = ["BACKENDS", "Backend", "kernel_for", "execute_batch", "Kernel", "OneStep", "BatchStep", "ReferenceKernel"]
+
+Backend = Literal["auto", "numba", "reference"]
+BACKENDS: tuple[str, ...] = ("auto", "numba", "reference")
+"""``"auto"``: the compiled kernel where one exists, else the reference;
+``"numba"``: the compiled kernel (an error where none exists);
+``"reference"``: the readable rules, row by row."""
+
+
+def kernel_for(task: Task, backend: str = "auto") -> Kernel:
+    """The kernel that steps ``task`` on ``backend`` (see the module docstring)."""
+    if backend not in BACKENDS:
+        raise CrmgraspError(f"unknown backend {backend!r}; choose one of {', '.join(BACKENDS)}")
+    compiled = isinstance(task.obj, Polygon)
+    if backend == "reference" or (backend == "auto" and not compiled):
+        return ReferenceKernel(task)
+    if not compiled:
+        raise CrmgraspError(f"no compiled kernel for a {type(task.obj).__name__}; use backend 'auto' or 'reference'")
+    from .polygon import FusedPolygonKernel, PolygonKernel
+
+    return PolygonKernel(task) if task.noise.active else FusedPolygonKernel(task)
+
+
+def _rows(configs: ArrayLike, name: str) -> NDArray[np.float64]:
+    if isinstance(configs, (list, tuple)) and configs and hasattr(configs[0], "a"):
+        arr = configs_to_array(list(configs))  # type: ignore[arg-type]
+    else:
+        arr = np.asarray(configs, dtype=np.float64)
+    if arr.ndim != 2 or arr.shape[1] != 8:
+        raise CrmgraspError(f"{name} must have shape (N, 8), got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise CrmgraspError(f"{name} must be finite")
+    return arr
+
+
+def execute_batch(
+    obj: Shape,
+    hand: Hand,
+    configs: ArrayLike,
+    c: ArrayLike,
+    f: ArrayLike,
+    r: ArrayLike,
+    sensed: ArrayLike | None = None,
+    *,
+    backend: str = "auto",
+) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
+    """Execute one CRM per row: new configurations ``(N, 8)`` and error codes ``(N,)``.
+
+    ``c`` and ``f`` are contact indices (0 = a, 1 = b) and ``r`` offsets in metres,
+    per row or broadcast; ``sensed`` (same layout as ``configs``) supplies the goal
+    lines' frames and defaults to ``configs``. Rows whose CRM fails keep their
+    configuration (:func:`crmgrasp.hand.execute_crm`).
+    """
+    cfg = _rows(configs, "configs")
+    sen = cfg if sensed is None else _rows(sensed, "sensed configs")
+    if sen.shape != cfg.shape:
+        raise CrmgraspError(f"sensed configs must have shape {cfg.shape}, got {sen.shape}")
+    n = len(cfg)
+    ci = np.broadcast_to(np.asarray(c, dtype=np.int64), (n,))
+    fi = np.broadcast_to(np.asarray(f, dtype=np.int64), (n,))
+    rr = np.broadcast_to(np.asarray(r, dtype=np.float64), (n,))
+    if np.any((ci < 0) | (ci > 1) | (fi < 0) | (fi > 1)):
+        raise CrmgraspError("contact indices c and f must be 0 (a) or 1 (b)")
+    if not np.all(np.isfinite(rr)) or np.any(np.abs(rr) > hand.r_max):  # type: ignore[operator]
+        raise CrmgraspError(f"CRM offsets r must be finite and within r_max = {hand.r_max:g}")
+    task = Task(name="execute_batch", obj=obj, hand=hand, actions=(CRM("a", "b", 0.0),))
+    return kernel_for(task, backend).execute_crms(cfg, sen, ci == 1, fi == 1, rr)

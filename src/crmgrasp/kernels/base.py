@@ -1,0 +1,131 @@
+"""The kernel interface: one task's dynamics over many configurations at once.
+
+A kernel evaluates the model's rules (CRM transition, observation, bins, min
+friction, start acceptance) on ``(N, 8)`` rows ``[ax, ay, anx, any, bx, by, bnx,
+bny]``, the package's one batched configuration layout. The composite steps
+(:meth:`Kernel.begin`, :meth:`Kernel.step_one`, :meth:`Kernel.step_batch`) are
+written here once from those rules and :mod:`crmgrasp.sim`; a compiled kernel may
+override a composite with a fused version that the tests hold equal to this one
+bit for bit.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..hand import Error
+from ..quality import min_friction
+from ..sim import SimState, begin, step
+from ..tasks import Task, accept_corner_candidates
+
+__all__ = ["Kernel", "OneStep", "BatchStep"]
+
+F64 = NDArray[np.float64]
+I64 = NDArray[np.int64]
+
+
+class OneStep(NamedTuple):
+    """One environment's state and what it senses after a reset or a CRM."""
+
+    state: SimState
+    rho: float
+    m_a: float
+    m_b: float
+    error: int
+    obs_index: int
+    min_friction: float
+
+
+class BatchStep(NamedTuple):
+    """A batch of environments after one step: true and sensed rows, the observation
+    (``rho``, ``m_a``, ``m_b`` as ``(N, 1)`` clipped into the observation space,
+    ``error`` as ``(N,)``), bin indices and min friction of the true rows."""
+
+    config: F64
+    sensed: F64
+    obs: dict[str, np.ndarray]
+    obs_index: I64
+    min_friction: F64
+
+
+class Kernel:
+    """A task's rules over rows. Subclasses implement :meth:`execute_crms` and
+    :meth:`observe`; build one with :func:`crmgrasp.kernels.kernel_for`."""
+
+    name: ClassVar[str] = "abstract"
+
+    def __init__(self, task: Task) -> None:
+        self.task = task
+        self.acts = np.array([(a.ci, a.fi, a.r) for a in task.actions], dtype=np.float64)
+        self.bound = 2.0 * task.hand.aperture  # the observation space's moment bound, m
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.task.name!r})"
+
+    # ------------------------------------------------------------ the rules
+    def execute_crms(
+        self, cfg: F64, sen: F64, c_is_b: NDArray[np.bool_], f_is_b: NDArray[np.bool_], r: F64
+    ) -> tuple[F64, NDArray[np.int8]]:
+        """The CRM ``(c, f, r)`` of each row from true rows ``cfg`` and sensed rows
+        ``sen`` (:func:`crmgrasp.hand.execute_crm`): new rows and error codes."""
+        raise NotImplementedError
+
+    def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[F64, F64, F64, I64, F64]:
+        """``(rho, m_a, m_b)`` and the bin index of each sensed row (with the rows'
+        error codes), and the min friction of each true row."""
+        raise NotImplementedError
+
+    def accept_starts(self, obj: Any, hand: Any, mu_goal: float, u: np.ndarray) -> F64:
+        """The start filter (:data:`crmgrasp.tasks.StartFilter`) given to the sampler."""
+        return accept_corner_candidates(obj, hand, mu_goal, u)
+
+    # ------------------------------------------------------------ composites
+    def execute(self, cfg: F64, sen: F64, actions: I64) -> tuple[F64, NDArray[np.int8]]:
+        """:meth:`execute_crms` of the task's actions ``actions`` (indices)."""
+        a = self.acts[actions]
+        return self.execute_crms(cfg, sen, a[:, 0] != 0.0, a[:, 1] != 0.0, np.ascontiguousarray(a[:, 2]))
+
+    def sample_starts(self, rng: np.random.Generator, n: int) -> F64:
+        """``n`` starts as ``(n, 8)`` rows (:meth:`crmgrasp.tasks.Task.sample_starts`)."""
+        return self.task.sample_starts(rng, n, self.accept_starts)
+
+    def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
+        """An episode starting at ``config`` (:func:`crmgrasp.sim.begin`)."""
+        state, obs, index = begin(self.task, config, rng)
+        return OneStep(state, obs.rho, obs.m_a, obs.m_b, int(Error.NONE), index, min_friction(config))
+
+    def step_one(self, state: SimState, action: int, rng: np.random.Generator) -> OneStep:
+        """The CRM ``task.actions[action]`` from ``state`` (:func:`crmgrasp.sim.step`)."""
+        res = step(self.task, state, action, rng)
+        o = res.observation
+        return OneStep(res.state, o.rho, o.m_a, o.m_b, int(res.error), res.obs_index, res.min_friction)
+
+    def step_batch(
+        self, cfg: F64, sen: F64, actions: I64, resets: NDArray[np.bool_], starts: F64, rng: np.random.Generator
+    ) -> BatchStep:
+        """One step of a batch of environments: the CRM ``actions[j]`` in each row, or
+        the next of ``starts`` (in order) in the rows where ``resets`` is set; then one
+        reading per row, its observation, bins and min friction."""
+        new, err = self.execute(cfg, sen, actions)
+        rows = resets.nonzero()[0]
+        if len(rows):
+            new[rows] = starts
+            err[rows] = 0
+        sensed = self.task.noise.sense_batch(new, rng)
+        rho, m_a, m_b, index, mu = self.observe(new, sensed, err)
+        return BatchStep(new, sensed, self.clip(rho, m_a, m_b, err), index, mu)
+
+    def clip(self, rho: F64, m_a: F64, m_b: F64, err: np.ndarray) -> dict[str, np.ndarray]:
+        """The observation dict, clipped into the observation space (``rho <= 4``,
+        ``|m| <= 2 A``; ``rho = |n_a + n_b|^2 >= 0`` needs no lower clip)."""
+        b = self.bound
+        with np.errstate(invalid="ignore"):
+            return {
+                "rho": np.minimum(rho, 4.0)[:, None],
+                "m_a": np.minimum(np.maximum(m_a, -b), b)[:, None],
+                "m_b": np.minimum(np.maximum(m_b, -b), b)[:, None],
+                "error": np.asarray(err, dtype=np.int64),
+            }

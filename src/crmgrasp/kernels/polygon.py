@@ -1,0 +1,162 @@
+"""Compiled kernels for polygonal objects (numba): the one fast implementation of
+each rule, wrapped in the :class:`~crmgrasp.kernels.base.Kernel` interface.
+
+:func:`params` gathers every constant the compiled code needs from the model's
+own modules when a kernel is built, so the compiled functions
+(:mod:`crmgrasp.kernels._polygon_jit`) hold no constant of their own.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .. import _geombase, quality
+from ..contacts import Config, Contact
+from ..geometry import Polygon
+from ..sim import SimState
+from ..tasks import Task
+from . import _polygon_jit as jit
+from .base import F64, I64, BatchStep, Kernel, OneStep
+
+__all__ = ["PolygonKernel", "FusedPolygonKernel", "params"]
+
+
+def params(task: Task) -> tuple[F64, NDArray[np.int64], F64]:
+    """``(p, q, th)`` for the compiled functions: the float parameters and tolerances
+    (read from :mod:`crmgrasp.geometry`, :mod:`crmgrasp.hand`, :mod:`crmgrasp.quality`
+    and the task now), the integer ones, and the bin thresholds padded with ``+inf``."""
+    obj, hand, d = task.obj, task.hand, task.discretizer
+    assert isinstance(obj, Polygon)
+    p = np.empty(jit.N_P)
+    p[jit.APERTURE], p[jit.DEPTH], p[jit.PALM_TOL] = hand.aperture, hand.palm_depth, hand.palm_normal_tol
+    p[jit.EPS], p[jit.S_TOL], p[jit.LINE_TOL] = _geombase.EPS, _geombase.S_TOL, _geombase.LINE_TOL
+    p[jit.ANTIPODAL_TOL], p[jit.MU_GOAL], p[jit.BOUND] = quality.ANTIPODAL_TOL, task.mu_goal, 2.0 * hand.aperture
+    q = np.empty(jit.N_Q, dtype=np.int64)
+    q[jit.CONVEX], q[jit.NA], q[jit.NB], q[jit.ABS_M] = obj.convex, len(d.m_a) + 1, len(d.m_b) + 1, d.abs_moments
+    width = max(len(d.rho), len(d.m_a), len(d.m_b), 1)
+    th = np.full((3, width), np.inf)
+    for row, thresholds in zip(th, (d.rho, d.m_a, d.m_b)):
+        row[: len(thresholds)] = thresholds
+    return p, q, th
+
+
+class PolygonKernel(Kernel):
+    """Compiled CRMs, observations, bins, min friction and start filter on a polygon;
+    the composite steps are the generic ones (any sensing noise)."""
+
+    name = "numba-polygon"
+
+    def __init__(self, task: Task) -> None:
+        super().__init__(task)
+        assert isinstance(task.obj, Polygon)
+        self.e = np.ascontiguousarray(task.obj.edge_array)
+        self.p, self.q, self.th = params(task)
+
+    def execute_crms(
+        self, cfg: F64, sen: F64, c_is_b: NDArray[np.bool_], f_is_b: NDArray[np.bool_], r: F64
+    ) -> tuple[F64, NDArray[np.int8]]:
+        cfg = np.ascontiguousarray(cfg, dtype=np.float64)
+        n = len(cfg)
+        new = np.empty_like(cfg)
+        err = np.empty(n, dtype=np.int8)
+        jit.execute_rows(
+            cfg,
+            np.ascontiguousarray(sen, dtype=np.float64),
+            np.ascontiguousarray(np.broadcast_to(c_is_b, n)),
+            np.ascontiguousarray(np.broadcast_to(f_is_b, n)),
+            np.ascontiguousarray(np.broadcast_to(r, n), dtype=np.float64),
+            self.e,
+            self.p,
+            self.q,
+            new,
+            err,
+        )
+        return new, err
+
+    def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[F64, F64, F64, I64, F64]:
+        n = len(cfg)
+        rho, m_a, m_b, mu = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        index = np.empty(n, dtype=np.int64)
+        jit.observe_rows(
+            np.ascontiguousarray(cfg, dtype=np.float64),
+            np.ascontiguousarray(sen, dtype=np.float64),
+            np.ascontiguousarray(err, dtype=np.int64),
+            self.th,
+            self.p,
+            self.q,
+            rho,
+            m_a,
+            m_b,
+            index,
+            mu,
+        )
+        return rho, m_a, m_b, index, mu
+
+    def accept_starts(self, obj: Any, hand: Any, mu_goal: float, u: np.ndarray) -> F64:
+        out = np.empty((u.shape[1], 8))
+        count = jit.corner_rows(np.ascontiguousarray(u), self.e, self.p, self.q, out)
+        return out[:count]
+
+
+class FusedPolygonKernel(PolygonKernel):
+    """:class:`PolygonKernel` for noise-free tasks, whose single and batched steps are
+    each one compiled call."""
+
+    name = "numba-polygon-fused"
+
+    def __init__(self, task: Task) -> None:
+        super().__init__(task)
+        self._v = np.empty((1, 8))  # the last configuration stepped, as a row
+        self._v_of: Config | None = None
+        self._out = np.empty((1, 12))
+
+    def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
+        self._v[0] = (*config.a, *config.b)
+        self._v_of = config
+        index = jit.begin_one(self._v, self.th, self.p, self.q, self._out)
+        _, _, _, _, _, _, _, _, rho, m_a, m_b, mu = self._out[0].tolist()
+        return OneStep(SimState(config, config, 0), rho, m_a, m_b, 0, index, mu)
+
+    def step_one(self, state: SimState, action: int, rng: np.random.Generator) -> OneStep:
+        config = state.config
+        if config is not self._v_of:
+            self._v[0] = (*config.a, *config.b)
+            self._v_of = config
+        code, index = jit.step_one(self._v, action, self.acts, self.e, self.th, self.p, self.q, self._out)
+        o = self._out[0].tolist()
+        if not code:
+            config = Config(Contact(o[0], o[1], o[2], o[3]), Contact(o[4], o[5], o[6], o[7]))
+            self._v[0] = self._out[0, :8]
+            self._v_of = config
+        return OneStep(SimState(config, config, state.steps + 1), o[8], o[9], o[10], code, index, o[11])
+
+    def step_batch(
+        self, cfg: F64, sen: F64, actions: I64, resets: NDArray[np.bool_], starts: F64, rng: np.random.Generator
+    ) -> BatchStep:
+        n = len(cfg)
+        new = np.empty((n, 8))
+        obs = {"rho": np.empty((n, 1)), "m_a": np.empty((n, 1)), "m_b": np.empty((n, 1))}
+        err, index, mu = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty(n)
+        jit.step_rows(
+            np.ascontiguousarray(cfg),
+            np.ascontiguousarray(actions, dtype=np.int64),
+            self.acts,
+            np.ascontiguousarray(resets),
+            np.ascontiguousarray(starts, dtype=np.float64).reshape(-1, 8),
+            self.e,
+            self.th,
+            self.p,
+            self.q,
+            new,
+            obs["rho"],
+            obs["m_a"],
+            obs["m_b"],
+            err,
+            index,
+            mu,
+        )
+        obs["error"] = err  # type: ignore[assignment]
+        return BatchStep(new, new, obs, index, mu)

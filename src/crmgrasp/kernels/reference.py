@@ -1,0 +1,67 @@
+"""The reference kernel: the model's readable rules, row by row.
+
+Every shape and every noise setting runs here; it is the definition that the
+compiled kernels are tested against, and the path of any shape that has no
+compiled kernel.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..contacts import Config, Contact
+from ..hand import CRM, execute_crm
+from ..quality import min_friction
+from ..sensing import observe
+from .base import F64, I64, Kernel
+
+__all__ = ["ReferenceKernel"]
+
+
+def _config(row: list[float]) -> Config:
+    return Config(Contact(row[0], row[1], row[2], row[3]), Contact(row[4], row[5], row[6], row[7]))
+
+
+class ReferenceKernel(Kernel):
+    """:func:`crmgrasp.hand.execute_crm`, :func:`crmgrasp.sensing.observe`,
+    :meth:`crmgrasp.sensing.Discretizer.index_of` and
+    :func:`crmgrasp.quality.min_friction` per row."""
+
+    name = "reference"
+
+    def execute_crms(
+        self, cfg: F64, sen: F64, c_is_b: NDArray[np.bool_], f_is_b: NDArray[np.bool_], r: F64
+    ) -> tuple[F64, NDArray[np.int8]]:
+        obj, hand = self.task.obj, self.task.hand
+        new = np.array(cfg, dtype=np.float64, copy=True).reshape(-1, 8)
+        err = np.zeros(len(new), dtype=np.int8)
+        crms: dict[tuple[bool, bool, float], CRM] = {}
+        rows = zip(
+            new.tolist(),
+            np.asarray(sen).tolist(),
+            np.broadcast_to(c_is_b, len(new)).tolist(),
+            np.broadcast_to(f_is_b, len(new)).tolist(),
+            np.broadcast_to(r, len(new)).tolist(),
+        )
+        for j, (row, srow, cb, fb, rj) in enumerate(rows):
+            key = (cb, fb, rj)
+            crm = crms.get(key)
+            if crm is None:
+                crm = crms[key] = CRM("ab"[cb], "ab"[fb], rj)
+            out = execute_crm(obj, hand, _config(row), crm, _config(srow))
+            new[j] = (*out.config.a, *out.config.b)
+            err[j] = out.error
+        return new, err
+
+    def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[F64, F64, F64, I64, F64]:
+        n = len(cfg)
+        rho, m_a, m_b, mu = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        index = np.empty(n, dtype=np.int64)
+        index_of = self.task.discretizer.index_of
+        for j, (row, srow, e) in enumerate(zip(np.asarray(cfg).tolist(), np.asarray(sen).tolist(), err.tolist())):
+            o = observe(_config(srow))
+            rho[j], m_a[j], m_b[j] = o
+            index[j] = index_of(o.rho, o.m_a, o.m_b, e)
+            mu[j] = min_friction(_config(row))
+        return rho, m_a, m_b, index, mu

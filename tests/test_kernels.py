@@ -1,0 +1,342 @@
+"""Every kernel path against the reference rules, bit for bit; the kernel seam."""
+
+from __future__ import annotations
+
+import ast
+import math
+import pickle
+from collections import Counter
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from crmgrasp import (
+    CRM,
+    Config,
+    Contact,
+    CrmgraspError,
+    Disc,
+    Hand,
+    Polygon,
+    Rectangle,
+    SensorNoise,
+    Task,
+    make_task,
+    regular_polygon,
+)
+from crmgrasp.contacts import array_to_configs, configs_to_array
+from crmgrasp.hand import execute_crm
+from crmgrasp.kernels import execute_batch, kernel_for
+from crmgrasp.polygon import convex_entry, first_entry
+from crmgrasp.quality import min_friction
+from crmgrasp.sensing import Discretizer, observe
+from crmgrasp.sim import SimState, begin, step
+from crmgrasp.tasks import accept_corner_candidates, corner_boxes, corner_proposal
+from crmgrasp.vector import CRMGraspVectorEnv
+
+from .strategies import BACKENDS, on_boundary, scenes
+
+U_SHAPE = Polygon([(0, 0), (0.3, 0), (0.3, 0.2), (0.2, 0.2), (0.2, 0.08), (0.1, 0.08), (0.1, 0.2), (0, 0.2)])
+
+convex_objects = st.one_of(
+    st.builds(Rectangle, st.floats(0.05, 0.4), st.floats(0.03, 0.2)),
+    st.builds(regular_polygon, st.integers(3, 16), st.floats(0.03, 0.15), rotation=st.floats(0, 2 * math.pi)),
+)
+
+
+def _crm_arrays(crms: list[CRM]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    return np.array([m.ci for m in crms]), np.array([m.fi for m in crms]), np.array([m.r for m in crms])
+
+
+def _odd_task() -> Task:
+    """A hexagon, other bins (more than three thresholds, signed moments) and CRMs."""
+    disc = Discretizer((0.5, 1.0, 2.0, 3.0), tuple(np.linspace(-0.1, 0.1, 5)), (), abs_moments=False)
+    crms = (CRM("a", "b", 0.0), CRM("b", "a", 0.01), CRM("a", "a", 0.05), CRM("b", "b", -0.05))
+    return Task("hexagon", regular_polygon(6, 0.08), Hand(0.2, 0.05), crms, discretizer=disc)
+
+
+# ----------------------------------------------------------------- the seam
+def test_each_builtin_task_takes_a_stated_path():
+    """Which kernel each kind of task runs on, per backend (the one selector's table)."""
+    box = make_task("paper-box")
+    noisy = replace(box, noise=SensorNoise(0.05, 0.002))
+    disc = Task("disc", Disc(0.05), box.hand, box.actions, discretizer=box.discretizer)
+    u = Task("u", U_SHAPE, box.hand, box.actions)
+    paths = {
+        (name, backend): kernel_for(t, backend).name
+        for name, t in (("paper-box", box), ("noisy", noisy), ("disc", disc), ("u", u))
+        for backend in ("auto", "numba", "reference")
+        if not (name == "disc" and backend == "numba")
+    }
+    assert paths == {
+        ("paper-box", "auto"): "numba-polygon-fused",
+        ("paper-box", "numba"): "numba-polygon-fused",
+        ("paper-box", "reference"): "reference",
+        ("noisy", "auto"): "numba-polygon",
+        ("noisy", "numba"): "numba-polygon",
+        ("noisy", "reference"): "reference",
+        ("disc", "auto"): "reference",
+        ("disc", "reference"): "reference",
+        ("u", "auto"): "numba-polygon-fused",
+        ("u", "numba"): "numba-polygon-fused",
+        ("u", "reference"): "reference",
+    }
+    with pytest.raises(CrmgraspError, match="no compiled kernel for a Disc"):
+        kernel_for(disc, "numba")
+    with pytest.raises(CrmgraspError, match="unknown backend 'gpu'; choose one of auto, numba, reference"):
+        kernel_for(box, "gpu")
+
+
+def test_compiled_code_holds_no_constant_of_the_model():
+    """The compiled module imports only numpy and numba and defines no float constant:
+    every tolerance arrives as an argument, so numba's on-disk cache cannot hold a
+    stale copy of one."""
+    import crmgrasp.kernels._polygon_jit as jit
+
+    tree = ast.parse(Path(jit.__file__).read_text())
+    imports = {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+    imports |= {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+    assert imports == {"__future__", "numpy", "numba"}
+    floats = [n.value for n in ast.walk(tree) if isinstance(n, ast.Constant) and isinstance(n.value, float)]
+    assert set(floats) <= {0.0, 0.5, 1.0, 4.0, -1.0}, floats  # arithmetic of the rules, no tolerance
+
+
+def test_a_changed_tolerance_reaches_the_compiled_kernel(monkeypatch):
+    """A ray 1e-13 m below a box side enters at the corner with LINE_TOL = 1e-12 and
+    misses with 0: a kernel built after the change follows it, as the reference does."""
+    import crmgrasp._geombase as base
+    import crmgrasp.kernels._polygon_jit as jit
+    import crmgrasp.polygon as poly
+
+    task = make_task("paper-box")
+    ray = (-0.3, -0.05 - 1e-13, 1.0, 0.0, 1.0)
+    k = kernel_for(task, "numba")
+    assert jit._entry(*ray, k.e, True, k.p)[0] and convex_entry(*ray, task.obj.edges) is not None
+    monkeypatch.setattr(base, "LINE_TOL", 0.0)
+    monkeypatch.setattr(poly, "LINE_TOL", 0.0)
+    k = kernel_for(task, "numba")
+    assert not jit._entry(*ray, k.e, True, k.p)[0] and convex_entry(*ray, task.obj.edges) is None
+
+
+# ------------------------------------------------------------ entry rules
+def _rays(obj: Polygon, rng: np.random.Generator, n: int) -> tuple[np.ndarray, ...]:
+    """Rays from points around the object toward points near it."""
+    x0, y0, x1, y1 = obj.bounds()
+    span = max(x1 - x0, y1 - y0)
+    ox, oy = rng.uniform(x0 - span, x1 + span, n), rng.uniform(y0 - span, y1 + span, n)
+    tx, ty = rng.uniform(x0, x1, n), rng.uniform(y0, y1, n)
+    d = np.hypot(tx - ox, ty - oy)
+    return ox, oy, (tx - ox) / d, (ty - oy) / d, rng.uniform(0.0, 3 * span, n)
+
+
+@settings(max_examples=60, deadline=None)
+@given(convex_objects, st.integers(0, 2**32 - 1))
+def test_convex_entry_is_first_entry_away_from_vertices(obj, seed):
+    """On generic rays the vertex-side rule finds the running minimum's edge and u, bit for bit."""
+    ox, oy, dx, dy, umax = _rays(obj, np.random.default_rng(seed), 300)
+    for args in zip(ox.tolist(), oy.tolist(), dx.tolist(), dy.tolist(), umax.tolist()):
+        assert convex_entry(*args, obj.edges) == first_entry(*args, obj.edges)
+
+
+@pytest.mark.parametrize("n", [3, 4, 8, 9, 12, 13, 20])
+def test_compiled_entry_equals_the_reference_on_any_polygon(n):
+    import crmgrasp.kernels._polygon_jit as jit
+
+    for poly in (regular_polygon(n, 0.1, rotation=0.3), U_SHAPE):
+        k = kernel_for(Task("t", poly, Hand(0.2, 0.05), (CRM("a", "b", 0),)), "numba")
+        ox, oy, dx, dy, umax = _rays(poly, np.random.default_rng(n), 1000)
+        entered = 0
+        for args in zip(ox.tolist(), oy.tolist(), dx.tolist(), dy.tolist(), umax.tolist()):
+            ref = poly.ray_entry(args[:2], args[2:4], args[4])
+            got = jit._entry(*args, k.e, poly.convex, k.p)
+            assert got[0] == (ref is not None)
+            if ref is not None:
+                assert got[1:] == (*ref.point, *ref.normal)
+                entered += 1
+            assert jit._inside(args[0], args[1], k.e, poly.convex, k.p[3]) == poly.contains(args[:2])
+        assert 100 < entered < 1000
+
+
+def test_lines_through_vertices_and_along_edges_enter_at_the_vertex():
+    """A ray along a side (either way), through a corner, or missing it by less than
+    LINE_TOL enters at the corner; one missing it by more does not enter."""
+    box = Rectangle(0.30, 0.10)  # vertices (-0.15, -0.05), (0.15, -0.05), (0.15, 0.05), (-0.15, 0.05)
+    cases = [
+        ((0.3, -0.05), (-1.0, 0.0), (0.15, -0.05), (-1.0, 0.0)),  # along the bottom, leftward: right side
+        ((-0.3, -0.05), (1.0, 0.0), (-0.15, -0.05), (1.0, 0.0)),  # along the bottom, rightward: left side
+        ((-0.3, -0.05 - 1e-13), (1.0, 0.0), (-0.15, -0.05 - 1e-13), (1.0, 0.0)),
+        ((-0.25, -0.15), (math.sqrt(0.5), math.sqrt(0.5)), (-0.15, -0.05), None),  # through the corner
+    ]
+    for o, d, point, normal in cases:
+        e = box.ray_entry(o, d, 1.0)
+        assert e is not None and e.point == pytest.approx(point, abs=1e-15)
+        if normal is not None:
+            assert e.normal == normal
+    assert box.ray_entry((-0.3, -0.05 - 1e-9), (1.0, 0.0), 1.0) is None  # misses by 1 nm
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_corner_seeking_crms_match_the_reference(task, backend):
+    """CRMs whose goal line runs exactly along a box side (as the grasp controller
+    issues them) give the reference outcome in every kernel."""
+    cfg = Config(Contact(-0.15, 0.023360090626670917, 1.0, 0.0), Contact(-0.13013644553857112, -0.05, -0.0, 1.0))
+    crms = [CRM("a", "a", 0.023360090626670917 + 0.05), CRM("b", "a", 0.0), CRM("b", "b", 0.02), CRM("a", "b", 0.0)]
+    new, err = execute_batch(task.obj, task.hand, [cfg] * len(crms), *_crm_arrays(crms), backend=backend)
+    for i, crm in enumerate(crms):
+        out = execute_crm(task.obj, task.hand, cfg, crm)
+        assert (int(err[i]), tuple(new[i])) == (int(out.error), tuple(np.asarray(out.config).ravel()))
+
+
+# --------------------------------------------------------------- CRMs in bulk
+@pytest.mark.parametrize("backend", BACKENDS)
+@settings(max_examples=100, deadline=None)
+@given(st.lists(scenes(), min_size=1, max_size=1), st.integers(2, 12), st.booleans(), st.integers(0, 2**32 - 1))
+def test_execute_batch_matches_execute_crm(backend, first, n, noisy, seed):
+    obj, hand, cfg0, _ = first[0]
+    if backend == "numba" and not isinstance(obj, Polygon):
+        backend = "auto"  # the seam sends discs to the reference
+    rng = np.random.default_rng(seed)
+    configs = [cfg0]
+    for _ in range(n - 1):
+        s = rng.random(2) * obj.perimeter
+        configs.append(Config(on_boundary(obj, s[0]), on_boundary(obj, s[1])))
+    crms = [
+        CRM("ab"[rng.integers(2)], "ab"[rng.integers(2)], float(rng.uniform(-1, 1) * hand.aperture)) for _ in configs
+    ]
+    noise = SensorNoise(math.radians(5), 0.003) if noisy else SensorNoise()
+    sensed = [noise.sense(c, np.random.default_rng(seed + i)) for i, c in enumerate(configs)]
+    arr, sarr = configs_to_array(configs), configs_to_array(sensed)
+    new, err = execute_batch(obj, hand, arr, *_crm_arrays(crms), sensed=sarr, backend=backend)
+    for i, (cfg, crm) in enumerate(zip(configs, crms)):
+        out = execute_crm(obj, hand, cfg, crm, sensed[i])
+        assert int(err[i]) == int(out.error)
+        assert tuple(new[i]) == tuple(np.asarray(out.config).ravel())
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_batch_worked_cases(task, backend):
+    near = task.hand.contact(task.obj, a=(-0.15, -0.02), b=(-0.10, -0.05))
+    far = task.hand.contact(task.obj, a=(-0.15, -0.02), b=(0.00, -0.05))
+    cfgs = configs_to_array([near, near, far, far])
+    crms = [task.actions[i] for i in (0, 1, 0, 3)]
+    new, err = execute_batch(task.obj, task.hand, cfgs, *_crm_arrays(crms), backend=backend)
+    assert err.tolist() == [0, 1, 2, 0]
+    assert new[0, :4].tolist() == [-0.10, 0.05, 0.0, -1.0]
+    assert new[3, 4:6].tolist() == [-0.08, -0.05]
+
+
+def test_batch_input_errors(task):
+    arr = configs_to_array([task.sample_start(np.random.default_rng(0))])
+    with pytest.raises(CrmgraspError, match=r"shape \(N, 8\)"):
+        execute_batch(task.obj, task.hand, arr[:, :6], 0, 1, 0.0)
+    with pytest.raises(CrmgraspError, match="0 \\(a\\) or 1 \\(b\\)"):
+        execute_batch(task.obj, task.hand, arr, 2, 1, 0.0)
+    with pytest.raises(CrmgraspError, match="r_max"):
+        execute_batch(task.obj, task.hand, arr, 0, 1, 1.0)
+    with pytest.raises(CrmgraspError, match="finite"):
+        execute_batch(task.obj, task.hand, arr * np.nan, 0, 1, 0.0)
+    with pytest.raises(CrmgraspError, match="unknown backend"):
+        execute_batch(task.obj, task.hand, arr, 0, 1, 0.0, backend="numpy")
+
+
+# ------------------------------------------------------ observation and bins
+@pytest.mark.parametrize(
+    "disc",
+    [
+        Discretizer(),
+        Discretizer((0.5, 1.5), (0.02, 0.1, 0.2), ()),
+        Discretizer((1.0,), tuple(np.linspace(-0.2, 0.2, 9)), (0.1,), abs_moments=False),
+    ],
+)
+@pytest.mark.parametrize("noisy", [False, True])
+def test_kernel_observe_equals_the_reference(task, disc, noisy):
+    t = replace(task, discretizer=disc, symmetry=None)
+    rng = np.random.default_rng(3)
+    cfg = np.array([(*on_boundary(t.obj, a), *on_boundary(t.obj, b)) for a, b in rng.random((300, 2)) * 0.8])
+    sen = cfg + rng.normal(0, 0.01, cfg.shape) if noisy else cfg
+    err = rng.integers(0, 3, 300)
+    outs = [kernel_for(t, b).observe(cfg, sen, err) for b in BACKENDS]
+    for j, (row, srow) in enumerate(zip(array_to_configs(cfg), array_to_configs(sen))):
+        o = observe(srow)
+        want = (o.rho, o.m_a, o.m_b, disc.index(o, int(err[j])), min_friction(row))
+        for rho, m_a, m_b, index, mu in outs:
+            assert (rho[j], m_a[j], m_b[j], index[j], mu[j]) == want
+
+
+def test_noise_batch_stream_equals_scalar_stream(task):
+    noise = SensorNoise(0.05, 0.002)
+    cfgs = [task.sample_start(np.random.default_rng(i)) for i in range(5)]
+    batch = noise.sense_batch(configs_to_array(cfgs), np.random.default_rng(9))
+    rng = np.random.default_rng(9)
+    np.testing.assert_array_equal(batch, configs_to_array([noise.sense(c, rng) for c in cfgs]))
+
+
+# -------------------------------------------------------- composite steps
+def test_fused_single_step_equals_sim_step_on_convex_and_non_convex_objects(task):
+    """Random CRMs from random boundary pairs on the box and a U: all three error
+    codes occur on each and every result equals :func:`crmgrasp.sim.step` exactly."""
+    rng = np.random.default_rng(0)
+    for obj in (task.obj, U_SHAPE):
+        t = replace(task, obj=obj, symmetry=None)
+        k = kernel_for(t, "numba")
+        codes: Counter[int] = Counter()
+        for _ in range(3000):
+            s = rng.random(2) * obj.perimeter
+            cfg = Config(on_boundary(obj, s[0]), on_boundary(obj, s[1]))
+            action = int(rng.integers(4))
+            state = SimState(cfg, cfg, int(rng.integers(10)))
+            ref, got = step(t, state, action, rng), k.step_one(state, action, rng)
+            o = ref.observation
+            assert got == (ref.state, o.rho, o.m_a, o.m_b, int(ref.error), ref.obs_index, ref.min_friction)
+            ref0, got0 = begin(t, cfg, rng), k.begin(cfg, rng)
+            assert (got0.state, got0.rho, got0.m_a, got0.m_b, got0.obs_index) == (ref0[0], *ref0[1], ref0[2])
+            assert got0.min_friction == min_friction(cfg)
+            codes[got.error] += 1
+        assert set(codes) == {0, 1, 2}, codes
+
+
+@pytest.mark.parametrize("which", ["paper-box", "hexagon", "noisy", "u-shape"])
+def test_backends_agree_on_vector_env_and_starts(which):
+    """The vector env gives the same outputs on every backend (the noise-free polygon
+    step runs as one compiled pass; with noise, compiled rules around reference sensing)."""
+    task = _odd_task() if which == "hexagon" else make_task("paper-box")
+    if which == "noisy":
+        task = replace(task, noise=SensorNoise(0.05, 0.002))
+    if which == "u-shape":
+        task = replace(task, obj=U_SHAPE, starts=task.starts, symmetry=None)
+
+    def run(backend: str) -> list[np.ndarray]:
+        env = CRMGraspVectorEnv(256, task, backend=backend)
+        out = [env.reset(seed=9)[1]["config"]]
+        rng = np.random.default_rng(9)
+        for _ in range(12):
+            obs, rew, term, trunc, info = env.step(rng.integers(4, size=256))
+            out += [*obs.values(), rew, term, trunc, *info.values()]
+        return out
+
+    for x, y in zip(run("reference"), run("numba")):
+        assert x.dtype == y.dtype and x.shape == y.shape
+        np.testing.assert_array_equal(x, y)
+
+
+def test_corner_filters_agree_across_backends(task):
+    """The reference and the compiled corner-start filters accept the same candidates."""
+    rng = np.random.default_rng(5)
+    for t in (task, replace(task, obj=U_SHAPE, symmetry=None)):
+        cum, c_in, c_out = corner_boxes(t.obj, t.hand.aperture)
+        u = corner_proposal(rng.random((4, 4000)), cum, c_in, c_out)
+        a = accept_corner_candidates(t.obj, t.hand, t.mu_goal, u)
+        b = kernel_for(t, "numba").accept_starts(t.obj, t.hand, t.mu_goal, u)
+        assert a.shape == b.shape and len(a) > 500 and np.array_equal(a, b)
+
+
+def test_tasks_and_kernels_stay_picklable(task):
+    k = kernel_for(task)
+    k.sample_starts(np.random.default_rng(0), 10)
+    again = pickle.loads(pickle.dumps(task))
+    assert again.obj == task.obj and again.obj.contains((0.0, 0.0))
+    assert kernel_for(again).name == k.name
