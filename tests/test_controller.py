@@ -11,21 +11,17 @@ from crmgrasp.cli import main
 from crmgrasp.experiments.compare import CompareConfig, compare
 from crmgrasp.experiments.learning import LearnerSpec
 from crmgrasp.hand import execute_crm
+from crmgrasp.sim import run_episode
 
 
 def _episode(task, cfg):
-    ctl = GraspController(task)
-    ctl.begin_episode()
-    crms = []
-    for _ in range(task.max_steps):
-        crm = ctl.choose(cfg)
-        out = execute_crm(task.obj, task.hand, cfg, crm, cfg)
-        ctl.observe(crm, out.error)
-        crms.append((crm, out.error))
-        cfg = out.config
-        if min_friction(cfg) <= task.mu_goal:
-            return crms, True
-    return crms, False
+    """The controller as a Policy through the one episode loop, from ``cfg``."""
+    ep = run_episode(task, GraspController(task), np.random.default_rng(0), start=cfg, trace=True)
+    for tr in ep.trace:  # the loop executed exactly what execute_crm gives
+        out = execute_crm(task.obj, task.hand, tr.state.config, tr.action, tr.state.sensed)
+        assert (out.config, out.error) == (tr.result.state.config, tr.result.error)
+    assert ep.success == (min_friction(ep.trace[-1].result.state.config) <= task.mu_goal)
+    return [(tr.action, tr.result.error) for tr in ep.trace], ep.success
 
 
 def test_controller_by_hand(task):

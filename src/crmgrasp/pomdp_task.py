@@ -24,11 +24,11 @@ from scipy import sparse
 from ._validation import CrmgraspError
 from .contacts import Config, Contact
 from .geometry import Polygon
-from .hand import Error, execute_crm, feasible
+from .hand import Error, execute_crm
 from .pomdp import POMDP, PBVIPolicy, belief_update, collect_beliefs, solve_pbvi
-from .quality import min_friction
 from .sensing import observe
-from .tasks import Task
+from .sim import Percept, run_episode
+from .tasks import Task, acceptable
 
 __all__ = ["TaskPOMDP", "build_task_pomdp", "POMDPAgent"]
 
@@ -113,7 +113,7 @@ def build_task_pomdp(
         configs = []
         for _ in range(samples * 5):
             cfg = _sample_in(obj, bins, c, rng)
-            if feasible(obj, task.hand, cfg) is Error.NONE and min_friction(cfg) > task.mu_goal:
+            if acceptable(obj, task.hand, task.mu_goal, cfg):
                 configs.append(cfg)
                 if len(configs) == samples:
                     break
@@ -123,7 +123,7 @@ def build_task_pomdp(
             for cfg in configs:
                 out = execute_crm(obj, task.hand, cfg, crm, cfg)
                 executed += 1
-                if min_friction(out.config) <= task.mu_goal:
+                if task.is_success(out.config):
                     s2, o = -1, goal_obs
                 else:
                     s2 = state(_cell(obj, bins, out.config))
@@ -178,6 +178,7 @@ class POMDPAgent:
         extra = [self._initial(o) for o in range(tp.model.n_obs)]
         pts = np.vstack([pts] + [b[None] for b in extra if b is not None])
         self.policy: PBVIPolicy = solve_pbvi(tp.model, pts, h)
+        self._b, self._left, self._a = tp.model.b0, h, 0
 
     def model_value(self) -> float:
         """Expected CRMs predicted by the model: ``sum_o Pr(o_0) V(b0 | o_0)``."""
@@ -194,23 +195,33 @@ class POMDPAgent:
         b = self.tp.model.b0 * self.tp.z0[:, o]
         return None if b.sum() <= 0 else b / b.sum()
 
+    # -- the Policy interface (crmgrasp.sim.run_episode)
+    def begin(self, first: Percept) -> None:
+        """Belief: the prior conditioned on the first observation."""
+        b = self._initial(first.obs_index)
+        self._b = self.tp.model.b0 if b is None else b
+        self._left = self.tp.task.max_steps
+
+    def act(self) -> int:
+        """The PBVI policy's action for the belief and the CRMs left."""
+        self._a = self.policy.action(self._b, self._left)
+        return self._a
+
+    def tell(self, percept: Percept) -> None:
+        """Bayes update of the belief on the observation (the prediction alone where
+        the model gives it probability 0), conditioned on no grasp yet."""
+        if percept.terminated:
+            return
+        m, b, a = self.tp.model, self._b, self._a
+        nb = belief_update(m, b, a, percept.obs_index)
+        if nb is None or nb[~m.goal].sum() <= 0:
+            nb = m.T[a].T @ b
+        nb = np.where(m.goal, 0.0, nb)
+        self._b = nb / nb.sum() if nb.sum() > 0 else m.b0
+        self._left -= 1
+
     def run(self, config: Config) -> tuple[int, bool]:
-        """Execute from ``config`` (noise-free); return (CRMs, success)."""
-        t, m = self.tp.task, self.tp.model
-        o = t.discretizer.index(observe(config), Error.NONE)
-        b = self._initial(o)
-        if b is None:
-            b = m.b0
-        for n in range(1, t.max_steps + 1):
-            a = self.policy.action(b, t.max_steps - n + 1)
-            out = execute_crm(t.obj, t.hand, config, t.actions[a], config)
-            config = out.config
-            if min_friction(config) <= t.mu_goal:
-                return n, True
-            o = t.discretizer.index(observe(config), out.error)
-            nb = belief_update(m, b, a, o)
-            if nb is None or nb[~m.goal].sum() <= 0:
-                nb = m.T[a].T @ b
-            nb = np.where(m.goal, 0.0, nb)
-            b = nb / nb.sum() if nb.sum() > 0 else m.b0
-        return t.max_steps, False
+        """Execute from ``config`` (noise-free; :func:`crmgrasp.sim.run_episode`); return
+        (CRMs, success)."""
+        ep = run_episode(self.tp.task, self, np.random.default_rng(0), start=config)
+        return ep.steps, ep.success

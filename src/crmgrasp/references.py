@@ -30,8 +30,8 @@ import numpy as np
 from ._validation import CrmgraspError
 from .contacts import Config
 from .hand import Error, execute_crm
-from .quality import min_friction
 from .sensing import observe
+from .sim import Percept, run_episode
 from .tasks import Task
 
 __all__ = ["clairvoyant_steps", "clairvoyant_bound", "belief_optimum", "sample_starts", "BeliefPolicy"]
@@ -54,7 +54,7 @@ class _Model:
             t = self.task
             out = execute_crm(t.obj, t.hand, config, t.actions[action], config)
             index = t.discretizer.index(observe(out.config), out.error)
-            hit = self._step[key] = (out.config, index, min_friction(out.config) <= t.mu_goal)
+            hit = self._step[key] = (out.config, index, t.is_success(out.config))
         return hit
 
     def clairvoyant(self, config: Config, horizon: int) -> int:
@@ -179,6 +179,8 @@ class BeliefPolicy:
         self._model = _Model(task)
         self._memo: dict = {}
         self._acts: dict = {}
+        self._belief: tuple[Config, ...] = ()
+        self._left, self._a = task.max_steps, 0
         self._groups: dict[int, tuple[Config, ...]] = {}
         for c in starts:
             k = task.discretizer.index(observe(c), Error.NONE)
@@ -190,21 +192,32 @@ class BeliefPolicy:
             _value(self._model, belief, h, self._memo, self._acts)
         return self._acts[key]
 
-    def run(self, config: Config) -> tuple[int, bool]:
-        """Execute the policy from ``config``; return (CRMs, success)."""
-        t, model = self.task, self._model
-        obs = t.discretizer.index(observe(config), Error.NONE)
-        belief = self._groups.get(obs, ())
-        for n in range(1, t.max_steps + 1):
-            h = t.max_steps - n + 1
-            a = self._action(belief, h) if belief else 0
-            config, obs, grasped = model.step(config, a)
-            if grasped:
-                return n, True
-            nxt = []
-            for c in belief:
-                c2, o2, g2 = model.step(c, a)
-                if not g2 and o2 == obs:
-                    nxt.append(c2)
-            belief = tuple(nxt) or self._groups.get(obs, ())
-        return t.max_steps, False
+    # -- the Policy interface (crmgrasp.sim.run_episode)
+    def begin(self, first: Percept) -> None:
+        """Belief: the sample starts whose first observation is this one."""
+        self._belief = self._groups.get(first.obs_index, ())
+        self._left = self.task.max_steps
+
+    def act(self) -> int:
+        """The optimal action for the belief and the CRMs left (0 on an empty belief)."""
+        self._a = self._action(self._belief, self._left) if self._belief else 0
+        return self._a
+
+    def tell(self, percept: Percept) -> None:
+        """Keep the belief's configurations that the action leads to this observation
+        without a grasp (restart from the sample starts if none is left)."""
+        if percept.terminated:
+            return
+        nxt = []
+        for c in self._belief:
+            c2, o2, g2 = self._model.step(c, self._a)
+            if not g2 and o2 == percept.obs_index:
+                nxt.append(c2)
+        self._belief = tuple(nxt) or self._groups.get(percept.obs_index, ())
+        self._left -= 1
+
+    def run(self, config: Config, rng: np.random.Generator | None = None) -> tuple[int, bool]:
+        """Execute the policy from ``config`` (:func:`crmgrasp.sim.run_episode`; ``rng``
+        is drawn from only if the task has sensing noise); return (CRMs, success)."""
+        ep = run_episode(self.task, self, rng if rng is not None else np.random.default_rng(0), start=config)
+        return ep.steps, ep.success

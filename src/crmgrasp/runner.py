@@ -25,7 +25,6 @@ from .agents.policy import GreedyPolicy
 from .contact_sensing import NoContact
 from .contacts import Config
 from .hand import CRM, Error, execute_crm
-from .quality import min_friction
 from .sensing import SensorNoise, observe
 from .tasks import Task
 
@@ -127,7 +126,7 @@ class PolicyRunner:
             hist = enc.start(index) if hist is None or action is None else enc.push(hist, action, index)
             raw: dict[str, Any] = getattr(hand, "raw_reading", dict)()
             row = [step, *reading.a, *reading.b, *obs, index, t.discretizer.label(index)]
-            if min_friction(reading) <= t.mu_goal:
+            if t.is_success(reading):
                 rows.append([*row, "", "", "", json.dumps(raw)])
                 result = RunResult(step, True, "grasp sensed")
                 break

@@ -1,8 +1,10 @@
-"""Pure episode dynamics of a task: ``reset`` and ``step`` on an immutable state.
+"""Pure episode dynamics of a task, and the one episode loop.
 
-This is the reference definition of an episode: the environments, training,
-evaluation, planners and runners step through it, or through a kernel of
-:mod:`crmgrasp.kernels` that is tested equal to it bit for bit.
+``begin``/``reset`` and ``step`` on an immutable state are the reference definition
+of an episode: the environments, training, evaluation, planners and controllers
+step through them, or through a kernel of :mod:`crmgrasp.kernels` that is tested
+equal to them bit for bit. :func:`run_episode` is the one loop that lets a
+:class:`Policy` (a learner, a planner or a controller) act in an episode.
 
 Sensing: each configuration is read once. The observation ``o_t`` is computed from
 that reading, and the CRM executed at time ``t`` builds its goal line from the same
@@ -15,18 +17,30 @@ Draw order: ``reset`` draws the start (the task's sampler) then one reading;
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple, overload
+from typing import Any, NamedTuple, Protocol, overload
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .contacts import Config
-from .hand import Error, Outcome, execute_crm
+from .hand import CRM, Error, Outcome, execute_crm
 from .quality import min_friction
 from .sensing import Observation, observe
 from .tasks import Task
 
-__all__ = ["SimState", "StepResult", "begin", "reset", "step", "episode_end"]
+__all__ = [
+    "Episode",
+    "Transition",
+    "SimState",
+    "StepResult",
+    "Percept",
+    "Policy",
+    "begin",
+    "reset",
+    "step",
+    "episode_end",
+    "run_episode",
+]
 
 
 class SimState(NamedTuple):
@@ -35,6 +49,20 @@ class SimState(NamedTuple):
     config: Config
     sensed: Config
     steps: int
+
+
+class Percept(NamedTuple):
+    """What a policy may use after a reset or a CRM: the sensed observation, the error
+    flag, the discretized observation, the sensed contact frames (what the next CRM's
+    goal line is built from), and the reward and episode end of the step."""
+
+    observation: Observation
+    error: Error
+    obs_index: int
+    sensed: Config
+    reward: float = 0.0
+    terminated: bool = False
+    truncated: bool = False
 
 
 class StepResult(NamedTuple):
@@ -50,6 +78,19 @@ class StepResult(NamedTuple):
     min_friction: float
     outcome: Outcome
 
+    @property
+    def percept(self) -> Percept:
+        """What a policy perceives of this step."""
+        return Percept(
+            self.observation,
+            self.error,
+            self.obs_index,
+            self.state.sensed,
+            self.reward,
+            self.terminated,
+            self.truncated,
+        )
+
 
 def begin(task: Task, config: Config, rng: np.random.Generator) -> tuple[SimState, Observation, int]:
     """Start an episode at ``config``: one reading; the state, its observation and
@@ -64,13 +105,15 @@ def reset(task: Task, rng: np.random.Generator) -> tuple[SimState, Observation, 
     return begin(task, task.sample_start(rng), rng)
 
 
-def step(task: Task, state: SimState, action: int, rng: np.random.Generator) -> StepResult:
-    """Execute ``task.actions[action]`` from ``state``.
+def step(task: Task, state: SimState, action: int | CRM, rng: np.random.Generator) -> StepResult:
+    """Execute ``task.actions[action]`` (or the CRM ``action`` itself, within the
+    hand's ``r_max``) from ``state``.
 
     ``terminated`` when the true configuration is a grasp (``min_friction <=
     mu_goal``); ``truncated`` when ``max_steps`` CRMs have been executed without.
     """
-    out = execute_crm(task.obj, task.hand, state.config, task.actions[action], state.sensed)
+    crm = task.hand.check_crm(action) if isinstance(action, CRM) else task.actions[action]
+    out = execute_crm(task.obj, task.hand, state.config, crm, state.sensed)
     sensed = task.noise.sense(out.config, rng)
     obs = observe(sensed)
     mu = min_friction(out.config)
@@ -105,3 +148,61 @@ def episode_end(task: Task, mu: Any, steps: Any) -> tuple[Any, Any]:
     executed without one. Works on numbers or, elementwise, on arrays."""
     terminated = task.grasped(mu)
     return terminated, (steps >= task.max_steps) > terminated  # a > b on booleans: a and not b
+
+
+class Policy(Protocol):
+    """The one agent interface of :func:`run_episode`: learners (through
+    :class:`crmgrasp.agents.LearnerPolicy`), planners and controllers.
+
+    ``begin`` receives the first percept of an episode, ``act`` returns an action
+    index of the task or a :class:`~crmgrasp.hand.CRM`, and ``tell`` the percept
+    that action produced (a learner learns there).
+    """
+
+    def begin(self, first: Percept) -> None: ...
+
+    def act(self) -> int | CRM: ...
+
+    def tell(self, percept: Percept) -> None: ...
+
+
+class Transition(NamedTuple):
+    """One step of a traced episode: the state and observation before it, the action
+    taken, and its result."""
+
+    state: SimState
+    observation: Observation
+    action: int | CRM
+    result: StepResult
+
+
+class Episode(NamedTuple):
+    """CRMs executed, success, and (when asked for) every transition."""
+
+    steps: int
+    success: bool
+    trace: tuple[Transition, ...] = ()
+
+
+def run_episode(
+    task: Task, policy: Policy, rng: np.random.Generator, *, start: Config | None = None, trace: bool = False
+) -> Episode:
+    """Run ``policy`` for one episode of ``task``: from a start drawn from ``rng``
+    (:func:`reset`) or from ``start`` (:func:`begin`), :func:`step` until the episode
+    ends; starts and readings draw from ``rng``."""
+    state, obs, index = reset(task, rng) if start is None else begin(task, start, rng)
+    policy.begin(Percept(obs, Error.NONE, index, state.sensed))
+    steps: list[Transition] = []
+    while True:
+        action = policy.act()
+        res = step(task, state, action, rng)
+        if trace:
+            steps.append(Transition(state, obs, action, res))
+        policy.tell(
+            Percept(
+                res.observation, res.error, res.obs_index, res.state.sensed, res.reward, res.terminated, res.truncated
+            )
+        )
+        if res.terminated or res.truncated:
+            return Episode(res.state.steps, res.terminated, tuple(steps))
+        state, obs = res.state, res.observation

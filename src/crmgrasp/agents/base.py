@@ -1,4 +1,5 @@
-"""The agent interface shared by every learner and baseline.
+"""The learning interface shared by every learner and baseline, and its adapter to
+the episode loop's :class:`~crmgrasp.sim.Policy`.
 
 An agent maps integer states (k-order history codes) to action indices:
 
@@ -8,7 +9,10 @@ An agent maps integer states (k-order history codes) to action indices:
   the action already chosen in ``s2`` by ``act`` (``None`` when ``terminal``);
 * ``greedy(state, rng) -> action``: the learned policy, for evaluation.
 
-All randomness comes from the ``rng`` passed in.
+All randomness comes from the ``rng`` passed in. :class:`LearnerPolicy` makes an
+agent a :class:`~crmgrasp.sim.Policy` over k-order histories, so that learners act
+through the same episode loop (:func:`crmgrasp.sim.run_episode`) as planners and
+controllers.
 """
 
 from __future__ import annotations
@@ -17,7 +21,10 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-__all__ = ["Agent", "greedy_choice"]
+from ..history import KOrderEncoder
+from ..sim import Percept
+
+__all__ = ["Agent", "LearnerPolicy", "greedy_choice"]
 
 
 @runtime_checkable
@@ -45,3 +52,43 @@ def greedy_choice(row: list[float], rng: np.random.Generator) -> int:
     if len(ties) == 1:
         return ties[0]
     return ties[int(rng.integers(len(ties)))]
+
+
+class LearnerPolicy:
+    """An :class:`Agent` as a :class:`~crmgrasp.sim.Policy`: it keeps the k-order
+    history (SPEC section 6) of the discretized observations, acts on its code and,
+    when ``learn``, updates after every step.
+
+    The order of the agent's draws from ``rng`` is that of SARSA's loop: the first
+    action at ``begin``; after each non-terminal step the next action is chosen, then
+    the update ``(s, a, r, s', a')`` is made; a terminal step updates with
+    ``a' = None``. With ``learn=False`` the agent's greedy policy acts and nothing is
+    updated.
+    """
+
+    def __init__(self, agent: Agent, encoder: KOrderEncoder, rng: np.random.Generator, *, learn: bool = True) -> None:
+        self.agent, self.encoder, self.rng, self.learn = agent, encoder, rng, learn
+        self._pick = agent.act if learn else agent.greedy
+        self._hist: tuple[int, ...] = ()
+        self._s = self._a = 0
+
+    def begin(self, first: Percept) -> None:
+        self._hist = self.encoder.start(first.obs_index)
+        self._s = self.encoder.encode(self._hist)
+        self.agent.begin_episode()
+        self._a = self._pick(self._s, self.rng)
+
+    def act(self) -> int:
+        return self._a
+
+    def tell(self, percept: Percept) -> None:
+        self._hist = self.encoder.push(self._hist, self._a, percept.obs_index)
+        s2 = self.encoder.encode(self._hist)
+        if percept.terminated:
+            if self.learn:
+                self.agent.update(self._s, self._a, percept.reward, s2, None, True, self.rng)
+            return
+        a2 = self._pick(s2, self.rng)
+        if self.learn:
+            self.agent.update(self._s, self._a, percept.reward, s2, a2, False, self.rng)
+        self._s, self._a = s2, a2

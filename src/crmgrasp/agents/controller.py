@@ -20,7 +20,8 @@ exactly when ``i`` lies on contact ``j``'s normal line, so the rule is:
 
 It reads sensed contact frames (what a CRM's goal line is built from anyway) and
 the error flag; it may issue any ``(c, f, r)`` with ``|r| <= r_max``, not only the
-task's four CRMs.
+task's four CRMs. It is a :class:`~crmgrasp.sim.Policy`: episodes run through
+:func:`crmgrasp.sim.run_episode`.
 """
 
 from __future__ import annotations
@@ -28,8 +29,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..contacts import Config
-from ..hand import CRM, Error, execute_crm
-from ..quality import min_friction
+from ..hand import CRM, Error
+from ..sensing import observe
+from ..sim import Percept, run_episode
 from ..tasks import Task
 
 __all__ = ["GraspController", "run_controller"]
@@ -46,16 +48,27 @@ class GraspController:
         self.r_step = r_step if r_step is not None else (max(own) if own else 0.5 * task.hand.aperture)
         self._last: CRM | None = None
         self._last_error = Error.NONE
+        self._sensed: Config | None = None
+        self._pending = CRM("a", "b", 0.0)
 
-    def begin_episode(self) -> None:
-        """Forget the previous episode."""
-        self._last, self._last_error = None, Error.NONE
+    def begin(self, first: Percept) -> None:
+        """Forget the previous episode; read the first percept."""
+        self._last, self._last_error, self._sensed = None, Error.NONE, first.sensed
+
+    def act(self) -> CRM:
+        """The next CRM (:meth:`choose` on the last sensed configuration)."""
+        assert self._sensed is not None, "begin() first"
+        self._pending = self.choose(self._sensed)
+        return self._pending
+
+    def tell(self, percept: Percept) -> None:
+        """Record the outcome of the CRM just executed and the new reading."""
+        self.observe(self._pending, percept.error)
+        self._sensed = percept.sensed
 
     def choose(self, sensed: Config) -> CRM:
         """The next CRM, given the sensed configuration and the last CRM's outcome."""
-        a, b = sensed
-        m_a = (b.x - a.x) * b.ny - (b.y - a.y) * b.nx
-        m_b = -(b.x - a.x) * a.ny + (b.y - a.y) * a.nx
+        _, m_a, m_b = observe(sensed)
         last = self._last
         if last is None or self._last_error is Error.NONE:
             c = "a" if abs(m_a) >= abs(m_b) else "b"
@@ -80,16 +93,5 @@ def run_controller(task: Task, episodes: int, rng: np.random.Generator) -> tuple
     steps = np.empty(episodes, dtype=np.int64)
     success = np.empty(episodes, dtype=bool)
     for e in range(episodes):
-        config = task.sample_start(rng)
-        sensed = task.noise.sense(config, rng)
-        ctl.begin_episode()
-        n, ok = 0, False
-        while n < task.max_steps and not ok:
-            crm = task.hand.check_crm(ctl.choose(sensed))
-            out = execute_crm(task.obj, task.hand, config, crm, sensed)
-            config, n = out.config, n + 1
-            sensed = task.noise.sense(config, rng)
-            ctl.observe(crm, out.error)
-            ok = min_friction(config) <= task.mu_goal
-        steps[e], success[e] = n, ok
+        steps[e], success[e], _ = run_episode(task, ctl, rng)
     return steps, success

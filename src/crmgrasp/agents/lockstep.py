@@ -15,10 +15,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..contacts import Config, Contact
+from ..hand import Error
+from ..history import KOrderEncoder
 from ..kernels import kernel_for
-from ..sim import reset
+from ..sensing import Observation
+from ..sim import Percept, reset
 from ..tasks import Task
-from .base import Agent
+from .base import Agent, LearnerPolicy
 from .training import (
     TrialResult,
     build_agent,
@@ -32,20 +35,22 @@ from .training import (
 __all__ = ["train_trials_lockstep"]
 
 
+def _config(row: list[float]) -> Config:
+    return Config(Contact(*row[:4]), Contact(*row[4:]))
+
+
 class _Trial:
     """The mutable state of one trial between lockstep steps."""
 
-    __slots__ = ("a", "agent", "agent_rng", "env_rng", "episode", "eval_rng", "hist", "next_checkpoint", "s", "steps")
+    __slots__ = ("agent", "env_rng", "episode", "eval_rng", "next_checkpoint", "policy", "steps")
 
-    def __init__(self, agent: Agent, gens: tuple[np.random.Generator, ...]) -> None:
+    def __init__(self, agent: Agent, encoder: KOrderEncoder, gens: tuple[np.random.Generator, ...]) -> None:
         self.agent = agent
-        self.env_rng, self.agent_rng, self.eval_rng = gens
+        self.env_rng, agent_rng, self.eval_rng = gens
+        self.policy = LearnerPolicy(agent, encoder, agent_rng)
         self.episode = 0
         self.next_checkpoint = 0
         self.steps = 0
-        self.hist: tuple[int, ...] = ()
-        self.s = 0
-        self.a = 0
 
 
 def train_trials_lockstep(
@@ -72,20 +77,17 @@ def train_trials_lockstep(
     steps = np.empty((trials, episodes), dtype=np.int64)
     success = np.empty((trials, episodes), dtype=bool)
     csteps = np.empty((trials, len(ckpts)))
-    runs = [_Trial(build_agent(task, encoder, agent, params), g) for g in trial_generators(seed, trials)]
+    runs = [_Trial(build_agent(task, encoder, agent, params), encoder, g) for g in trial_generators(seed, trials)]
 
     cfg = np.zeros((trials, 8))  # true configurations, one row per trial
     sen = np.zeros((trials, 8))  # their sensed readings
 
     def begin(t: int, tr: _Trial) -> None:
-        state, _, index = reset(task, tr.env_rng)
+        state, obs, index = reset(task, tr.env_rng)
         cfg[t] = (*state.config.a, *state.config.b)
         sen[t] = (*state.sensed.a, *state.sensed.b)
         tr.steps = 0
-        tr.hist = encoder.start(index)
-        tr.s = encoder.encode(tr.hist)
-        tr.agent.begin_episode()
-        tr.a = tr.agent.act(tr.s, tr.agent_rng)
+        tr.policy.begin(Percept(obs, Error.NONE, index, state.sensed))
 
     def finish(t: int, tr: _Trial, ok: bool) -> bool:
         """Record the episode; start the next one. False when the trial is over."""
@@ -105,38 +107,30 @@ def train_trials_lockstep(
         begin(t, tr)
     active = np.arange(trials)
     while len(active):
-        acts = np.array([runs[t].a for t in active])
+        acts = np.array([runs[t].policy.act() for t in active])
         new, errors = kernel.execute(cfg[active], sen[active], acts)
         cfg[active] = new
         if noise.active:  # one reading per trial, from the trial's own generator, in trial order
             for i, t in enumerate(active.tolist()):
-                c = Config(Contact(*new[i, :4].tolist()), Contact(*new[i, 4:].tolist()))
-                sensed = noise.sense(c, runs[t].env_rng)
+                sensed = noise.sense(_config(new[i].tolist()), runs[t].env_rng)
                 sen[t] = (*sensed.a, *sensed.b)
         else:
             sen[active] = new
-        _, _, _, index_arr, mu = kernel.observe(new, sen[active], errors)
-        index = index_arr.tolist()
-        done = task.grasped(mu).tolist()
+        rho, m_a, m_b, index, mu = kernel.observe(new, sen[active], errors)
+        done = task.grasped(mu)
         still = []
-        for i, t in enumerate(active.tolist()):
+        rows = zip(active.tolist(), sen[active].tolist(), rho.tolist(), m_a.tolist(), m_b.tolist())
+        for i, (t, srow, *obs) in enumerate(rows):
             tr = runs[t]
             tr.steps += 1
-            tr.hist = encoder.push(tr.hist, tr.a, index[i])
-            s2 = encoder.encode(tr.hist)
-            if done[i]:
-                tr.agent.update(tr.s, tr.a, -1.0, s2, None, True, tr.agent_rng)
-                if finish(t, tr, True):
-                    still.append(t)
-                continue
-            a2 = tr.agent.act(s2, tr.agent_rng)
-            tr.agent.update(tr.s, tr.a, -1.0, s2, a2, False, tr.agent_rng)
-            if tr.steps >= task.max_steps:
-                if finish(t, tr, False):
-                    still.append(t)
-                continue
-            tr.s, tr.a = s2, a2
-            still.append(t)
+            terminated = bool(done[i])
+            truncated = tr.steps >= task.max_steps and not terminated
+            percept = Percept(
+                Observation(*obs), Error(errors[i]), int(index[i]), _config(srow), -1.0, terminated, truncated
+            )
+            tr.policy.tell(percept)
+            if (not (terminated or truncated)) or finish(t, tr, terminated):
+                still.append(t)
         active = np.array(still, dtype=np.int64)
     gsteps = np.empty((trials, eval_episodes), dtype=np.int64)
     gsucc = np.empty((trials, eval_episodes), dtype=bool)

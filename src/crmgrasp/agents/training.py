@@ -17,12 +17,12 @@ import numpy as np
 
 from .._validation import CrmgraspError
 from ..contacts import Config
-from ..hand import Error, Outcome
+from ..hand import Outcome
 from ..history import KOrderEncoder
-from ..sensing import Observation, observe
-from ..sim import SimState, reset, step
+from ..sensing import Observation
+from ..sim import run_episode as sim_run_episode
 from ..tasks import Task
-from .base import Agent
+from .base import Agent, LearnerPolicy
 from .baselines import FixedSequence, RandomAgent
 from .tabular import DynaQ, QLearning, Sarsa, SarsaLambda
 
@@ -96,28 +96,11 @@ def run_episode(
     *,
     learn: bool = True,
 ) -> tuple[int, bool]:
-    """One episode; returns (CRMs executed, success). ``learn=False`` acts greedily
-    and does not update."""
-    state, _, index = reset(task, env_rng)
-    hist = encoder.start(index)
-    s = encoder.encode(hist)
-    agent.begin_episode()
-    pick = agent.act if learn else agent.greedy
-    a = pick(s, agent_rng)
-    while True:
-        res = step(task, state, a, env_rng)
-        hist = encoder.push(hist, a, res.obs_index)
-        s2 = encoder.encode(hist)
-        if res.terminated:
-            if learn:
-                agent.update(s, a, res.reward, s2, None, True, agent_rng)
-            return res.state.steps, True
-        a2 = pick(s2, agent_rng)
-        if learn:
-            agent.update(s, a, res.reward, s2, a2, False, agent_rng)
-        if res.truncated:
-            return res.state.steps, False
-        s, a, state = s2, a2, res.state
+    """One episode of ``agent`` (:func:`crmgrasp.sim.run_episode` with a
+    :class:`~crmgrasp.agents.base.LearnerPolicy`); returns (CRMs executed, success).
+    ``learn=False`` acts greedily and does not update."""
+    ep = sim_run_episode(task, LearnerPolicy(agent, encoder, agent_rng, learn=learn), env_rng)
+    return ep.steps, ep.success
 
 
 def evaluate(
@@ -290,17 +273,12 @@ def rollout(
     task: Task, agent: Agent, encoder: KOrderEncoder, start: Config, rng: np.random.Generator
 ) -> tuple[list[RolloutStep], bool]:
     """Run the agent's greedy policy from ``start``; returns the steps and success."""
-    sensed = task.noise.sense(start, rng)
-    state = SimState(start, sensed, 0)
-    obs = observe(sensed)
-    hist = encoder.start(task.discretizer.index(obs, Error.NONE))
-    agent.begin_episode()
-    steps: list[RolloutStep] = []
-    while True:
-        a = agent.greedy(encoder.encode(hist), rng)
-        res = step(task, state, a, rng)
-        steps.append(RolloutStep(state.config, obs, a, res.outcome, res.observation, res.obs_index, res.min_friction))
-        hist = encoder.push(hist, a, res.obs_index)
-        state, obs = res.state, res.observation
-        if res.terminated or res.truncated:
-            return steps, res.terminated
+    ep = sim_run_episode(task, LearnerPolicy(agent, encoder, rng, learn=False), rng, start=start, trace=True)
+    steps = []
+    for tr in ep.trace:
+        r, a = tr.result, tr.action
+        assert isinstance(a, int)  # a learner acts by index
+        steps.append(
+            RolloutStep(tr.state.config, tr.observation, a, r.outcome, r.observation, r.obs_index, r.min_friction)
+        )
+    return steps, ep.success

@@ -120,7 +120,7 @@ def figure_9_robonaut_trials(out_dir: str | Path, config: Figure9Config = Figure
         start, fingers = thumb_far_start(base, rng, config.min_thumb_distance, config.max_thumb_distance)
         steps, ok = rollout(task, policy, policy.encoder, start, rng)
         successes += ok
-        tight += steps[-1].min_friction <= base.mu_goal
+        tight += base.grasped(steps[-1].min_friction)
         crms.append(len(steps))
         readings = [_point(st.observation, fingers) for st in steps] + [_point(steps[-1].next_observation, fingers)]
         clusters.add(readings)

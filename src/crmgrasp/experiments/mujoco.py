@@ -148,7 +148,7 @@ def figure_9_mujoco(out_dir: str | Path, config: MujocoFigure9Config = MujocoFig
         pts = (pts + pts[-1:])[:2] + pts[-1:]
         seconds += hand.crm_seconds
         actions = " ".join(names[r[14]] for r in run.rows if r[14] != "")
-        rows.append([trial, fingers, actions, run.crms, kin.crms, run.stopped, mu <= c.mu_goal, mu, *np.ravel(pts)])
+        rows.append([trial, fingers, actions, run.crms, kin.crms, run.stopped, task.grasped(mu), mu, *np.ravel(pts)])
     write_csv(
         out / "data.csv",
         [
