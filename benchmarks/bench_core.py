@@ -23,8 +23,8 @@ import time
 import gymnasium as gym
 import numpy as np
 
-from crmgrasp.contacts import configs_to_array
 from crmgrasp.kernels import execute_batch
+from crmgrasp.model.contacts import configs_to_array
 from crmgrasp.tasks import paper_box
 
 

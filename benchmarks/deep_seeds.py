@@ -16,7 +16,7 @@ import numpy as np
 from crmgrasp import paper_box
 from crmgrasp.agents.deep import evaluate_recurrent, train_recurrent_ppo
 from crmgrasp.experiments.compare import DEFAULT_DEEP
-from crmgrasp.references import sample_starts
+from crmgrasp.planners.references import sample_starts
 
 
 def main(seeds: int = 3) -> dict:

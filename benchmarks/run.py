@@ -1,9 +1,9 @@
-"""Speed benchmarks against Gymnasium (see :mod:`crmgrasp.bench`).
+"""Speed benchmarks against Gymnasium (see ``bench_env.py`` beside this file).
 
 Usage: ``python benchmarks/run.py [--smoke] [--rounds N]``; the same as ``crmgrasp bench``.
 """
 
-from crmgrasp.bench import main
+from bench_env import main
 
 if __name__ == "__main__":
     main()

@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from crmgrasp.cli import main
+from crmgrasp.cli.main import main
 
 NEAR = ["--a", "-0.15,-0.02", "--b", "-0.10,-0.05"]
 
@@ -77,7 +77,7 @@ def test_show_writes_image(tmp_path, capsys):
 
 
 def test_installed_entry_point_help():
-    res = subprocess.run([sys.executable, "-m", "crmgrasp.cli", "crm", "--help"], capture_output=True, text=True)
+    res = subprocess.run([sys.executable, "-m", "crmgrasp", "crm", "--help"], capture_output=True, text=True)
     assert res.returncode == 0 and "--crm" in res.stdout
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from crmgrasp import CrmgraspError
-from crmgrasp.contact_sensing import (
+from crmgrasp.hardware.contact_sensing import (
     Circle,
     ContactDetector,
     Flat,

@@ -7,10 +7,10 @@ import numpy as np
 
 from crmgrasp import Error, min_friction
 from crmgrasp.agents.controller import GraspController, run_controller
-from crmgrasp.cli import main
+from crmgrasp.cli.main import main
 from crmgrasp.experiments.compare import CompareConfig, compare
 from crmgrasp.experiments.learning import LearnerSpec
-from crmgrasp.hand import execute_crm
+from crmgrasp.model.hand import execute_crm
 from crmgrasp.sim import run_episode
 
 

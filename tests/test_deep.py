@@ -16,8 +16,8 @@ from crmgrasp.agents.deep import (
     features,
     train_recurrent_ppo,
 )
-from crmgrasp.cli import main
-from crmgrasp.env import CRMGraspEnv
+from crmgrasp.cli.main import main
+from crmgrasp.envs.single import CRMGraspEnv
 from crmgrasp.experiments.compare import CompareConfig, compare
 from crmgrasp.experiments.learning import LearnerSpec
 

@@ -7,7 +7,7 @@ from gymnasium.utils.env_checker import check_env
 
 import crmgrasp
 from crmgrasp import CRMGraspEnv, CrmgraspError, KOrderHistory
-from crmgrasp.env import ENV_ID
+from crmgrasp.envs.single import ENV_ID
 
 
 def test_check_env_passes_without_warnings():

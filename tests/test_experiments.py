@@ -5,7 +5,7 @@ import math
 import numpy as np
 
 from crmgrasp import Error, min_friction
-from crmgrasp.cli import main
+from crmgrasp.cli.main import main
 from crmgrasp.experiments import (
     Figure4Config,
     Figure7Config,

@@ -5,7 +5,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from crmgrasp import CrmgraspError, Disc, Polygon, Rectangle, regular_polygon
-from crmgrasp.geometry import EPS
+from crmgrasp.model.geometry import EPS
 
 from .strategies import objects
 

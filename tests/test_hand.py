@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from crmgrasp import CRM, Config, Contact, CrmgraspError, Disc, Error, Hand, Polygon, min_friction, observe
-from crmgrasp.geometry import regular_polygon
-from crmgrasp.hand import palm_point
+from crmgrasp.model.geometry import regular_polygon
+from crmgrasp.model.hand import palm_point
 
 from .test_geometry import U_SHAPE
 

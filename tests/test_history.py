@@ -3,7 +3,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from crmgrasp import CrmgraspError
-from crmgrasp.history import KOrderEncoder
+from crmgrasp.model.history import KOrderEncoder
 
 
 def test_paper_sizes():

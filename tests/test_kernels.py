@@ -28,15 +28,15 @@ from crmgrasp import (
     make_task,
     regular_polygon,
 )
-from crmgrasp.contacts import array_to_configs, configs_to_array
-from crmgrasp.hand import execute_crm
+from crmgrasp.envs.vector import CRMGraspVectorEnv
 from crmgrasp.kernels import execute_batch, kernel_for
-from crmgrasp.polygon import convex_entry, first_entry
-from crmgrasp.quality import min_friction
-from crmgrasp.sensing import Discretizer, observe
+from crmgrasp.model.contacts import array_to_configs, configs_to_array
+from crmgrasp.model.hand import execute_crm
+from crmgrasp.model.polygon import convex_entry, first_entry
+from crmgrasp.model.quality import min_friction
+from crmgrasp.model.sensing import Discretizer, observe
 from crmgrasp.sim import SimState, begin, step
 from crmgrasp.tasks import accept_corner_candidates, corner_boxes, corner_proposal
-from crmgrasp.vector import CRMGraspVectorEnv
 
 from .strategies import BACKENDS, on_boundary, scenes
 
@@ -108,9 +108,9 @@ def test_compiled_code_holds_no_constant_of_the_model():
 def test_a_changed_tolerance_reaches_the_compiled_kernel(monkeypatch):
     """A ray 1e-13 m below a box side enters at the corner with LINE_TOL = 1e-12 and
     misses with 0: a kernel built after the change follows it, as the reference does."""
-    import crmgrasp._geombase as base
     import crmgrasp.kernels._polygon_jit as jit
-    import crmgrasp.polygon as poly
+    import crmgrasp.model.polygon as poly
+    import crmgrasp.model.shape as base
 
     task = make_task("paper-box")
     ray = (-0.3, -0.05 - 1e-13, 1.0, 0.0, 1.0)

@@ -8,10 +8,10 @@ import pytest
 
 from crmgrasp import make_task
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.disc import Disc
-from crmgrasp.geometry import Polygon
-from crmgrasp.physics import hardware_task, mujoco_available, require_mujoco
-from crmgrasp.physics.model import PhysicsParams, mjcf
+from crmgrasp.hardware.mujoco import hardware_task, mujoco_available, require_mujoco
+from crmgrasp.hardware.mujoco.model import PhysicsParams, mjcf
+from crmgrasp.model.disc import Disc
+from crmgrasp.model.geometry import Polygon
 
 
 def test_require_mujoco_names_the_extra(monkeypatch):

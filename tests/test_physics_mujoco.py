@@ -12,22 +12,22 @@ pytest.importorskip("mujoco", reason="MuJoCo stand-in tests need the extra: pip 
 from crmgrasp import make_task
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents import GreedyPolicy, train_trials
-from crmgrasp.cli import main
-from crmgrasp.contact_sensing import NoContact
-from crmgrasp.contacts import Config, Contact
+from crmgrasp.cli.main import main
 from crmgrasp.experiments.mujoco import (
     MujocoFigure4Config,
     MujocoFigure9Config,
     figure_4_mujoco,
     figure_9_mujoco,
 )
-from crmgrasp.hand import CRM
-from crmgrasp.physics import hardware_task
-from crmgrasp.physics.hand import MujocoHand
-from crmgrasp.physics.model import PhysicsParams
-from crmgrasp.quality import min_friction
-from crmgrasp.runner import HandInterface, PolicyRunner
-from crmgrasp.sensing import Error
+from crmgrasp.hardware.contact_sensing import NoContact
+from crmgrasp.hardware.mujoco import hardware_task
+from crmgrasp.hardware.mujoco.hand import MujocoHand
+from crmgrasp.hardware.mujoco.model import PhysicsParams
+from crmgrasp.hardware.runner import HandInterface, PolicyRunner
+from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.hand import CRM
+from crmgrasp.model.quality import min_friction
+from crmgrasp.model.sensing import Error
 
 NEAR = Config(Contact(-0.15, -0.02, 1.0, 0.0), Contact(-0.10, -0.05, 0.0, 1.0))  # SPEC section 7 worked cases
 FAR = Config(Contact(-0.15, -0.02, 1.0, 0.0), Contact(0.0, -0.05, 0.0, 1.0))
@@ -158,7 +158,7 @@ def _render_or_skip(fn):
 
 
 def test_headless_render(task, tmp_path):
-    from crmgrasp.physics.render import render, show
+    from crmgrasp.hardware.mujoco.render import render, show
 
     hand = MujocoHand(task, NEAR, np.random.default_rng(0))
     frame = _render_or_skip(lambda: render(hand, 160, 120))
@@ -170,7 +170,7 @@ def test_headless_render(task, tmp_path):
 def test_show_retries_with_osmesa_when_egl_fails(monkeypatch, tmp_path):
     import subprocess
 
-    from crmgrasp.physics import render
+    from crmgrasp.hardware.mujoco import render
 
     def broken(*args, **kwargs):
         raise CrmgraspError("headless MuJoCo rendering failed with MUJOCO_GL=egl: no EGL")
@@ -200,9 +200,9 @@ def test_figure_experiments_smoke(policy_file, tmp_path):
 def test_other_convex_objects(kind):
     import dataclasses
 
-    from crmgrasp.disc import Disc
-    from crmgrasp.geometry import regular_polygon
-    from crmgrasp.hand import execute_crm
+    from crmgrasp.model.disc import Disc
+    from crmgrasp.model.geometry import regular_polygon
+    from crmgrasp.model.hand import execute_crm
     from crmgrasp.tasks import UniformStarts
 
     obj = regular_polygon(6, 0.06) if kind == "hexagon" else Disc(0.05)

@@ -5,9 +5,9 @@ import pytest
 from scipy import sparse
 
 from crmgrasp import CrmgraspError
-from crmgrasp.pomdp import POMDP, belief_update, collect_beliefs, read_cassandra, solve_pbvi, write_cassandra
-from crmgrasp.pomdp_task import POMDPAgent, build_task_pomdp
-from crmgrasp.references import sample_starts
+from crmgrasp.planners.pomdp import POMDP, belief_update, collect_beliefs, read_cassandra, solve_pbvi, write_cassandra
+from crmgrasp.planners.pomdp_task import POMDPAgent, build_task_pomdp
+from crmgrasp.planners.references import sample_starts
 
 
 def aliased():

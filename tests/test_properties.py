@@ -8,7 +8,7 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 
 from crmgrasp import CRM, Config, Contact, Disc, Error, force_closure, min_friction, observe
-from crmgrasp.hand import feasible
+from crmgrasp.model.hand import feasible
 
 from .strategies import assert_close_config, mirror_swap, mirror_x, scenes
 

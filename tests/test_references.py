@@ -6,7 +6,7 @@ import pytest
 from crmgrasp import CRM, Config, Contact, CrmgraspError, Disc, Hand, Task, make_task
 from crmgrasp.agents import make_agent
 from crmgrasp.agents.training import encoder_for, rollout
-from crmgrasp.references import belief_optimum, clairvoyant_bound, clairvoyant_steps, sample_starts
+from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, clairvoyant_steps, sample_starts
 from crmgrasp.tasks import UniformStarts
 
 
@@ -62,7 +62,7 @@ def test_bad_reference_input(task):
 
 
 def test_belief_policy_executes_its_own_value(task):
-    from crmgrasp.references import BeliefPolicy
+    from crmgrasp.planners.references import BeliefPolicy
 
     starts = sample_starts(task, 300, seed=4)
     policy = BeliefPolicy(task, starts)

@@ -9,8 +9,8 @@ import pytest
 
 from crmgrasp import SensorNoise, make_task
 from crmgrasp.agents import GreedyPolicy, train_trials
-from crmgrasp.contact_sensing import NoContact
-from crmgrasp.runner import HandInterface, KinematicHand, PolicyRunner
+from crmgrasp.hardware.contact_sensing import NoContact
+from crmgrasp.hardware.runner import HandInterface, KinematicHand, PolicyRunner
 
 
 @pytest.fixture(scope="module")

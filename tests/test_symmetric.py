@@ -12,10 +12,10 @@ from crmgrasp.agents import GreedyPolicy
 from crmgrasp.agents.symmetric import SymmetricAgent, mirror_observation_map
 from crmgrasp.agents.tabular import DynaQ
 from crmgrasp.agents.training import build_agent, encoder_for
-from crmgrasp.cli import main
+from crmgrasp.cli.main import main
 from crmgrasp.experiments.learning import SYMMETRIC_DYNA_Q, learn
-from crmgrasp.hand import CRM
-from crmgrasp.sensing import Discretizer, Error, observe
+from crmgrasp.model.hand import CRM
+from crmgrasp.model.sensing import Discretizer, Error, observe
 from crmgrasp.tasks import Symmetry
 
 from .strategies import mirror_swap, mirror_x

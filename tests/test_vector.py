@@ -6,10 +6,10 @@ import pytest
 
 import crmgrasp  # noqa: F401
 from crmgrasp import Config, Contact, CrmgraspError, min_friction
-from crmgrasp.env import ENV_ID
-from crmgrasp.hand import execute_crm, feasible
-from crmgrasp.sensing import Error
-from crmgrasp.vector import CRMGraspVectorEnv
+from crmgrasp.envs.single import ENV_ID
+from crmgrasp.envs.vector import CRMGraspVectorEnv
+from crmgrasp.model.hand import execute_crm, feasible
+from crmgrasp.model.sensing import Error
 
 from .strategies import BACKENDS
 

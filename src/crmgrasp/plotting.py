@@ -16,9 +16,9 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Circle
 from matplotlib.patches import Polygon as PolygonPatch
 
-from .contacts import LABELS, Config
-from .geometry import Disc, Polygon, Shape
-from .hand import Hand, Outcome
+from crmgrasp.model.contacts import LABELS, Config
+from crmgrasp.model.geometry import Disc, Polygon, Shape
+from crmgrasp.model.hand import Hand, Outcome
 
 __all__ = ["draw_object", "draw_scene", "scene_figure", "friction_histogram"]
 

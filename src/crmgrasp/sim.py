@@ -22,11 +22,11 @@ from typing import Any, NamedTuple, Protocol, overload
 import numpy as np
 from numpy.typing import NDArray
 
-from .contacts import Config
-from .hand import CRM, Error, Outcome, execute_crm
-from .quality import min_friction
-from .sensing import Observation, observe
-from .tasks import Task
+from crmgrasp.model.contacts import Config
+from crmgrasp.model.hand import CRM, Error, Outcome, execute_crm
+from crmgrasp.model.quality import min_friction
+from crmgrasp.model.sensing import Observation, observe
+from crmgrasp.tasks import Task
 
 __all__ = [
     "Episode",
@@ -155,7 +155,7 @@ class Policy(Protocol):
     :class:`crmgrasp.agents.LearnerPolicy`), planners and controllers.
 
     ``begin`` receives the first percept of an episode, ``act`` returns an action
-    index of the task or a :class:`~crmgrasp.hand.CRM`, and ``tell`` the percept
+    index of the task or a :class:`~crmgrasp.model.hand.CRM`, and ``tell`` the percept
     that action produced (a learner learns there).
     """
 

@@ -16,12 +16,12 @@ from typing import Protocol, overload, runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import CrmgraspError, non_negative
-from .contacts import Config, Contact
-from .geometry import Polygon, Rectangle, Shape
-from .hand import CRM, Error, Hand, feasible
-from .quality import min_friction
-from .sensing import Discretizer, SensorNoise
+from crmgrasp._validation import CrmgraspError, non_negative
+from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.geometry import Polygon, Rectangle, Shape
+from crmgrasp.model.hand import CRM, Error, Hand, feasible
+from crmgrasp.model.quality import min_friction
+from crmgrasp.model.sensing import Discretizer, SensorNoise
 
 __all__ = [
     "StartSampler",
@@ -255,7 +255,7 @@ class Task:
     name
         Registry name, e.g. ``"paper-box"``.
     obj
-        The object (:class:`~crmgrasp.geometry.Polygon`, :class:`~crmgrasp.geometry.Disc`, ...).
+        The object (:class:`~crmgrasp.model.geometry.Polygon`, :class:`~crmgrasp.model.geometry.Disc`, ...).
     hand
         The two-contact hand.
     actions

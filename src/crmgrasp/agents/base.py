@@ -21,8 +21,8 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from ..history import KOrderEncoder
-from ..sim import Percept
+from crmgrasp.model.history import KOrderEncoder
+from crmgrasp.sim import Percept
 
 __all__ = ["Agent", "LearnerPolicy", "greedy_choice"]
 

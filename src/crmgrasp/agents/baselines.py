@@ -6,7 +6,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError
 
 __all__ = ["RandomAgent", "FixedSequence"]
 

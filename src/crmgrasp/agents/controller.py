@@ -28,11 +28,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contacts import Config
-from ..hand import CRM, Error
-from ..sensing import observe
-from ..sim import Percept, run_episode
-from ..tasks import Task
+from crmgrasp.model.contacts import Config
+from crmgrasp.model.hand import CRM, Error
+from crmgrasp.model.sensing import observe
+from crmgrasp.sim import Percept, run_episode
+from crmgrasp.tasks import Task
 
 __all__ = ["GraspController", "run_controller"]
 

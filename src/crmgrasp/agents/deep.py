@@ -6,7 +6,7 @@ this module imports them only when training or evaluating, and raises a one-line
 
 The policy sees what the tabular learners see before discretisation, as a float
 vector ``[rho / 4, m_a / (2A), m_b / (2A), one-hot(error)]`` (``A`` the hand
-aperture, values clipped as in :class:`~crmgrasp.env.CRMGraspEnv`); the LSTM
+aperture, values clipped as in :class:`~crmgrasp.envs.single.CRMGraspEnv`); the LSTM
 carries the history that the k-order state spells out for the tabular learners.
 Training runs ``n_envs`` environments in a ``DummyVecEnv`` with one torch thread
 (deterministic for a seed on a given machine). The learning curve is the CRMs
@@ -26,13 +26,13 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from .._validation import CrmgraspError
-from ..contacts import Config
-from ..hand import Error
-from ..sensing import observe
-from ..sim import SimState, step
-from ..tasks import Task
-from .training import checkpoint_generators, checkpoints_to_within
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.agents.training import checkpoint_generators, checkpoints_to_within
+from crmgrasp.model.contacts import Config
+from crmgrasp.model.hand import Error
+from crmgrasp.model.sensing import observe
+from crmgrasp.sim import SimState, step
+from crmgrasp.tasks import Task
 
 __all__ = [
     "ContinuousObservation",
@@ -58,7 +58,7 @@ def features(rho: float, m_a: float, m_b: float, error: int, aperture: float) ->
 
 
 class ContinuousObservation(gym.ObservationWrapper):
-    """Flattens :class:`~crmgrasp.env.CRMGraspEnv`'s ``Dict`` observation into :func:`features`."""
+    """Flattens :class:`~crmgrasp.envs.single.CRMGraspEnv`'s ``Dict`` observation into :func:`features`."""
 
     def __init__(self, env: gym.Env) -> None:
         super().__init__(env)
@@ -168,7 +168,7 @@ def evaluate_recurrent(
 def train_recurrent_ppo(task: Task, seed: int, config: RecurrentPPOConfig = RecurrentPPOConfig()) -> DeepRun:
     """Train RecurrentPPO on ``task`` from ``seed``; return the model, curve and checkpoints."""
     torch, contrib, vec, callbacks = _modules()
-    from ..env import CRMGraspEnv
+    from crmgrasp.envs.single import CRMGraspEnv
 
     c = config
     starts_rng, _ = checkpoint_generators(seed)

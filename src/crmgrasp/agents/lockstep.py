@@ -14,15 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contacts import Config, Contact
-from ..hand import Error
-from ..history import KOrderEncoder
-from ..kernels import kernel_for
-from ..sensing import Observation
-from ..sim import Percept, reset
-from ..tasks import Task
-from .base import Agent, LearnerPolicy
-from .training import (
+from crmgrasp.agents.base import Agent, LearnerPolicy
+from crmgrasp.agents.training import (
     TrialResult,
     build_agent,
     check_budget,
@@ -31,6 +24,13 @@ from .training import (
     evaluate,
     trial_generators,
 )
+from crmgrasp.kernels import kernel_for
+from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.hand import Error
+from crmgrasp.model.history import KOrderEncoder
+from crmgrasp.model.sensing import Observation
+from crmgrasp.sim import Percept, reset
+from crmgrasp.tasks import Task
 
 __all__ = ["train_trials_lockstep"]
 

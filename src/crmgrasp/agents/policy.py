@@ -11,7 +11,7 @@ File layout (``format`` ``"crmgrasp-policy"``, ``version`` 1)::
       "greedy": {"<state code>": [best actions], ...}   # visited states only
     }
 
-A state code is the k-order history code of :mod:`crmgrasp.history`; its
+A state code is the k-order history code of :mod:`crmgrasp.model.history`; its
 ``"greedy"`` entry lists the actions tied for the best value (usually one). In a
 state the file does not list, the policy picks uniformly among all actions.
 Loading checks every field and refuses a policy made for another task, history
@@ -27,14 +27,14 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._io import write_json
-from .._validation import CrmgraspError
-from ..history import KOrderEncoder
-from ..tasks import Task
-from .tabular import TabularAgent
+from crmgrasp._io import write_json
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.agents.tabular import TabularAgent
+from crmgrasp.model.history import KOrderEncoder
+from crmgrasp.tasks import Task
 
 if TYPE_CHECKING:
-    from .symmetric import SymmetricAgent
+    from crmgrasp.agents.symmetric import SymmetricAgent
 
 __all__ = ["GreedyPolicy", "FORMAT", "VERSION"]
 

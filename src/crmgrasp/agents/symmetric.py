@@ -20,10 +20,10 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import CrmgraspError
-from ..history import KOrderEncoder
-from ..tasks import Task
-from .tabular import TabularAgent
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.agents.tabular import TabularAgent
+from crmgrasp.model.history import KOrderEncoder
+from crmgrasp.tasks import Task
 
 __all__ = ["SymmetricAgent", "mirror_observation_map"]
 

@@ -23,8 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validation import CrmgraspError, finite
-from .base import greedy_choice
+from crmgrasp._validation import CrmgraspError, finite
+from crmgrasp.agents.base import greedy_choice
 
 __all__ = ["TabularAgent", "Sarsa", "QLearning", "SarsaLambda", "DynaQ"]
 

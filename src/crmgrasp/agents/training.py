@@ -15,16 +15,16 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._validation import CrmgraspError
-from ..contacts import Config
-from ..hand import Outcome
-from ..history import KOrderEncoder
-from ..sensing import Observation
-from ..sim import run_episode as sim_run_episode
-from ..tasks import Task
-from .base import Agent, LearnerPolicy
-from .baselines import FixedSequence, RandomAgent
-from .tabular import DynaQ, QLearning, Sarsa, SarsaLambda
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.agents.base import Agent, LearnerPolicy
+from crmgrasp.agents.baselines import FixedSequence, RandomAgent
+from crmgrasp.agents.tabular import DynaQ, QLearning, Sarsa, SarsaLambda
+from crmgrasp.model.contacts import Config
+from crmgrasp.model.hand import Outcome
+from crmgrasp.model.history import KOrderEncoder
+from crmgrasp.model.sensing import Observation
+from crmgrasp.sim import run_episode as sim_run_episode
+from crmgrasp.tasks import Task
 
 __all__ = [
     "AGENTS",
@@ -77,7 +77,7 @@ def build_agent(task: Task, encoder: KOrderEncoder, name: str, params: dict[str,
     agent = make_agent(name, len(task.actions), **p)
     if not symmetric:
         return agent
-    from .symmetric import SymmetricAgent
+    from crmgrasp.agents.symmetric import SymmetricAgent
 
     return SymmetricAgent(agent, task, encoder)  # type: ignore[arg-type]
 

@@ -14,13 +14,13 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from .._io import atomic_write_text
-from .._validation import CrmgraspError
-from .compare import CompareConfig, compare
-from .figure4 import Figure4Config, figure_4_opposition_quality
-from .figure7 import Figure7Config, figure_7_learning_curve
-from .figure8 import Figure8Config, figure_8_strategies
-from .figure9 import Figure9Config, figure_9_robonaut_trials
+from crmgrasp._io import atomic_write_text
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.experiments.compare import CompareConfig, compare
+from crmgrasp.experiments.figure4 import Figure4Config, figure_4_opposition_quality
+from crmgrasp.experiments.figure7 import Figure7Config, figure_7_learning_curve
+from crmgrasp.experiments.figure8 import Figure8Config, figure_8_strategies
+from crmgrasp.experiments.figure9 import Figure9Config, figure_9_robonaut_trials
 
 __all__ = [
     "EXPERIMENTS",
@@ -126,7 +126,7 @@ def _sensing_row(s: dict[str, Any]) -> Row:
 
 
 def _figure4_mujoco(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
-    from .mujoco import MujocoFigure4Config, figure_4_mujoco
+    from crmgrasp.experiments.mujoco import MujocoFigure4Config, figure_4_mujoco
 
     s = figure_4_mujoco(out, MujocoFigure4Config(seed=seed, extra_starts=40 if quick else 100))
     return s, [
@@ -138,7 +138,7 @@ def _figure4_mujoco(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> t
 
 
 def _figure9_mujoco(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
-    from .mujoco import MujocoFigure9Config, figure_9_mujoco
+    from crmgrasp.experiments.mujoco import MujocoFigure9Config, figure_9_mujoco
 
     s = figure_9_mujoco(out, MujocoFigure9Config(seed=seed, policy=ctx.get("policy")))
     return s, [
@@ -190,7 +190,7 @@ def reproduce(
 ) -> dict[str, dict[str, Any]]:
     """Run the named experiments (all by default) into ``out_dir/<name>/`` and write
     ``out_dir/README.md`` with every figure and our numbers beside the paper's."""
-    from ..physics import mujoco_available, require_mujoco
+    from crmgrasp.hardware.mujoco import mujoco_available, require_mujoco
 
     skipped: list[str] = []
     if not names:

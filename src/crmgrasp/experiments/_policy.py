@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..agents import GreedyPolicy
-from ..tasks import Task
-from .learning import LearnerSpec, best_policy, learn
+from crmgrasp.agents import GreedyPolicy
+from crmgrasp.experiments.learning import LearnerSpec, best_policy, learn
+from crmgrasp.tasks import Task
 
 
 def learned_policy(task: Task, policy_path: str | Path | None, seed: int, trials: int, episodes: int) -> GreedyPolicy:

@@ -19,15 +19,15 @@ from typing import Any
 
 import numpy as np
 
-from .._io import atomic_write_text, save_figure, write_csv, write_json
-from ..agents.controller import run_controller
-from ..agents.deep import RecurrentPPOConfig, deep_available, evaluate_recurrent, train_recurrent_ppo
-from ..agents.training import episodes_to_within
-from ..plotting import learning_curve_figure
-from ..pomdp_task import POMDPAgent, build_task_pomdp
-from ..references import BeliefPolicy, belief_optimum, clairvoyant_bound, sample_starts
-from ..tasks import Task, make_task
-from .learning import SYMMETRIC_DYNA_Q, LearnerSpec, learn, usable
+from crmgrasp._io import atomic_write_text, save_figure, write_csv, write_json
+from crmgrasp.agents.controller import run_controller
+from crmgrasp.agents.deep import RecurrentPPOConfig, deep_available, evaluate_recurrent, train_recurrent_ppo
+from crmgrasp.agents.training import episodes_to_within
+from crmgrasp.experiments.learning import SYMMETRIC_DYNA_Q, LearnerSpec, learn, usable
+from crmgrasp.planners.pomdp_task import POMDPAgent, build_task_pomdp
+from crmgrasp.planners.references import BeliefPolicy, belief_optimum, clairvoyant_bound, sample_starts
+from crmgrasp.plotting import learning_curve_figure
+from crmgrasp.tasks import Task, make_task
 
 __all__ = ["CompareConfig", "compare", "COMPARE_LEARNERS"]
 

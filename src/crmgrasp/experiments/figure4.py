@@ -19,15 +19,15 @@ from typing import Any
 
 import numpy as np
 
-from .._io import save_figure, write_csv, write_json
-from .._validation import CrmgraspError
-from ..contacts import Config
-from ..geometry import Polygon
-from ..hand import CRM, Error
-from ..plotting import friction_histogram
-from ..quality import min_friction
-from ..sensing import SensorNoise
-from ..tasks import Task, make_task
+from crmgrasp._io import save_figure, write_csv, write_json
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.model.contacts import Config
+from crmgrasp.model.geometry import Polygon
+from crmgrasp.model.hand import CRM, Error
+from crmgrasp.model.quality import min_friction
+from crmgrasp.model.sensing import SensorNoise
+from crmgrasp.plotting import friction_histogram
+from crmgrasp.tasks import Task, make_task
 
 __all__ = ["Figure4Config", "figure_4_opposition_quality", "long_side_start"]
 

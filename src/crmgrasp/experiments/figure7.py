@@ -14,10 +14,10 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from .._io import save_figure, write_csv, write_json
-from ..plotting import checkpoint_figure, learning_curve_figure
-from ..tasks import make_task
-from .learning import SYMMETRIC_DYNA_Q, LearnerSpec, LearnRun, _mean_sem, best_policy, learn, usable
+from crmgrasp._io import save_figure, write_csv, write_json
+from crmgrasp.experiments.learning import SYMMETRIC_DYNA_Q, LearnerSpec, LearnRun, _mean_sem, best_policy, learn, usable
+from crmgrasp.plotting import checkpoint_figure, learning_curve_figure
+from crmgrasp.tasks import make_task
 
 __all__ = ["Figure7Config", "figure_7_learning_curve", "DEFAULT_LEARNERS", "PAPER_LEARNER"]
 
@@ -129,7 +129,7 @@ def figure_7_learning_curve(out_dir: str | Path, config: Figure7Config = Figure7
     if policy is not None:
         policy.save(out / "policy.json")
 
-    from ..references import belief_optimum, clairvoyant_bound, sample_starts
+    from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts
 
     starts = sample_starts(task, 4000, config.seed)
     summary: dict[str, Any] = {

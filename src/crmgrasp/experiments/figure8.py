@@ -22,11 +22,11 @@ from typing import Any
 
 import numpy as np
 
-from .._io import atomic_path, save_figure, write_csv, write_json
-from ..agents.training import rollout
-from ..plotting import rollout_animation, rollout_panels
-from ..tasks import make_task
-from ._policy import learned_policy
+from crmgrasp._io import atomic_path, save_figure, write_csv, write_json
+from crmgrasp.agents.training import rollout
+from crmgrasp.experiments._policy import learned_policy
+from crmgrasp.plotting import rollout_animation, rollout_panels
+from crmgrasp.tasks import make_task
 
 __all__ = ["Figure8Config", "figure_8_strategies", "FIGURE8_STARTS"]
 

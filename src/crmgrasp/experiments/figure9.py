@@ -22,15 +22,15 @@ from typing import Any
 
 import numpy as np
 
-from .._io import save_figure, write_csv, write_json
-from ..agents.training import rollout
-from ..contacts import Config
-from ..geometry import Polygon
-from ..plotting import cluster_figure
-from ..sensing import Observation
-from ..tasks import Task, make_task
-from ._policy import learned_policy
-from .figure4 import noisy_execution
+from crmgrasp._io import save_figure, write_csv, write_json
+from crmgrasp.agents.training import rollout
+from crmgrasp.experiments._policy import learned_policy
+from crmgrasp.experiments.figure4 import noisy_execution
+from crmgrasp.model.contacts import Config
+from crmgrasp.model.geometry import Polygon
+from crmgrasp.model.sensing import Observation
+from crmgrasp.plotting import cluster_figure
+from crmgrasp.tasks import Task, make_task
 
 __all__ = ["Figure9Config", "figure_9_robonaut_trials", "thumb_far_start", "Clusters"]
 

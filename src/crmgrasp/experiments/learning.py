@@ -27,11 +27,11 @@ from typing import Any
 
 import numpy as np
 
-from .._io import save_figure, write_csv, write_json
-from ..agents import GreedyPolicy, TabularAgent, episodes_to_within, train_trials, train_trials_lockstep
-from ..agents.symmetric import SymmetricAgent
-from ..agents.training import DEFAULT_CHECKPOINTS, TrialResult, checkpoints_to_within
-from ..tasks import Task
+from crmgrasp._io import save_figure, write_csv, write_json
+from crmgrasp.agents import GreedyPolicy, TabularAgent, episodes_to_within, train_trials, train_trials_lockstep
+from crmgrasp.agents.symmetric import SymmetricAgent
+from crmgrasp.agents.training import DEFAULT_CHECKPOINTS, TrialResult, checkpoints_to_within
+from crmgrasp.tasks import Task
 
 __all__ = ["LearnerSpec", "LearnRun", "learn", "write_learn_outputs", "SYMMETRIC_DYNA_Q", "usable"]
 
@@ -138,7 +138,7 @@ def best_policy(task: Task, run: LearnRun) -> GreedyPolicy | None:
 def write_learn_outputs(task: Task, run: LearnRun, out_dir: str | Path) -> list[Path]:
     """Write ``curve.csv``, ``summary.json``, ``policy.json`` (tabular learners) and
     ``learning_curve.png``; return the paths."""
-    from ..plotting import learning_curve_figure
+    from crmgrasp.plotting import learning_curve_figure
 
     out = Path(out_dir)
     res = run.result

@@ -3,7 +3,7 @@
 * :func:`figure_9_mujoco`: the policy learned in the kinematic simulator runs
   11 times on the MuJoCo hand from starts like the paper's Robonaut trials; the
   same starts also run on the kinematic hand (sensing noise of Figure 9) through
-  the same :class:`~crmgrasp.runner.PolicyRunner`, so the CRM counts compare
+  the same :class:`~crmgrasp.hardware.runner.PolicyRunner`, so the CRM counts compare
   one to one. Points are plotted from the *sensed* readings, as in Figure 9;
   success and the final ``min_friction`` come from MuJoCo's true contacts.
 * :func:`figure_4_mujoco`: 30 opposition CRMs on the MuJoCo hand, histogram of
@@ -25,21 +25,21 @@ from typing import Any
 
 import numpy as np
 
-from .._io import save_figure, write_csv, write_json
-from .._validation import CrmgraspError
-from ..contact_sensing import NoContact
-from ..contacts import Config
-from ..hand import CRM, Error, execute_crm
-from ..physics import hardware_task
-from ..physics.hand import MujocoHand
-from ..physics.model import PhysicsParams
-from ..plotting import friction_histogram
-from ..quality import min_friction
-from ..runner import KinematicHand, PolicyRunner
-from ..tasks import Task, make_task
-from ._policy import learned_policy
-from .figure4 import long_side_start, noisy_execution
-from .figure9 import Clusters, Figure9Config, thumb_far_start
+from crmgrasp._io import save_figure, write_csv, write_json
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.experiments._policy import learned_policy
+from crmgrasp.experiments.figure4 import long_side_start, noisy_execution
+from crmgrasp.experiments.figure9 import Clusters, Figure9Config, thumb_far_start
+from crmgrasp.hardware.contact_sensing import NoContact
+from crmgrasp.hardware.mujoco import hardware_task
+from crmgrasp.hardware.mujoco.hand import MujocoHand
+from crmgrasp.hardware.mujoco.model import PhysicsParams
+from crmgrasp.hardware.runner import KinematicHand, PolicyRunner
+from crmgrasp.model.contacts import Config
+from crmgrasp.model.hand import CRM, Error, execute_crm
+from crmgrasp.model.quality import min_friction
+from crmgrasp.plotting import friction_histogram
+from crmgrasp.tasks import Task, make_task
 
 __all__ = ["MujocoFigure9Config", "MujocoFigure4Config", "figure_9_mujoco", "figure_4_mujoco", "SensingErrors"]
 
@@ -48,7 +48,7 @@ __all__ = ["MujocoFigure9Config", "MujocoFigure4Config", "figure_9_mujoco", "fig
 class MujocoFigure9Config(Figure9Config):
     """Figure 9 on the MuJoCo stand-in; the fields of :class:`~crmgrasp.experiments.Figure9Config`
     keep their meaning, ``sigma_n_deg`` and ``sigma_p`` being the sensing noise of the kinematic
-    comparison runs (the MuJoCo hand has its own sensors, :class:`~crmgrasp.physics.model.PhysicsParams`)."""
+    comparison runs (the MuJoCo hand has its own sensors, :class:`~crmgrasp.hardware.mujoco.model.PhysicsParams`)."""
 
     animate: bool = True
     """Also render trial 0 to ``figure9_mujoco.gif`` (needs headless OpenGL)."""
@@ -106,7 +106,7 @@ def _points(rows: list[list[Any]], fingers: str) -> list[tuple[float, float]]:
 
 def _animate(task: Task, start: Config, policy: Any, rng: np.random.Generator, path: Path) -> str:
     """Render one MuJoCo episode to a GIF; returns a note of what happened."""
-    from ..physics.render import Recorder, save_gif
+    from crmgrasp.hardware.mujoco.render import Recorder, save_gif
 
     hand = MujocoHand(task, start, rng)
     try:

@@ -24,13 +24,13 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import CrmgraspError
-from ..contacts import configs_to_array
-from ..geometry import Polygon, Shape
-from ..hand import CRM, Hand
-from ..tasks import Task
-from .base import BatchStep, Kernel, OneStep
-from .reference import ReferenceKernel
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.kernels.base import BatchStep, Kernel, OneStep
+from crmgrasp.kernels.reference import ReferenceKernel
+from crmgrasp.model.contacts import configs_to_array
+from crmgrasp.model.geometry import Polygon, Shape
+from crmgrasp.model.hand import CRM, Hand
+from crmgrasp.tasks import Task
 
 __all__ = ["BACKENDS", "Backend", "kernel_for", "execute_batch", "Kernel", "OneStep", "BatchStep", "ReferenceKernel"]
 
@@ -50,7 +50,7 @@ def kernel_for(task: Task, backend: str = "auto") -> Kernel:
         return ReferenceKernel(task)
     if not compiled:
         raise CrmgraspError(f"no compiled kernel for a {type(task.obj).__name__}; use backend 'auto' or 'reference'")
-    from .polygon import FusedPolygonKernel, PolygonKernel
+    from crmgrasp.kernels.polygon import FusedPolygonKernel, PolygonKernel
 
     return PolygonKernel(task) if task.noise.active else FusedPolygonKernel(task)
 
@@ -83,7 +83,7 @@ def execute_batch(
     ``c`` and ``f`` are contact indices (0 = a, 1 = b) and ``r`` offsets in metres,
     per row or broadcast; ``sensed`` (same layout as ``configs``) supplies the goal
     lines' frames and defaults to ``configs``. Rows whose CRM fails keep their
-    configuration (:func:`crmgrasp.hand.execute_crm`).
+    configuration (:func:`crmgrasp.model.hand.execute_crm`).
     """
     cfg = _rows(configs, "configs")
     sen = cfg if sensed is None else _rows(sensed, "sensed configs")

@@ -2,9 +2,9 @@
 
 Each function evaluates exactly the floating-point expressions of the model's
 reference rules in the same order: the inside test and first entry
-(:mod:`crmgrasp.polygon`), feasibility and the CRM transition
-(:mod:`crmgrasp.hand`), the observation and bins (:mod:`crmgrasp.sensing`), min
-friction (:mod:`crmgrasp.quality`) and the start rule (:mod:`crmgrasp.tasks`).
+(:mod:`crmgrasp.model.polygon`), feasibility and the CRM transition
+(:mod:`crmgrasp.model.hand`), the observation and bins (:mod:`crmgrasp.model.sensing`), min
+friction (:mod:`crmgrasp.model.quality`) and the start rule (:mod:`crmgrasp.tasks`).
 numba compiles without ``fastmath``, so LLVM neither reassociates nor fuses them,
 and the results equal the reference bit for bit (the tests check it).
 
@@ -40,7 +40,7 @@ def _unpack(p, q):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _inside(px, py, e, convex, eps):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.polygon.inside`."""
+    """:func:`crmgrasp.model.polygon.inside`."""
     n = e.shape[0]
     if convex:
         for i in range(n):
@@ -66,7 +66,7 @@ def _inside(px, py, e, convex, eps):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _feasible(c, j, e, p, q):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.hand.feasible` of row ``j`` of ``c``: 0 none, 1 aperture, 2 palm."""
+    """:func:`crmgrasp.model.hand.feasible` of row ``j`` of ``c``: 0 none, 1 aperture, 2 palm."""
     dx, dy = c[j, 4] - c[j, 0], c[j, 5] - c[j, 1]
     dist = np.sqrt(dx * dx + dy * dy)
     if dist > p[APERTURE]:
@@ -90,7 +90,7 @@ def _side(c, tol):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _convex_edge(ox, oy, dx, dy, e, line_tol):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.polygon.convex_edge` (-1 if none)."""
+    """:func:`crmgrasp.model.polygon.convex_edge` (-1 if none)."""
     n = e.shape[0]
     tol = line_tol * (abs(dx) + abs(dy))
     s0 = _side(dx * (e[0, 1] - oy) - dy * (e[0, 0] - ox), tol)
@@ -105,7 +105,7 @@ def _convex_edge(ox, oy, dx, dy, e, line_tol):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _entry(ox, oy, dx, dy, u_max, e, convex, p):  # type: ignore[no-untyped-def]
-    """:meth:`crmgrasp.polygon.Polygon.ray_entry`: ``(entered, x, y, nx, ny)``."""
+    """:meth:`crmgrasp.model.polygon.Polygon.ray_entry`: ``(entered, x, y, nx, ny)``."""
     eps = p[EPS]
     if convex:
         k = _convex_edge(ox, oy, dx, dy, e, p[LINE_TOL])
@@ -141,7 +141,7 @@ def _entry(ox, oy, dx, dy, u_max, e, convex, p):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _crm(cfg, sen, j, c_is_b, f_is_b, r, e, p, q, new, jn):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.hand.execute_crm` on row ``j`` of ``cfg`` (true) and ``sen``
+    """:func:`crmgrasp.model.hand.execute_crm` on row ``j`` of ``cfg`` (true) and ``sen``
     (sensed): writes the resulting configuration into row ``jn`` of ``new``; returns
     the error code. (Rows by index, not views: a view costs reference counting.)"""
     for k in range(8):
@@ -181,7 +181,7 @@ def _crm(cfg, sen, j, c_is_b, f_is_b, r, e, p, q, new, jn):  # type: ignore[no-u
 
 @njit(cache=True)
 def _tan(x, y, nx, ny, ox, oy, antipodal_tol):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.quality.tan_term`."""
+    """:func:`crmgrasp.model.quality.tan_term`."""
     dx, dy = ox - x, oy - y
     dot = nx * dx + ny * dy
     if dot <= 0.0:
@@ -192,7 +192,7 @@ def _tan(x, y, nx, ny, ox, oy, antipodal_tol):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _mu(c, j, antipodal_tol):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.quality.min_friction` of row ``j`` of ``c``."""
+    """:func:`crmgrasp.model.quality.min_friction` of row ``j`` of ``c``."""
     ta = _tan(c[j, 0], c[j, 1], c[j, 2], c[j, 3], c[j, 4], c[j, 5], antipodal_tol)
     tb = _tan(c[j, 4], c[j, 5], c[j, 6], c[j, 7], c[j, 0], c[j, 1], antipodal_tol)
     return max(ta, tb)
@@ -200,7 +200,7 @@ def _mu(c, j, antipodal_tol):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _observe(s, j):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.sensing.observe` of row ``j`` of the sensed rows ``s``:
+    """:func:`crmgrasp.model.sensing.observe` of row ``j`` of the sensed rows ``s``:
     ``(rho, m_a, m_b)``."""
     sx, sy = s[j, 2] + s[j, 6], s[j, 3] + s[j, 7]
     dx, dy = s[j, 4] - s[j, 0], s[j, 5] - s[j, 1]
@@ -209,7 +209,7 @@ def _observe(s, j):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _bin(v, t):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.sensing._bin`: how many thresholds ``v`` reaches."""
+    """:func:`crmgrasp.model.sensing._bin`: how many thresholds ``v`` reaches."""
     k = 0
     for i in range(t.shape[0]):
         if v >= t[i]:
@@ -219,7 +219,7 @@ def _bin(v, t):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _index(rho, m_a, m_b, code, th, q):  # type: ignore[no-untyped-def]
-    """:meth:`crmgrasp.sensing.Discretizer.index_of`."""
+    """:meth:`crmgrasp.model.sensing.Discretizer.index_of`."""
     if q[ABS_M]:
         m_a, m_b = abs(m_a), abs(m_b)
     return ((_bin(rho, th[0]) * q[NA] + _bin(m_a, th[1])) * q[NB] + _bin(m_b, th[2])) * 3 + code

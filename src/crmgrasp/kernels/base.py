@@ -16,10 +16,10 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from ..hand import Error
-from ..quality import min_friction
-from ..sim import SimState, begin, step
-from ..tasks import Task, accept_corner_candidates
+from crmgrasp.model.hand import Error
+from crmgrasp.model.quality import min_friction
+from crmgrasp.sim import SimState, begin, step
+from crmgrasp.tasks import Task, accept_corner_candidates
 
 __all__ = ["Kernel", "OneStep", "BatchStep"]
 
@@ -70,7 +70,7 @@ class Kernel:
         self, cfg: F64, sen: F64, c_is_b: NDArray[np.bool_], f_is_b: NDArray[np.bool_], r: F64
     ) -> tuple[F64, NDArray[np.int8]]:
         """The CRM ``(c, f, r)`` of each row from true rows ``cfg`` and sensed rows
-        ``sen`` (:func:`crmgrasp.hand.execute_crm`): new rows and error codes."""
+        ``sen`` (:func:`crmgrasp.model.hand.execute_crm`): new rows and error codes."""
         raise NotImplementedError
 
     def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[F64, F64, F64, I64, F64]:

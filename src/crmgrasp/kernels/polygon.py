@@ -13,26 +13,26 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .. import _geombase, quality
-from ..contacts import Config, Contact
-from ..geometry import Polygon
-from ..sim import SimState
-from ..tasks import Task
-from . import _polygon_jit as jit
-from .base import F64, I64, BatchStep, Kernel, OneStep
+from crmgrasp.kernels import _polygon_jit as jit
+from crmgrasp.kernels.base import F64, I64, BatchStep, Kernel, OneStep
+from crmgrasp.model import quality, shape
+from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.geometry import Polygon
+from crmgrasp.sim import SimState
+from crmgrasp.tasks import Task
 
 __all__ = ["PolygonKernel", "FusedPolygonKernel", "params"]
 
 
 def params(task: Task) -> tuple[F64, NDArray[np.int64], F64]:
     """``(p, q, th)`` for the compiled functions: the float parameters and tolerances
-    (read from :mod:`crmgrasp.geometry`, :mod:`crmgrasp.hand`, :mod:`crmgrasp.quality`
+    (read from :mod:`crmgrasp.model.geometry`, :mod:`crmgrasp.model.hand`, :mod:`crmgrasp.model.quality`
     and the task now), the integer ones, and the bin thresholds padded with ``+inf``."""
     obj, hand, d = task.obj, task.hand, task.discretizer
     assert isinstance(obj, Polygon)
     p = np.empty(jit.N_P)
     p[jit.APERTURE], p[jit.DEPTH], p[jit.PALM_TOL] = hand.aperture, hand.palm_depth, hand.palm_normal_tol
-    p[jit.EPS], p[jit.S_TOL], p[jit.LINE_TOL] = _geombase.EPS, _geombase.S_TOL, _geombase.LINE_TOL
+    p[jit.EPS], p[jit.S_TOL], p[jit.LINE_TOL] = shape.EPS, shape.S_TOL, shape.LINE_TOL
     p[jit.ANTIPODAL_TOL], p[jit.MU_GOAL], p[jit.BOUND] = quality.ANTIPODAL_TOL, task.mu_goal, 2.0 * hand.aperture
     q = np.empty(jit.N_Q, dtype=np.int64)
     q[jit.CONVEX], q[jit.NA], q[jit.NB], q[jit.ABS_M] = obj.convex, len(d.m_a) + 1, len(d.m_b) + 1, d.abs_moments

@@ -10,11 +10,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..contacts import Config, Contact
-from ..hand import CRM, execute_crm
-from ..quality import min_friction
-from ..sensing import observe
-from .base import F64, I64, Kernel
+from crmgrasp.kernels.base import F64, I64, Kernel
+from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.hand import CRM, execute_crm
+from crmgrasp.model.quality import min_friction
+from crmgrasp.model.sensing import observe
 
 __all__ = ["ReferenceKernel"]
 
@@ -24,9 +24,9 @@ def _config(row: list[float]) -> Config:
 
 
 class ReferenceKernel(Kernel):
-    """:func:`crmgrasp.hand.execute_crm`, :func:`crmgrasp.sensing.observe`,
-    :meth:`crmgrasp.sensing.Discretizer.index_of` and
-    :func:`crmgrasp.quality.min_friction` per row."""
+    """:func:`crmgrasp.model.hand.execute_crm`, :func:`crmgrasp.model.sensing.observe`,
+    :meth:`crmgrasp.model.sensing.Discretizer.index_of` and
+    :func:`crmgrasp.model.quality.min_friction` per row."""
 
     name = "reference"
 

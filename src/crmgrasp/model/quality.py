@@ -30,8 +30,8 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._validation import CrmgraspError, non_negative
-from .contacts import Config
+from crmgrasp._validation import CrmgraspError, non_negative
+from crmgrasp.model.contacts import Config
 
 __all__ = [
     "min_friction",
@@ -66,7 +66,7 @@ def min_friction(config: Config) -> float:
 
     Examples
     --------
-    >>> from crmgrasp.contacts import Config, Contact
+    >>> from crmgrasp.model.contacts import Config, Contact
     >>> min_friction(Config(Contact(0, 0.05, 0, -1), Contact(0, -0.05, 0, 1)))
     0.0
     >>> round(min_friction(Config(Contact(0, 0.05, 0, -1), Contact(0.01, -0.05, 0, 1))), 6)

@@ -30,7 +30,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._validation import CrmgraspError, as_point, finite, positive
+from crmgrasp._validation import CrmgraspError, as_point, finite, positive
 
 __all__ = [
     "Circle",

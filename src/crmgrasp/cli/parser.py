@@ -7,10 +7,10 @@ import re
 from pathlib import Path
 from typing import NoReturn
 
-from . import __version__
-from ._validation import CrmgraspError, as_point, finite
-from .hand import CRM
-from .tasks import Task
+from crmgrasp import __version__
+from crmgrasp._validation import CrmgraspError, as_point, finite
+from crmgrasp.model.hand import CRM
+from crmgrasp.tasks import Task
 
 __all__ = ["build_parser"]
 

@@ -27,8 +27,8 @@ from pathlib import Path
 import numpy as np
 from scipy import sparse
 
-from ._io import atomic_write_text
-from ._validation import CrmgraspError
+from crmgrasp._io import atomic_write_text
+from crmgrasp._validation import CrmgraspError
 
 __all__ = ["POMDP", "PBVIPolicy", "belief_update", "solve_pbvi", "collect_beliefs", "write_cassandra", "read_cassandra"]
 

@@ -1,7 +1,7 @@
 """Run a saved policy on a hand: the kinematic simulator or a real (or physics) hand.
 
 A hand implements :class:`HandInterface`: ``sense()`` returns the sensed contact
-configuration (or :class:`~crmgrasp.contact_sensing.NoContact`), ``execute(crm)``
+configuration (or :class:`~crmgrasp.hardware.contact_sensing.NoContact`), ``execute(crm)``
 performs a CRM and returns its error flag. :class:`KinematicHand` is the
 simulator behind that interface. :class:`PolicyRunner` senses, discretizes,
 builds the k-order history, picks the policy's action, executes it, and logs every
@@ -19,14 +19,14 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from ._io import write_csv
-from ._validation import CrmgraspError
-from .agents.policy import GreedyPolicy
-from .contact_sensing import NoContact
-from .contacts import Config
-from .hand import CRM, Error, execute_crm
-from .sensing import SensorNoise, observe
-from .tasks import Task
+from crmgrasp._io import write_csv
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.agents.policy import GreedyPolicy
+from crmgrasp.hardware.contact_sensing import NoContact
+from crmgrasp.model.contacts import Config
+from crmgrasp.model.hand import CRM, Error, execute_crm
+from crmgrasp.model.sensing import SensorNoise, observe
+from crmgrasp.tasks import Task
 
 __all__ = ["HandInterface", "KinematicHand", "PolicyRunner", "RunResult"]
 

@@ -22,9 +22,9 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import CrmgraspError, finite, non_negative
-from .contacts import Config, Contact
-from .hand import Error
+from crmgrasp._validation import CrmgraspError, finite, non_negative
+from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.hand import Error
 
 __all__ = [
     "Error",
@@ -48,7 +48,7 @@ def observe(config: Config) -> Observation:
 
     Examples
     --------
-    >>> from crmgrasp.contacts import Config, Contact
+    >>> from crmgrasp.model.contacts import Config, Contact
     >>> cfg = Config(Contact(-0.15, -0.02, 1.0, 0.0), Contact(-0.10, -0.05, 0.0, 1.0))
     >>> [round(v, 12) for v in observe(cfg)]
     [2.0, 0.05, -0.03]

@@ -18,14 +18,14 @@ from typing import Any
 
 import numpy as np
 
-from ._cli_parser import _AGENT_FLAGS, _resolve_crm, build_parser
-from ._io import save_figure
-from ._validation import CrmgraspError
-from .contacts import Config
-from .hand import CRM, Error
-from .quality import min_friction
-from .sensing import SensorNoise, observe
-from .tasks import Task, make_task, task_names
+from crmgrasp._io import save_figure
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.cli.parser import _AGENT_FLAGS, _resolve_crm, build_parser
+from crmgrasp.model.contacts import Config
+from crmgrasp.model.hand import CRM, Error
+from crmgrasp.model.quality import min_friction
+from crmgrasp.model.sensing import SensorNoise, observe
+from crmgrasp.tasks import Task, make_task, task_names
 
 __all__ = ["main", "build_parser"]
 
@@ -77,7 +77,7 @@ def _cmd_crm(args: argparse.Namespace) -> int:
 
 
 def _cmd_show(args: argparse.Namespace) -> int:
-    from .plotting import scene_figure
+    from crmgrasp.plotting import scene_figure
 
     if args.backend == "mujoco":
         return _show_mujoco(args)
@@ -92,8 +92,8 @@ def _cmd_show(args: argparse.Namespace) -> int:
 
 
 def _show_mujoco(args: argparse.Namespace) -> int:
-    from .physics import hardware_task
-    from .physics.render import show
+    from crmgrasp.hardware.mujoco import hardware_task
+    from crmgrasp.hardware.mujoco.render import show
 
     user_gl = os.environ.get("MUJOCO_GL")
     task, config, crm, _, rng = _scene(args)
@@ -109,7 +109,7 @@ def _show_mujoco(args: argparse.Namespace) -> int:
 
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:
-    from .experiments import reproduce
+    from crmgrasp.experiments import reproduce
 
     results = reproduce(args.out, args.experiments, seed=args.seed, quick=args.quick)
     root = args.out.resolve()
@@ -123,7 +123,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
 
 
 def _cmd_learn(args: argparse.Namespace) -> int:
-    from .experiments.learning import LearnerSpec, learn, write_learn_outputs
+    from crmgrasp.experiments.learning import LearnerSpec, learn, write_learn_outputs
 
     task = make_task(args.task)
     params = {
@@ -157,7 +157,7 @@ def _cmd_learn(args: argparse.Namespace) -> int:
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
-    from .agents import GreedyPolicy, evaluate
+    from crmgrasp.agents import GreedyPolicy, evaluate
 
     if args.episodes < 1:
         raise CrmgraspError(f"--episodes must be >= 1, got {args.episodes}")
@@ -197,7 +197,7 @@ def _print_result(args: argparse.Namespace, result: dict[str, Any], text: str) -
 
 
 def _cmd_references(args: argparse.Namespace) -> int:
-    from .references import belief_optimum, clairvoyant_bound, sample_starts
+    from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts
 
     task = make_task(args.task)
     starts = sample_starts(task, args.starts, args.seed)
@@ -219,8 +219,8 @@ def _cmd_references(args: argparse.Namespace) -> int:
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
-    from .agents.deep import RecurrentPPOConfig
-    from .experiments.compare import CompareConfig, compare
+    from crmgrasp.agents.deep import RecurrentPPOConfig
+    from crmgrasp.experiments.compare import CompareConfig, compare
 
     make_task(args.task)  # a clear error for an unknown task before any work
     cfg = CompareConfig.quick(args.task, args.seed) if args.quick else CompareConfig(task=args.task, seed=args.seed)
@@ -240,9 +240,9 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
 
 def _cmd_pomdp(args: argparse.Namespace) -> int:
-    from .pomdp import write_cassandra
-    from .pomdp_task import POMDPAgent, build_task_pomdp
-    from .references import sample_starts
+    from crmgrasp.planners.pomdp import write_cassandra
+    from crmgrasp.planners.pomdp_task import POMDPAgent, build_task_pomdp
+    from crmgrasp.planners.references import sample_starts
 
     if args.cell <= 0 or args.samples < 1 or args.episodes < 1:
         raise CrmgraspError("--cell must be > 0, and --samples and --episodes >= 1")
@@ -262,8 +262,8 @@ def _cmd_pomdp(args: argparse.Namespace) -> int:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from .agents import GreedyPolicy
-    from .runner import KinematicHand, PolicyRunner
+    from crmgrasp.agents import GreedyPolicy
+    from crmgrasp.hardware.runner import KinematicHand, PolicyRunner
 
     name = "paper-box"
     try:
@@ -278,8 +278,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         raise CrmgraspError("the start configuration is infeasible")
     rng = np.random.default_rng(args.seed)
     if args.backend == "mujoco":
-        from .physics import hardware_task
-        from .physics.hand import MujocoHand
+        from crmgrasp.hardware.mujoco import hardware_task
+        from crmgrasp.hardware.mujoco.hand import MujocoHand
 
         task = hardware_task(task)
         hand: Any = MujocoHand(task, start, rng)
@@ -295,11 +295,20 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from .bench import main as bench_main
+    """Run ``benchmarks/bench_env.py`` of the source checkout this package runs from."""
+    import importlib.util
+    from pathlib import Path
 
     if args.rounds < 1:
         raise CrmgraspError(f"--rounds must be >= 1, got {args.rounds}")
-    bench_main((["--smoke"] if args.smoke else []) + ["--rounds", str(args.rounds), "--seed", str(args.seed)])
+    path = Path(__file__).resolve().parents[3] / "benchmarks" / "bench_env.py"
+    if not path.is_file():
+        raise CrmgraspError(f"crmgrasp bench runs benchmarks/bench_env.py from a source checkout; not found at {path}")
+    spec = importlib.util.spec_from_file_location("bench_env", path)
+    assert spec is not None and spec.loader is not None
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    bench.main((["--smoke"] if args.smoke else []) + ["--rounds", str(args.rounds), "--seed", str(args.seed)])
     return 0
 
 

@@ -1,7 +1,7 @@
 """Headless rendering of the MuJoCo stand-in to PNG and GIF.
 
 MuJoCo picks its OpenGL backend when it is first imported, from ``MUJOCO_GL``;
-:func:`~crmgrasp.physics.require_mujoco` sets it to ``egl`` unless the user set
+:func:`~crmgrasp.hardware.mujoco.require_mujoco` sets it to ``egl`` unless the user set
 it. Where EGL is missing, ``crmgrasp show --backend mujoco`` retries once in a
 child process with ``MUJOCO_GL=osmesa``.
 """
@@ -14,12 +14,12 @@ from typing import Any
 
 import numpy as np
 
-from .._io import atomic_path
-from .._validation import CrmgraspError
-from ..contacts import Config
-from ..hand import CRM
-from ..tasks import Task
-from .hand import MujocoHand
+from crmgrasp._io import atomic_path
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.hardware.mujoco.hand import MujocoHand
+from crmgrasp.model.contacts import Config
+from crmgrasp.model.hand import CRM
+from crmgrasp.tasks import Task
 
 __all__ = ["Recorder", "render", "save_png", "save_gif", "show"]
 

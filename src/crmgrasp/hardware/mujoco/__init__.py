@@ -1,7 +1,7 @@
 """A physics-simulated stand-in for Robonaut: a MuJoCo two-fingertip hand.
 
 Needs the optional extra ``crmgrasp[mujoco]`` (``mujoco>=3.2,<5``). The modules
-import MuJoCo lazily, so ``import crmgrasp.physics`` works without it and the
+import MuJoCo lazily, so ``import crmgrasp.hardware.mujoco`` works without it and the
 first use raises a one-line :class:`~crmgrasp._validation.CrmgraspError`.
 Rendering is headless: ``MUJOCO_GL`` defaults to ``egl`` here (set it to
 ``osmesa`` where EGL is missing).
@@ -15,8 +15,8 @@ import math
 import os
 from types import ModuleType
 
-from .._validation import CrmgraspError
-from ..tasks import Task
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.tasks import Task
 
 __all__ = ["require_mujoco", "mujoco_available", "hardware_task"]
 

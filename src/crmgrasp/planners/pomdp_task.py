@@ -21,14 +21,14 @@ import math
 import numpy as np
 from scipy import sparse
 
-from ._validation import CrmgraspError
-from .contacts import Config, Contact
-from .geometry import Polygon
-from .hand import Error, execute_crm
-from .pomdp import POMDP, PBVIPolicy, belief_update, collect_beliefs, solve_pbvi
-from .sensing import observe
-from .sim import Percept, run_episode
-from .tasks import Task, acceptable
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.geometry import Polygon
+from crmgrasp.model.hand import Error, execute_crm
+from crmgrasp.model.sensing import observe
+from crmgrasp.planners.pomdp import POMDP, PBVIPolicy, belief_update, collect_beliefs, solve_pbvi
+from crmgrasp.sim import Percept, run_episode
+from crmgrasp.tasks import Task, acceptable
 
 __all__ = ["TaskPOMDP", "build_task_pomdp", "POMDPAgent"]
 

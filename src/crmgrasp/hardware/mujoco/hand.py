@@ -1,12 +1,12 @@
 """A MuJoCo-simulated two-fingertip hand that executes CRMs as real motions.
 
-:class:`MujocoHand` implements :class:`~crmgrasp.runner.HandInterface`. It knows
+:class:`MujocoHand` implements :class:`~crmgrasp.hardware.runner.HandInterface`. It knows
 its own kinematics (fingertip sensor poses) but not the object: ``sense()`` reads
 the two fingertip force/torque sensors (with white noise and a slow linear drift
 per channel), subtracts each sensor's tare (taken whenever that fingertip is
 free), averages ``sense_ticks`` control ticks, and turns each wrench into a
-contact by intrinsic contact sensing (:func:`~crmgrasp.contact_sensing.contact_from_wrench`
-on a :class:`~crmgrasp.contact_sensing.Circle` of the tip radius). MuJoCo's
+contact by intrinsic contact sensing (:func:`~crmgrasp.hardware.contact_sensing.contact_from_wrench`
+on a :class:`~crmgrasp.hardware.contact_sensing.Circle` of the tip radius). MuJoCo's
 contact list is used only by :meth:`MujocoHand.true_config`, for evaluation.
 
 A CRM ``(c, f, r)`` runs as (SPEC section 3 made physical):
@@ -37,13 +37,13 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import CrmgraspError
-from ..contact_sensing import Circle, ContactDetector, NoContact, contact_from_wrench
-from ..contacts import Config, Contact
-from ..hand import CRM, Error, goal_line
-from ..tasks import Task
-from . import require_mujoco
-from .model import PhysicsParams, mjcf
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.hardware.contact_sensing import Circle, ContactDetector, NoContact, contact_from_wrench
+from crmgrasp.hardware.mujoco import require_mujoco
+from crmgrasp.hardware.mujoco.model import PhysicsParams, mjcf
+from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.hand import CRM, Error, goal_line
+from crmgrasp.tasks import Task
 
 __all__ = ["MujocoHand"]
 

@@ -15,7 +15,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._validation import CrmgraspError, as_point
+from crmgrasp._validation import CrmgraspError, as_point
 
 __all__ = ["LABELS", "Contact", "Config", "label_index", "other", "configs_to_array", "array_to_configs"]
 

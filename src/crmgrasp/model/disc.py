@@ -1,4 +1,4 @@
-"""Exact discs (see :mod:`crmgrasp.geometry` for the conventions)."""
+"""Exact discs (see :mod:`crmgrasp.model.geometry` for the conventions)."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 from numpy.typing import ArrayLike
 
-from ._geombase import EPS, BoundaryPoint, Entry
-from ._validation import CrmgraspError, as_point, finite, positive
+from crmgrasp._validation import CrmgraspError, as_point, finite, positive
+from crmgrasp.model.shape import EPS, BoundaryPoint, Entry
 
 __all__ = ["Disc"]
 

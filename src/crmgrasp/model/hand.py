@@ -38,12 +38,12 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._validation import CrmgraspError, finite, non_negative, positive
-from .contacts import Config, Contact, label_index
-from .geometry import Shape
+from crmgrasp._validation import CrmgraspError, finite, non_negative, positive
+from crmgrasp.model.contacts import Config, Contact, label_index
+from crmgrasp.model.geometry import Shape
 
 if TYPE_CHECKING:
-    from .sensing import SensorNoise
+    from crmgrasp.model.sensing import SensorNoise
 
 __all__ = ["Hand", "CRM", "Error", "GoalLine", "Outcome", "palm_point", "feasible", "execute_crm"]
 

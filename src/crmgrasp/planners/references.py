@@ -27,12 +27,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ._validation import CrmgraspError
-from .contacts import Config
-from .hand import Error, execute_crm
-from .sensing import observe
-from .sim import Percept, run_episode
-from .tasks import Task
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.model.contacts import Config
+from crmgrasp.model.hand import Error, execute_crm
+from crmgrasp.model.sensing import observe
+from crmgrasp.sim import Percept, run_episode
+from crmgrasp.tasks import Task
 
 __all__ = ["clairvoyant_steps", "clairvoyant_bound", "belief_optimum", "sample_starts", "BeliefPolicy"]
 

@@ -11,7 +11,7 @@ Autoreset is ``NEXT_STEP`` (Gymnasium's default): the step after an episode ends
 resets that sub-environment, ignores its action and returns the new start's
 observation with reward 0, ``terminated`` and ``truncated`` false. Starts are
 drawn in blocks of 2,048 with the kernel's vectorised sampler from
-``self.np_random``: the same distribution as :class:`~crmgrasp.env.CRMGraspEnv`,
+``self.np_random``: the same distribution as :class:`~crmgrasp.envs.single.CRMGraspEnv`,
 not the same stream. With sensing noise each step takes one reading per
 sub-environment, after the resets. Every backend gives the same outputs bit for
 bit (tested).
@@ -26,11 +26,11 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from ._validation import CrmgraspError
-from .hand import Error
-from .kernels import Kernel, kernel_for
-from .sim import episode_end
-from .tasks import Task, make_task
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.kernels import Kernel, kernel_for
+from crmgrasp.model.hand import Error
+from crmgrasp.sim import episode_end
+from crmgrasp.tasks import Task, make_task
 
 __all__ = ["CRMGraspVectorEnv"]
 

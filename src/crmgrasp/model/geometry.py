@@ -13,7 +13,7 @@ Conventions (SPEC section 1)
 
 The inside test and the first-entry rule are defined here once, on plain Python
 floats (:meth:`Polygon.contains`, :meth:`Polygon.ray_entry` and the functions of
-:mod:`crmgrasp.polygon`; :meth:`Disc.contains`, :meth:`Disc.ray_entry`). Batched
+:mod:`crmgrasp.model.polygon`; :meth:`Disc.contains`, :meth:`Disc.ray_entry`). Batched
 and compiled evaluations live in :mod:`crmgrasp.kernels` and are tested equal to
 these bit for bit.
 """
@@ -24,10 +24,10 @@ import math
 
 import numpy as np
 
-from ._geombase import EPS, LINE_TOL, S_TOL, BoundaryPoint, Entry, Shape
-from ._validation import CrmgraspError, as_point, finite, positive
-from .disc import Disc
-from .polygon import Polygon
+from crmgrasp._validation import CrmgraspError, as_point, finite, positive
+from crmgrasp.model.disc import Disc
+from crmgrasp.model.polygon import Polygon
+from crmgrasp.model.shape import EPS, LINE_TOL, S_TOL, BoundaryPoint, Entry, Shape
 
 __all__ = [
     "EPS",

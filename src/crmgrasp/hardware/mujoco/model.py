@@ -17,10 +17,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields
 
-from .._validation import CrmgraspError, non_negative, positive
-from ..disc import Disc
-from ..geometry import Polygon
-from ..tasks import Task
+from crmgrasp._validation import CrmgraspError, non_negative, positive
+from crmgrasp.model.disc import Disc
+from crmgrasp.model.geometry import Polygon
+from crmgrasp.tasks import Task
 
 __all__ = ["PhysicsParams", "mjcf"]
 

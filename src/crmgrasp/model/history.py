@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError
 
 __all__ = ["KOrderEncoder"]
 

@@ -12,13 +12,13 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from ._validation import CrmgraspError
-from .contacts import Config, Contact
-from .hand import Error, execute_crm
-from .history import KOrderEncoder
-from .kernels import Kernel, OneStep, kernel_for
-from .sim import SimState, episode_end
-from .tasks import Task, make_task
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.kernels import Kernel, OneStep, kernel_for
+from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.hand import Error, execute_crm
+from crmgrasp.model.history import KOrderEncoder
+from crmgrasp.sim import SimState, episode_end
+from crmgrasp.tasks import Task, make_task
 
 __all__ = ["CRMGraspEnv", "KOrderHistory", "ENV_ID"]
 
@@ -168,7 +168,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             return None
         from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-        from .plotting import scene_figure
+        from crmgrasp.plotting import scene_figure
 
         title = f"{self.task.name}: after {self._state.steps} CRMs"
         if self._last is None:
@@ -218,8 +218,8 @@ def register() -> None:
     if ENV_ID not in gym.registry:
         gym.register(
             id=ENV_ID,
-            entry_point="crmgrasp.env:CRMGraspEnv",
-            vector_entry_point="crmgrasp.vector:CRMGraspVectorEnv",
+            entry_point="crmgrasp.envs.single:CRMGraspEnv",
+            vector_entry_point="crmgrasp.envs.vector:CRMGraspVectorEnv",
             kwargs={"task": "paper-box"},
         )
 

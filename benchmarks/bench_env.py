@@ -14,7 +14,8 @@ ratios compare minimum times measured in the same run:
 * ``reproduce_quick_seconds``: ``crmgrasp reproduce --quick`` in a subprocess;
 * ``batch_peak_mb``: peak traced memory of 100 steps of the 1,024-env vector env.
 
-Run ``python benchmarks/run.py`` or ``crmgrasp bench`` (``--smoke`` for tiny sizes).
+Run ``python benchmarks/bench_env.py``, ``python benchmarks/run.py`` or ``crmgrasp bench`` (from
+a source checkout; ``--smoke`` for tiny sizes).
 """
 
 from __future__ import annotations
@@ -32,9 +33,9 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from .agents import train_trials
-from .env import ENV_ID
-from .tasks import paper_box
+from crmgrasp.agents import train_trials
+from crmgrasp.envs import ENV_ID
+from crmgrasp.tasks import paper_box
 
 __all__ = ["run_benchmarks"]
 
@@ -126,7 +127,7 @@ def run_benchmarks(
         with tempfile.TemporaryDirectory() as tmp:
             t0 = time.perf_counter()
             subprocess.run(
-                [sys.executable, "-m", "crmgrasp.cli", "reproduce", "--quick", "--out", tmp],
+                [sys.executable, "-m", "crmgrasp", "reproduce", "--quick", "--out", tmp],
                 check=True,
                 capture_output=True,
             )
@@ -159,3 +160,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         res = run_benchmarks(rounds=args.rounds, seed=args.seed)
     print(json.dumps(res, indent=2))
     return res
+
+
+if __name__ == "__main__":
+    main()

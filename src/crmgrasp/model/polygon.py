@@ -1,4 +1,4 @@
-"""Simple polygons, convex or not (see :mod:`crmgrasp.geometry` for the conventions)."""
+"""Simple polygons, convex or not (see :mod:`crmgrasp.model.geometry` for the conventions)."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._geombase import EPS, LINE_TOL, S_TOL, Array, BoundaryPoint, Entry
-from ._validation import CrmgraspError, as_point, finite
+from crmgrasp._validation import CrmgraspError, as_point, finite
+from crmgrasp.model.shape import EPS, LINE_TOL, S_TOL, Array, BoundaryPoint, Entry
 
 __all__ = ["Polygon", "Edges", "inside", "first_entry", "convex_edge", "convex_entry"]
 

@@ -1,0 +1,8 @@
+"""Gymnasium environments over a task's kernel: :class:`CRMGraspEnv` (one episode),
+:class:`CRMGraspVectorEnv` (N episodes batched) and the :class:`KOrderHistory`
+wrapper. Importing this package registers ``crmgrasp/PaperBox-v0``."""
+
+from crmgrasp.envs.single import ENV_ID, CRMGraspEnv, KOrderHistory
+from crmgrasp.envs.vector import CRMGraspVectorEnv
+
+__all__ = ["ENV_ID", "CRMGraspEnv", "CRMGraspVectorEnv", "KOrderHistory"]

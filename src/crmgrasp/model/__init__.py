@@ -1,0 +1,52 @@
+"""The model: what a two-contact hand touching an unseen planar object is and senses.
+
+One module per concept, each rule written once in readable Python:
+
+* :mod:`~crmgrasp.model.shape`: tolerances, the :class:`Shape` protocol;
+  :mod:`~crmgrasp.model.polygon`, :mod:`~crmgrasp.model.disc` and
+  :mod:`~crmgrasp.model.geometry`: objects, their boundary, inside test and first entry;
+* :mod:`~crmgrasp.model.contacts`: contacts and configurations;
+* :mod:`~crmgrasp.model.hand`: the hand, feasibility (aperture and palm), the CRM
+  transition and its error flags;
+* :mod:`~crmgrasp.model.sensing`: observations, sensing noise, observation bins;
+* :mod:`~crmgrasp.model.quality`: min friction and force closure;
+* :mod:`~crmgrasp.model.history`: the k-order history state.
+
+The model imports no kernel, numba or matplotlib (a test keeps it so); fast
+evaluations of these rules live in :mod:`crmgrasp.kernels`.
+"""
+
+from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.geometry import Disc, Polygon, Rectangle, regular_polygon
+from crmgrasp.model.hand import CRM, Error, Hand, Outcome, execute_crm, feasible
+from crmgrasp.model.history import KOrderEncoder
+from crmgrasp.model.quality import force_closure, is_force_closure, min_friction
+from crmgrasp.model.sensing import Discretizer, Observation, SensorNoise, observe
+from crmgrasp.model.shape import EPS, LINE_TOL, S_TOL, Shape
+
+__all__ = [
+    "Config",
+    "Contact",
+    "Disc",
+    "Polygon",
+    "Rectangle",
+    "regular_polygon",
+    "CRM",
+    "Error",
+    "Hand",
+    "Outcome",
+    "execute_crm",
+    "feasible",
+    "KOrderEncoder",
+    "force_closure",
+    "is_force_closure",
+    "min_friction",
+    "Discretizer",
+    "Observation",
+    "SensorNoise",
+    "observe",
+    "EPS",
+    "LINE_TOL",
+    "S_TOL",
+    "Shape",
+]
