@@ -179,3 +179,21 @@ def test_run_command(tmp_path, capsys):
     out = capsys.readouterr().out
     assert out.startswith("grasp sensed after 2 CRMs") and log.read_text().startswith("step,ax,ay")
     assert main(["run", "--policy", str(tmp_path / "nope.json"), "--a", "0,0", "--b", "0,0", "--log", str(log)]) == 2
+
+
+def test_learn_gives_the_same_curve_on_every_kernel_backend(tmp_path):
+    """--lockstep on each --backend, and sequential training, write the same curve."""
+    base = ["learn", "--agent", "sarsa", "--trials", "3", "--episodes", "40", "--eval-episodes", "10", "--seed", "2"]
+    runs = {
+        "sequential": [],
+        "auto": ["--lockstep"],
+        "numba": ["--lockstep", "--backend", "numba"],
+        "reference": ["--lockstep", "--backend", "reference"],
+    }
+    curves = {}
+    for name, extra in runs.items():
+        assert main([*base, *extra, "--out", str(tmp_path / name)]) == 0
+        curves[name] = (tmp_path / name / "curve.csv").read_text()
+    assert len(set(curves.values())) == 1
+    with pytest.raises(SystemExit):
+        main([*base, "--lockstep", "--backend", "gpu", "--out", str(tmp_path / "x")])

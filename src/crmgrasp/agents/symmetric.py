@@ -31,11 +31,10 @@ __all__ = ["SymmetricAgent", "mirror_observation_map"]
 def mirror_observation_map(task: Task) -> list[int]:
     """Discretized observation index -> index of its mirror image (padding maps to itself)."""
     d = task.discretizer
-    _, na, nb = d._sizes
     out = []
     for i in range(d.size):
         r, a, b, e = d.decode(i)
-        out.append(((r * na + b) * nb + a) * 3 + int(e))
+        out.append(d.compose(r, b, a, int(e)))  # m_a and m_b bins swapped
     return [*out, d.size]
 
 

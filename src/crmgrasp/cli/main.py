@@ -143,6 +143,7 @@ def _cmd_learn(args: argparse.Namespace) -> int:
         seed=args.seed,
         eval_episodes=args.eval_episodes,
         lockstep=args.lockstep,
+        backend=args.backend,
     )
     paths = write_learn_outputs(task, run, args.out)
     s = run.summary

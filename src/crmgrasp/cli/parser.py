@@ -144,6 +144,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="step all trials together through the batched simulator (same results; faster from ~500 trials)",
     )
     p.add_argument(
+        "--backend",
+        choices=("auto", "numba", "reference"),
+        default="auto",
+        help="kernel that --lockstep steps through: compiled where one exists (auto, default), compiled "
+        "(numba), or the readable rules (reference); all give the same results",
+    )
+    p.add_argument(
         "--symmetric",
         action="store_true",
         help="learn on the mirror quotient of the task (tabular learners; the task must declare a symmetry)",

@@ -45,7 +45,18 @@ from crmgrasp.model.geometry import Shape
 if TYPE_CHECKING:
     from crmgrasp.model.sensing import SensorNoise
 
-__all__ = ["Hand", "CRM", "Error", "GoalLine", "Outcome", "palm_point", "feasible", "execute_crm"]
+__all__ = [
+    "Hand",
+    "CRM",
+    "Error",
+    "GoalLine",
+    "Outcome",
+    "palm_axis",
+    "palm_point",
+    "faces_palm",
+    "feasible",
+    "execute_crm",
+]
 
 PALM_NORMAL_TOL = 1e-9
 """Slack on ``n . u <= 0`` in the palm test (unitless)."""
@@ -228,32 +239,49 @@ class Hand:
         return execute_crm(obj, self, config, crm, sensed)
 
 
-def palm_point(config: Config, palm_depth: float) -> tuple[float, float]:
-    """``P = (x_a + x_b)/2 + h u`` with ``u`` the right of a -> b (NaN if coincident)."""
+def palm_axis(config: Config) -> tuple[float, float, float]:
+    """``(|x_b - x_a|, u_x, u_y)``: the contacts' distance and the unit vector ``u`` to
+    the right of a -> b, the side the palm is on (``u`` is NaN if they coincide)."""
     a, b = config
     dx, dy = b.x - a.x, b.y - a.y
     dist = math.sqrt(dx * dx + dy * dy)
     if dist == 0.0:
-        return (math.nan, math.nan)
-    ux, uy = dy / dist, -dx / dist
-    return (0.5 * (a.x + b.x) + palm_depth * ux, 0.5 * (a.y + b.y) + palm_depth * uy)
+        return 0.0, math.nan, math.nan
+    return dist, dy / dist, -dx / dist
+
+
+def _palm_at(a: Contact, b: Contact, ux: float, uy: float, h: float) -> tuple[float, float]:
+    return (0.5 * (a.x + b.x) + h * ux, 0.5 * (a.y + b.y) + h * uy)
+
+
+def _faces(a: Contact, b: Contact, ux: float, uy: float, tol: float) -> bool:
+    return a.nx * ux + a.ny * uy > tol or b.nx * ux + b.ny * uy > tol
+
+
+def palm_point(config: Config, palm_depth: float) -> tuple[float, float]:
+    """``P = (x_a + x_b)/2 + h u`` with ``u`` the right of a -> b (NaN if coincident)."""
+    _, ux, uy = palm_axis(config)
+    return _palm_at(config.a, config.b, ux, uy, palm_depth)
+
+
+def faces_palm(config: Config, tol: float) -> bool:
+    """True if a contact's surface faces the palm side: ``n . u > tol`` for ``n_a`` or
+    ``n_b`` (the object would lie between palm and finger). False if they coincide."""
+    _, ux, uy = palm_axis(config)
+    return _faces(config.a, config.b, ux, uy, tol)
 
 
 def feasible(obj: Shape, hand: Hand, config: Config) -> Error:
-    """Feasibility of a configuration (SPEC section 2), as an :class:`Error`."""
-    a, b = config
-    dx, dy = b.x - a.x, b.y - a.y
-    dist = math.sqrt(dx * dx + dy * dy)
+    """Feasibility of a configuration (SPEC section 2), as an :class:`Error`: APERTURE
+    if ``|x_a - x_b| > A``; PALM if the contacts coincide, a contact faces the palm
+    side (:func:`faces_palm`) or the palm point (:func:`palm_point`) is inside."""
+    dist, ux, uy = palm_axis(config)
     if dist > hand.aperture:
         return Error.APERTURE
-    if dist == 0.0:
+    a, b = config
+    if dist == 0.0 or _faces(a, b, ux, uy, hand.palm_normal_tol):
         return Error.PALM
-    ux, uy = dy / dist, -dx / dist
-    tol = hand.palm_normal_tol
-    if a.nx * ux + a.ny * uy > tol or b.nx * ux + b.ny * uy > tol:
-        return Error.PALM
-    palm = (0.5 * (a.x + b.x) + hand.palm_depth * ux, 0.5 * (a.y + b.y) + hand.palm_depth * uy)
-    if obj.contains(palm):
+    if obj.contains(_palm_at(a, b, ux, uy, hand.palm_depth)):
         return Error.PALM
     return Error.NONE
 

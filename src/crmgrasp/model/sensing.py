@@ -177,8 +177,13 @@ class Discretizer:
         """:meth:`index` from plain numbers (the environments' hot path)."""
         if self.abs_moments:
             m_a, m_b = abs(m_a), abs(m_b)
+        return self.compose(_bin(rho, self.rho), _bin(m_a, self.m_a), _bin(m_b, self.m_b), error)
+
+    def compose(self, rho_bin: int, ma_bin: int, mb_bin: int, error: int) -> int:
+        """The index of the bins and error flag (mixed radix, error fastest); inverse of
+        :meth:`decode`."""
         _, na, nb = self._sizes
-        return ((_bin(rho, self.rho) * na + _bin(m_a, self.m_a)) * nb + _bin(m_b, self.m_b)) * 3 + error
+        return ((rho_bin * na + ma_bin) * nb + mb_bin) * len(Error) + error
 
     def decode(self, index: int) -> tuple[int, int, int, Error]:
         """Inverse of :meth:`index`: ``(rho_bin, ma_bin, mb_bin, error)``."""

@@ -42,7 +42,7 @@ from crmgrasp.hardware.contact_sensing import Circle, ContactDetector, NoContact
 from crmgrasp.hardware.mujoco import require_mujoco
 from crmgrasp.hardware.mujoco.model import PhysicsParams, mjcf
 from crmgrasp.model.contacts import Config, Contact
-from crmgrasp.model.hand import CRM, Error, goal_line
+from crmgrasp.model.hand import CRM, Error, faces_palm, goal_line, palm_point
 from crmgrasp.tasks import Task
 
 __all__ = ["MujocoHand"]
@@ -104,11 +104,10 @@ class MujocoHand:
     def _tick(self) -> None:
         """Place the palm at ``P`` of the fingertip centres, step, read the sensors."""
         d, p = self.data, self.params
-        ta, tb = d.site_xpos[self._site[0]], d.site_xpos[self._site[1]]
-        dx, dy = tb[0] - ta[0], tb[1] - ta[1]
-        dist = math.hypot(dx, dy) or 1.0
-        h = self.task.hand.palm_depth
-        d.mocap_pos[0] = (0.5 * (ta[0] + tb[0]) + h * dy / dist, 0.5 * (ta[1] + tb[1]) - h * dx / dist, p.height / 2)
+        (ax, ay, _), (bx, by, _) = d.site_xpos[self._site[0]].tolist(), d.site_xpos[self._site[1]].tolist()
+        px, py = palm_point(Config(Contact(ax, ay, 0.0, 0.0), Contact(bx, by, 0.0, 0.0)), self.task.hand.palm_depth)
+        if math.isfinite(px):  # the 1 cm tips never coincide; if they did, the palm stays put
+            d.mocap_pos[0] = (px, py, p.height / 2)
         d.ctrl[:] = self._cmd.ravel()
         self.mj.mj_step(self.model, d, nstep=p.control_steps)
         for i, (fa, ta_) in enumerate(self._sensors):
@@ -301,16 +300,9 @@ class MujocoHand:
             return self._recover(i, mover, home, Error.APERTURE if outcome == "end" else Error.PALM)
         self._hold(i, direction)
         new = self.sense()
-        if self._palm_hit or (isinstance(new, Config) and self._faces_palm(new)):
+        if self._palm_hit or (isinstance(new, Config) and faces_palm(new, self.task.hand.palm_normal_tol)):
             return self._recover(i, mover, home, Error.PALM)
         return Error.NONE
-
-    def _faces_palm(self, cfg: Config) -> bool:
-        a, b = cfg
-        dist = math.hypot(b.x - a.x, b.y - a.y) or 1.0
-        ux, uy = (b.y - a.y) / dist, -(b.x - a.x) / dist
-        tol = self.task.hand.palm_normal_tol
-        return a.nx * ux + a.ny * uy > tol or b.nx * ux + b.ny * uy > tol
 
     def _recover(self, i: int, original: Contact, home: np.ndarray, error: Error) -> Error:
         """Go back over the air to the back-off point and re-establish the contact."""

@@ -1,0 +1,164 @@
+"""The experiments that ``crmgrasp reproduce`` knows: per name, a description, the
+runner (``runner(out_dir, seed, quick, context) -> (summary, rows)``) and the images
+it writes; each runner's rows put our numbers beside the paper's."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from crmgrasp.experiments.compare import CompareConfig, compare
+from crmgrasp.experiments.figure4 import Figure4Config, figure_4_opposition_quality
+from crmgrasp.experiments.figure7 import Figure7Config, figure_7_learning_curve
+from crmgrasp.experiments.figure8 import Figure8Config, figure_8_strategies
+from crmgrasp.experiments.figure9 import Figure9Config, figure_9_robonaut_trials
+
+__all__ = ["EXPERIMENTS", "NEEDS_MUJOCO", "IMAGES", "Row", "Runner"]
+
+Row = tuple[str, object, str]
+Runner = Callable[[Path, int, bool, dict[str, Any]], tuple[dict[str, Any], list[Row]]]
+
+
+def _figure4(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    s: dict[str, Any] = figure_4_opposition_quality(out, Figure4Config(seed=seed))
+    return s, [
+        ("opposition grasps", f"{s['trials'] - s['failures']} of {s['trials']}", "30 of 30"),
+        (
+            "median / max min_friction",
+            f"{s['median_min_friction']:.3f} / {s['max_min_friction']:.3f}",
+            "histogram concentrated below ~0.1",
+        ),
+    ]
+
+
+def _figure7(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    cfg = Figure7Config(seed=seed)
+    if quick:
+        cfg = replace(cfg, trials=5, episodes=300, eval_episodes=200, checkpoint_episodes=50)
+    s = figure_7_learning_curve(out, cfg)
+    if not quick:
+        ctx["policy"] = str(out / "policy.json")
+    return s, [
+        ("belief-space optimum, 4,000 starts (SPEC: 1.66)", s["belief_optimum_4000_starts"], "-"),
+        ("clairvoyant bound, 4,000 starts (SPEC: 1.19)", s["clairvoyant_bound_4000_starts"], "-"),
+        ("paper SARSA: greedy CRMs per episode", s["paper_sarsa_greedy_mean_steps"], "1.8 (learning curve)"),
+        ("paper SARSA: final training CRMs per episode", s["paper_sarsa_final_mean_steps"], "1.8"),
+        (
+            "paper SARSA: episodes to within 5% of optimum",
+            s["paper_sarsa_episodes_to_5pct"],
+            "about 60 (to its own plateau)",
+        ),
+        ("best learner: episodes to within 5%", f"{s['best_episodes_to_5pct']} ({s['best_learner']})", "-"),
+        ("paper SARSA: greedy policy within 5% after", s["paper_sarsa_greedy_episodes_to_5pct"], "-"),
+        (
+            "best learner: greedy policy within 5% after",
+            f"{s['best_greedy_episodes_to_5pct']} ({s['best_greedy_learner']})",
+            "about 60 (SARSA)",
+        ),
+        ("SARSA k=0 (memoryless) greedy CRMs", s["sarsa_k0_greedy_mean_steps"], "(not run; k = 2 used)"),
+    ]
+
+
+def _figure8(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    s = figure_8_strategies(out, Figure8Config(seed=seed, policy=ctx.get("policy")))
+    labels = list(s)
+    return s, [
+        (
+            "aliased near-corner starts",
+            f"{s[labels[0]]}; mirror: {s[labels[1]]}",
+            "oppose one contact; on failure oppose the other",
+        ),
+        ("long-side contact far from the corner", s[labels[2]], "move it toward the corner (C3/C4), then oppose it"),
+    ]
+
+
+def _figure9(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    s = figure_9_robonaut_trials(out, Figure9Config(seed=seed, policy=ctx.get("policy")))
+    return s, [
+        ("grasps / trials", f"{s['successes']} / {s['trials']}", "11 / 11"),
+        ("CRMs per trial", s["mean_crms"], "2"),
+        (
+            "cluster centroids (rho, |m|)",
+            "; ".join(str(v) for k, v in s.items() if k.startswith("centroid")),
+            "(0.7, 1.2); (0.5, 1.2); (~0, ~0) in the paper's units",
+        ),
+    ]
+
+
+def _compare(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    cfg = CompareConfig.quick(seed=seed) if quick else CompareConfig(seed=seed)
+    s = compare(out, cfg)
+    return s, [
+        ("best learner, greedy CRMs", f"{s['best_learner_mean_crms']} ({s['best_learner']})", "1.8"),
+        ("belief-space optimum / clairvoyant bound", f"{s['belief_optimum']} / {s['clairvoyant_bound']}", "-"),
+        ("grasp controller (no learning), CRMs", s["grasp_controller_mean_crms"], "-"),
+        ("belief-space policy executed on fresh starts, CRMs", s["belief_policy_executed_mean_crms"], "-"),
+    ]
+
+
+def _sensing_row(s: dict[str, Any]) -> Row:
+    cs = s["contact_sensing"]
+    return (
+        f"contact sensing vs MuJoCo contacts ({cs['contacts']} contacts): median position / normal error",
+        f"{cs['median_position_error_mm']} mm / {cs['median_normal_error_deg']} deg",
+        "(Robonaut load cells; not reported)",
+    )
+
+
+def _figure4_mujoco(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    from crmgrasp.experiments.mujoco import MujocoFigure4Config, figure_4_mujoco
+
+    s = figure_4_mujoco(out, MujocoFigure4Config(seed=seed, extra_starts=40 if quick else 100))
+    return s, [
+        ("MuJoCo opposition grasps", f"{s['trials'] - s['failures']} of {s['trials']}", "30 of 30 (Robonaut)"),
+        ("MuJoCo median / max true min_friction", f"{s['median_min_friction']} / {s['max_min_friction']}", "-"),
+        _sensing_row(s),
+        ("MuJoCo wall time per CRM, median / max", f"{s['median_crm_seconds']} / {s['max_crm_seconds']} s", "-"),
+    ]
+
+
+def _figure9_mujoco(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    from crmgrasp.experiments.mujoco import MujocoFigure9Config, figure_9_mujoco
+
+    s = figure_9_mujoco(out, MujocoFigure9Config(seed=seed, policy=ctx.get("policy")))
+    return s, [
+        ("MuJoCo grasps / trials (kinematic policy)", f"{s['successes']} / {s['trials']}", "11 / 11 (Robonaut)"),
+        (
+            "CRMs per trial: MuJoCo / kinematic, same starts",
+            f"{s['mean_crms_mujoco']} / {s['mean_crms_kinematic']}",
+            "2",
+        ),
+        ("most extra CRMs on MuJoCo in one trial", s["max_extra_crms"], "-"),
+        (
+            "MuJoCo cluster centroids (rho, |m|)",
+            "; ".join(str(v) for k, v in s.items() if k.startswith("centroid")),
+            "three clusters",
+        ),
+    ]
+
+
+EXPERIMENTS: dict[str, tuple[str, Runner]] = {
+    "figure4": ("Fig. 4: min-friction histogram of 30 opposition CRMs under sensing noise", _figure4),
+    "figure7": ("Fig. 7: CRMs per episode vs episode, 20 trials, SARSA and the other learners", _figure7),
+    "figure8": ("Fig. 8: the learned strategies on aliased and far-from-corner starts", _figure8),
+    "figure9": ("Fig. 9: the learned policy, 11 noisy trials, in the (rho, moment) plane", _figure9),
+    "compare": ("Every method on paper-box: learners, baselines, grasp controller, exact references", _compare),
+    "figure4-mujoco": ("Fig. 4 on the MuJoCo stand-in hand, and intrinsic contact sensing accuracy", _figure4_mujoco),
+    "figure9-mujoco": ("Fig. 9 on the MuJoCo stand-in: the kinematic policy transferred, 11 trials", _figure9_mujoco),
+}
+"""Experiment name -> (description, runner(out_dir, seed, quick, context))."""
+
+NEEDS_MUJOCO = ("figure4-mujoco", "figure9-mujoco")
+"""The experiments that need the extra ``crmgrasp[mujoco]`` (skipped without it)."""
+
+IMAGES = {
+    "figure4": ["figure4.png"],
+    "figure7": ["figure7.png", "figure7_greedy.png", "figure7_k_ablation.png"],
+    "figure8": ["figure8.png", "figure8.gif"],
+    "figure9": ["figure9.png"],
+    "compare": ["compare.png"],
+    "figure4-mujoco": ["figure4_mujoco.png"],
+    "figure9-mujoco": ["figure9_mujoco.png", "figure9_mujoco.gif"],
+}
