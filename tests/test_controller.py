@@ -18,10 +18,10 @@ def _episode(task, cfg):
     """The controller as a Policy through the one episode loop, from ``cfg``."""
     ep = run_episode(task, GraspController(task), np.random.default_rng(0), start=cfg, trace=True)
     for tr in ep.trace:  # the loop executed exactly what execute_crm gives
-        out = execute_crm(task.obj, task.hand, tr.state.config, tr.action, tr.state.sensed)
-        assert (out.config, out.error) == (tr.result.state.config, tr.result.error)
-    assert ep.success == (min_friction(ep.trace[-1].result.state.config) <= task.mu_goal)
-    return [(tr.action, tr.result.error) for tr in ep.trace], ep.success
+        out = execute_crm(task.obj, task.hand, tr.before.state.config, tr.action, tr.before.state.sensed)
+        assert (out.config, out.error) == (tr.after.state.config, tr.after.error)
+    assert ep.success == (min_friction(ep.trace[-1].after.state.config) <= task.mu_goal)
+    return [(tr.action, tr.after.error) for tr in ep.trace], ep.success
 
 
 def test_controller_by_hand(task):

@@ -31,11 +31,11 @@ from crmgrasp import (
 from crmgrasp.envs.vector import CRMGraspVectorEnv
 from crmgrasp.kernels import execute_batch, kernel_for
 from crmgrasp.model.contacts import array_to_configs, configs_to_array
-from crmgrasp.model.hand import execute_crm
+from crmgrasp.model.hand import Error, execute_crm
 from crmgrasp.model.polygon import convex_entry, first_entry
 from crmgrasp.model.quality import min_friction
 from crmgrasp.model.sensing import Discretizer, observe
-from crmgrasp.sim import SimState, begin, step
+from crmgrasp.sim import SimState, begin, begin_one, step, step_one
 from crmgrasp.tasks import accept_corner_candidates, corner_boxes, corner_proposal
 
 from .strategies import BACKENDS, on_boundary, scenes
@@ -291,10 +291,12 @@ def test_fused_single_step_equals_sim_step_on_convex_and_non_convex_objects(task
             state = SimState(cfg, cfg, int(rng.integers(10)))
             ref, got = step(t, state, action, rng), k.step_one(state, action, rng)
             o = ref.observation
-            assert got == (ref.state, o.rho, o.m_a, o.m_b, int(ref.error), ref.obs_index, ref.min_friction)
+            want = (ref.state, o.rho, o.m_a, o.m_b, ref.error, ref.obs_index, ref.min_friction, -1.0)
+            assert got == (*want, ref.terminated, ref.truncated) and type(got.error) is Error
+            assert got == step_one(t, state, action, rng)
             ref0, got0 = begin(t, cfg, rng), k.begin(cfg, rng)
             assert (got0.state, got0.rho, got0.m_a, got0.m_b, got0.obs_index) == (ref0[0], *ref0[1], ref0[2])
-            assert got0.min_friction == min_friction(cfg)
+            assert got0 == begin_one(t, cfg, rng) and got0.min_friction == min_friction(cfg)
             codes[got.error] += 1
         assert set(codes) == {0, 1, 2}, codes
 
@@ -330,7 +332,7 @@ def test_corner_filters_agree_across_backends(task):
         cum, c_in, c_out = corner_boxes(t.obj, t.hand.aperture)
         u = corner_proposal(rng.random((4, 4000)), cum, c_in, c_out)
         a = accept_corner_candidates(t.obj, t.hand, t.mu_goal, u)
-        b = kernel_for(t, "numba").accept_starts(t.obj, t.hand, t.mu_goal, u)
+        b = kernel_for(t, "numba").start_filter(t.obj, t.hand, t.mu_goal, u)
         assert a.shape == b.shape and len(a) > 500 and np.array_equal(a, b)
 
 
@@ -340,3 +342,27 @@ def test_tasks_and_kernels_stay_picklable(task):
     again = pickle.loads(pickle.dumps(task))
     assert again.obj == task.obj and again.obj.contains((0.0, 0.0))
     assert kernel_for(again).name == k.name
+
+
+@pytest.mark.parametrize("shape", ["box", "u"])
+def test_the_scalar_start_stream_does_not_depend_on_the_kernel(task, shape):
+    """The one-at-a-time sampler with a kernel's compiled filter draws the same starts
+    as the task's own (same uniforms, same decisions)."""
+    t = task if shape == "box" else replace(task, obj=U_SHAPE, symmetry=None)
+    want = [t.sample_start(rng) for rng in [np.random.default_rng(4)] for _ in range(400)]
+    for backend in BACKENDS:
+        k, rng = kernel_for(t, backend), np.random.default_rng(4)
+        assert [k.sample_start(rng) for _ in range(400)] == want
+
+
+@pytest.mark.parametrize("noisy", [False, True])
+def test_sequential_training_is_the_same_on_every_backend(task, noisy):
+    from crmgrasp.agents import train_trials
+
+    if noisy:
+        task = replace(task, noise=SensorNoise(0.05, 0.002))
+    kw = dict(trials=3, episodes=80, seed=5, eval_episodes=20, checkpoints=(10, 80), checkpoint_episodes=10)
+    a, b = (train_trials(task, "sarsa", **kw, backend=backend) for backend in BACKENDS)
+    for field in ("steps", "success", "greedy_steps", "greedy_success", "checkpoint_steps"):
+        np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
+    assert [x.q for x in a.agents] == [y.q for y in b.agents]

@@ -17,6 +17,8 @@ Draw order: ``reset`` draws the start (the task's sampler) then one reading;
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from functools import partial
 from typing import Any, NamedTuple, Protocol, overload
 
 import numpy as np
@@ -29,6 +31,10 @@ from crmgrasp.model.sensing import Observation, observe
 from crmgrasp.tasks import Task
 
 __all__ = [
+    "OneStep",
+    "Stepper",
+    "begin_one",
+    "step_one",
     "Episode",
     "Transition",
     "SimState",
@@ -78,11 +84,33 @@ class StepResult(NamedTuple):
     min_friction: float
     outcome: Outcome
 
+
+class OneStep(NamedTuple):
+    """The state after a reset or a CRM and what is sensed there, as plain numbers: the
+    result type of :func:`begin_one`, :func:`step_one` and every kernel's single step.
+    ``error`` is :class:`~crmgrasp.model.hand.Error` (an ``int``)."""
+
+    state: SimState
+    rho: float
+    m_a: float
+    m_b: float
+    error: Error
+    obs_index: int
+    min_friction: float
+    reward: float = 0.0
+    terminated: bool = False
+    truncated: bool = False
+
+    @property
+    def observation(self) -> Observation:
+        """``(rho, m_a, m_b)`` of the sensed configuration."""
+        return Observation(self.rho, self.m_a, self.m_b)
+
     @property
     def percept(self) -> Percept:
         """What a policy perceives of this step."""
         return Percept(
-            self.observation,
+            Observation(self.rho, self.m_a, self.m_b),
             self.error,
             self.obs_index,
             self.state.sensed,
@@ -132,6 +160,21 @@ def step(task: Task, state: SimState, action: int | CRM, rng: np.random.Generato
     )
 
 
+def begin_one(task: Task, config: Config, rng: np.random.Generator) -> OneStep:
+    """:func:`begin` as a :class:`OneStep` (error none, reward 0)."""
+    state, obs, index = begin(task, config, rng)
+    return OneStep(state, obs.rho, obs.m_a, obs.m_b, Error.NONE, index, min_friction(config))
+
+
+def step_one(task: Task, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
+    """:func:`step` as a :class:`OneStep` (without the CRM's path)."""
+    r = step(task, state, action, rng)
+    o = r.observation
+    return OneStep(
+        r.state, o.rho, o.m_a, o.m_b, r.error, r.obs_index, r.min_friction, r.reward, r.terminated, r.truncated
+    )
+
+
 @overload
 def episode_end(task: Task, mu: float, steps: int) -> tuple[bool, bool]: ...
 
@@ -166,14 +209,24 @@ class Policy(Protocol):
     def tell(self, percept: Percept) -> None: ...
 
 
-class Transition(NamedTuple):
-    """One step of a traced episode: the state and observation before it, the action
-    taken, and its result."""
+class Stepper(Protocol):
+    """What :func:`run_episode` steps through: a kernel of :mod:`crmgrasp.kernels` (its
+    ``sample_start``, ``begin`` and ``step_one`` equal :meth:`Task.sample_start`,
+    :func:`begin_one` and :func:`step_one` bit for bit)."""
 
-    state: SimState
-    observation: Observation
+    def sample_start(self, rng: np.random.Generator) -> Config: ...
+
+    def begin(self, config: Config, rng: np.random.Generator) -> OneStep: ...
+
+    def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep: ...
+
+
+class Transition(NamedTuple):
+    """One step of a traced episode: the step before it, the action taken, its result."""
+
+    before: OneStep
     action: int | CRM
-    result: StepResult
+    after: OneStep
 
 
 class Episode(NamedTuple):
@@ -185,24 +238,33 @@ class Episode(NamedTuple):
 
 
 def run_episode(
-    task: Task, policy: Policy, rng: np.random.Generator, *, start: Config | None = None, trace: bool = False
+    task: Task,
+    policy: Policy,
+    rng: np.random.Generator,
+    *,
+    start: Config | None = None,
+    trace: bool = False,
+    kernel: Stepper | None = None,
 ) -> Episode:
-    """Run ``policy`` for one episode of ``task``: from a start drawn from ``rng``
-    (:func:`reset`) or from ``start`` (:func:`begin`), :func:`step` until the episode
-    ends; starts and readings draw from ``rng``."""
-    state, obs, index = reset(task, rng) if start is None else begin(task, start, rng)
-    policy.begin(Percept(obs, Error.NONE, index, state.sensed))
+    """Run ``policy`` for one episode of ``task``: from a start drawn from ``rng`` (the
+    task's scalar sampler) or from ``start``, one step per action until the episode
+    ends; starts and readings draw from ``rng``. Steps are :func:`begin_one` and
+    :func:`step_one`, or the same steps of ``kernel`` (faster, the same results)."""
+    advance: Callable[[SimState, int | CRM, np.random.Generator], OneStep]
+    if kernel is None:
+        config = task.sample_start(rng) if start is None else start
+        now, advance = begin_one(task, config, rng), partial(step_one, task)
+    else:
+        config = kernel.sample_start(rng) if start is None else start
+        now, advance = kernel.begin(config, rng), kernel.step_one
+    policy.begin(now.percept)
     steps: list[Transition] = []
     while True:
         action = policy.act()
-        res = step(task, state, action, rng)
+        nxt = advance(now.state, action, rng)
         if trace:
-            steps.append(Transition(state, obs, action, res))
-        policy.tell(
-            Percept(
-                res.observation, res.error, res.obs_index, res.state.sensed, res.reward, res.terminated, res.truncated
-            )
-        )
-        if res.terminated or res.truncated:
-            return Episode(res.state.steps, res.terminated, tuple(steps))
-        state, obs = res.state, res.observation
+            steps.append(Transition(now, action, nxt))
+        policy.tell(nxt.percept)
+        if nxt.terminated or nxt.truncated:
+            return Episode(nxt.state.steps, nxt.terminated, tuple(steps))
+        now = nxt

@@ -144,16 +144,27 @@ class CornerStarts:
     Each attempt draws four uniforms in one call: corner (``floor(u n)``), fraction
     along the incoming side, fraction along the outgoing side, coin (a is the
     incoming-side contact when ``u < 0.5``). A fraction of exactly 0 (a vertex) is
-    rejected.
+    rejected. ``accept`` (a compiled :data:`StartFilter`, given by a kernel) decides
+    each candidate as :func:`acceptable` does, so the stream is the same with or
+    without it.
     """
 
     max_tries: int = 10_000
 
-    def __call__(self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator) -> Config:
+    def __call__(
+        self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator, accept: StartFilter | None = None
+    ) -> Config:
         if not isinstance(obj, Polygon):
             raise CrmgraspError(f"corner starts need a polygon, got {type(obj).__name__}")
         for _ in range(self.max_tries):
-            cfg = corner_candidate(obj, *rng.random(4).tolist())
+            u = rng.random(4)
+            if accept is not None:
+                got = accept(obj, hand, mu_goal, u[:, None])
+                if len(got):
+                    v = got[0].tolist()
+                    return Config(Contact(v[0], v[1], v[2], v[3]), Contact(v[4], v[5], v[6], v[7]))
+                continue
+            cfg = corner_candidate(obj, *u.tolist())
             if cfg is not None and acceptable(obj, hand, mu_goal, cfg):
                 return cfg
         raise CrmgraspError(f"no feasible corner start found in {self.max_tries} tries")
@@ -318,16 +329,19 @@ class Task:
         ):
             raise CrmgraspError(f"reference_mean_steps must be > 0, got {self.reference_mean_steps!r}")
 
-    def sample_start(self, rng: np.random.Generator) -> Config:
-        """A start configuration drawn from ``rng``."""
+    def sample_start(self, rng: np.random.Generator, accept: StartFilter | None = None) -> Config:
+        """A start configuration drawn from ``rng``. ``accept``: a compiled start filter,
+        used by :class:`CornerStarts` (the same start either way), ignored by others."""
+        if accept is not None and isinstance(self.starts, CornerStarts):
+            return self.starts(self.obj, self.hand, self.mu_goal, rng, accept)
         return self.starts(self.obj, self.hand, self.mu_goal, rng)
 
     def sample_starts(self, rng: np.random.Generator, n: int, accept: StartFilter | None = None) -> np.ndarray:
-        """``n`` starts as ``(n, 8)`` rows: the sampler's ``batch`` method if it has one
-        (with ``accept``, a compiled start filter, when given), else ``n`` scalar draws."""
-        batch = getattr(self.starts, "batch", None)
-        if batch is not None:
-            return batch(self.obj, self.hand, self.mu_goal, rng, n, *(() if accept is None else (accept,)))
+        """``n`` starts as ``(n, 8)`` rows: :meth:`CornerStarts.batch` (another stream than
+        :meth:`sample_start`'s, the same distribution; ``accept`` as there), or ``n``
+        scalar draws for other samplers."""
+        if isinstance(self.starts, CornerStarts):
+            return self.starts.batch(self.obj, self.hand, self.mu_goal, rng, n, accept or accept_corner_candidates)
         return np.array([(*c.a, *c.b) for c in (self.sample_start(rng) for _ in range(n))]).reshape(n, 8)
 
     @overload

@@ -96,7 +96,8 @@ def train_trials_lockstep(
         j = tr.next_checkpoint
         if j < len(ckpts) and ckpts[j] == tr.episode:
             starts_rng, ties_rng = checkpoint_generators(seed)
-            csteps[t, j] = evaluate(task, tr.agent, encoder, checkpoint_episodes, starts_rng, ties_rng)[0].mean()
+            ck = evaluate(task, tr.agent, encoder, checkpoint_episodes, starts_rng, ties_rng, kernel=kernel)
+            csteps[t, j] = ck[0].mean()
             tr.next_checkpoint += 1
         if tr.episode == episodes:
             return False
@@ -135,5 +136,5 @@ def train_trials_lockstep(
     gsteps = np.empty((trials, eval_episodes), dtype=np.int64)
     gsucc = np.empty((trials, eval_episodes), dtype=bool)
     for t, tr in enumerate(runs):
-        gsteps[t], gsucc[t] = evaluate(task, tr.agent, encoder, eval_episodes, tr.eval_rng)
+        gsteps[t], gsucc[t] = evaluate(task, tr.agent, encoder, eval_episodes, tr.eval_rng, kernel=kernel)
     return TrialResult(steps, success, gsteps, gsucc, [tr.agent for tr in runs], ckpts, csteps)

@@ -19,10 +19,12 @@ from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents.base import Agent, LearnerPolicy
 from crmgrasp.agents.baselines import FixedSequence, RandomAgent
 from crmgrasp.agents.tabular import DynaQ, QLearning, Sarsa, SarsaLambda
+from crmgrasp.kernels import kernel_for
 from crmgrasp.model.contacts import Config
-from crmgrasp.model.hand import Outcome
+from crmgrasp.model.hand import Outcome, execute_crm
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.model.sensing import Observation
+from crmgrasp.sim import Stepper
 from crmgrasp.sim import run_episode as sim_run_episode
 from crmgrasp.tasks import Task
 
@@ -95,11 +97,13 @@ def run_episode(
     agent_rng: np.random.Generator,
     *,
     learn: bool = True,
+    kernel: Stepper | None = None,
 ) -> tuple[int, bool]:
     """One episode of ``agent`` (:func:`crmgrasp.sim.run_episode` with a
-    :class:`~crmgrasp.agents.base.LearnerPolicy`); returns (CRMs executed, success).
-    ``learn=False`` acts greedily and does not update."""
-    ep = sim_run_episode(task, LearnerPolicy(agent, encoder, agent_rng, learn=learn), env_rng)
+    :class:`~crmgrasp.agents.base.LearnerPolicy`, stepping through ``kernel`` if
+    given); returns (CRMs executed, success). ``learn=False`` acts greedily and does
+    not update."""
+    ep = sim_run_episode(task, LearnerPolicy(agent, encoder, agent_rng, learn=learn), env_rng, kernel=kernel)
     return ep.steps, ep.success
 
 
@@ -110,6 +114,8 @@ def evaluate(
     episodes: int,
     rng: np.random.Generator,
     agent_rng: np.random.Generator | None = None,
+    *,
+    kernel: Stepper | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Greedy evaluation: CRMs per episode and success flags over ``episodes`` fresh
     starts. Starts (and sensing) draw from ``rng``, tie-breaking from ``agent_rng``
@@ -117,7 +123,7 @@ def evaluate(
     steps = np.empty(episodes, dtype=np.int64)
     success = np.empty(episodes, dtype=bool)
     for i in range(episodes):
-        steps[i], success[i] = run_episode(task, agent, encoder, rng, agent_rng or rng, learn=False)
+        steps[i], success[i] = run_episode(task, agent, encoder, rng, agent_rng or rng, learn=False, kernel=kernel)
     return steps, success
 
 
@@ -185,6 +191,7 @@ def train_trials(
     params: dict[str, object] | None = None,
     checkpoints: tuple[int, ...] = (),
     checkpoint_episodes: int = 100,
+    backend: str = "auto",
 ) -> TrialResult:
     """Train ``trials`` independent agents for ``episodes`` each, then evaluate each
     greedily on ``eval_episodes`` fresh episodes.
@@ -192,9 +199,12 @@ def train_trials(
     After each training episode listed in ``checkpoints`` the greedy policy is also
     evaluated on ``checkpoint_episodes`` episodes whose starts are the same at every
     checkpoint (:func:`checkpoint_generators`): a learning curve of the policy itself,
-    free of exploration and of start-to-start noise."""
+    free of exploration and of start-to-start noise. Episodes step through the task's
+    kernel on ``backend`` (:func:`crmgrasp.kernels.kernel_for`; every backend gives
+    the same results)."""
     check_budget(trials, episodes, eval_episodes)
     encoder = encoder_for(task, k)
+    kernel = kernel_for(task, backend)
     steps = np.empty((trials, episodes), dtype=np.int64)
     success = np.empty((trials, episodes), dtype=bool)
     gsteps = np.empty((trials, eval_episodes), dtype=np.int64)
@@ -206,12 +216,13 @@ def train_trials(
         ag = build_agent(task, encoder, agent, params)
         j = 0
         for e in range(episodes):
-            steps[t, e], success[t, e] = run_episode(task, ag, encoder, env_rng, agent_rng)
+            steps[t, e], success[t, e] = run_episode(task, ag, encoder, env_rng, agent_rng, kernel=kernel)
             if j < len(ckpts) and ckpts[j] == e + 1:
                 starts_rng, ties_rng = checkpoint_generators(seed)
-                csteps[t, j] = evaluate(task, ag, encoder, checkpoint_episodes, starts_rng, ties_rng)[0].mean()
+                ck = evaluate(task, ag, encoder, checkpoint_episodes, starts_rng, ties_rng, kernel=kernel)
+                csteps[t, j] = ck[0].mean()
                 j += 1
-        gsteps[t], gsucc[t] = evaluate(task, ag, encoder, eval_episodes, eval_rng)
+        gsteps[t], gsucc[t] = evaluate(task, ag, encoder, eval_episodes, eval_rng, kernel=kernel)
         agents.append(ag)
     return TrialResult(steps, success, gsteps, gsucc, agents, ckpts, csteps)
 
@@ -276,9 +287,12 @@ def rollout(
     ep = sim_run_episode(task, LearnerPolicy(agent, encoder, rng, learn=False), rng, start=start, trace=True)
     steps = []
     for tr in ep.trace:
-        r, a = tr.result, tr.action
+        a, before, after = tr.action, tr.before, tr.after
         assert isinstance(a, int)  # a learner acts by index
+        path = execute_crm(task.obj, task.hand, before.state.config, task.actions[a], before.state.sensed)
         steps.append(
-            RolloutStep(tr.state.config, tr.observation, a, r.outcome, r.observation, r.obs_index, r.min_friction)
+            RolloutStep(
+                before.state.config, before.observation, a, path, after.observation, after.obs_index, after.min_friction
+            )
         )
     return steps, ep.success

@@ -147,7 +147,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--backend",
         choices=("auto", "numba", "reference"),
         default="auto",
-        help="kernel that --lockstep steps through: compiled where one exists (auto, default), compiled "
+        help="kernel that episodes step through: compiled where one exists (auto, default), compiled "
         "(numba), or the readable rules (reference); all give the same results",
     )
     p.add_argument(

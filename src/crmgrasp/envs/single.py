@@ -13,11 +13,11 @@ import numpy as np
 from gymnasium import spaces
 
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.kernels import Kernel, OneStep, kernel_for
+from crmgrasp.kernels import Kernel, kernel_for
 from crmgrasp.model.contacts import Config, Contact
 from crmgrasp.model.hand import Error, execute_crm
 from crmgrasp.model.history import KOrderEncoder
-from crmgrasp.sim import SimState, episode_end
+from crmgrasp.sim import OneStep, SimState
 from crmgrasp.tasks import Task, make_task
 
 __all__ = ["CRMGraspEnv", "KOrderHistory", "ENV_ID"]
@@ -111,7 +111,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             m_a = -b if m_a < -b else b
         if not (-b <= m_b <= b):
             m_b = -b if m_b < -b else b
-        obs = {"rho": np.array([rho]), "m_a": np.array([m_a]), "m_b": np.array([m_b]), "error": res.error}
+        obs = {"rho": np.array([rho]), "m_a": np.array([m_a]), "m_b": np.array([m_b]), "error": int(res.error)}
         info = {
             "obs_index": res.obs_index,
             "config": res.state.config,
@@ -147,9 +147,8 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             raise CrmgraspError(f"action must be an integer in [0, {self._n_actions}), got {action!r}")
         self._last = (self._state, action)
         res = self.kernel.step_one(self._state, action, self.np_random)
-        terminated, truncated = episode_end(self.task, res.min_friction, res.state.steps)
         obs, info = self._emit(res)
-        return obs, -1.0, terminated, truncated, info
+        return obs, res.reward, res.terminated, res.truncated, info
 
     def _next_start(self) -> Config:
         """The next start, from blocks drawn by the kernel's vectorised sampler: 16 after

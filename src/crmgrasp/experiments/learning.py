@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -84,12 +83,12 @@ def learn(
     lockstep: bool = False,
     backend: str = "auto",
 ) -> LearnRun:
-    """Train ``trials`` independent agents and summarise them. With ``lockstep`` the
-    trials step together through the task's kernel on ``backend``
-    (:func:`crmgrasp.kernels.kernel_for`); otherwise each episode steps
-    :func:`crmgrasp.sim.step`. Every choice gives the same results."""
+    """Train ``trials`` independent agents and summarise them. Episodes step through the
+    task's kernel on ``backend`` (:func:`crmgrasp.kernels.kernel_for`), one trial after
+    another or, with ``lockstep``, all trials together. Every choice gives the same
+    results."""
     t0 = time.perf_counter()
-    trainer = partial(train_trials_lockstep, backend=backend) if lockstep else train_trials
+    trainer = train_trials_lockstep if lockstep else train_trials
     res = trainer(
         task,
         spec.agent,
@@ -101,6 +100,7 @@ def learn(
         params=spec.params,
         checkpoints=DEFAULT_CHECKPOINTS if checkpoint_episodes else (),
         checkpoint_episodes=checkpoint_episodes,
+        backend=backend,
     )
     curve = res.curve
     ref = task.reference_mean_steps

@@ -25,11 +25,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.kernels.base import BatchStep, Kernel, OneStep
+from crmgrasp.kernels.base import BatchStep, Kernel
 from crmgrasp.kernels.reference import ReferenceKernel
 from crmgrasp.model.contacts import configs_to_array
 from crmgrasp.model.geometry import Polygon, Shape
 from crmgrasp.model.hand import CRM, Hand
+from crmgrasp.sim import OneStep
 from crmgrasp.tasks import Task
 
 __all__ = ["BACKENDS", "Backend", "kernel_for", "execute_batch", "Kernel", "OneStep", "BatchStep", "ReferenceKernel"]

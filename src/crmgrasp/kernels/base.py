@@ -16,27 +16,14 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from crmgrasp.model.hand import Error
-from crmgrasp.model.quality import min_friction
-from crmgrasp.sim import SimState, begin, step
-from crmgrasp.tasks import Task, accept_corner_candidates
+from crmgrasp.model.hand import CRM
+from crmgrasp.sim import OneStep, SimState, begin_one, step_one
+from crmgrasp.tasks import StartFilter, Task
 
 __all__ = ["Kernel", "OneStep", "BatchStep"]
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
-
-
-class OneStep(NamedTuple):
-    """One environment's state and what it senses after a reset or a CRM."""
-
-    state: SimState
-    rho: float
-    m_a: float
-    m_b: float
-    error: int
-    obs_index: int
-    min_friction: float
 
 
 class BatchStep(NamedTuple):
@@ -53,7 +40,9 @@ class BatchStep(NamedTuple):
 
 class Kernel:
     """A task's rules over rows. Subclasses implement :meth:`execute_crms` and
-    :meth:`observe`; build one with :func:`crmgrasp.kernels.kernel_for`."""
+    :meth:`observe`, and may set :attr:`start_filter` (a compiled
+    :data:`crmgrasp.tasks.StartFilter` that the task's sampler uses where it can); build
+    one with :func:`crmgrasp.kernels.kernel_for`."""
 
     name: ClassVar[str] = "abstract"
 
@@ -61,6 +50,7 @@ class Kernel:
         self.task = task
         self.acts = np.array([(a.ci, a.fi, a.r) for a in task.actions], dtype=np.float64)
         self.bound = 2.0 * task.hand.aperture  # the observation space's moment bound, m
+        self.start_filter: StartFilter | None = None  # a compiled one, where the kernel has it
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.task.name!r})"
@@ -78,30 +68,30 @@ class Kernel:
         error codes), and the min friction of each true row."""
         raise NotImplementedError
 
-    def accept_starts(self, obj: Any, hand: Any, mu_goal: float, u: np.ndarray) -> F64:
-        """The start filter (:data:`crmgrasp.tasks.StartFilter`) given to the sampler."""
-        return accept_corner_candidates(obj, hand, mu_goal, u)
-
     # ------------------------------------------------------------ composites
     def execute(self, cfg: F64, sen: F64, actions: I64) -> tuple[F64, NDArray[np.int8]]:
         """:meth:`execute_crms` of the task's actions ``actions`` (indices)."""
         a = self.acts[actions]
         return self.execute_crms(cfg, sen, a[:, 0] != 0.0, a[:, 1] != 0.0, np.ascontiguousarray(a[:, 2]))
 
+    def sample_start(self, rng: np.random.Generator) -> Any:
+        """One start (:meth:`crmgrasp.tasks.Task.sample_start`, with :attr:`start_filter`):
+        the task's scalar stream."""
+        return self.task.sample_start(rng, self.start_filter)
+
     def sample_starts(self, rng: np.random.Generator, n: int) -> F64:
-        """``n`` starts as ``(n, 8)`` rows (:meth:`crmgrasp.tasks.Task.sample_starts`)."""
-        return self.task.sample_starts(rng, n, self.accept_starts)
+        """``n`` starts as ``(n, 8)`` rows (:meth:`crmgrasp.tasks.Task.sample_starts`, with
+        :attr:`start_filter`)."""
+        return self.task.sample_starts(rng, n, self.start_filter)
 
     def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
-        """An episode starting at ``config`` (:func:`crmgrasp.sim.begin`)."""
-        state, obs, index = begin(self.task, config, rng)
-        return OneStep(state, obs.rho, obs.m_a, obs.m_b, int(Error.NONE), index, min_friction(config))
+        """An episode starting at ``config`` (:func:`crmgrasp.sim.begin_one`)."""
+        return begin_one(self.task, config, rng)
 
-    def step_one(self, state: SimState, action: int, rng: np.random.Generator) -> OneStep:
-        """The CRM ``task.actions[action]`` from ``state`` (:func:`crmgrasp.sim.step`)."""
-        res = step(self.task, state, action, rng)
-        o = res.observation
-        return OneStep(res.state, o.rho, o.m_a, o.m_b, int(res.error), res.obs_index, res.min_friction)
+    def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
+        """The CRM ``task.actions[action]`` (or the CRM ``action``) from ``state``
+        (:func:`crmgrasp.sim.step_one`)."""
+        return step_one(self.task, state, action, rng)
 
     def step_batch(
         self, cfg: F64, sen: F64, actions: I64, resets: NDArray[np.bool_], starts: F64, rng: np.random.Generator

@@ -14,14 +14,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from crmgrasp.kernels import _polygon_jit as jit
-from crmgrasp.kernels.base import F64, I64, BatchStep, Kernel, OneStep
+from crmgrasp.kernels.base import F64, I64, BatchStep, Kernel
 from crmgrasp.model import quality, shape
 from crmgrasp.model.contacts import Config, Contact
 from crmgrasp.model.geometry import Polygon
-from crmgrasp.sim import SimState
+from crmgrasp.model.hand import CRM, Error
+from crmgrasp.sim import OneStep, SimState, episode_end
 from crmgrasp.tasks import Task
 
 __all__ = ["PolygonKernel", "FusedPolygonKernel", "params"]
+
+_ERRORS = tuple(Error)  # code -> Error, faster than Error(code)
 
 
 def params(task: Task) -> tuple[F64, NDArray[np.int64], F64]:
@@ -54,6 +57,7 @@ class PolygonKernel(Kernel):
         assert isinstance(task.obj, Polygon)
         self.e = np.ascontiguousarray(task.obj.edge_array)
         self.p, self.q, self.th = params(task)
+        self.start_filter = self._accept
 
     def execute_crms(
         self, cfg: F64, sen: F64, c_is_b: NDArray[np.bool_], f_is_b: NDArray[np.bool_], r: F64
@@ -95,7 +99,8 @@ class PolygonKernel(Kernel):
         )
         return rho, m_a, m_b, index, mu
 
-    def accept_starts(self, obj: Any, hand: Any, mu_goal: float, u: np.ndarray) -> F64:
+    def _accept(self, obj: Any, hand: Any, mu_goal: float, u: np.ndarray) -> F64:
+        """:func:`crmgrasp.tasks.accept_corner_candidates`, compiled."""
         out = np.empty((u.shape[1], 8))
         count = jit.corner_rows(np.ascontiguousarray(u), self.e, self.p, self.q, out)
         return out[:count]
@@ -118,9 +123,11 @@ class FusedPolygonKernel(PolygonKernel):
         self._v_of = config
         index = jit.begin_one(self._v, self.th, self.p, self.q, self._out)
         _, _, _, _, _, _, _, _, rho, m_a, m_b, mu = self._out[0].tolist()
-        return OneStep(SimState(config, config, 0), rho, m_a, m_b, 0, index, mu)
+        return OneStep(SimState(config, config, 0), rho, m_a, m_b, Error.NONE, index, mu)
 
-    def step_one(self, state: SimState, action: int, rng: np.random.Generator) -> OneStep:
+    def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
+        if isinstance(action, CRM):  # a CRM outside the task's set: the reference step
+            return super().step_one(state, action, rng)
         config = state.config
         if config is not self._v_of:
             self._v[0] = (*config.a, *config.b)
@@ -131,7 +138,10 @@ class FusedPolygonKernel(PolygonKernel):
             config = Config(Contact(o[0], o[1], o[2], o[3]), Contact(o[4], o[5], o[6], o[7]))
             self._v[0] = self._out[0, :8]
             self._v_of = config
-        return OneStep(SimState(config, config, state.steps + 1), o[8], o[9], o[10], code, index, o[11])
+        steps = state.steps + 1
+        terminated, truncated = episode_end(self.task, o[11], steps)
+        state = SimState(config, config, steps)
+        return OneStep(state, o[8], o[9], o[10], _ERRORS[code], index, o[11], -1.0, terminated, truncated)
 
     def step_batch(
         self, cfg: F64, sen: F64, actions: I64, resets: NDArray[np.bool_], starts: F64, rng: np.random.Generator
