@@ -23,6 +23,7 @@ from crmgrasp.tasks import Task, make_task
 __all__ = ["CRMGraspEnv", "KOrderHistory", "ENV_ID"]
 
 ENV_ID = "crmgrasp/PaperBox-v0"
+_empty = np.empty
 _FIRST_BLOCK, _MAX_BLOCK = 16, 1024
 
 
@@ -111,7 +112,9 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             m_a = -b if m_a < -b else b
         if not (-b <= m_b <= b):
             m_b = -b if m_b < -b else b
-        obs = {"rho": np.array([rho]), "m_a": np.array([m_a]), "m_b": np.array([m_b]), "error": int(res.error)}
+        r, a, c = _empty(1), _empty(1), _empty(1)  # cheaper than np.array([x])
+        r[0], a[0], c[0] = rho, m_a, m_b
+        obs = {"rho": r, "m_a": a, "m_b": c, "error": int(res.error)}
         info = {
             "obs_index": res.obs_index,
             "config": res.state.config,

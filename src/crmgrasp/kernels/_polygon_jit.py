@@ -246,8 +246,8 @@ def observe_rows(cfg, sen, err, th, p, q, rho, m_a, m_b, index, mu):  # type: ig
 
 @njit(cache=True)
 def step_one(v, action, acts, e, th, p, q, out):  # type: ignore[no-untyped-def]
-    """One noise-free CRM of the single environment from the configuration ``v``
-    (``(1, 8)``): the new configuration into ``out[0, :8]``, then ``rho, m_a, m_b,
+    """One noise-free CRM of the single environment from the configuration in the first
+    8 columns of ``v`` (one row): the new configuration into ``out[0, :8]``, then ``rho, m_a, m_b,
     min_friction`` into ``out[0, 8:12]``; returns ``(error code, bin index)``."""
     p, q = _unpack(p, q)
     code = _crm(v, v, 0, acts[action, 0] != 0.0, acts[action, 1] != 0.0, acts[action, 2], e, p, q, out, 0)
@@ -259,7 +259,8 @@ def step_one(v, action, acts, e, th, p, q, out):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def begin_one(v, th, p, q, out):  # type: ignore[no-untyped-def]
-    """The observation of the configuration ``v`` (``(1, 8)``, noise-free) into
+    """The observation of the configuration in the first 8 columns of ``v`` (one row,
+    noise-free) into
     ``out[0, 8:11]`` and its min friction into ``out[0, 11]``; returns its bin index
     (error none), as :func:`crmgrasp.sim.begin`."""
     p, q = _unpack(p, q)

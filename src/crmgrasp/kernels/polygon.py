@@ -114,12 +114,13 @@ class FusedPolygonKernel(PolygonKernel):
 
     def __init__(self, task: Task) -> None:
         super().__init__(task)
-        self._v = np.empty((1, 8))  # the last configuration stepped, as a row
+        # the configuration stepped from (columns 0-7) and the step's output (0-7: the new
+        # configuration, 8-11: rho, m_a, m_b, min friction); swapped after a move
+        self._v, self._out = np.empty((1, 12)), np.empty((1, 12))
         self._v_of: Config | None = None
-        self._out = np.empty((1, 12))
 
     def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
-        self._v[0] = (*config.a, *config.b)
+        self._v[0, :8] = (*config.a, *config.b)
         self._v_of = config
         index = jit.begin_one(self._v, self.th, self.p, self.q, self._out)
         _, _, _, _, _, _, _, _, rho, m_a, m_b, mu = self._out[0].tolist()
@@ -130,13 +131,13 @@ class FusedPolygonKernel(PolygonKernel):
             return super().step_one(state, action, rng)
         config = state.config
         if config is not self._v_of:
-            self._v[0] = (*config.a, *config.b)
+            self._v[0, :8] = (*config.a, *config.b)
             self._v_of = config
         code, index = jit.step_one(self._v, action, self.acts, self.e, self.th, self.p, self.q, self._out)
         o = self._out[0].tolist()
         if not code:
             config = Config(Contact(o[0], o[1], o[2], o[3]), Contact(o[4], o[5], o[6], o[7]))
-            self._v[0] = self._out[0, :8]
+            self._v, self._out = self._out, self._v  # the output is the next step's input
             self._v_of = config
         steps = state.steps + 1
         terminated, truncated = episode_end(self.task, o[11], steps)
