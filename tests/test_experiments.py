@@ -114,3 +114,16 @@ def test_reproduce_index_and_cli(tmp_path, capsys):
         assert name in out
     index = (tmp_path / "b" / "README.md").read_text()
     assert "figure9/figure9.png" in index and "1.8" in index
+
+
+def test_reproduce_writes_the_same_files_on_every_kernel_backend(tmp_path):
+    """Figures 8 and 9 (each trains its policy) on the compiled and on the reference kernel."""
+    outs = {}
+    for backend in ("numba", "reference"):
+        reproduce(tmp_path / backend, ["figure8", "figure9"], quick=True, backend=backend)
+        outs[backend] = {
+            p.relative_to(tmp_path / backend): p.read_bytes()
+            for p in sorted((tmp_path / backend).rglob("*"))
+            if p.suffix in (".csv", ".json")
+        }
+    assert outs["numba"] == outs["reference"] and len(outs["numba"]) >= 4

@@ -165,8 +165,11 @@ def evaluate_recurrent(
     return steps, success
 
 
-def train_recurrent_ppo(task: Task, seed: int, config: RecurrentPPOConfig = RecurrentPPOConfig()) -> DeepRun:
-    """Train RecurrentPPO on ``task`` from ``seed``; return the model, curve and checkpoints."""
+def train_recurrent_ppo(
+    task: Task, seed: int, config: RecurrentPPOConfig = RecurrentPPOConfig(), *, backend: str = "auto"
+) -> DeepRun:
+    """Train RecurrentPPO on ``task`` from ``seed`` (environments on the kernel ``backend``);
+    return the model, curve and checkpoints."""
     torch, contrib, vec, callbacks = _modules()
     from crmgrasp.envs.single import CRMGraspEnv
 
@@ -191,7 +194,9 @@ def train_recurrent_ppo(task: Task, seed: int, config: RecurrentPPOConfig = Recu
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
-        env = vec.DummyVecEnv([lambda: ContinuousObservation(CRMGraspEnv(task)) for _ in range(c.n_envs)])
+        env = vec.DummyVecEnv(
+            [lambda: ContinuousObservation(CRMGraspEnv(task, backend=backend)) for _ in range(c.n_envs)]
+        )
         model = contrib.RecurrentPPO(
             "MlpLstmPolicy",
             env,

@@ -111,7 +111,7 @@ def _show_mujoco(args: argparse.Namespace) -> int:
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from crmgrasp.experiments import reproduce
 
-    results = reproduce(args.out, args.experiments, seed=args.seed, quick=args.quick)
+    results = reproduce(args.out, args.experiments, seed=args.seed, quick=args.quick, backend=args.backend)
     root = args.out.resolve()
     for name, summary in results.items():
         print(f"{name}: {root / name} ({summary['seconds']} s)")
@@ -171,7 +171,11 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
             name = "paper-box"  # GreedyPolicy.load reports the real problem
     task = make_task(name)
     policy = GreedyPolicy.load(args.policy, task)
-    steps, success = evaluate(task, policy, policy.encoder, args.episodes, np.random.default_rng(args.seed))
+    from crmgrasp.kernels import kernel_for
+
+    kernel = kernel_for(task, args.backend)
+    rng = np.random.default_rng(args.seed)
+    steps, success = evaluate(task, policy, policy.encoder, args.episodes, rng, kernel=kernel)
     half = 1.96 * float(steps.std(ddof=1)) / math.sqrt(len(steps)) if len(steps) > 1 else 0.0
     result = {
         "task": task.name,
@@ -232,7 +236,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
         cfg = dataclasses.replace(
             cfg, deep=dataclasses.replace(deep, total_steps=args.deep_steps) if args.deep_steps else None
         )
-    summary = compare(args.out, cfg)
+    summary = compare(args.out, cfg, backend=args.backend)
     print((args.out / "compare.md").read_text(encoding="utf-8"))
     for key, value in summary.items():
         print(f"{key}: {value}")

@@ -79,6 +79,16 @@ def _add_scene_args(p: argparse.ArgumentParser, crm_required: bool) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the sensing noise (default 0)")
 
 
+def _add_kernel_backend(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--backend",
+        choices=("auto", "numba", "reference"),
+        default="auto",
+        help="kernel that episodes step through: compiled where one exists (auto, default), compiled "
+        "(numba), or the readable rules (reference); all give the same results",
+    )
+
+
 def _add_backend(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--backend",
@@ -123,6 +133,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
     p.add_argument("--quick", action="store_true", help="small budgets (under a minute on 2 cores)")
+    _add_kernel_backend(p)
 
     p = sub.add_parser(
         "learn",
@@ -143,13 +154,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="step all trials together through the batched simulator (same results; faster from ~500 trials)",
     )
-    p.add_argument(
-        "--backend",
-        choices=("auto", "numba", "reference"),
-        default="auto",
-        help="kernel that episodes step through: compiled where one exists (auto, default), compiled "
-        "(numba), or the readable rules (reference); all give the same results",
-    )
+    _add_kernel_backend(p)
     p.add_argument(
         "--symmetric",
         action="store_true",
@@ -168,6 +173,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--episodes", type=int, default=1000, help="episodes (default 1000)")
     p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
+    _add_kernel_backend(p)
 
     p = sub.add_parser(
         "bench",
@@ -206,6 +212,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N",
         help="RecurrentPPO training steps (default 120000, --quick 4096; 0 leaves the deep-RL peer out)",
     )
+    _add_kernel_backend(p)
 
     p = sub.add_parser(
         "pomdp",

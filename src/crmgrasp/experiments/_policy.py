@@ -9,9 +9,12 @@ from crmgrasp.experiments.learning import LearnerSpec, best_policy, learn
 from crmgrasp.tasks import Task
 
 
-def learned_policy(task: Task, policy_path: str | Path | None, seed: int, trials: int, episodes: int) -> GreedyPolicy:
+def learned_policy(
+    task: Task, policy_path: str | Path | None, seed: int, trials: int, episodes: int, backend: str = "auto"
+) -> GreedyPolicy:
     """Load ``policy_path`` if given, else train the paper's SARSA (``trials`` trials of
-    ``episodes`` episodes from ``seed``) and take the best trial's greedy policy."""
+    ``episodes`` episodes from ``seed``, on the kernel ``backend``) and take the best
+    trial's greedy policy."""
     if policy_path is not None:
         return GreedyPolicy.load(policy_path, task)
     run = learn(
@@ -22,6 +25,7 @@ def learned_policy(task: Task, policy_path: str | Path | None, seed: int, trials
         seed=seed,
         eval_episodes=200,
         checkpoint_episodes=0,
+        backend=backend,
     )
     policy = best_policy(task, run)
     assert policy is not None

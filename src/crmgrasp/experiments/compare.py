@@ -84,8 +84,9 @@ def _ci(values: np.ndarray) -> tuple[float, float, float]:
     return m, m - half, m + half
 
 
-def compare(out_dir: str | Path, config: CompareConfig = CompareConfig()) -> dict[str, Any]:
-    """Run every method; write the table and the figure; return a summary."""
+def compare(out_dir: str | Path, config: CompareConfig = CompareConfig(), *, backend: str = "auto") -> dict[str, Any]:
+    """Run every method (learners and the deep-RL peer on the kernel ``backend``); write
+    the table and the figure; return a summary."""
     task = make_task(config.task)
     rows: list[list[Any]] = []
     curves = {}
@@ -97,6 +98,7 @@ def compare(out_dir: str | Path, config: CompareConfig = CompareConfig()) -> dic
             episodes=config.episodes,
             seed=config.seed,
             eval_episodes=config.eval_episodes,
+            backend=backend,
         )
         res, s = run.result, run.summary
         m, lo, hi = _ci(res.greedy_steps.ravel())
@@ -125,7 +127,7 @@ def compare(out_dir: str | Path, config: CompareConfig = CompareConfig()) -> dic
     controller = m
     starts = sample_starts(task, config.reference_starts, config.seed)
     fresh = sample_starts(task, config.trials * config.eval_episodes, config.seed + 1)
-    deep = _deep_row(task, config, fresh, curves, controller, Path(out_dir))
+    deep = _deep_row(task, config, fresh, curves, controller, Path(out_dir), backend)
     rows += deep[0]
     t0 = time.perf_counter()
     policy = BeliefPolicy(task, starts)
@@ -178,7 +180,7 @@ def compare(out_dir: str | Path, config: CompareConfig = CompareConfig()) -> dic
 
 
 def _deep_row(
-    task: Task, config: CompareConfig, fresh: list, curves: dict, controller: float, out: Path
+    task: Task, config: CompareConfig, fresh: list, curves: dict, controller: float, out: Path, backend: str
 ) -> tuple[list[list[Any]], str | dict]:
     """RecurrentPPO's row (if it runs) and a summary of it; writes ``deep_curve.csv`` and
     ``deep_checkpoints.csv`` and adds its curve (100-episode moving average: one run is
@@ -188,7 +190,7 @@ def _deep_row(
     if not deep_available():
         return [], "skipped: needs pip install 'crmgrasp[deep]'"
     t0 = time.perf_counter()
-    run = train_recurrent_ppo(task, config.seed, config.deep)
+    run = train_recurrent_ppo(task, config.seed, config.deep, backend=backend)
     steps, ok = evaluate_recurrent(run.model, task, fresh, np.random.default_rng(config.seed + 1))
     m, lo, hi = _ci(steps.astype(float))
     ref = task.reference_mean_steps

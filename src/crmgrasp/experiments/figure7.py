@@ -59,7 +59,9 @@ def _ms(run: LearnRun) -> tuple[Any, Any]:
     return _mean_sem(run.result.checkpoint_steps)
 
 
-def figure_7_learning_curve(out_dir: str | Path, config: Figure7Config = Figure7Config()) -> dict[str, Any]:
+def figure_7_learning_curve(
+    out_dir: str | Path, config: Figure7Config = Figure7Config(), *, backend: str = "auto"
+) -> dict[str, Any]:
     """Run every learner; write ``curves.csv``, ``checkpoints.csv``, ``learners.csv``,
     ``figure7.png``, ``figure7_greedy.png``, ``figure7_k_ablation.png``,
     ``policy.json`` (the paper SARSA's best trial) and ``config.json``."""
@@ -71,6 +73,7 @@ def figure_7_learning_curve(out_dir: str | Path, config: Figure7Config = Figure7
         seed=config.seed,
         eval_episodes=config.eval_episodes,
         checkpoint_episodes=config.checkpoint_episodes,
+        backend=backend,
     )
     runs: list[LearnRun] = [learn(task, spec, **kw) for spec in usable(task, config.learners)]
     ablation = [learn(task, LearnerSpec("sarsa", k, {}, f"SARSA k={k}"), **kw) for k in config.ablation_ks]

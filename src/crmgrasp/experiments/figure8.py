@@ -51,10 +51,12 @@ class Figure8Config:
     train_episodes: int = 2000
 
 
-def figure_8_strategies(out_dir: str | Path, config: Figure8Config = Figure8Config()) -> dict[str, Any]:
+def figure_8_strategies(
+    out_dir: str | Path, config: Figure8Config = Figure8Config(), *, backend: str = "auto"
+) -> dict[str, Any]:
     """Execute the learned policy from the three starts and draw them."""
     task = make_task(config.task)
-    policy = learned_policy(task, config.policy, config.seed, config.train_trials, config.train_episodes)
+    policy = learned_policy(task, config.policy, config.seed, config.train_trials, config.train_episodes, backend)
     rng = np.random.default_rng(config.seed)
     names = task.action_names()
     rows, csv_rows, summary = [], [], {}

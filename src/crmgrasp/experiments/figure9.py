@@ -107,10 +107,12 @@ class Clusters:
         return {f"centroid {k}": [round(float(x), 3) for x in v.mean(axis=0)] for k, v in arrays.items() if len(v)}
 
 
-def figure_9_robonaut_trials(out_dir: str | Path, config: Figure9Config = Figure9Config()) -> dict[str, Any]:
+def figure_9_robonaut_trials(
+    out_dir: str | Path, config: Figure9Config = Figure9Config(), *, backend: str = "auto"
+) -> dict[str, Any]:
     """Run the trials and plot the three clusters."""
     base = make_task(config.task)
-    policy = learned_policy(base, config.policy, config.seed, config.train_trials, config.train_episodes)
+    policy = learned_policy(base, config.policy, config.seed, config.train_trials, config.train_episodes, backend)
     noisy = noisy_execution(base, config.sigma_n_deg, config.sigma_p, config.palm_tolerance_deg)
     task = dataclasses.replace(noisy, mu_goal=config.mu_goal)
     rng = np.random.default_rng(config.seed)

@@ -119,11 +119,13 @@ def _animate(task: Task, start: Config, policy: Any, rng: np.random.Generator, p
     return f"{len(rec.frames)} frames"
 
 
-def figure_9_mujoco(out_dir: str | Path, config: MujocoFigure9Config = MujocoFigure9Config()) -> dict[str, Any]:
+def figure_9_mujoco(
+    out_dir: str | Path, config: MujocoFigure9Config = MujocoFigure9Config(), *, backend: str = "auto"
+) -> dict[str, Any]:
     """Run the kinematic policy on the MuJoCo hand; write CSV, PNG, per-trial logs and config."""
     c = config
     base = make_task(c.task)
-    policy = learned_policy(base, c.policy, c.seed, c.train_trials, c.train_episodes)
+    policy = learned_policy(base, c.policy, c.seed, c.train_trials, c.train_episodes, backend)
     task = hardware_task(base, c.palm_tolerance_deg, c.mu_goal)
     kin_task = dataclasses.replace(
         noisy_execution(base, c.sigma_n_deg, c.sigma_p, c.palm_tolerance_deg), mu_goal=c.mu_goal

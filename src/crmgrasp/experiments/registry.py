@@ -1,6 +1,8 @@
 """The experiments that ``crmgrasp reproduce`` knows: per name, a description, the
 runner (``runner(out_dir, seed, quick, context) -> (summary, rows)``) and the images
-it writes; each runner's rows put our numbers beside the paper's."""
+it writes; each runner's rows put our numbers beside the paper's. The context is
+shared by the experiments of one run: ``backend`` (the kernel backend) and what
+earlier experiments produced (``policy``: the Figure 7 policy)."""
 
 from __future__ import annotations
 
@@ -37,7 +39,7 @@ def _figure7(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
     cfg = Figure7Config(seed=seed)
     if quick:
         cfg = replace(cfg, trials=5, episodes=300, eval_episodes=200, checkpoint_episodes=50)
-    s = figure_7_learning_curve(out, cfg)
+    s = figure_7_learning_curve(out, cfg, backend=ctx["backend"])
     if not quick:
         ctx["policy"] = str(out / "policy.json")
     return s, [
@@ -62,7 +64,7 @@ def _figure7(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
 
 
 def _figure8(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
-    s = figure_8_strategies(out, Figure8Config(seed=seed, policy=ctx.get("policy")))
+    s = figure_8_strategies(out, Figure8Config(seed=seed, policy=ctx.get("policy")), backend=ctx["backend"])
     labels = list(s)
     return s, [
         (
@@ -75,7 +77,7 @@ def _figure8(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
 
 
 def _figure9(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
-    s = figure_9_robonaut_trials(out, Figure9Config(seed=seed, policy=ctx.get("policy")))
+    s = figure_9_robonaut_trials(out, Figure9Config(seed=seed, policy=ctx.get("policy")), backend=ctx["backend"])
     return s, [
         ("grasps / trials", f"{s['successes']} / {s['trials']}", "11 / 11"),
         ("CRMs per trial", s["mean_crms"], "2"),
@@ -89,7 +91,7 @@ def _figure9(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
 
 def _compare(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
     cfg = CompareConfig.quick(seed=seed) if quick else CompareConfig(seed=seed)
-    s = compare(out, cfg)
+    s = compare(out, cfg, backend=ctx["backend"])
     return s, [
         ("best learner, greedy CRMs", f"{s['best_learner_mean_crms']} ({s['best_learner']})", "1.8"),
         ("belief-space optimum / clairvoyant bound", f"{s['belief_optimum']} / {s['clairvoyant_bound']}", "-"),
@@ -122,7 +124,7 @@ def _figure4_mujoco(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> t
 def _figure9_mujoco(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
     from crmgrasp.experiments.mujoco import MujocoFigure9Config, figure_9_mujoco
 
-    s = figure_9_mujoco(out, MujocoFigure9Config(seed=seed, policy=ctx.get("policy")))
+    s = figure_9_mujoco(out, MujocoFigure9Config(seed=seed, policy=ctx.get("policy")), backend=ctx["backend"])
     return s, [
         ("MuJoCo grasps / trials (kinematic policy)", f"{s['successes']} / {s['trials']}", "11 / 11 (Robonaut)"),
         (

@@ -10,6 +10,7 @@ from typing import Any
 from crmgrasp._io import atomic_write_text
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.experiments.registry import EXPERIMENTS, IMAGES, NEEDS_MUJOCO
+from crmgrasp.kernels import BACKENDS
 
 __all__ = ["reproduce"]
 
@@ -20,10 +21,16 @@ def _cell(value: object) -> str:
 
 
 def reproduce(
-    out_dir: str | Path, names: list[str] | None = None, *, seed: int = 0, quick: bool = False
+    out_dir: str | Path,
+    names: list[str] | None = None,
+    *,
+    seed: int = 0,
+    quick: bool = False,
+    backend: str = "auto",
 ) -> dict[str, dict[str, Any]]:
     """Run the named experiments (all by default) into ``out_dir/<name>/`` and write
-    ``out_dir/README.md`` with every figure and our numbers beside the paper's."""
+    ``out_dir/README.md`` with every figure and our numbers beside the paper's.
+    Episodes step through the kernel ``backend`` (every backend gives the same results)."""
     from crmgrasp.hardware.mujoco import mujoco_available, require_mujoco
 
     skipped: list[str] = []
@@ -39,7 +46,9 @@ def reproduce(
         require_mujoco()
     out = Path(out_dir)
     results: dict[str, dict[str, Any]] = {}
-    ctx: dict[str, Any] = {}
+    if backend not in BACKENDS:
+        raise CrmgraspError(f"unknown backend {backend!r}; choose one of {', '.join(BACKENDS)}")
+    ctx: dict[str, Any] = {"backend": backend}
     lines = [
         "# crmgrasp reproduction",
         "",
