@@ -11,6 +11,7 @@ bit for bit.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
@@ -38,7 +39,7 @@ class BatchStep(NamedTuple):
     min_friction: F64
 
 
-class Kernel:
+class Kernel(ABC):
     """A task's rules over rows. Subclasses implement :meth:`execute_crms` and
     :meth:`observe`, and may set :attr:`start_filter` (a compiled
     :data:`crmgrasp.tasks.StartFilter` that the task's sampler uses where it can); build
@@ -56,17 +57,17 @@ class Kernel:
         return f"{type(self).__name__}({self.task.name!r})"
 
     # ------------------------------------------------------------ the rules
+    @abstractmethod
     def execute_crms(
         self, cfg: F64, sen: F64, c_is_b: NDArray[np.bool_], f_is_b: NDArray[np.bool_], r: F64
     ) -> tuple[F64, NDArray[np.int8]]:
         """The CRM ``(c, f, r)`` of each row from true rows ``cfg`` and sensed rows
         ``sen`` (:func:`crmgrasp.model.hand.execute_crm`): new rows and error codes."""
-        raise NotImplementedError
 
+    @abstractmethod
     def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[F64, F64, F64, I64, F64]:
         """``(rho, m_a, m_b)`` and the bin index of each sensed row (with the rows'
         error codes), and the min friction of each true row."""
-        raise NotImplementedError
 
     # ------------------------------------------------------------ composites
     def execute(self, cfg: F64, sen: F64, actions: I64) -> tuple[F64, NDArray[np.int8]]:

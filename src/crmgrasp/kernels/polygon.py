@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from crmgrasp._validation import CrmgraspError
 from crmgrasp.kernels import _polygon_jit as jit
 from crmgrasp.kernels.base import F64, I64, BatchStep, Kernel
 from crmgrasp.model import quality, shape
@@ -120,7 +121,7 @@ class FusedPolygonKernel(PolygonKernel):
         self._v_of: Config | None = None
 
     def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
-        self._v[0, :8] = (*config.a, *config.b)
+        self._v[0, :8] = config.a + config.b
         self._v_of = config
         index = jit.begin_one(self._v, self.th, self.p, self.q, self._out)
         _, _, _, _, _, _, _, _, rho, m_a, m_b, mu = self._out[0].tolist()
@@ -129,9 +130,11 @@ class FusedPolygonKernel(PolygonKernel):
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
         if isinstance(action, CRM):  # a CRM outside the task's set: the reference step
             return super().step_one(state, action, rng)
+        if not 0 <= action < len(self.acts):  # compiled code does not check indices
+            raise CrmgraspError(f"action must be an integer in [0, {len(self.acts)}), got {action!r}")
         config = state.config
         if config is not self._v_of:
-            self._v[0, :8] = (*config.a, *config.b)
+            self._v[0, :8] = config.a + config.b
             self._v_of = config
         code, index = jit.step_one(self._v, action, self.acts, self.e, self.th, self.p, self.q, self._out)
         o = self._out[0].tolist()
@@ -149,8 +152,9 @@ class FusedPolygonKernel(PolygonKernel):
     ) -> BatchStep:
         n = len(cfg)
         new = np.empty((n, 8))
-        obs = {"rho": np.empty((n, 1)), "m_a": np.empty((n, 1)), "m_b": np.empty((n, 1))}
         err, index, mu = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty(n)
+        obs: dict[str, np.ndarray] = {"rho": np.empty((n, 1)), "m_a": np.empty((n, 1)), "m_b": np.empty((n, 1))}
+        obs["error"] = err
         jit.step_rows(
             np.ascontiguousarray(cfg),
             np.ascontiguousarray(actions, dtype=np.int64),
@@ -169,5 +173,4 @@ class FusedPolygonKernel(PolygonKernel):
             index,
             mu,
         )
-        obs["error"] = err  # type: ignore[assignment]
         return BatchStep(new, new, obs, index, mu)
