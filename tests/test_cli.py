@@ -52,12 +52,15 @@ def test_crm_with_noise_is_seeded(capsys):
         (["reproduce", "figure99"], "unknown experiment 'figure99'"),
         (["frobnicate"], "invalid choice"),
         (["learn", "--agent", "nope", "--out", "x"], "unknown agent 'nope'"),
-        (["learn", "--trials", "0", "--out", "x"], "trials must be"),
+        (["learn", "--trials", "0", "--out", "x"], "--trials: value must be an integer in [1, 100000], got 0"),
         (["learn", "--alpha", "2", "--trials", "1", "--episodes", "1", "--out", "x"], "alpha must be in"),
-        (["learn", "--k", "-1", "--out", "x"], "--k must be >= 0"),
-        (["references", "--starts", "0"], "integer >= 1"),
+        (["learn", "--k", "-1", "--out", "x"], "--k: value must be an integer in [0, 10], got -1"),
+        (["references", "--starts", "0"], "--starts: value must be an integer in [1, 1000000]"),
         (["evaluate", "--policy", "missing.json"], "does not exist"),
-        (["evaluate", "--policy", "missing.json", "--episodes", "0"], "--episodes must be >= 1"),
+        (
+            ["evaluate", "--policy", "missing.json", "--episodes", "0"],
+            "--episodes: value must be an integer in [1, 10000000]",
+        ),
     ],
 )
 def test_bad_input_is_one_line_exit_2(argv, msg, capsys, tmp_path, monkeypatch):

@@ -105,4 +105,6 @@ def task_max() -> int:
 def test_compare_cli_deep_steps(tmp_path, capsys):
     assert main(["compare", "--quick", "--deep-steps", "0", "--out", str(tmp_path)]) == 0
     assert "not run" in capsys.readouterr().out
-    assert main(["compare", "--quick", "--deep-steps", "-5", "--out", str(tmp_path)]) == 2
+    with pytest.raises(SystemExit) as info:  # refused by the parser, before any work
+        main(["compare", "--quick", "--deep-steps", "-5", "--out", str(tmp_path)])
+    assert info.value.code == 2

@@ -46,7 +46,7 @@ def test_distinct_histories_get_distinct_codes():
 
 
 def test_bad_encoder():
-    with pytest.raises(CrmgraspError, match="k must be an integer >= 0"):
+    with pytest.raises(CrmgraspError, match=r"k must be an integer in \[0, 10\], got -1"):
         KOrderEncoder(24, 4, -1)
     with pytest.raises(CrmgraspError, match="outside"):
         KOrderEncoder(24, 4, 1).start(24)

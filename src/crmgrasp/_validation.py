@@ -4,7 +4,12 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["CrmgraspError", "as_point", "finite", "positive", "non_negative"]
+__all__ = ["CrmgraspError", "as_point", "finite", "positive", "non_negative", "integer", "shown", "SEED_MAX"]
+
+SEED_MAX = 2**63 - 1
+"""Largest seed accepted anywhere (seeds are non-negative and fit a signed 64-bit integer)."""
+
+_MAX_DIGITS = 30  # longer integers are refused before conversion (no run needs more)
 
 
 class CrmgraspError(ValueError):
@@ -15,12 +20,27 @@ class CrmgraspError(ValueError):
     """
 
 
+def shown(value: object, limit: int = 40) -> str:
+    """``repr(value)``, cut to ``limit`` characters for a one-line message.
+
+    Examples
+    --------
+    >>> shown("x" * 100, 10)
+    "'xxxxxxxx..."
+    """
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 1] + "..."
+
+
 def finite(value: object, name: str) -> float:
-    """Return ``value`` as a finite float, or raise :class:`CrmgraspError`."""
+    """Return ``value`` as a finite float, or raise :class:`CrmgraspError`. Text must be
+    plain ASCII (Python would also read other scripts' digits)."""
+    if isinstance(value, str) and not value.isascii():
+        raise CrmgraspError(f"{name} must be a number written with ASCII digits, got {shown(value)}")
     try:
         x = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):
-        raise CrmgraspError(f"{name} must be a number, got {value!r}") from None
+        raise CrmgraspError(f"{name} must be a number, got {shown(value)}") from None
     if not math.isfinite(x):
         raise CrmgraspError(f"{name} must be finite, got {x}")
     return x
@@ -45,11 +65,34 @@ def non_negative(value: object, name: str) -> float:
 def as_point(value: object, name: str) -> tuple[float, float]:
     """Return ``value`` as a finite 2-tuple of floats, or raise :class:`CrmgraspError`."""
     if isinstance(value, (str, bytes)):
-        raise CrmgraspError(f"{name} must be a pair (x, y), got {value!r}")
+        raise CrmgraspError(f"{name} must be a pair (x, y), got {shown(value)}")
     try:
         items = list(value)  # type: ignore[call-overload]
     except TypeError:
-        raise CrmgraspError(f"{name} must be a pair (x, y), got {value!r}") from None
+        raise CrmgraspError(f"{name} must be a pair (x, y), got {shown(value)}") from None
     if len(items) != 2:
         raise CrmgraspError(f"{name} must have 2 coordinates, got {len(items)}")
     return (finite(items[0], f"{name}[0]"), finite(items[1], f"{name}[1]"))
+
+
+def integer(value: object, name: str, low: int, high: int) -> int:
+    """Return ``value`` as an ``int`` in ``[low, high]``, or raise :class:`CrmgraspError`.
+
+    Accepts an ``int`` (not a ``bool``) or decimal ASCII text such as ``"12"``; refuses
+    floats, other scripts' digits and overlong text before converting it.
+
+    Examples
+    --------
+    >>> integer("7", "trials", 1, 10)
+    7
+    """
+    if isinstance(value, str):
+        text = value.strip()
+        if not (text.isascii() and text.lstrip("+-").isdigit() and len(text) <= _MAX_DIGITS):
+            raise CrmgraspError(f"{name} must be an integer in [{low}, {high}], got {shown(value)}")
+        value = int(text)
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise CrmgraspError(f"{name} must be an integer in [{low}, {high}], got {shown(value)}")
+    if not low <= value <= high:
+        raise CrmgraspError(f"{name} must be an integer in [{low}, {high}], got {value}")
+    return value

@@ -15,7 +15,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, integer
 from crmgrasp.agents.base import Agent, LearnerPolicy
 from crmgrasp.agents.baselines import FixedSequence, RandomAgent
 from crmgrasp.agents.tabular import DynaQ, QLearning, Sarsa, SarsaLambda
@@ -172,11 +172,21 @@ class TrialResult:
         return self.steps.std(axis=0, ddof=1) / np.sqrt(n) if n > 1 else np.zeros(self.steps.shape[1])
 
 
+MAX_EPISODE_RECORDS = 200_000_000
+"""Most episodes (training and evaluation, all trials) whose results one run keeps in
+memory (9 bytes each: about 1.8 GB)."""
+
+
 def check_budget(trials: int, episodes: int, eval_episodes: int) -> None:
-    """One-line errors for a bad training budget."""
+    """One-line errors for a bad training budget, before any work or allocation."""
     for name, v, low in (("trials", trials, 1), ("episodes", episodes, 1), ("eval_episodes", eval_episodes, 0)):
-        if isinstance(v, bool) or not isinstance(v, int) or v < low:
-            raise CrmgraspError(f"{name} must be an integer >= {low}, got {v!r}")
+        integer(v, name, low, MAX_EPISODE_RECORDS)
+    total = trials * (episodes + eval_episodes)
+    if total > MAX_EPISODE_RECORDS:
+        raise CrmgraspError(
+            f"trials x (episodes + eval_episodes) = {total:,} episodes exceed the {MAX_EPISODE_RECORDS:,} "
+            "whose results one run keeps in memory; split the run"
+        )
 
 
 def train_trials(

@@ -33,7 +33,7 @@ __all__ = ["main", "build_parser"]
 def _scene(args: argparse.Namespace) -> tuple[Task, Config, CRM | None, SensorNoise, np.random.Generator]:
     task = make_task(args.task)
     config = task.hand.contact(task.obj, args.a, args.b)
-    crm = _resolve_crm(task, args.crm) if args.crm else None
+    crm = _resolve_crm(task, args.crm) if args.crm is not None else None
     noise = SensorNoise(math.radians(args.sigma_n), args.sigma_p)
     return task, config, crm, noise, np.random.default_rng(args.seed)
 
@@ -346,6 +346,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except CrmgraspError as exc:
         print(f"crmgrasp {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # Ctrl-C: one line and the shell's status for SIGINT
+        print(f"crmgrasp {args.command}: interrupted", file=sys.stderr)
+        return 130
     except BrokenPipeError:  # output piped into e.g. `head`
         sys.stderr.close()
         return 0

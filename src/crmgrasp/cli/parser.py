@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import argparse
 import re
+from collections.abc import Callable
 from pathlib import Path
 from typing import NoReturn
 
 from crmgrasp import __version__
-from crmgrasp._validation import CrmgraspError, as_point, finite
+from crmgrasp._validation import SEED_MAX, CrmgraspError, as_point, finite, integer, shown
 from crmgrasp.model.hand import CRM
+from crmgrasp.model.history import MAX_K
 from crmgrasp.tasks import Task
 
 __all__ = ["build_parser"]
@@ -38,6 +40,26 @@ def _point(text: str) -> tuple[float, float]:
         raise argparse.ArgumentTypeError(f"{exc} in {text!r}") from None
 
 
+def _int(low: int, high: int) -> Callable[[str], int]:
+    """An argparse type: an integer in ``[low, high]`` written in ASCII digits."""
+
+    def parse(text: str) -> int:
+        try:
+            return integer(text, "value", low, high)
+        except CrmgraspError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    parse.__name__ = "integer"
+    return parse
+
+
+_SEED = _int(0, SEED_MAX)
+_TRIALS = _int(1, 100_000)
+_EPISODES = _int(1, 10_000_000)
+_EVAL_EPISODES = _int(0, 10_000_000)
+_STARTS = _int(1, 1_000_000)
+
+
 def _number(text: str) -> float:
     try:
         return finite(text, "value")
@@ -47,11 +69,11 @@ def _number(text: str) -> float:
 
 def _resolve_crm(task: Task, text: str) -> CRM:
     """``C1``..``Cn`` names the task's actions; anything else is parsed as ``c,f,r``."""
-    m = re.fullmatch(r"[Cc](\d+)", text.strip())
+    m = re.fullmatch(r"[Cc]([0-9]+)", text.strip())
     if m:
-        i = int(m.group(1))
+        i = int(m.group(1)) if len(m.group(1)) <= 6 else 0
         if not 1 <= i <= len(task.actions):
-            raise CrmgraspError(f"task {task.name} has actions C1..C{len(task.actions)}, got {text!r}")
+            raise CrmgraspError(f"task {task.name} has actions C1..C{len(task.actions)}, got {shown(text)}")
         return task.actions[i - 1]
     return task.hand.check_crm(CRM.parse(text))
 
@@ -76,7 +98,7 @@ def _add_scene_args(p: argparse.ArgumentParser, crm_required: bool) -> None:
     p.add_argument(
         "--sigma-p", type=_number, default=0.0, metavar="M", help="position sensing noise, metres (default 0)"
     )
-    p.add_argument("--seed", type=int, default=0, help="seed of the sensing noise (default 0)")
+    p.add_argument("--seed", type=_SEED, default=0, help="seed of the sensing noise (default 0; 0 to 2**63-1)")
 
 
 def _add_kernel_backend(p: argparse.ArgumentParser) -> None:
@@ -131,7 +153,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--out", type=Path, default=Path("crmgrasp-results"), help="output folder (default: ./crmgrasp-results)"
     )
-    p.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
+    p.add_argument("--seed", type=_SEED, default=0, help="seed of the run (default 0; 0 to 2**63-1)")
     p.add_argument("--quick", action="store_true", help="small budgets (under a minute on 2 cores)")
     _add_kernel_backend(p)
 
@@ -143,11 +165,18 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
     p.add_argument("--agent", default="sarsa", help="sarsa, q, sarsa-lambda, dyna-q, random or fixed")
-    p.add_argument("--k", type=int, default=2, help="history order of the state (default 2)")
-    p.add_argument("--trials", type=int, default=20, help="independent trials (default 20)")
-    p.add_argument("--episodes", type=int, default=2000, help="training episodes per trial (default 2000)")
-    p.add_argument("--eval-episodes", type=int, default=1000, help="greedy evaluation episodes per trial")
-    p.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
+    p.add_argument("--k", type=_int(0, MAX_K), default=2, help=f"history order of the state (default 2; 0 to {MAX_K})")
+    p.add_argument("--trials", type=_TRIALS, default=20, help="independent trials (default 20; 1 to 100,000)")
+    p.add_argument(
+        "--episodes", type=_EPISODES, default=2000, help="training episodes per trial (default 2000; 1 to 10,000,000)"
+    )
+    p.add_argument(
+        "--eval-episodes",
+        type=_EVAL_EPISODES,
+        default=1000,
+        help="greedy evaluation episodes per trial (default 1000; 0 to 10,000,000)",
+    )
+    p.add_argument("--seed", type=_SEED, default=0, help="seed of the run (default 0; 0 to 2**63-1)")
     p.add_argument("--out", type=Path, required=True, help="output folder")
     p.add_argument(
         "--lockstep",
@@ -170,8 +199,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--policy", type=Path, required=True, help="policy.json written by `crmgrasp learn`")
     p.add_argument("--task", default=None, help="task name (default: the one the policy names)")
-    p.add_argument("--episodes", type=int, default=1000, help="episodes (default 1000)")
-    p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    p.add_argument("--episodes", type=_EPISODES, default=1000, help="episodes (default 1000; 1 to 10,000,000)")
+    p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
     _add_kernel_backend(p)
 
@@ -181,8 +210,8 @@ def build_parser() -> argparse.ArgumentParser:
         description="Time paper-box against CartPole-v1 in one process; print one JSON object.",
     )
     p.add_argument("--smoke", action="store_true", help="tiny sizes (CI): no meaningful timings")
-    p.add_argument("--rounds", type=int, default=15, help="alternating rounds (default 15)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--rounds", type=_int(1, 1000), default=15, help="alternating rounds (default 15; 1 to 1,000)")
+    p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
 
     p = sub.add_parser(
         "references",
@@ -191,8 +220,8 @@ def build_parser() -> argparse.ArgumentParser:
         "and the belief-space optimum (observations only).",
     )
     p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
-    p.add_argument("--starts", type=int, default=4000, help="sampled starts (default 4000)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the starts (default 0)")
+    p.add_argument("--starts", type=_STARTS, default=4000, help="sampled starts (default 4000; 1 to 1,000,000)")
+    p.add_argument("--seed", type=_SEED, default=0, help="seed of the starts (default 0; 0 to 2**63-1)")
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
 
     p = sub.add_parser(
@@ -202,12 +231,12 @@ def build_parser() -> argparse.ArgumentParser:
         "same seeds; writes compare.csv, compare.md and compare.png to --out.",
     )
     p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
-    p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
     p.add_argument("--out", type=Path, required=True, help="output folder")
     p.add_argument("--quick", action="store_true", help="small budgets (seconds)")
     p.add_argument(
         "--deep-steps",
-        type=int,
+        type=_int(0, 100_000_000),
         default=None,
         metavar="N",
         help="RecurrentPPO training steps (default 120000, --quick 4096; 0 leaves the deep-RL peer out)",
@@ -222,10 +251,25 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
     p.add_argument("--cell", type=_number, default=0.01, help="cell size along each edge, m (default 0.01)")
-    p.add_argument("--samples", type=int, default=20, help="CRM samples per cell and action (default 20)")
-    p.add_argument("--starts", type=int, default=4000, help="sampled starts for the start belief (default 4000)")
-    p.add_argument("--episodes", type=int, default=1000, help="fresh starts to execute the policy on")
-    p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    p.add_argument(
+        "--samples",
+        type=_int(1, 100_000),
+        default=20,
+        help="CRM samples per cell and action (default 20; 1 to 100,000)",
+    )
+    p.add_argument(
+        "--starts",
+        type=_STARTS,
+        default=4000,
+        help="sampled starts for the start belief (default 4000; 1 to 1,000,000)",
+    )
+    p.add_argument(
+        "--episodes",
+        type=_STARTS,
+        default=1000,
+        help="fresh starts to execute the policy on (default 1000; 1 to 1,000,000)",
+    )
+    p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
     p.add_argument("--out", type=Path, required=True, help="the .pomdp file to write")
 
     p = sub.add_parser(
@@ -240,7 +284,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--log", type=Path, required=True, help="CSV step log to write")
     p.add_argument("--sigma-n", type=_number, default=0.0, metavar="DEG", help="normal sensing noise, degrees")
     p.add_argument("--sigma-p", type=_number, default=0.0, metavar="M", help="position sensing noise, metres")
-    p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
     _add_backend(p)
 
     sub.add_parser("tasks", help="list registered tasks", description="List the registered tasks.")
@@ -254,6 +298,6 @@ _AGENT_FLAGS = (
     ("--q0", _number, "initial Q value (default 0: optimistic)"),
     ("--lam", _number, "sarsa-lambda: trace decay lambda (default 0.9)"),
     ("--trace", str, "sarsa-lambda: replacing or accumulating"),
-    ("--n-planning", int, "dyna-q: planning updates (sample) or max sweeps (sweep) per step"),
+    ("--n-planning", _int(0, 1_000_000), "dyna-q: planning updates (sample) or max sweeps (sweep) per step"),
     ("--planning", str, "dyna-q: sample or sweep"),
 )

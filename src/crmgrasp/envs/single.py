@@ -15,7 +15,7 @@ from gymnasium import spaces
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.kernels import Kernel, kernel_for
 from crmgrasp.model.contacts import Config, Contact
-from crmgrasp.model.hand import Error, execute_crm
+from crmgrasp.model.hand import Error, check_config, execute_crm
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.sim import OneStep, SimState
 from crmgrasp.tasks import Task, make_task
@@ -130,7 +130,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         super().reset(seed=seed)
         self._last = None
         if options and "config" in options:
-            cfg = options["config"]
+            cfg = check_config(self.task.obj, options["config"], "options['config']")
         else:
             if seed is not None:
                 self._starts, self._next, self._block = [], 0, _FIRST_BLOCK

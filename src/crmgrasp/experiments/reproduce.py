@@ -39,6 +39,9 @@ def reproduce(
         if not mujoco_available():
             skipped = [n for n in names if n in NEEDS_MUJOCO]
             names = [n for n in names if n not in NEEDS_MUJOCO]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise CrmgraspError(f"experiment {twice[0]!r} is named more than once")
     unknown = [n for n in names if n not in EXPERIMENTS]
     if unknown:
         raise CrmgraspError(f"unknown experiment {unknown[0]!r}; known: {', '.join(EXPERIMENTS)}")

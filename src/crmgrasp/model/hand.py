@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from crmgrasp._validation import CrmgraspError, finite, non_negative, positive
+from crmgrasp._validation import CrmgraspError, finite, non_negative, positive, shown
 from crmgrasp.model.contacts import Config, Contact, label_index
 from crmgrasp.model.geometry import Shape
 
@@ -51,6 +51,8 @@ __all__ = [
     "Error",
     "GoalLine",
     "Outcome",
+    "check_config",
+    "CONTACT_TOL",
     "palm_axis",
     "palm_point",
     "faces_palm",
@@ -115,7 +117,7 @@ class CRM:
         """Parse ``"c,f,r"``, e.g. ``"a,b,0"``."""
         parts = [p.strip() for p in str(text).split(",")]
         if len(parts) != 3:
-            raise CrmgraspError(f"CRM must be written c,f,r (e.g. a,b,0), got {text!r}")
+            raise CrmgraspError(f"CRM must be written c,f,r (e.g. a,b,0), got {shown(text)}")
         return cls(parts[0], parts[1], finite(parts[2], "CRM offset r"))
 
     @property
@@ -229,14 +231,40 @@ class Hand:
 
         The goal line is computed from ``sensed`` if given; otherwise from a fresh
         reading through ``noise`` (which then needs ``rng``); otherwise from the
-        true configuration.
+        true configuration. ``config`` is checked (:func:`check_config`); the pure
+        transition :func:`execute_crm` checks nothing.
         """
         self.check_crm(crm)
+        check_config(obj, config)
+        if rng is not None and not isinstance(rng, np.random.Generator):
+            raise CrmgraspError(f"rng must be a numpy.random.Generator, got {shown(rng)}")
         if sensed is None and noise is not None and noise.active:
             if rng is None:
                 raise CrmgraspError("sensing noise needs a numpy Generator (rng)")
             sensed = noise.sense(config, rng)
         return execute_crm(obj, self, config, crm, sensed)
+
+
+CONTACT_TOL = 1e-6
+"""How far (m) a given contact may lie from the object's boundary, and its normal's
+length from 1, before :func:`check_config` refuses it."""
+
+
+def check_config(obj: Shape, config: object, name: str = "configuration") -> Config:
+    """``config`` if it is a :class:`~crmgrasp.model.contacts.Config` of two contacts with
+    finite coordinates, unit normals and points on the boundary of ``obj`` (both within
+    :data:`CONTACT_TOL`); else a one-line :class:`CrmgraspError`."""
+    if not isinstance(config, Config) or not all(isinstance(c, Contact) for c in config):
+        raise CrmgraspError(f"{name} must be a Config of two Contacts, got {shown(config)}")
+    for label, c in zip("ab", config):
+        if not all(math.isfinite(v) for v in c):
+            raise CrmgraspError(f"{name}: contact {label} must be finite, got {tuple(c)}")
+        if abs(math.hypot(c.nx, c.ny) - 1.0) > CONTACT_TOL:
+            raise CrmgraspError(f"{name}: contact {label}'s normal must be a unit vector, got ({c.nx:g}, {c.ny:g})")
+        off = obj.distance(c.point)
+        if off > CONTACT_TOL:
+            raise CrmgraspError(f"{name}: contact {label} at ({c.x:g}, {c.y:g}) is {off:.3g} m off the object")
+    return config
 
 
 def palm_axis(config: Config) -> tuple[float, float, float]:

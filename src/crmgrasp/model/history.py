@@ -13,10 +13,17 @@ Of the ``size`` codes, ``n_obs * n_actions**k * n_obs**(k-1)`` have no padding.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, integer
 
-__all__ = ["KOrderEncoder"]
+__all__ = ["KOrderEncoder", "MAX_K"]
+
+MAX_K = 10
+"""Largest history order: beyond it the state space (at least ``n_obs * n_actions**k``)
+is far past anything a table can learn, and encoding grows with ``k``."""
+
+_MAX_SYMBOLS = 1_000_000  # observations or actions an encoder accepts
 
 History = tuple[int, ...]
 
@@ -45,12 +52,11 @@ class KOrderEncoder:
     k: int
 
     def __post_init__(self) -> None:
-        for name in ("n_obs", "n_actions", "k"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < (0 if name == "k" else 1):
-                raise CrmgraspError(f"{name} must be an integer >= {0 if name == 'k' else 1}, got {v!r}")
+        integer(self.n_obs, "n_obs", 1, _MAX_SYMBOLS)
+        integer(self.n_actions, "n_actions", 1, _MAX_SYMBOLS)
+        integer(self.k, "history order k", 0, MAX_K)
 
-    @property
+    @cached_property
     def radices(self) -> tuple[int, ...]:
         """Radix of each history slot, most significant first."""
         out = [self.n_obs]
@@ -60,7 +66,7 @@ class KOrderEncoder:
                 out.append(self.n_obs + 1)
         return tuple(out)
 
-    @property
+    @cached_property
     def size(self) -> int:
         """Number of codes, padded histories included."""
         n = 1
