@@ -7,6 +7,7 @@ import pytest
 
 from crmgrasp import CrmgraspError, make_task
 from crmgrasp.agents import GreedyPolicy, evaluate, make_agent, train_trials
+from crmgrasp.agents.policy import policy_digest
 from crmgrasp.agents.training import encoder_for, episodes_to_within, rollout
 
 LEARNERS = [
@@ -128,6 +129,7 @@ def test_policy_file_roundtrip_and_errors(learned, tmp_path):
     def check(mutate, msg):
         d = json.loads(json.dumps(doc))
         mutate(d)
+        d["sha256"] = policy_digest(d)  # re-signed: the fields' own checks answer
         bad = tmp_path / "bad.json"
         bad.write_text(json.dumps(d))
         with pytest.raises(CrmgraspError, match=msg) as info:
@@ -139,12 +141,18 @@ def test_policy_file_roundtrip_and_errors(learned, tmp_path):
     check(lambda d: d.update(task="other"), "for task 'other'")
     check(lambda d: d.pop("bins"), "missing field")
     check(lambda d: d.update(k=-1), "k must be")
+    check(lambda d: d.update(k=1000000), r"k must be an integer in \[0, 10\]")
     check(lambda d: d["actions"][0].__setitem__(2, 0.1), "CRM set")
     check(lambda d: d["bins"].update(rho=[2.0]), "bins")
     check(lambda d: d["greedy"].update({"99999999": [0]}), "outside")
-    check(lambda d: d["greedy"].update({"x": [0]}), "not an integer")
+    check(lambda d: d["greedy"].update({"x": [0]}), "not a canonical non-negative integer")
     check(lambda d: d["greedy"].update({"0": [7]}), "actions must be")
     check(lambda d: d.update(k=0), "outside")  # k = 2 codes do not fit a k = 0 table
+    edited = json.loads(json.dumps(doc))
+    edited["k"] = 1  # not re-signed: the checksum refuses it
+    (tmp_path / "edited.json").write_text(json.dumps(edited))
+    with pytest.raises(CrmgraspError, match="checksum does not match"):
+        GreedyPolicy.load(tmp_path / "edited.json", task)
     (tmp_path / "corrupt.json").write_text('{"format": ')
     with pytest.raises(CrmgraspError, match="not valid JSON"):
         GreedyPolicy.load(tmp_path / "corrupt.json", task)

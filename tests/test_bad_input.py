@@ -130,3 +130,121 @@ def test_the_fused_kernel_refuses_an_action_out_of_range(task):
     for action in (-1, 4, 10**9):
         with pytest.raises(CrmgraspError, match=r"action must be an integer in \[0, 4\)"):
             k.step_one(SimState(good, good, 0), action, np.random.default_rng(0))
+
+
+# ------------------------------------------------------------------ policy files
+@pytest.fixture
+def saved_policy(tmp_path):
+    from crmgrasp.agents import GreedyPolicy
+
+    task = make_task("paper-box")
+    res = train_trials(task, "sarsa", trials=1, episodes=30, seed=0, eval_episodes=0)
+    path = GreedyPolicy.from_agent(task, 2, res.agents[0]).save(tmp_path / "p.json")
+    return task, path
+
+
+def _load_error(task, path) -> str:
+    from crmgrasp.agents import GreedyPolicy
+
+    with pytest.raises(CrmgraspError) as info:
+        GreedyPolicy.load(path, task)
+    msg = str(info.value)
+    assert "\n" not in msg and len(msg) < 300, msg
+    return msg
+
+
+def test_policy_reader_refuses_files_that_are_not_small_regular_json(saved_policy, tmp_path, monkeypatch):
+    import json
+    import os
+
+    import crmgrasp.agents.policy as policy_module
+
+    task, good = saved_policy
+    doc = json.loads(good.read_text())
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    assert "is not a regular file" in _load_error(task, fifo)  # refused without opening: no hang
+    assert "is not a regular file" in _load_error(task, "/dev/zero")
+    assert "is not a regular file" in _load_error(task, tmp_path)
+    monkeypatch.setattr(policy_module, "MAX_BYTES", 100)
+    assert "larger than 100 bytes" in _load_error(task, good)
+    monkeypatch.undo()
+    cases = {
+        "nested.json": "[" * 100_000 + "]" * 100_000,
+        "bigint.json": '{"format": "crmgrasp-policy", "version": ' + "9" * 5000 + "}",
+        "nan.json": '{"format": NaN}',
+        "dupes.json": '{"format": "a", "format": "b"}',
+    }
+    expected = {
+        "nested.json": "nested too deeply",
+        "bigint.json": "has more than 20 digits",
+        "nan.json": "NaN is not standard JSON",
+        "dupes.json": "'format' appears more than once",
+    }
+    for name, text in cases.items():
+        (tmp_path / name).write_text(text)
+        assert expected[name] in _load_error(task, tmp_path / name)
+    for key in ("7_813", "+5", "05", " 5", "\u0665"):
+        d = json.loads(json.dumps(doc))
+        d["greedy"][key] = [0]
+        from crmgrasp.agents.policy import policy_digest
+
+        d["sha256"] = policy_digest(d)
+        (tmp_path / "key.json").write_text(json.dumps(d))
+        assert "is not a canonical non-negative integer" in _load_error(task, tmp_path / "key.json")
+
+
+def test_cli_reads_policies_through_the_bounded_reader(tmp_path, capsys, monkeypatch):
+    for argv in (["evaluate", "--policy", "/dev/zero"], ["run", "--policy", "/dev/zero", *NEAR, "--log", "x.csv"]):
+        assert "is not a regular file" in _one_line_exit_2(argv, capsys, tmp_path, monkeypatch)
+
+
+# ------------------------------------------------------------------ output paths
+def test_outputs_never_replace_devices_folders_or_symlinks_to_them(saved_policy, tmp_path, capsys, monkeypatch):
+    import os
+
+    _, good = saved_policy
+    link = tmp_path / "link"
+    os.symlink("/dev/null", link)
+    (tmp_path / "folder").mkdir()
+    for target in ("/dev/null", str(link), str(tmp_path / "folder")):
+        argv = ["run", "--policy", str(good), *NEAR, "--log", target]
+        assert "refusing to replace it" in _one_line_exit_2(argv, capsys, tmp_path, monkeypatch)
+        argv = ["pomdp", "--out", target]
+        assert "refusing to replace it" in _one_line_exit_2(argv, capsys, tmp_path, monkeypatch)
+    assert link.is_symlink() and os.readlink(link) == "/dev/null"
+    for argv in (["learn", "--out", ""], ["reproduce", "--out", ""], ["show", *NEAR, "--out", ""]):
+        assert "the path is empty" in _one_line_exit_2(argv, capsys, tmp_path, monkeypatch)
+    (tmp_path / "file").write_text("keep")
+    assert "exists and is not a folder" in _one_line_exit_2(
+        ["learn", "--out", str(tmp_path / "file")], capsys, tmp_path, monkeypatch
+    )
+    assert (tmp_path / "file").read_text() == "keep"
+
+
+def test_writes_use_short_temporary_names_the_umask_and_standard_json(tmp_path):
+    import json
+    import os
+    import stat
+
+    from crmgrasp._io import write_json
+
+    long_name = tmp_path / ("x" * 250 + ".json")  # legal; a temporary name built from it would not be
+    write_json(long_name, {"nan": float("nan"), "inf": float("inf"), "ok": 1.5})
+    assert json.loads(long_name.read_text()) == {"nan": None, "inf": None, "ok": 1.5}
+    old = os.umask(0o027)
+    try:
+        write_json(tmp_path / "u.json", {})
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE((tmp_path / "u.json").stat().st_mode) == 0o640
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
+def test_write_errors_name_the_users_path(tmp_path):
+    from crmgrasp._io import write_json
+
+    (tmp_path / "plain").write_text("a file, not a folder")
+    target = tmp_path / "plain" / "x.json"
+    with pytest.raises(CrmgraspError, match=re.escape(f"output file {str(target)!r} cannot be written")):
+        write_json(target, {})

@@ -1,5 +1,12 @@
-"""Atomic file output: a reader never sees a half-written file, and a failed write
-leaves the previous file intact."""
+"""Safe file input and output.
+
+Output is atomic (a reader never sees a half-written file, and a failed write leaves
+the previous file intact), goes only to regular files (a device node, a FIFO, a
+folder or a symlink to one of them is refused, never replaced), respects the umask,
+and names the user's path in every error. JSON is standard (no NaN or Infinity: a
+non-finite number is written as ``null``). Input of a file the user names is bounded
+(:func:`read_bounded`).
+"""
 
 from __future__ import annotations
 
@@ -7,30 +14,131 @@ import contextlib
 import csv
 import io
 import json
+import math
 import os
+import stat
 import tempfile
 from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "write_json", "write_csv", "save_figure"]
+from crmgrasp._validation import CrmgraspError
+
+__all__ = [
+    "check_output",
+    "check_folder",
+    "read_bounded",
+    "atomic_path",
+    "atomic_write_bytes",
+    "atomic_write_text",
+    "json_safe",
+    "dumps_json",
+    "write_json",
+    "write_csv",
+    "save_figure",
+]
+
+_TMP_PREFIX, _TMP_SUFFIX = ".crmgrasp-", ".tmp"  # short: a 255-byte file name still gets one
+
+
+def check_output(path: str | os.PathLike[str], what: str = "output file") -> Path:
+    """``path`` as a :class:`Path` if a file can be written there: not empty, not an
+    existing non-regular file (device node, FIFO, socket, folder) or a symlink to one,
+    and its folder exists (or can be made) and is writable. Call it before any long
+    work, so that a bad path fails at once."""
+    if str(path) == "":
+        raise CrmgraspError(f"{what} path is empty")
+    target = Path(path)
+    if target.exists() or target.is_symlink():
+        try:
+            mode = os.stat(target).st_mode  # follows a symlink
+        except OSError as exc:
+            raise CrmgraspError(f"{what} {str(target)!r} cannot be used: {exc.strerror}") from None
+        if not stat.S_ISREG(mode):
+            kind = "a folder" if stat.S_ISDIR(mode) else "not a regular file"
+            raise CrmgraspError(f"{what} {str(target)!r} is {kind}; refusing to replace it")
+    parent = target.resolve().parent
+    probe = parent
+    while not probe.exists():
+        probe = probe.parent
+    if not probe.is_dir() or not os.access(probe, os.W_OK | os.X_OK):
+        raise CrmgraspError(f"{what} {str(target)!r} cannot be written: folder {str(probe)!r} is not writable")
+    return target
+
+
+def check_folder(path: str | os.PathLike[str], what: str = "output folder") -> Path:
+    """``path`` as a :class:`Path` if it is, or can be made, a writable folder (checked
+    before any long work)."""
+    if str(path) == "":
+        raise CrmgraspError(f"{what} path is empty")
+    target = Path(path)
+    if target.exists() and not target.is_dir():
+        raise CrmgraspError(f"{what} {str(target)!r} exists and is not a folder")
+    probe = target.resolve()
+    while not probe.exists():
+        probe = probe.parent
+    if not probe.is_dir() or not os.access(probe, os.W_OK | os.X_OK):
+        raise CrmgraspError(f"{what} {str(target)!r} cannot be written: {str(probe)!r} is not a writable folder")
+    return target
+
+
+def read_bounded(path: str | os.PathLike[str], max_bytes: int, what: str = "file") -> bytes:
+    """The bytes of a regular file of at most ``max_bytes``; a one-line error for a
+    missing file, a FIFO, device or folder (never opened, so never blocking or endless)
+    or a larger file."""
+    p = Path(path)
+    try:
+        mode = os.stat(p).st_mode
+    except FileNotFoundError:
+        raise CrmgraspError(f"{what} {str(p)!r} does not exist") from None
+    except OSError as exc:
+        raise CrmgraspError(f"{what} {str(p)!r} cannot be read: {exc.strerror}") from None
+    if not stat.S_ISREG(mode):
+        raise CrmgraspError(f"{what} {str(p)!r} is not a regular file")
+    try:
+        with open(p, "rb") as fh:
+            data = fh.read(max_bytes + 1)
+    except OSError as exc:
+        raise CrmgraspError(f"{what} {str(p)!r} cannot be read: {exc.strerror}") from None
+    if len(data) > max_bytes:
+        raise CrmgraspError(f"{what} {str(p)!r} is larger than {max_bytes:,} bytes")
+    return data
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _destination(path: str | os.PathLike[str]) -> Path:
+    """The file to replace: ``path``, or the regular file a symlink at ``path`` names."""
+    target = check_output(path)
+    return target.resolve() if target.is_symlink() else target
 
 
 def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> Path:
     """Write ``data`` to ``path`` via a temporary file in the same folder and ``os.replace``."""
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+    target = _destination(path)
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=_TMP_PREFIX, suffix=_TMP_SUFFIX)
+    except OSError as exc:
+        raise CrmgraspError(f"cannot write {str(path)!r}: {exc.strerror}") from None
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
             fh.flush()
             os.fsync(fh.fileno())
+        os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, target)
+    except OSError as exc:
+        Path(tmp).unlink(missing_ok=True)
+        raise CrmgraspError(f"cannot write {str(path)!r}: {exc.strerror}") from None
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
-    return target
+    return Path(path)
 
 
 def atomic_write_text(path: str | os.PathLike[str], text: str) -> Path:
@@ -38,9 +146,28 @@ def atomic_write_text(path: str | os.PathLike[str], text: str) -> Path:
     return atomic_write_bytes(path, text.encode("utf-8"))
 
 
+def json_safe(obj: Any) -> Any:
+    """``obj`` with every non-finite float replaced by ``None`` (JSON ``null``) and numpy
+    scalars and tuples turned into plain values and lists."""
+    if isinstance(obj, dict):
+        return {str(k): json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    if hasattr(obj, "item") and not isinstance(obj, (str, bytes)):
+        obj = obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def dumps_json(obj: Any, indent: int | None = 2) -> str:
+    """Standard JSON text of ``obj`` (:func:`json_safe`; never NaN or Infinity)."""
+    return json.dumps(json_safe(obj), indent=indent, allow_nan=False)
+
+
 def write_json(path: str | os.PathLike[str], obj: Any) -> Path:
-    """Atomically write ``obj`` as indented JSON."""
-    return atomic_write_text(path, json.dumps(obj, indent=2, sort_keys=False, allow_nan=True) + "\n")
+    """Atomically write ``obj`` as indented standard JSON."""
+    return atomic_write_text(path, dumps_json(obj) + "\n")
 
 
 def write_csv(path: str | os.PathLike[str], header: Sequence[str], rows: Iterable[Sequence[Any]]) -> Path:
@@ -70,14 +197,22 @@ def save_figure(fig: Any, path: str | os.PathLike[str], **kwargs: Any) -> Path:
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
-    """Yield a temporary path beside ``path``; on success it replaces ``path``."""
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.stem}.", suffix=target.suffix)
+    """Yield a temporary path beside ``path`` (with its suffix, for writers that choose
+    the format by it); on success it replaces ``path``."""
+    target = _destination(path)
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=_TMP_PREFIX, suffix=target.suffix or _TMP_SUFFIX)
+    except OSError as exc:
+        raise CrmgraspError(f"cannot write {str(path)!r}: {exc.strerror}") from None
     os.close(fd)
     try:
         yield Path(tmp)
+        os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, target)
+    except OSError as exc:
+        Path(tmp).unlink(missing_ok=True)
+        raise CrmgraspError(f"cannot write {str(path)!r}: {exc.strerror}") from None
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

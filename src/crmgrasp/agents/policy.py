@@ -1,25 +1,31 @@
 """Greedy policies and their JSON file format (no pickle).
 
-File layout (``format`` ``"crmgrasp-policy"``, ``version`` 1)::
+File layout (``format`` ``"crmgrasp-policy"``, ``version`` 2)::
 
     {
-      "format": "crmgrasp-policy", "version": 1,
+      "format": "crmgrasp-policy", "version": 2,
       "task": "paper-box", "k": 2,
       "actions": [["a", "b", 0.0], ...],          # the task's CRM set, in order
       "bins": {"rho": [1.0], "m_a": [0.1], "m_b": [0.1], "abs_moments": true},
       "agent": "sarsa",
-      "greedy": {"<state code>": [best actions], ...}   # visited states only
+      "greedy": {"<state code>": [best actions], ...},  # visited states only
+      "sha256": "<hex digest of the rest of the document>"
     }
 
-A state code is the k-order history code of :mod:`crmgrasp.model.history`; its
-``"greedy"`` entry lists the actions tied for the best value (usually one). In a
-state the file does not list, the policy picks uniformly among all actions.
-Loading checks every field and refuses a policy made for another task, history
+A state code is the k-order history code of :mod:`crmgrasp.model.history`, written
+in canonical decimal; its ``"greedy"`` entry lists the actions tied for the best value
+(usually one). In a state the file does not list, the policy picks uniformly among
+all actions. ``sha256`` is the digest of the document without it, serialised with
+sorted keys and no spaces, so an edited file (a changed ``k``, table or header) is
+refused. Loading reads at most :data:`MAX_BYTES` from a regular file, parses strict
+standard JSON (no duplicate keys, no NaN, integers of at most 20 digits, bounded
+nesting), checks every field and refuses a policy made for another task, history
 order, CRM set or bins.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 from pathlib import Path
@@ -27,19 +33,77 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from crmgrasp._io import write_json
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._io import read_bounded, write_json
+from crmgrasp._validation import CrmgraspError, shown
 from crmgrasp.agents.tabular import TabularAgent
-from crmgrasp.model.history import KOrderEncoder
+from crmgrasp.model.history import MAX_K, KOrderEncoder
 from crmgrasp.tasks import Task
 
 if TYPE_CHECKING:
     from crmgrasp.agents.symmetric import SymmetricAgent
 
-__all__ = ["GreedyPolicy", "FORMAT", "VERSION"]
+__all__ = ["GreedyPolicy", "FORMAT", "VERSION", "MAX_BYTES", "read_policy_document", "policy_digest"]
 
 FORMAT = "crmgrasp-policy"
-VERSION = 1
+VERSION = 2
+MAX_BYTES = 64 * 2**20
+"""Largest policy file read (64 MiB; a paper-box table is a few kB)."""
+
+_MAX_INT_DIGITS = 20
+
+
+def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in out:
+            raise CrmgraspError(f"key {shown(key)} appears more than once")
+        out[key] = value
+    return out
+
+
+def _int(text: str) -> int:
+    if len(text.lstrip("-")) > _MAX_INT_DIGITS:
+        raise CrmgraspError(f"integer {shown(text)} has more than {_MAX_INT_DIGITS} digits")
+    return int(text)
+
+
+def _no_constant(text: str) -> Any:
+    raise CrmgraspError(f"{text} is not standard JSON")
+
+
+def policy_digest(doc: dict[str, Any]) -> str:
+    """SHA-256 hex digest of a policy document without its ``sha256`` field (sorted
+    keys, no spaces)."""
+    body = {k: v for k, v in doc.items() if k != "sha256"}
+    return hashlib.sha256(json.dumps(body, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+
+
+def read_policy_document(path: str | os.PathLike[str]) -> Any:
+    """The parsed JSON of a policy file, read with the bounds above (one-line errors)."""
+    p = Path(path)
+    data = read_bounded(p, MAX_BYTES, "policy file")
+    try:
+        return json.loads(
+            data.decode("utf-8"),
+            object_pairs_hook=_no_duplicates,
+            parse_int=_int,
+            parse_constant=_no_constant,
+        )
+    except CrmgraspError as exc:
+        raise CrmgraspError(f"policy file {str(p)!r}: {exc}") from None
+    except RecursionError:
+        raise CrmgraspError(f"policy file {str(p)!r} is nested too deeply") from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise CrmgraspError(f"policy file {str(p)!r} is not valid JSON ({exc})") from None
+
+
+def policy_task_name(path: str | os.PathLike[str]) -> str:
+    """The task a policy file names (read with :func:`read_policy_document`)."""
+    doc = read_policy_document(path)
+    name = doc.get("task") if isinstance(doc, dict) else None
+    if not isinstance(name, str):
+        raise CrmgraspError(f"policy file {str(path)!r} names no task")
+    return name
 
 
 class GreedyPolicy:
@@ -82,8 +146,8 @@ class GreedyPolicy:
         """A saved policy does not learn."""
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON document."""
-        return {
+        """The JSON document, with its checksum."""
+        doc: dict[str, Any] = {
             "format": FORMAT,
             "version": VERSION,
             "task": self.task.name,
@@ -93,6 +157,8 @@ class GreedyPolicy:
             "agent": self.agent,
             "greedy": {str(s): list(a) for s, a in sorted(self.table.items())},
         }
+        doc["sha256"] = policy_digest(doc)
+        return doc
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the policy atomically."""
@@ -100,15 +166,8 @@ class GreedyPolicy:
 
     @classmethod
     def load(cls, path: str | os.PathLike[str], task: Task) -> GreedyPolicy:
-        """Read and validate a policy file for ``task``."""
-        p = Path(path)
-        try:
-            doc = json.loads(p.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise CrmgraspError(f"policy file {str(p)!r} does not exist") from None
-        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-            raise CrmgraspError(f"policy file {str(p)!r} is not valid JSON ({exc})") from None
-        return cls.from_dict(doc, task, source=str(p))
+        """Read (:func:`read_policy_document`) and validate a policy file for ``task``."""
+        return cls.from_dict(read_policy_document(path), task, source=repr(str(path)))
 
     @classmethod
     def from_dict(cls, doc: Any, task: Task, source: str = "policy") -> GreedyPolicy:
@@ -120,15 +179,17 @@ class GreedyPolicy:
         if not isinstance(doc, dict) or doc.get("format") != FORMAT:
             raise bad(f'not a crmgrasp policy (expected "format": "{FORMAT}")')
         if doc.get("version") != VERSION:
-            raise bad(f"unsupported policy version {doc.get('version')!r} (expected {VERSION})")
-        missing = {"task", "k", "actions", "bins", "greedy"} - set(doc)
+            raise bad(f"unsupported policy version {shown(doc.get('version'))} (expected {VERSION}; re-save it)")
+        missing = {"task", "k", "actions", "bins", "greedy", "sha256"} - set(doc)
         if missing:
             raise bad(f"missing field(s) {', '.join(sorted(missing))}")
+        if doc["sha256"] != policy_digest(doc):
+            raise bad("the checksum does not match: the file was edited or damaged")
         if doc["task"] != task.name:
             raise bad(f"policy is for task {doc['task']!r}, not {task.name!r}")
         k = doc["k"]
-        if isinstance(k, bool) or not isinstance(k, int) or k < 0:
-            raise bad(f"k must be an integer >= 0, got {k!r}")
+        if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k <= MAX_K:
+            raise bad(f"k must be an integer in [0, {MAX_K}], got {shown(k)}")
         expected = [[c.c, c.f, c.r] for c in task.actions]
         if doc["actions"] != expected:
             raise bad(f"policy's CRM set {doc['actions']} differs from the task's {expected}")
@@ -139,10 +200,9 @@ class GreedyPolicy:
             raise bad('"greedy" must be an object mapping state codes to action lists')
         table: dict[int, tuple[int, ...]] = {}
         for key, acts in doc["greedy"].items():
-            try:
-                s = int(key)
-            except ValueError:
-                raise bad(f"state code {key!r} is not an integer") from None
+            if not (key.isascii() and key.isdigit() and len(key) <= _MAX_INT_DIGITS and key == str(int(key))):
+                raise bad(f"state code {shown(key)} is not a canonical non-negative integer")
+            s = int(key)
             if not 0 <= s < encoder.size:
                 raise bad(f"state code {s} is outside [0, {encoder.size}) for k = {k}")
             if (

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import math
 import os
 import subprocess
@@ -18,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from crmgrasp._io import save_figure
+from crmgrasp._io import check_folder, check_output, dumps_json, save_figure
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.cli.parser import _AGENT_FLAGS, _resolve_crm, build_parser
 from crmgrasp.model.contacts import Config
@@ -64,7 +63,7 @@ def _cmd_crm(args: argparse.Namespace) -> int:
         "path": [list(p) for p in out.path],
     }
     if args.json:
-        print(json.dumps(result, indent=2))
+        print(dumps_json(result))
         return 0
     print(f"CRM {crm} on {task.name}: error={result['error']}")
     for lab in ("a", "b"):
@@ -83,6 +82,7 @@ def _cmd_show(args: argparse.Namespace) -> int:
         return _show_mujoco(args)
     if args.out.suffix.lower() not in {".png", ".pdf", ".svg"}:
         raise CrmgraspError(f"--out must end in .png, .pdf or .svg, got {args.out.name!r}")
+    check_output(args.out, "--out")
     task, config, crm, noise, rng = _scene(args)
     outcome = task.hand.execute(task.obj, config, crm, noise=noise, rng=rng) if crm else None
     title = f"{task.name}" + (f": CRM {crm} -> {outcome.error.name.lower()}" if outcome else "")
@@ -96,6 +96,7 @@ def _show_mujoco(args: argparse.Namespace) -> int:
     from crmgrasp.hardware.mujoco.render import show
 
     user_gl = os.environ.get("MUJOCO_GL")
+    check_output(args.out, "--out")
     task, config, crm, _, rng = _scene(args)
     try:
         print(show(hardware_task(task), config, crm, args.out, rng))
@@ -111,6 +112,7 @@ def _show_mujoco(args: argparse.Namespace) -> int:
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from crmgrasp.experiments import reproduce
 
+    check_folder(args.out, "--out")
     results = reproduce(args.out, args.experiments, seed=args.seed, quick=args.quick, backend=args.backend)
     root = args.out.resolve()
     for name, summary in results.items():
@@ -125,6 +127,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
 def _cmd_learn(args: argparse.Namespace) -> int:
     from crmgrasp.experiments.learning import LearnerSpec, learn, write_learn_outputs
 
+    check_folder(args.out, "--out")
     task = make_task(args.task)
     params = {
         flag.lstrip("-").replace("-", "_"): getattr(args, flag.lstrip("-").replace("-", "_"))
@@ -159,17 +162,11 @@ def _cmd_learn(args: argparse.Namespace) -> int:
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     from crmgrasp.agents import GreedyPolicy, evaluate
+    from crmgrasp.agents.policy import policy_task_name
 
     if args.episodes < 1:
         raise CrmgraspError(f"--episodes must be >= 1, got {args.episodes}")
-    name = args.task
-    if name is None:
-        try:
-            doc = json.loads(args.policy.read_text(encoding="utf-8"))
-            name = doc["task"] if isinstance(doc, dict) and isinstance(doc.get("task"), str) else "paper-box"
-        except (OSError, ValueError):
-            name = "paper-box"  # GreedyPolicy.load reports the real problem
-    task = make_task(name)
+    task = make_task(args.task if args.task is not None else policy_task_name(args.policy))
     policy = GreedyPolicy.load(args.policy, task)
     from crmgrasp.kernels import kernel_for
 
@@ -197,7 +194,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
 def _print_result(args: argparse.Namespace, result: dict[str, Any], text: str) -> int:
     """Print ``result`` as JSON with ``--json``, else the one-line ``text``; exit code 0."""
-    print(json.dumps(result, indent=2) if args.json else text)
+    print(dumps_json(result) if args.json else text)
     return 0
 
 
@@ -228,6 +225,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     from crmgrasp.experiments.compare import CompareConfig, compare
 
     make_task(args.task)  # a clear error for an unknown task before any work
+    check_folder(args.out, "--out")
     cfg = CompareConfig.quick(args.task, args.seed) if args.quick else CompareConfig(task=args.task, seed=args.seed)
     if args.deep_steps is not None:
         if args.deep_steps < 0:
@@ -251,6 +249,7 @@ def _cmd_pomdp(args: argparse.Namespace) -> int:
 
     if args.cell <= 0 or args.samples < 1 or args.episodes < 1:
         raise CrmgraspError("--cell must be > 0, and --samples and --episodes >= 1")
+    check_output(args.out, "--out")
     task = make_task(args.task)
     tp = build_task_pomdp(task, cell=args.cell, samples=args.samples, n_starts=args.starts, seed=args.seed)
     path = write_cassandra(tp.model, args.out)
@@ -268,15 +267,11 @@ def _cmd_pomdp(args: argparse.Namespace) -> int:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from crmgrasp.agents import GreedyPolicy
+    from crmgrasp.agents.policy import policy_task_name
     from crmgrasp.hardware.runner import KinematicHand, PolicyRunner
 
-    name = "paper-box"
-    try:
-        doc = json.loads(args.policy.read_text(encoding="utf-8"))
-        name = doc["task"] if isinstance(doc, dict) and isinstance(doc.get("task"), str) else name
-    except (OSError, ValueError):
-        pass  # GreedyPolicy.load reports the real problem
-    task = make_task(name)
+    check_output(args.log, "--log")
+    task = make_task(policy_task_name(args.policy))
     policy = GreedyPolicy.load(args.policy, task)
     start = task.hand.contact(task.obj, args.a, args.b)
     if task.hand.feasible(task.obj, start) is not Error.NONE:

@@ -60,6 +60,13 @@ _EVAL_EPISODES = _int(0, 10_000_000)
 _STARTS = _int(1, 1_000_000)
 
 
+def _path(text: str) -> Path:
+    """An argparse type: a non-empty path (``Path("")`` would silently mean ``.``)."""
+    if text == "":
+        raise argparse.ArgumentTypeError("the path is empty")
+    return Path(text)
+
+
 def _number(text: str) -> float:
     try:
         return finite(text, "value")
@@ -141,7 +148,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Draw object, contacts with normals, palm point and, with --crm, the goal line and path.",
     )
     _add_scene_args(p, crm_required=False)
-    p.add_argument("--out", type=Path, required=True, help="image file (.png, .pdf, .svg; mujoco: .png or .gif)")
+    p.add_argument("--out", type=_path, required=True, help="image file (.png, .pdf, .svg; mujoco: .png or .gif)")
     _add_backend(p)
 
     p = sub.add_parser(
@@ -151,7 +158,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("experiments", nargs="*", metavar="NAME", help="experiments to run (default: all)")
     p.add_argument(
-        "--out", type=Path, default=Path("crmgrasp-results"), help="output folder (default: ./crmgrasp-results)"
+        "--out", type=_path, default=Path("crmgrasp-results"), help="output folder (default: ./crmgrasp-results)"
     )
     p.add_argument("--seed", type=_SEED, default=0, help="seed of the run (default 0; 0 to 2**63-1)")
     p.add_argument("--quick", action="store_true", help="small budgets (under a minute on 2 cores)")
@@ -177,7 +184,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="greedy evaluation episodes per trial (default 1000; 0 to 10,000,000)",
     )
     p.add_argument("--seed", type=_SEED, default=0, help="seed of the run (default 0; 0 to 2**63-1)")
-    p.add_argument("--out", type=Path, required=True, help="output folder")
+    p.add_argument("--out", type=_path, required=True, help="output folder")
     p.add_argument(
         "--lockstep",
         action="store_true",
@@ -197,7 +204,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="evaluate a saved policy",
         description="Run a saved policy greedily on fresh episodes of its task.",
     )
-    p.add_argument("--policy", type=Path, required=True, help="policy.json written by `crmgrasp learn`")
+    p.add_argument("--policy", type=_path, required=True, help="policy.json written by `crmgrasp learn`")
     p.add_argument("--task", default=None, help="task name (default: the one the policy names)")
     p.add_argument("--episodes", type=_EPISODES, default=1000, help="episodes (default 1000; 1 to 10,000,000)")
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
@@ -232,7 +239,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
-    p.add_argument("--out", type=Path, required=True, help="output folder")
+    p.add_argument("--out", type=_path, required=True, help="output folder")
     p.add_argument("--quick", action="store_true", help="small budgets (seconds)")
     p.add_argument(
         "--deep-steps",
@@ -270,7 +277,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="fresh starts to execute the policy on (default 1000; 1 to 1,000,000)",
     )
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
-    p.add_argument("--out", type=Path, required=True, help="the .pomdp file to write")
+    p.add_argument("--out", type=_path, required=True, help="the .pomdp file to write")
 
     p = sub.add_parser(
         "run",
@@ -278,10 +285,10 @@ def build_parser() -> argparse.ArgumentParser:
         description="Run a saved policy through the hand interface (here: the kinematic simulator) from the "
         "configuration given by --a and --b; write the step log to --log.",
     )
-    p.add_argument("--policy", type=Path, required=True, help="policy.json written by `crmgrasp learn`")
+    p.add_argument("--policy", type=_path, required=True, help="policy.json written by `crmgrasp learn`")
     p.add_argument("--a", type=_point, required=True, metavar="X,Y", help="start point for contact a (m)")
     p.add_argument("--b", type=_point, required=True, metavar="X,Y", help="start point for contact b (m)")
-    p.add_argument("--log", type=Path, required=True, help="CSV step log to write")
+    p.add_argument("--log", type=_path, required=True, help="CSV step log to write")
     p.add_argument("--sigma-n", type=_number, default=0.0, metavar="DEG", help="normal sensing noise, degrees")
     p.add_argument("--sigma-p", type=_number, default=0.0, metavar="M", help="position sensing noise, metres")
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")

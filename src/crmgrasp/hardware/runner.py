@@ -12,14 +12,13 @@ robot can check), when contact is lost, or after ``task.max_steps`` CRMs.
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from crmgrasp._io import write_csv
+from crmgrasp._io import dumps_json, write_csv
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents.policy import GreedyPolicy
 from crmgrasp.hardware.contact_sensing import NoContact
@@ -127,17 +126,17 @@ class PolicyRunner:
             raw: dict[str, Any] = getattr(hand, "raw_reading", dict)()
             row = [step, *reading.a, *reading.b, *obs, index, t.discretizer.label(index)]
             if t.is_success(reading):
-                rows.append([*row, "", "", "", json.dumps(raw)])
+                rows.append([*row, "", "", "", dumps_json(raw, indent=None)])
                 result = RunResult(step, True, "grasp sensed")
                 break
             if step == t.max_steps:
-                rows.append([*row, "", "", "", json.dumps(raw)])
+                rows.append([*row, "", "", "", dumps_json(raw, indent=None)])
                 result = RunResult(step, False, "step limit")
                 break
             action = self.policy.greedy(enc.encode(hist), rng)
             crm = t.actions[action]
             error = hand.execute(crm)
-            rows.append([*row, action, str(crm), error.name.lower(), json.dumps(raw)])
+            rows.append([*row, action, str(crm), error.name.lower(), dumps_json(raw, indent=None)])
         assert result is not None
         result.rows = rows
         if log is not None:
