@@ -248,3 +248,15 @@ def test_write_errors_name_the_users_path(tmp_path):
     target = tmp_path / "plain" / "x.json"
     with pytest.raises(CrmgraspError, match=re.escape(f"output file {str(target)!r} cannot be written")):
         write_json(target, {})
+
+
+def test_noise_and_coordinates_have_stated_ranges():
+    from crmgrasp import Polygon, SensorNoise
+    from crmgrasp.model.sensing import MAX_SIGMA_N, MAX_SIGMA_P
+
+    SensorNoise(MAX_SIGMA_N, MAX_SIGMA_P)  # the bounds themselves are valid
+    for bad in ((MAX_SIGMA_N * 1.01, 0.0), (0.0, 0.2)):
+        with pytest.raises(CrmgraspError, match="beyond the valid range"):
+            SensorNoise(*bad)
+    with pytest.raises(CrmgraspError, match=re.escape("vertex 1 (1e+200, 0) is beyond +-1e+06 m")):
+        Polygon([(0, 0), (1e200, 0), (0, 1e200)])

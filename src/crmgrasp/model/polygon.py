@@ -13,7 +13,11 @@ from numpy.typing import ArrayLike
 from crmgrasp._validation import CrmgraspError, as_point, finite
 from crmgrasp.model.shape import EPS, LINE_TOL, S_TOL, Array, BoundaryPoint, Entry
 
-__all__ = ["Polygon", "Edges", "inside", "first_entry", "convex_edge", "convex_entry"]
+__all__ = ["Polygon", "Edges", "MAX_COORD", "inside", "first_entry", "convex_edge", "convex_entry"]
+
+MAX_COORD = 1e6
+"""Largest vertex coordinate, metres: far beyond any hand, and far from where products of
+coordinates overflow."""
 
 Edges = tuple[tuple[float, float, float, float, float, float, float], ...]
 """Per edge ``(ax, ay, ex, ey, l2, nx, ny)``: start, edge vector, squared length,
@@ -72,6 +76,9 @@ class Polygon:
         if len(raw) < 3:
             raise CrmgraspError(f"a polygon needs at least 3 vertices, got {len(raw)}")
         pts = [as_point(v, f"vertex {i}") for i, v in enumerate(raw)]
+        for i, (x, y) in enumerate(pts):
+            if abs(x) > MAX_COORD or abs(y) > MAX_COORD:
+                raise CrmgraspError(f"vertex {i} ({x:g}, {y:g}) is beyond +-{MAX_COORD:g} m")
         area2 = sum(
             pts[i][0] * pts[(i + 1) % len(pts)][1] - pts[(i + 1) % len(pts)][0] * pts[i][1] for i in range(len(pts))
         )

@@ -31,6 +31,8 @@ __all__ = [
     "Observation",
     "observe",
     "SensorNoise",
+    "MAX_SIGMA_N",
+    "MAX_SIGMA_P",
     "Discretizer",
 ]
 
@@ -59,6 +61,14 @@ def observe(config: Config) -> Observation:
     return Observation(sx * sx + sy * sy, dx * b.ny - dy * b.nx, -dx * a.ny + dy * a.nx)
 
 
+MAX_SIGMA_N = math.pi / 4
+"""Largest normal noise, radians (45 degrees): beyond it a sensed normal is as likely to
+point along the surface as into it, and a goal line says little about the object."""
+
+MAX_SIGMA_P = 0.1
+"""Largest position noise, metres (10 cm, far beyond any fingertip sensor)."""
+
+
 @dataclass(frozen=True)
 class SensorNoise:
     """Gaussian sensing noise on contact normals and positions.
@@ -66,17 +76,26 @@ class SensorNoise:
     Parameters
     ----------
     sigma_n
-        Standard deviation of the normal's rotation, radians (>= 0).
+        Standard deviation of the normal's rotation, radians, in ``[0, MAX_SIGMA_N]``
+        (45 degrees).
     sigma_p
-        Standard deviation of each position coordinate, metres (>= 0).
+        Standard deviation of each position coordinate, metres, in ``[0, MAX_SIGMA_P]``
+        (0.1 m).
     """
 
     sigma_n: float = 0.0
     sigma_p: float = 0.0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "sigma_n", non_negative(self.sigma_n, "sigma_n"))
-        object.__setattr__(self, "sigma_p", non_negative(self.sigma_p, "sigma_p"))
+        sigma_n = non_negative(self.sigma_n, "sigma_n")
+        sigma_p = non_negative(self.sigma_p, "sigma_p")
+        if sigma_n > MAX_SIGMA_N or sigma_p > MAX_SIGMA_P:
+            raise CrmgraspError(
+                f"sensing noise (sigma_n {sigma_n:g} rad, sigma_p {sigma_p:g} m) is beyond the valid range "
+                f"(sigma_n <= {MAX_SIGMA_N:.4g} rad = 45 degrees, sigma_p <= {MAX_SIGMA_P:g} m)"
+            )
+        object.__setattr__(self, "sigma_n", sigma_n)
+        object.__setattr__(self, "sigma_p", sigma_p)
 
     @property
     def active(self) -> bool:
