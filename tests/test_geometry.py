@@ -1,7 +1,7 @@
 import math
 
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from crmgrasp import CrmgraspError, Disc, Polygon, Rectangle, regular_polygon
@@ -120,3 +120,37 @@ def test_boundary_points_are_on_boundary_with_unit_inward_normal(obj, frac):
     near_vertex = isinstance(obj, Polygon) and min(math.dist(bp.point, v) for v in obj.vertices) < 1e-4
     if not near_vertex:  # at a vertex (convex or reflex) either side may cross the adjacent edge
         assert obj.contains(inner) and not obj.contains(outer)
+
+
+def _all_pairs_check(pts):
+    """The simplicity check on every pair of edges (the definition the grid must match)."""
+    from crmgrasp.model.polygon import _segments_cross
+
+    n = len(pts)
+    for i in range(n):
+        if pts[i] == pts[(i + 1) % n]:
+            return f"polygon has a repeated vertex {pts[i]} (zero-length edge {i})"
+    for i in range(n):
+        p, q, r = pts[i], pts[(i + 1) % n], pts[(i + 2) % n]
+        ux, uy, wx, wy = q[0] - p[0], q[1] - p[1], r[0] - q[0], r[1] - q[1]
+        if ux * wy - uy * wx == 0.0 and ux * wx + uy * wy < 0.0:
+            return f"polygon is not simple: edges {i} and {(i + 1) % n} fold back"
+        for j in range(i + 2, n):
+            if not (i == 0 and j == n - 1) and _segments_cross(p, q, pts[j], pts[(j + 1) % n]):
+                return f"polygon is not simple: edges {i} and {j} intersect"
+    return None
+
+
+@settings(max_examples=400, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 6), st.integers(0, 6)), min_size=3, max_size=14))
+def test_grid_simplicity_check_decides_as_all_pairs(raw):
+    """Small integer grids give many touching, collinear and crossing edges."""
+    from crmgrasp.model.polygon import _check_simple
+
+    pts = [(float(x), float(y)) for x, y in raw]
+    try:
+        _check_simple(list(pts))
+        got = None
+    except CrmgraspError as exc:
+        got = str(exc)
+    assert got == _all_pairs_check(pts)

@@ -245,22 +245,57 @@ class Polygon:
 
 
 def _check_simple(pts: list[tuple[float, float]]) -> None:
+    """Refuse repeated vertices, edges folding back onto the previous one, and edges that
+    touch or cross (:func:`_segments_cross`), reporting the first such pair ``(i, j)``
+    in order. Only pairs whose bounding boxes share a cell of a uniform grid (about
+    ``n`` cells) are tested: every touching pair does, so the answer is that of testing
+    all pairs, in near-linear time for ordinary polygons."""
     n = len(pts)
     for i in range(n):
         p, q = pts[i], pts[(i + 1) % n]
         if p == q:
             raise CrmgraspError(f"polygon has a repeated vertex {p} (zero-length edge {i})")
+    candidates = _grid_pairs(pts)
     for i in range(n):
         p, q = pts[i], pts[(i + 1) % n]
         r = pts[(i + 2) % n]
         ux, uy, wx, wy = q[0] - p[0], q[1] - p[1], r[0] - q[0], r[1] - q[1]
         if ux * wy - uy * wx == 0.0 and ux * wx + uy * wy < 0.0:
             raise CrmgraspError(f"polygon is not simple: edges {i} and {(i + 1) % n} fold back")
-        for j in range(i + 2, n):
-            if i == 0 and j == n - 1:
-                continue
+        for j in candidates.get(i, ()):
             if _segments_cross(p, q, pts[j], pts[(j + 1) % n]):
                 raise CrmgraspError(f"polygon is not simple: edges {i} and {j} intersect")
+
+
+def _grid_pairs(pts: list[tuple[float, float]]) -> dict[int, list[int]]:
+    """Per edge ``i``, the sorted edges ``j > i + 1`` (not the edge closing the ring with
+    edge 0) whose bounding boxes share a grid cell with edge ``i``'s."""
+    n = len(pts)
+    xs, ys = [x for x, _ in pts], [y for _, y in pts]
+    x0, y0 = min(xs), min(ys)
+    side = max(1, math.isqrt(n))
+    wx = (max(xs) - x0) / side or 1.0
+    wy = (max(ys) - y0) / side or 1.0
+
+    def cell(v: float, lo: float, w: float) -> int:
+        return min(side - 1, max(0, int((v - lo) / w)))
+
+    cells: dict[tuple[int, int], list[int]] = {}
+    for i in range(n):
+        (ax, ay), (bx, by) = pts[i], pts[(i + 1) % n]
+        cx0, cx1 = cell(min(ax, bx), x0, wx), cell(max(ax, bx), x0, wx)
+        cy0, cy1 = cell(min(ay, by), y0, wy), cell(max(ay, by), y0, wy)
+        for cx in range(cx0, cx1 + 1):
+            for cy in range(cy0, cy1 + 1):
+                cells.setdefault((cx, cy), []).append(i)
+    pairs: dict[int, set[int]] = {}
+    for members in cells.values():
+        for a in range(len(members)):
+            for b in range(a + 1, len(members)):
+                i, j = members[a], members[b]  # i < j: edges are added in order
+                if j >= i + 2 and not (i == 0 and j == n - 1):
+                    pairs.setdefault(i, set()).add(j)
+    return {i: sorted(js) for i, js in pairs.items()}
 
 
 # ------------------------------------------------------------------ the rules
