@@ -3,6 +3,7 @@ CrmgraspError (API), never a traceback, a hang or an allocation that cannot succ
 
 from __future__ import annotations
 
+import json
 import re
 import signal
 import subprocess
@@ -11,6 +12,8 @@ import time
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from crmgrasp import CRM, Config, Contact, CrmgraspError, make_task
 from crmgrasp.agents import train_trials
@@ -260,3 +263,32 @@ def test_noise_and_coordinates_have_stated_ranges():
             SensorNoise(*bad)
     with pytest.raises(CrmgraspError, match=re.escape("vertex 1 (1e+200, 0) is beyond +-1e+06 m")):
         Polygon([(0, 0), (1e200, 0), (0, 1e200)])
+
+
+_json_values = st.recursive(
+    st.none() | st.booleans() | st.integers() | st.floats(allow_nan=False) | st.text(max_size=8),
+    lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=6), inner, max_size=4),
+    max_leaves=20,
+)
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(
+    st.one_of(
+        st.binary(max_size=200),
+        _json_values.map(lambda v: json.dumps(v).encode()),
+        st.fixed_dictionaries(
+            {"format": st.just("crmgrasp-policy"), "version": st.integers(0, 3), "task": st.just("paper-box")},
+            optional={"k": _json_values, "greedy": _json_values, "sha256": st.text(max_size=5)},
+        ).map(lambda v: json.dumps(v).encode()),
+    )
+)
+def test_fuzzed_policy_files_load_or_fail_in_one_line(tmp_path, data):
+    from crmgrasp.agents import GreedyPolicy
+
+    path = tmp_path / "fuzz.json"
+    path.write_bytes(data)
+    try:
+        GreedyPolicy.load(path, make_task("paper-box"))
+    except CrmgraspError as exc:
+        assert "\n" not in str(exc) and len(str(exc)) < 400
