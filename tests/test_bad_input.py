@@ -292,3 +292,32 @@ def test_fuzzed_policy_files_load_or_fail_in_one_line(tmp_path, data):
         GreedyPolicy.load(path, make_task("paper-box"))
     except CrmgraspError as exc:
         assert "\n" not in str(exc) and len(str(exc)) < 400
+
+
+def test_near_coincident_contacts_after_a_noisy_crm_are_a_palm_error(task):
+    """At 30 degrees of normal noise an opposition sometimes lands the moving contact
+    within a millimetre of the other: with min_separation the model calls it a palm
+    error (the fingertips collide), and no accepted CRM ends closer than that."""
+    import math
+    from dataclasses import replace
+
+    from crmgrasp import SensorNoise
+    from crmgrasp.model.hand import Error, execute_crm
+
+    noise = SensorNoise(math.radians(30), 0.002)
+    hand = replace(task.hand, min_separation=0.01)
+    rng = np.random.default_rng(0)
+    close = reclassified = 0
+    for _ in range(3000):
+        cfg = task.sample_start(rng)
+        sensed = noise.sense(cfg, rng)
+        plain = execute_crm(task.obj, task.hand, cfg, task.actions[0], sensed)
+        strict = execute_crm(task.obj, hand, cfg, task.actions[0], sensed)
+        if strict.error is Error.NONE:
+            assert strict.config.separation > 0.01
+        if plain.error is Error.NONE and plain.config.separation <= 0.01:
+            close += 1
+            reclassified += strict.error is Error.PALM
+    assert close > 0 and reclassified == close
+    with pytest.raises(CrmgraspError, match="min_separation must be below the aperture"):
+        replace(task.hand, min_separation=1.0)

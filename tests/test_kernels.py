@@ -301,7 +301,7 @@ def test_fused_single_step_equals_sim_step_on_convex_and_non_convex_objects(task
         assert set(codes) == {0, 1, 2}, codes
 
 
-@pytest.mark.parametrize("which", ["paper-box", "hexagon", "noisy", "u-shape"])
+@pytest.mark.parametrize("which", ["paper-box", "hexagon", "noisy", "u-shape", "min-separation"])
 def test_backends_agree_on_vector_env_and_starts(which):
     """The vector env gives the same outputs on every backend (the noise-free polygon
     step runs as one compiled pass; with noise, compiled rules around reference sensing)."""
@@ -310,6 +310,9 @@ def test_backends_agree_on_vector_env_and_starts(which):
         task = replace(task, noise=SensorNoise(0.05, 0.002))
     if which == "u-shape":
         task = replace(task, obj=U_SHAPE, starts=task.starts, symmetry=None)
+    if which == "min-separation":  # large noise, fingertips 1 cm wide
+        hand = replace(task.hand, min_separation=0.01, palm_normal_tol=0.2)
+        task = replace(task, hand=hand, noise=SensorNoise(math.radians(30), 0.002))
 
     def run(backend: str) -> list[np.ndarray]:
         env = CRMGraspVectorEnv(256, task, backend=backend)

@@ -25,17 +25,17 @@ import numpy as np
 from numba import njit
 
 # indices into the parameter array p
-APERTURE, DEPTH, PALM_TOL, EPS, S_TOL, LINE_TOL, ANTIPODAL_TOL, MU_GOAL, BOUND = range(9)
+APERTURE, DEPTH, PALM_TOL, EPS, S_TOL, LINE_TOL, ANTIPODAL_TOL, MU_GOAL, BOUND, MIN_SEP = range(10)
 # indices into the integer array q
 CONVEX, NA, NB, ABS_M = range(4)
-N_P, N_Q = 9, 4
+N_P, N_Q = 10, 4
 
 
 @njit(cache=True)
 def _unpack(p, q):  # type: ignore[no-untyped-def]
     """The parameter arrays as tuples: values the compiler keeps in registers (an
     array's loads would be repeated after every store to an output array)."""
-    return (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8]), (q[0], q[1], q[2], q[3])
+    return (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9]), (q[0], q[1], q[2], q[3])
 
 
 @njit(cache=True)
@@ -71,7 +71,7 @@ def _feasible(c, j, e, p, q):  # type: ignore[no-untyped-def]
     dist = np.sqrt(dx * dx + dy * dy)
     if dist > p[APERTURE]:
         return 1
-    if dist == 0.0:
+    if dist <= p[MIN_SEP]:
         return 2
     ux, uy = dy / dist, -dx / dist
     tol = p[PALM_TOL]

@@ -38,6 +38,7 @@ def params(task: Task) -> tuple[F64, NDArray[np.int64], F64]:
     p[jit.APERTURE], p[jit.DEPTH], p[jit.PALM_TOL] = hand.aperture, hand.palm_depth, hand.palm_normal_tol
     p[jit.EPS], p[jit.S_TOL], p[jit.LINE_TOL] = shape.EPS, shape.S_TOL, shape.LINE_TOL
     p[jit.ANTIPODAL_TOL], p[jit.MU_GOAL], p[jit.BOUND] = quality.ANTIPODAL_TOL, task.mu_goal, 2.0 * hand.aperture
+    p[jit.MIN_SEP] = hand.min_separation
     q = np.empty(jit.N_Q, dtype=np.int64)
     q[jit.CONVEX], q[jit.NA], q[jit.NB], q[jit.ABS_M] = obj.convex, len(d.m_a) + 1, len(d.m_b) + 1, d.abs_moments
     width = max(len(d.rho), len(d.m_a), len(d.m_b), 1)

@@ -7,8 +7,11 @@ directed segment a -> b), the palm point is ``P = (x_a + x_b) / 2 + h u``. A
 configuration is feasible iff ``|x_a - x_b| <= A`` (else APERTURE) and the palm is
 clear: ``P`` not strictly inside the object and ``n_a . u <= tol`` and
 ``n_b . u <= tol`` (else PALM), with ``tol = Hand.palm_normal_tol`` (SPEC: 1e-9).
-Coincident contacts (``x_a == x_b``) leave ``u`` undefined; this implementation
-reports them as PALM (the fingers collide).
+Contacts closer than ``Hand.min_separation`` (default 0: only coincident contacts,
+``x_a == x_b``, which leave ``u`` undefined) are reported as PALM: the fingers collide.
+Under large sensing noise a CRM can land the moving contact a fraction of a millimetre
+from the other one; a hand with fingertips of diameter ``D`` models that with
+``min_separation = D``.
 
 CRM ``(c, f, r)``
 -----------------
@@ -176,6 +179,9 @@ class Hand:
         Under sensing noise an opposition lands slightly misaligned and one normal
         then faces the palm side by a hair; a real fingertip tolerates a few
         degrees, which a larger value (e.g. ``sin(10 deg)``) models.
+    min_separation
+        Contacts this close or closer (metres) collide: a PALM error. Default 0: only
+        coincident contacts (SPEC). Must be below the aperture.
     """
 
     aperture: float
@@ -183,6 +189,7 @@ class Hand:
     backoff: float = 0.01
     r_max: float | None = None
     palm_normal_tol: float = PALM_NORMAL_TOL
+    min_separation: float = 0.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "aperture", positive(self.aperture, "hand aperture"))
@@ -194,6 +201,10 @@ class Hand:
         if tol >= 1.0:
             raise CrmgraspError(f"hand palm_normal_tol must be < 1, got {tol}")
         object.__setattr__(self, "palm_normal_tol", tol)
+        sep = non_negative(self.min_separation, "hand min_separation")
+        if sep >= self.aperture:
+            raise CrmgraspError(f"hand min_separation must be below the aperture {self.aperture:g}, got {sep:g}")
+        object.__setattr__(self, "min_separation", sep)
 
     def check_crm(self, crm: CRM) -> CRM:
         """Return ``crm`` if ``|r| <= r_max``, else raise :class:`CrmgraspError`."""
@@ -301,13 +312,14 @@ def faces_palm(config: Config, tol: float) -> bool:
 
 def feasible(obj: Shape, hand: Hand, config: Config) -> Error:
     """Feasibility of a configuration (SPEC section 2), as an :class:`Error`: APERTURE
-    if ``|x_a - x_b| > A``; PALM if the contacts coincide, a contact faces the palm
-    side (:func:`faces_palm`) or the palm point (:func:`palm_point`) is inside."""
+    if ``|x_a - x_b| > A``; PALM if the contacts collide (``|x_a - x_b| <=
+    min_separation``, coincident by default), a contact faces the palm side
+    (:func:`faces_palm`) or the palm point (:func:`palm_point`) is inside."""
     dist, ux, uy = palm_axis(config)
     if dist > hand.aperture:
         return Error.APERTURE
     a, b = config
-    if dist == 0.0 or _faces(a, b, ux, uy, hand.palm_normal_tol):
+    if dist <= hand.min_separation or _faces(a, b, ux, uy, hand.palm_normal_tol):
         return Error.PALM
     if obj.contains(_palm_at(a, b, ux, uy, hand.palm_depth)):
         return Error.PALM
