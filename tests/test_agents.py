@@ -120,6 +120,8 @@ def test_policy_file_roundtrip_and_errors(learned, tmp_path):
     path = policy.save(tmp_path / "p.json")
     back = GreedyPolicy.load(path, task)
     assert back.table == policy.table and back.k == 2
+    by_path = GreedyPolicy.load(path)  # the task travels in the file
+    assert by_path.task.name == task.name and by_path.table == policy.table
     enc = encoder_for(task, 2)
     s1, _ = evaluate(task, policy, enc, 100, np.random.default_rng(4))
     s2, _ = evaluate(task, back, enc, 100, np.random.default_rng(4))

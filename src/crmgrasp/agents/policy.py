@@ -37,7 +37,7 @@ from crmgrasp._io import read_bounded, write_json
 from crmgrasp._validation import CrmgraspError, shown
 from crmgrasp.agents.tabular import TabularAgent
 from crmgrasp.model.history import MAX_K, KOrderEncoder
-from crmgrasp.tasks import Task
+from crmgrasp.tasks import Task, make_task
 
 if TYPE_CHECKING:
     from crmgrasp.agents.symmetric import SymmetricAgent
@@ -95,15 +95,6 @@ def read_policy_document(path: str | os.PathLike[str]) -> Any:
         raise CrmgraspError(f"policy file {str(p)!r} is nested too deeply") from None
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise CrmgraspError(f"policy file {str(p)!r} is not valid JSON ({exc})") from None
-
-
-def policy_task_name(path: str | os.PathLike[str]) -> str:
-    """The task a policy file names (read with :func:`read_policy_document`)."""
-    doc = read_policy_document(path)
-    name = doc.get("task") if isinstance(doc, dict) else None
-    if not isinstance(name, str):
-        raise CrmgraspError(f"policy file {str(path)!r} names no task")
-    return name
 
 
 class GreedyPolicy:
@@ -165,9 +156,16 @@ class GreedyPolicy:
         return write_json(path, self.to_dict())
 
     @classmethod
-    def load(cls, path: str | os.PathLike[str], task: Task) -> GreedyPolicy:
-        """Read (:func:`read_policy_document`) and validate a policy file for ``task``."""
-        return cls.from_dict(read_policy_document(path), task, source=repr(str(path)))
+    def load(cls, path: str | os.PathLike[str], task: Task | None = None) -> GreedyPolicy:
+        """Read (:func:`read_policy_document`) and validate a policy file for ``task``
+        (default: the registered task the file names)."""
+        doc = read_policy_document(path)
+        if task is None:
+            name = doc.get("task") if isinstance(doc, dict) else None
+            if not isinstance(name, str):
+                raise CrmgraspError(f"policy file {str(path)!r} names no task")
+            task = make_task(name)
+        return cls.from_dict(doc, task, source=repr(str(path)))
 
     @classmethod
     def from_dict(cls, doc: Any, task: Task, source: str = "policy") -> GreedyPolicy:

@@ -162,12 +162,11 @@ def _cmd_learn(args: argparse.Namespace) -> int:
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     from crmgrasp.agents import GreedyPolicy, evaluate
-    from crmgrasp.agents.policy import policy_task_name
 
     if args.episodes < 1:
         raise CrmgraspError(f"--episodes must be >= 1, got {args.episodes}")
-    task = make_task(args.task if args.task is not None else policy_task_name(args.policy))
-    policy = GreedyPolicy.load(args.policy, task)
+    policy = GreedyPolicy.load(args.policy, None if args.task is None else make_task(args.task))
+    task = policy.task
     from crmgrasp.kernels import kernel_for
 
     kernel = kernel_for(task, args.backend)
@@ -267,12 +266,11 @@ def _cmd_pomdp(args: argparse.Namespace) -> int:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from crmgrasp.agents import GreedyPolicy
-    from crmgrasp.agents.policy import policy_task_name
     from crmgrasp.hardware.runner import KinematicHand, PolicyRunner
 
     check_output(args.log, "--log")
-    task = make_task(policy_task_name(args.policy))
-    policy = GreedyPolicy.load(args.policy, task)
+    policy = GreedyPolicy.load(args.policy)
+    task = policy.task
     start = task.hand.contact(task.obj, args.a, args.b)
     if task.hand.feasible(task.obj, start) is not Error.NONE:
         raise CrmgraspError("the start configuration is infeasible")
