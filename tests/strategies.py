@@ -43,7 +43,7 @@ def scenes(draw):
     hand = draw(hands)
     fa, fb = draw(st.floats(0, 1, exclude_max=True)), draw(st.floats(0, 1, exclude_max=True))
     cfg = Config(on_boundary(obj, fa * obj.perimeter), on_boundary(obj, fb * obj.perimeter))
-    if isinstance(obj, Polygon):  # contacts are never placed on a vertex (SPEC section 1)
+    if isinstance(obj, Polygon):  # contacts are never placed on a vertex (docs/model.md section 1)
         assume(all(math.dist(c.point, v) > 1e-6 for c in cfg for v in obj.vertices))
     crm = CRM(draw(st.sampled_from("ab")), draw(st.sampled_from("ab")), draw(st.floats(-hand.aperture, hand.aperture)))
     return obj, hand, cfg, crm

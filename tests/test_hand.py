@@ -1,4 +1,4 @@
-"""CRM execution: SPEC section 7 worked cases and hand-computed cases."""
+"""CRM execution: docs/model.md section 7 worked cases and hand-computed cases."""
 
 import math
 
@@ -11,7 +11,7 @@ from crmgrasp.model.hand import palm_point
 
 from .test_geometry import U_SHAPE
 
-# --------------------------------------------------------- SPEC section 7
+# --------------------------------------------------------- docs/model.md section 7
 
 
 @pytest.fixture
@@ -176,7 +176,7 @@ def test_noise_moves_goal_line_but_contact_stays_on_true_boundary(task, near):
     assert out.config.a.y == pytest.approx(0.05) and out.config.a.normal == (0.0, -1.0)
     assert out.config.a.x != -0.10  # the sensed frame shifted the goal line
     assert 0.0 < min_friction(out.config) < 0.2
-    # with the SPEC's 1e-9 tolerance the same misaligned landing is a palm error
+    # with the default 1e-9 tolerance the same misaligned landing is a palm error
     strict = task.hand.execute(task.obj, near, task.actions[0], noise=noise, rng=np.random.default_rng(3))
     assert strict.error is Error.PALM
 

@@ -29,7 +29,7 @@ from crmgrasp.model.hand import CRM
 from crmgrasp.model.quality import min_friction
 from crmgrasp.model.sensing import Error
 
-NEAR = Config(Contact(-0.15, -0.02, 1.0, 0.0), Contact(-0.10, -0.05, 0.0, 1.0))  # SPEC section 7 worked cases
+NEAR = Config(Contact(-0.15, -0.02, 1.0, 0.0), Contact(-0.10, -0.05, 0.0, 1.0))  # docs/model.md section 7 worked cases
 FAR = Config(Contact(-0.15, -0.02, 1.0, 0.0), Contact(0.0, -0.05, 0.0, 1.0))
 
 

@@ -1,7 +1,7 @@
 """Named grasping tasks: object, hand, CRM set, observation bins, starts, goal.
 
 A :class:`Task` bundles everything an environment or experiment needs. Tasks are
-looked up by name with :func:`make_task` (``"paper-box"`` is SPEC section 7);
+looked up by name with :func:`make_task` (``"paper-box"`` is docs/model.md section 7);
 users build their own by constructing :class:`Task` directly and may register a
 factory under a new name with :func:`register_task`.
 """
@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from crmgrasp._validation import CrmgraspError, non_negative
-from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.contacts import Config, Contact, config_from_row
 from crmgrasp.model.geometry import Polygon, Rectangle, Shape
 from crmgrasp.model.hand import CRM, Error, Hand, feasible
 from crmgrasp.model.quality import min_friction
@@ -52,7 +52,7 @@ supplies a compiled one that makes the same decisions."""
 
 
 def acceptable(obj: Shape, hand: Hand, mu_goal: float, config: Config) -> bool:
-    """The start rule: feasible (SPEC section 2) and not already a grasp
+    """The start rule: feasible (docs/model.md section 2) and not already a grasp
     (``min_friction > mu_goal``)."""
     return feasible(obj, hand, config) is Error.NONE and min_friction(config) > mu_goal
 
@@ -137,7 +137,7 @@ def corner_proposal(w: np.ndarray, cum: np.ndarray, c_in: np.ndarray, c_out: np.
 
 @dataclass(frozen=True)
 class CornerStarts:
-    """SPEC section 7 starts: a random polygon corner, one contact uniform on each
+    """docs/model.md section 7 starts: a random polygon corner, one contact uniform on each
     of the two sides meeting there, a fair coin for which contact is ``a``;
     resampled until feasible and not already a grasp (``min_friction > mu_goal``).
 
@@ -161,8 +161,7 @@ class CornerStarts:
             if accept is not None:
                 got = accept(obj, hand, mu_goal, u[:, None])
                 if len(got):
-                    v = got[0].tolist()
-                    return Config(Contact(v[0], v[1], v[2], v[3]), Contact(v[4], v[5], v[6], v[7]))
+                    return config_from_row(got[0].tolist())
                 continue
             cfg = corner_candidate(obj, *u.tolist())
             if cfg is not None and acceptable(obj, hand, mu_goal, cfg):
@@ -351,12 +350,12 @@ class Task:
     def grasped(self, mu: NDArray[np.float64]) -> NDArray[np.bool_]: ...
 
     def grasped(self, mu: float | NDArray[np.float64]) -> bool | NDArray[np.bool_]:
-        """The success rule (SPEC section 5) from a configuration's min friction:
+        """The success rule (docs/model.md section 5) from a configuration's min friction:
         ``mu <= mu_goal`` (elementwise on an array)."""
         return mu <= self.mu_goal
 
     def is_success(self, config: Config) -> bool:
-        """SPEC section 5: :meth:`grasped` of ``min_friction(config)``."""
+        """docs/model.md section 5: :meth:`grasped` of ``min_friction(config)``."""
         return self.grasped(min_friction(config))
 
     def action_names(self) -> tuple[str, ...]:
@@ -365,7 +364,7 @@ class Task:
 
 
 def paper_box() -> Task:
-    """The paper's box task (SPEC section 7).
+    """The paper's box task (docs/model.md section 7).
 
     Examples
     --------

@@ -25,7 +25,7 @@ from crmgrasp.agents.training import (
     trial_generators,
 )
 from crmgrasp.kernels import kernel_for
-from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.contacts import config_from_row
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.model.sensing import Observation
@@ -33,10 +33,6 @@ from crmgrasp.sim import Percept, reset
 from crmgrasp.tasks import Task
 
 __all__ = ["train_trials_lockstep"]
-
-
-def _config(row: list[float]) -> Config:
-    return Config(Contact(*row[:4]), Contact(*row[4:]))
 
 
 class _Trial:
@@ -113,7 +109,7 @@ def train_trials_lockstep(
         cfg[active] = new
         if noise.active:  # one reading per trial, from the trial's own generator, in trial order
             for i, t in enumerate(active.tolist()):
-                sensed = noise.sense(_config(new[i].tolist()), runs[t].env_rng)
+                sensed = noise.sense(config_from_row(new[i].tolist()), runs[t].env_rng)
                 sen[t] = (*sensed.a, *sensed.b)
         else:
             sen[active] = new
@@ -127,7 +123,7 @@ def train_trials_lockstep(
             terminated = bool(done[i])
             truncated = tr.steps >= task.max_steps and not terminated
             percept = Percept(
-                Observation(*obs), Error(errors[i]), int(index[i]), _config(srow), -1.0, terminated, truncated
+                Observation(*obs), Error(errors[i]), int(index[i]), config_from_row(srow), -1.0, terminated, truncated
             )
             tr.policy.tell(percept)
             if (not (terminated or truncated)) or finish(t, tr, terminated):

@@ -14,17 +14,30 @@ from gymnasium import spaces
 
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.kernels import Kernel, kernel_for
-from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.contacts import Config, config_from_row
 from crmgrasp.model.hand import Error, check_config, execute_crm
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.sim import OneStep, SimState
 from crmgrasp.tasks import Task, make_task
 
-__all__ = ["CRMGraspEnv", "KOrderHistory", "ENV_ID"]
+__all__ = ["CRMGraspEnv", "KOrderHistory", "ENV_ID", "observation_space"]
 
 ENV_ID = "crmgrasp/PaperBox-v0"
 _empty = np.empty
 _FIRST_BLOCK, _MAX_BLOCK = 16, 1024
+
+
+def observation_space(bound: float) -> spaces.Dict:
+    """One environment's observation space: ``rho`` in ``[0, 4]``, the moments in
+    ``[-bound, bound]`` (twice the aperture, metres), the error flag."""
+    return spaces.Dict(
+        {
+            "rho": spaces.Box(0.0, 4.0, shape=(1,), dtype=np.float64),
+            "m_a": spaces.Box(-bound, bound, shape=(1,), dtype=np.float64),
+            "m_b": spaces.Box(-bound, bound, shape=(1,), dtype=np.float64),
+            "error": spaces.Discrete(len(Error)),
+        }
+    )
 
 
 class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
@@ -40,7 +53,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
     paper-box: 0 = C1 (a,b,0), 1 = C2 (b,a,0), 2 = C3 (a,a,+0.08), 3 = C4 (b,b,-0.08).
 
     ## Observation Space
-    A ``Dict``, computed from the sensed contacts (SPEC section 4):
+    A ``Dict``, computed from the sensed contacts (docs/model.md section 4):
 
     | key | meaning | min | max |
     | --- | --- | --- | --- |
@@ -72,7 +85,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
     backend gives the same episodes).
 
     ## Version History
-    * v0: initial version (SPEC sections 1-7).
+    * v0: initial version (docs/model.md).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 2}  # noqa: RUF012 - Gymnasium's convention
@@ -87,15 +100,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         self.kernel: Kernel = kernel_for(self.task, backend)
         self.action_space = spaces.Discrete(len(self.task.actions))
         self._n_actions = len(self.task.actions)
-        m = self.kernel.bound
-        self.observation_space = spaces.Dict(
-            {
-                "rho": spaces.Box(0.0, 4.0, shape=(1,), dtype=np.float64),
-                "m_a": spaces.Box(-m, m, shape=(1,), dtype=np.float64),
-                "m_b": spaces.Box(-m, m, shape=(1,), dtype=np.float64),
-                "error": spaces.Discrete(len(Error)),
-            }
-        )
+        self.observation_space = observation_space(self.kernel.bound)
         self._state: SimState | None = None
         self._last: tuple[SimState, int] | None = None
         self._starts: list[tuple[float, ...]] = []
@@ -160,9 +165,9 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         if self._next >= len(self._starts):
             self._starts, self._next = self.kernel.sample_starts(self.np_random, self._block).tolist(), 0
             self._block = min(2 * self._block, _MAX_BLOCK)
-        v = self._starts[self._next]
+        row = self._starts[self._next]
         self._next += 1
-        return Config(Contact(v[0], v[1], v[2], v[3]), Contact(v[4], v[5], v[6], v[7]))
+        return config_from_row(row)
 
     def render(self) -> np.ndarray | None:  # type: ignore[override]
         """An RGB image of the scene (``render_mode="rgb_array"``), else ``None``."""
@@ -187,7 +192,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
 
 
 class KOrderHistory(gym.Wrapper[int, np.int64, dict[str, Any], np.int64]):
-    """Replace the observation by the k-order history state of SPEC section 6.
+    """Replace the observation by the k-order history state of docs/model.md section 6.
 
     The observation becomes ``Discrete(encoder.size)``: the integer code of
     ``(o_t, a_{t-1}, o_{t-1}, ..., a_{t-k})`` over the task's discretized

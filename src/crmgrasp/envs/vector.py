@@ -27,8 +27,8 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from crmgrasp._validation import CrmgraspError
+from crmgrasp.envs.single import observation_space
 from crmgrasp.kernels import Kernel, kernel_for
-from crmgrasp.model.hand import Error
 from crmgrasp.sim import episode_end
 from crmgrasp.tasks import Task, make_task
 
@@ -53,15 +53,7 @@ class CRMGraspVectorEnv(VectorEnv):
         self.render_mode = None
         self.single_action_space = spaces.Discrete(len(self.task.actions))
         self.action_space = batch_space(self.single_action_space, num_envs)
-        b = self.kernel.bound
-        self.single_observation_space = spaces.Dict(
-            {
-                "rho": spaces.Box(0.0, 4.0, shape=(1,), dtype=np.float64),
-                "m_a": spaces.Box(-b, b, shape=(1,), dtype=np.float64),
-                "m_b": spaces.Box(-b, b, shape=(1,), dtype=np.float64),
-                "error": spaces.Discrete(len(Error)),
-            }
-        )
+        self.single_observation_space = observation_space(self.kernel.bound)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self._cfg = np.zeros((num_envs, 8))
         self._sensed = self._cfg

@@ -54,7 +54,7 @@ class Figure4Config:
     (nearer, a noisy goal line can slide off the side past the corner)."""
     palm_tolerance_deg: float = 10.0
     """Angle a contact surface may face the palm side (``Hand.palm_normal_tol`` =
-    sin of it). SPEC's 1e-9 would turn nearly every noisy opposition into a palm
+    sin of it). the default 1e-9 would turn nearly every noisy opposition into a palm
     error, because a misaligned landing tilts one normal toward the palm by a hair."""
 
 

@@ -43,8 +43,8 @@ def _figure7(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
     if not quick:
         ctx["policy"] = str(out / "policy.json")
     return s, [
-        ("belief-space optimum, 4,000 starts (SPEC: 1.66)", s["belief_optimum_4000_starts"], "-"),
-        ("clairvoyant bound, 4,000 starts (SPEC: 1.19)", s["clairvoyant_bound_4000_starts"], "-"),
+        ("belief-space optimum, 4,000 starts", s["belief_optimum_4000_starts"], "-"),
+        ("clairvoyant bound, 4,000 starts", s["clairvoyant_bound_4000_starts"], "-"),
         ("paper SARSA: greedy CRMs per episode", s["paper_sarsa_greedy_mean_steps"], "1.8 (learning curve)"),
         ("paper SARSA: final training CRMs per episode", s["paper_sarsa_final_mean_steps"], "1.8"),
         (

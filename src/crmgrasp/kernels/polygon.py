@@ -17,7 +17,7 @@ from crmgrasp._validation import CrmgraspError
 from crmgrasp.kernels import _polygon_jit as jit
 from crmgrasp.kernels.base import F64, I64, BatchStep, Kernel
 from crmgrasp.model import quality, shape
-from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.contacts import Config, config_from_row
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.model.hand import CRM, Error
 from crmgrasp.sim import OneStep, SimState, episode_end
@@ -140,7 +140,7 @@ class FusedPolygonKernel(PolygonKernel):
         code, index = jit.step_one(self._v, action, self.acts, self.e, self.th, self.p, self.q, self._out)
         o = self._out[0].tolist()
         if not code:
-            config = Config(Contact(o[0], o[1], o[2], o[3]), Contact(o[4], o[5], o[6], o[7]))
+            config = config_from_row(o)
             self._v, self._out = self._out, self._v  # the output is the next step's input
             self._v_of = config
         steps = state.steps + 1

@@ -11,16 +11,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from crmgrasp.kernels.base import F64, I64, Kernel
-from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.contacts import config_from_row
 from crmgrasp.model.hand import CRM, execute_crm
 from crmgrasp.model.quality import min_friction
 from crmgrasp.model.sensing import observe
 
 __all__ = ["ReferenceKernel"]
-
-
-def _config(row: list[float]) -> Config:
-    return Config(Contact(row[0], row[1], row[2], row[3]), Contact(row[4], row[5], row[6], row[7]))
 
 
 class ReferenceKernel(Kernel):
@@ -49,7 +45,7 @@ class ReferenceKernel(Kernel):
             crm = crms.get(key)
             if crm is None:
                 crm = crms[key] = CRM("ab"[cb], "ab"[fb], rj)
-            out = execute_crm(obj, hand, _config(row), crm, _config(srow))
+            out = execute_crm(obj, hand, config_from_row(row), crm, config_from_row(srow))
             new[j] = (*out.config.a, *out.config.b)
             err[j] = out.error
         return new, err
@@ -60,8 +56,8 @@ class ReferenceKernel(Kernel):
         index = np.empty(n, dtype=np.int64)
         index_of = self.task.discretizer.index_of
         for j, (row, srow, e) in enumerate(zip(np.asarray(cfg).tolist(), np.asarray(sen).tolist(), err.tolist())):
-            o = observe(_config(srow))
+            o = observe(config_from_row(srow))
             rho[j], m_a[j], m_b[j] = o
             index[j] = index_of(o.rho, o.m_a, o.m_b, e)
-            mu[j] = min_friction(_config(row))
+            mu[j] = min_friction(config_from_row(row))
         return rho, m_a, m_b, index, mu

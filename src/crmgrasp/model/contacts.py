@@ -1,4 +1,4 @@
-"""Contact configurations of the two-contact planar hand (SPEC section 2).
+"""Contact configurations of the two-contact planar hand (docs/model.md section 2).
 
 A :class:`Contact` is a position and the object's inward unit normal there; a
 :class:`Config` is the pair of contacts labelled ``a`` and ``b``. Both are
@@ -10,6 +10,7 @@ configuration is one row of 8 floats, ``[ax, ay, anx, any, bx, by, bnx, bny]``
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import NamedTuple
 
 import numpy as np
@@ -17,7 +18,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from crmgrasp._validation import CrmgraspError, as_point
 
-__all__ = ["LABELS", "Contact", "Config", "label_index", "other", "configs_to_array", "array_to_configs"]
+__all__ = [
+    "LABELS",
+    "Contact",
+    "Config",
+    "label_index",
+    "other",
+    "config_from_row",
+    "configs_to_array",
+    "array_to_configs",
+]
 
 LABELS = ("a", "b")
 """Contact labels, in index order."""
@@ -101,6 +111,12 @@ class Config(NamedTuple):
         return {lab: {"point": list(c.point), "normal": list(c.normal)} for lab, c in zip(LABELS, self)}
 
 
+def config_from_row(row: Sequence[float]) -> Config:
+    """The configuration of one row ``[ax, ay, anx, any, bx, by, bnx, bny]`` of plain floats
+    (no checks: for rows the package made itself)."""
+    return Config(Contact(row[0], row[1], row[2], row[3]), Contact(row[4], row[5], row[6], row[7]))
+
+
 def configs_to_array(configs: list[Config] | tuple[Config, ...]) -> NDArray[np.float64]:
     """Stack configurations into the batched ``(N, 8)`` layout."""
     return np.asarray(configs, dtype=np.float64).reshape(len(configs), 8)
@@ -111,4 +127,4 @@ def array_to_configs(arr: ArrayLike) -> list[Config]:
     a = np.asarray(arr, dtype=np.float64)
     if a.ndim != 2 or a.shape[1] != 8:
         raise CrmgraspError(f"configuration array must have shape (N, 8), got {a.shape}")
-    return [Config(Contact(*map(float, r[:4])), Contact(*map(float, r[4:]))) for r in a]
+    return [config_from_row(r) for r in a.tolist()]

@@ -1,4 +1,4 @@
-"""The two-contact planar hand and contact relative motions (SPEC sections 2 and 3).
+"""The two-contact planar hand and contact relative motions (docs/model.md sections 2 and 3).
 
 Palm model
 ----------
@@ -6,7 +6,7 @@ With ``d = (x_b - x_a) / |x_b - x_a|`` and ``u = (d_y, -d_x)`` (the right of the
 directed segment a -> b), the palm point is ``P = (x_a + x_b) / 2 + h u``. A
 configuration is feasible iff ``|x_a - x_b| <= A`` (else APERTURE) and the palm is
 clear: ``P`` not strictly inside the object and ``n_a . u <= tol`` and
-``n_b . u <= tol`` (else PALM), with ``tol = Hand.palm_normal_tol`` (SPEC: 1e-9).
+``n_b . u <= tol`` (else PALM), with ``tol = Hand.palm_normal_tol`` (default 1e-9).
 Contacts closer than ``Hand.min_separation`` (default 0: only coincident contacts,
 ``x_a == x_b``, which leave ``u`` undefined) are reported as PALM: the fingers collide.
 Under large sensing noise a CRM can land the moving contact a fraction of a millimetre
@@ -158,7 +158,7 @@ class Outcome(NamedTuple):
 
 @dataclass(frozen=True)
 class Hand:
-    """A two-contact planar hand (SPEC section 2).
+    """A two-contact planar hand (docs/model.md section 2).
 
     Parameters
     ----------
@@ -175,13 +175,13 @@ class Hand:
         line offset farther than A from the frame contact is out of reach.
     palm_normal_tol
         Largest ``n . u`` a contact may have (the sine of the angle by which its
-        surface may face the palm side) before the palm test fails. SPEC: 1e-9.
+        surface may face the palm side) before the palm test fails. Default 1e-9.
         Under sensing noise an opposition lands slightly misaligned and one normal
         then faces the palm side by a hair; a real fingertip tolerates a few
         degrees, which a larger value (e.g. ``sin(10 deg)``) models.
     min_separation
         Contacts this close or closer (metres) collide: a PALM error. Default 0: only
-        coincident contacts (SPEC). Must be below the aperture.
+        coincident contacts. Must be below the aperture.
     """
 
     aperture: float
@@ -238,7 +238,7 @@ class Hand:
         rng: np.random.Generator | None = None,
         sensed: Config | None = None,
     ) -> Outcome:
-        """Execute ``crm`` from ``config`` on ``obj`` (SPEC section 3).
+        """Execute ``crm`` from ``config`` on ``obj`` (docs/model.md section 3).
 
         The goal line is computed from ``sensed`` if given; otherwise from a fresh
         reading through ``noise`` (which then needs ``rng``); otherwise from the
@@ -311,7 +311,7 @@ def faces_palm(config: Config, tol: float) -> bool:
 
 
 def feasible(obj: Shape, hand: Hand, config: Config) -> Error:
-    """Feasibility of a configuration (SPEC section 2), as an :class:`Error`: APERTURE
+    """Feasibility of a configuration (docs/model.md section 2), as an :class:`Error`: APERTURE
     if ``|x_a - x_b| > A``; PALM if the contacts collide (``|x_a - x_b| <=
     min_separation``, coincident by default), a contact faces the palm side
     (:func:`faces_palm`) or the palm point (:func:`palm_point`) is inside."""

@@ -23,7 +23,7 @@ __all__ = ["require_mujoco", "mujoco_available", "hardware_task"]
 
 def hardware_task(task: Task, palm_tolerance_deg: float = 10.0, mu_goal: float | None = None) -> Task:
     """``task`` as a real (or MuJoCo) hand runs it: a fingertip palm tolerance
-    (``hand.palm_normal_tol = sin(palm_tolerance_deg)``; SPEC's 1e-9 would turn
+    (``hand.palm_normal_tol = sin(palm_tolerance_deg)``; the default 1e-9 would turn
     every sensed contact a hair off into a palm error) and, optionally, another goal."""
     hand = dataclasses.replace(task.hand, palm_normal_tol=math.sin(math.radians(palm_tolerance_deg)))
     out = dataclasses.replace(task, hand=hand)
