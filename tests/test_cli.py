@@ -51,7 +51,7 @@ def test_crm_with_noise_is_seeded(capsys):
         (["show", *NEAR, "--out", "x.txt"], ".png, .pdf or .svg"),
         (["reproduce", "figure99"], "unknown experiment 'figure99'"),
         (["frobnicate"], "invalid choice"),
-        (["learn", "--agent", "nope", "--out", "x"], "unknown agent 'nope'"),
+        (["learn", "--agent", "nope", "--out", "x"], "invalid choice: 'nope'"),
         (["learn", "--trials", "0", "--out", "x"], "--trials: value must be an integer in [1, 100000], got 0"),
         (["learn", "--alpha", "2", "--trials", "1", "--episodes", "1", "--out", "x"], "alpha must be in"),
         (["learn", "--k", "-1", "--out", "x"], "--k: value must be an integer in [0, 10], got -1"),
@@ -200,3 +200,30 @@ def test_learn_gives_the_same_curve_on_every_kernel_backend(tmp_path):
     assert len(set(curves.values())) == 1
     with pytest.raises(SystemExit):
         main([*base, "--lockstep", "--backend", "gpu", "--out", str(tmp_path / "x")])
+
+
+def test_parser_lists_match_the_registries():
+    from crmgrasp.agents.training import AGENTS
+    from crmgrasp.cli.parser import AGENT_NAMES, EXPERIMENT_NAMES
+    from crmgrasp.experiments.registry import EXPERIMENTS
+
+    assert AGENT_NAMES == tuple(AGENTS) and EXPERIMENT_NAMES == tuple(EXPERIMENTS)
+
+
+def test_every_option_shows_its_default_or_choices():
+    import argparse
+
+    from crmgrasp.cli.parser import _Help, build_parser
+
+    parser = build_parser()
+    subs = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    for name, sub in subs.choices.items():
+        for action in sub._actions:
+            if isinstance(action, (argparse._HelpAction, argparse._StoreTrueAction)) or not action.option_strings:
+                continue
+            text = _Help("crmgrasp")._get_help_string(action) or ""
+            shown = "default" in text or action.choices or action.required or action.default is None
+            assert shown, f"{name} {action.option_strings}: {text!r}"
+            if action.default is not None and action.choices is None:
+                assert "default" in text, f"{name} {action.option_strings}: {text!r}"
+        assert "usage:" in sub.format_help()

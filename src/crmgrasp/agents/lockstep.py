@@ -14,8 +14,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from crmgrasp._progress import Progress
 from crmgrasp.agents.base import Agent, LearnerPolicy
 from crmgrasp.agents.training import (
+    PROGRESS_EVERY,
     TrialResult,
     build_agent,
     check_budget,
@@ -62,6 +64,8 @@ def train_trials_lockstep(
     checkpoints: tuple[int, ...] = (),
     checkpoint_episodes: int = 100,
     backend: str = "auto",
+    first_trial: int = 0,
+    progress: Progress | None = None,
 ) -> TrialResult:
     """Lockstep version of :func:`~crmgrasp.agents.training.train_trials` (same
     arguments, same results); faster when ``trials`` is large (hundreds or more)."""
@@ -73,7 +77,11 @@ def train_trials_lockstep(
     steps = np.empty((trials, episodes), dtype=np.int64)
     success = np.empty((trials, episodes), dtype=bool)
     csteps = np.empty((trials, len(ckpts)))
-    runs = [_Trial(build_agent(task, encoder, agent, params), encoder, g) for g in trial_generators(seed, trials)]
+    runs = [
+        _Trial(build_agent(task, encoder, agent, params), encoder, g)
+        for g in trial_generators(seed, trials, first_trial)
+    ]
+    finished = [0]
 
     cfg = np.zeros((trials, 8))  # true configurations, one row per trial
     sen = np.zeros((trials, 8))  # their sensed readings
@@ -89,6 +97,10 @@ def train_trials_lockstep(
         """Record the episode; start the next one. False when the trial is over."""
         steps[t, tr.episode], success[t, tr.episode] = tr.steps, ok
         tr.episode += 1
+        finished[0] += 1
+        if progress is not None and finished[0] == PROGRESS_EVERY:
+            progress.advance(finished[0])
+            finished[0] = 0
         j = tr.next_checkpoint
         if j < len(ckpts) and ckpts[j] == tr.episode:
             starts_rng, ties_rng = checkpoint_generators(seed)
@@ -129,6 +141,8 @@ def train_trials_lockstep(
             if (not (terminated or truncated)) or finish(t, tr, terminated):
                 still.append(t)
         active = np.array(still, dtype=np.int64)
+    if progress is not None:
+        progress.advance(finished[0])
     gsteps = np.empty((trials, eval_episodes), dtype=np.int64)
     gsucc = np.empty((trials, eval_episodes), dtype=bool)
     for t, tr in enumerate(runs):

@@ -5,12 +5,18 @@ File layout (``format`` ``"crmgrasp-policy"``, ``version`` 2)::
     {
       "format": "crmgrasp-policy", "version": 2,
       "task": "paper-box", "k": 2,
+      "task_spec": {...},                          # the task itself (task-file schema)
       "actions": [["a", "b", 0.0], ...],          # the task's CRM set, in order
       "bins": {"rho": [1.0], "m_a": [0.1], "m_b": [0.1], "abs_moments": true},
       "agent": "sarsa",
       "greedy": {"<state code>": [best actions], ...},  # visited states only
       "sha256": "<hex digest of the rest of the document>"
     }
+
+``task_spec`` (:func:`crmgrasp.tasks.task_to_dict`) makes the file stand alone: it
+loads without naming a task, also for a task from a TOML file; given a task, the
+file is refused unless the task is the one it was made for (the first differing key is
+named). Files without ``task_spec`` (written before it existed) name a registered task.
 
 A state code is the k-order history code of :mod:`crmgrasp.model.history`, written
 in canonical decimal; its ``"greedy"`` entry lists the actions tied for the best value
@@ -37,12 +43,12 @@ from crmgrasp._io import read_bounded, write_json
 from crmgrasp._validation import CrmgraspError, shown
 from crmgrasp.agents.tabular import TabularAgent
 from crmgrasp.model.history import MAX_K, KOrderEncoder
-from crmgrasp.tasks import Task, make_task
+from crmgrasp.tasks import Task, make_task, task_from_dict, task_names, task_to_dict
 
 if TYPE_CHECKING:
     from crmgrasp.agents.symmetric import SymmetricAgent
 
-__all__ = ["GreedyPolicy", "FORMAT", "VERSION", "MAX_BYTES", "read_policy_document", "policy_digest"]
+__all__ = ["GreedyPolicy", "FORMAT", "VERSION", "MAX_BYTES", "read_policy_document", "policy_digest", "policy_task"]
 
 FORMAT = "crmgrasp-policy"
 VERSION = 2
@@ -97,6 +103,42 @@ def read_policy_document(path: str | os.PathLike[str]) -> Any:
         raise CrmgraspError(f"policy file {str(p)!r} is not valid JSON ({exc})") from None
 
 
+def _first_difference(a: Any, b: Any, where: str = "") -> str | None:
+    """The first key path at which two JSON values differ (``None`` if equal)."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        for key in sorted(set(a) | set(b), key=str):
+            sub = _first_difference(a.get(key), b.get(key), f"{where}.{key}" if where else str(key))
+            if sub is not None:
+                return sub
+        return None
+    if isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
+        for i, (x, y) in enumerate(zip(a, b)):
+            sub = _first_difference(x, y, f"{where}[{i}]")
+            if sub is not None:
+                return sub
+        return None
+    return None if a == b else (where or "the task")
+
+
+def policy_task(doc: Any, source: str = "policy") -> Task:
+    """The task a policy document carries (``task_spec``) or names (a registered task)."""
+    if not isinstance(doc, dict):
+        raise CrmgraspError(f"{source}: not a crmgrasp policy")
+    spec, name = doc.get("task_spec"), doc.get("task")
+    if spec is not None:
+        if isinstance(spec, dict) and isinstance(spec.get("starts"), dict) and spec["starts"].get("kind") == "custom":
+            if isinstance(name, str) and name in task_names():
+                return make_task(name)
+            raise CrmgraspError(f"{source}: its task {name!r} has Python-defined starts; give the task (--task)")
+        try:
+            return task_from_dict(spec)
+        except CrmgraspError as exc:
+            raise CrmgraspError(f"{source}: bad task_spec: {exc}") from None
+    if not isinstance(name, str):
+        raise CrmgraspError(f"{source} names no task")
+    return make_task(name)
+
+
 class GreedyPolicy:
     """A fixed state -> action table, usable wherever an agent's ``greedy`` is."""
 
@@ -142,6 +184,7 @@ class GreedyPolicy:
             "format": FORMAT,
             "version": VERSION,
             "task": self.task.name,
+            "task_spec": task_to_dict(self.task),
             "k": self.k,
             "actions": [[c.c, c.f, c.r] for c in self.task.actions],
             "bins": self.task.discretizer.to_dict(),
@@ -161,10 +204,7 @@ class GreedyPolicy:
         (default: the registered task the file names)."""
         doc = read_policy_document(path)
         if task is None:
-            name = doc.get("task") if isinstance(doc, dict) else None
-            if not isinstance(name, str):
-                raise CrmgraspError(f"policy file {str(path)!r} names no task")
-            task = make_task(name)
+            task = policy_task(doc, source=f"policy file {str(path)!r}")
         return cls.from_dict(doc, task, source=repr(str(path)))
 
     @classmethod
@@ -185,6 +225,10 @@ class GreedyPolicy:
             raise bad("the checksum does not match: the file was edited or damaged")
         if doc["task"] != task.name:
             raise bad(f"policy is for task {doc['task']!r}, not {task.name!r}")
+        if "task_spec" in doc:
+            where = _first_difference(doc["task_spec"], task_to_dict(task))
+            if where is not None:
+                raise bad(f"policy was made for another version of task {task.name!r} (it differs in {where})")
         k = doc["k"]
         if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k <= MAX_K:
             raise bad(f"k must be an integer in [0, {MAX_K}], got {shown(k)}")

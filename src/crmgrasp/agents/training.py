@@ -15,6 +15,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from crmgrasp._progress import Progress
 from crmgrasp._validation import CrmgraspError, integer
 from crmgrasp.agents.base import Agent, LearnerPolicy
 from crmgrasp.agents.baselines import FixedSequence, RandomAgent
@@ -63,10 +64,30 @@ def make_agent(name: str, n_actions: int, **params: object) -> Agent:
         cls = AGENTS[name]
     except KeyError:
         raise CrmgraspError(f"unknown agent {name!r}; known agents: {', '.join(AGENTS)}") from None
-    try:
-        return cls(n_actions, **params)
-    except TypeError as exc:
-        raise CrmgraspError(f"bad parameter for agent {name!r}: {exc}") from None
+    accepted = agent_parameters(name)
+    for key in params:
+        if key not in accepted:
+            takes = f"it takes {', '.join(accepted)}" if accepted else "it takes none"
+            raise CrmgraspError(f"agent {name!r} has no parameter {key!r}; {takes}")
+    return cls(n_actions, **params)
+
+
+def agent_parameters(name: str) -> tuple[str, ...]:
+    """The keyword parameters the registered agent ``name`` accepts (its constructor's and,
+    through ``**kwargs``, its base classes')."""
+    import inspect
+
+    out: list[str] = []
+    for klass in getattr(AGENTS[name], "__mro__", ()):
+        init = klass.__dict__.get("__init__")
+        if init is None:
+            continue
+        sig = inspect.signature(init).parameters.values()
+        out += [p.name for p in sig if p.kind is p.POSITIONAL_OR_KEYWORD and p.name not in ("self", "n_actions")]
+        out += [p.name for p in sig if p.kind is p.KEYWORD_ONLY]
+        if not any(p.kind is p.VAR_KEYWORD for p in sig):
+            break
+    return tuple(dict.fromkeys(out))
 
 
 def build_agent(task: Task, encoder: KOrderEncoder, name: str, params: dict[str, object] | None = None) -> Agent:
@@ -141,9 +162,11 @@ def checkpoint_generators(seed: int) -> tuple[np.random.Generator, np.random.Gen
     )
 
 
-def trial_generators(seed: int, trials: int) -> list[tuple[np.random.Generator, ...]]:
-    """``(env, agent, eval)`` generators of each trial, from one seed."""
-    children = np.random.SeedSequence(seed).spawn(trials)
+def trial_generators(seed: int, trials: int, first: int = 0) -> list[tuple[np.random.Generator, ...]]:
+    """``(env, agent, eval)`` generators of trials ``first .. first + trials - 1``, from
+    one seed: trial ``t`` draws from child ``t`` of ``SeedSequence(seed)`` whatever the
+    other trials, so trials can run in any grouping, order or process."""
+    children = [np.random.SeedSequence(seed, spawn_key=(t,)) for t in range(first, first + trials)]
     return [tuple(np.random.default_rng(s) for s in child.spawn(3)) for child in children]
 
 
@@ -171,6 +194,9 @@ class TrialResult:
         n = self.steps.shape[0]
         return self.steps.std(axis=0, ddof=1) / np.sqrt(n) if n > 1 else np.zeros(self.steps.shape[1])
 
+
+PROGRESS_EVERY = 100
+"""Training episodes between two calls of ``progress.advance``."""
 
 MAX_EPISODE_RECORDS = 200_000_000
 """Most episodes (training and evaluation, all trials) whose results one run keeps in
@@ -202,9 +228,15 @@ def train_trials(
     checkpoints: tuple[int, ...] = (),
     checkpoint_episodes: int = 100,
     backend: str = "auto",
+    first_trial: int = 0,
+    progress: Progress | None = None,
 ) -> TrialResult:
     """Train ``trials`` independent agents for ``episodes`` each, then evaluate each
     greedily on ``eval_episodes`` fresh episodes.
+
+    The trials are numbers ``first_trial ..`` of the run (:func:`trial_generators`), so
+    a run split into groups of trials gives the results of one call. ``progress``
+    advances by the training episodes done.
 
     After each training episode listed in ``checkpoints`` the greedy policy is also
     evaluated on ``checkpoint_episodes`` episodes whose starts are the same at every
@@ -222,11 +254,13 @@ def train_trials(
     ckpts = np.array(sorted({c for c in checkpoints if 1 <= c <= episodes}), dtype=np.int64)
     csteps = np.empty((trials, len(ckpts)))
     agents = []
-    for t, (env_rng, agent_rng, eval_rng) in enumerate(trial_generators(seed, trials)):
+    for t, (env_rng, agent_rng, eval_rng) in enumerate(trial_generators(seed, trials, first_trial)):
         ag = build_agent(task, encoder, agent, params)
         j = 0
         for e in range(episodes):
             steps[t, e], success[t, e] = run_episode(task, ag, encoder, env_rng, agent_rng, kernel=kernel)
+            if progress is not None and e % PROGRESS_EVERY == PROGRESS_EVERY - 1:
+                progress.advance(PROGRESS_EVERY)
             if j < len(ckpts) and ckpts[j] == e + 1:
                 starts_rng, ties_rng = checkpoint_generators(seed)
                 ck = evaluate(task, ag, encoder, checkpoint_episodes, starts_rng, ties_rng, kernel=kernel)
@@ -234,6 +268,8 @@ def train_trials(
                 j += 1
         gsteps[t], gsucc[t] = evaluate(task, ag, encoder, eval_episodes, eval_rng, kernel=kernel)
         agents.append(ag)
+        if progress is not None:
+            progress.advance(episodes % PROGRESS_EVERY)
     return TrialResult(steps, success, gsteps, gsucc, agents, ckpts, csteps)
 
 

@@ -17,20 +17,20 @@ from typing import Any
 
 import numpy as np
 
-from crmgrasp._io import check_folder, check_output, dumps_json, save_figure
+from crmgrasp._io import check_output, dumps_json, save_figure
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.cli.parser import _AGENT_FLAGS, _resolve_crm, build_parser
 from crmgrasp.model.contacts import Config
 from crmgrasp.model.hand import CRM, Error
 from crmgrasp.model.quality import min_friction
 from crmgrasp.model.sensing import SensorNoise, observe
-from crmgrasp.tasks import Task, make_task, task_names
+from crmgrasp.tasks import TEMPLATE, Task, make_task, resolve_task, task_names, task_to_dict
 
 __all__ = ["main", "build_parser"]
 
 
 def _scene(args: argparse.Namespace) -> tuple[Task, Config, CRM | None, SensorNoise, np.random.Generator]:
-    task = make_task(args.task)
+    task = resolve_task(args.task)
     config = task.hand.contact(task.obj, args.a, args.b)
     crm = _resolve_crm(task, args.crm) if args.crm is not None else None
     noise = SensorNoise(math.radians(args.sigma_n), args.sigma_p)
@@ -109,12 +109,39 @@ def _show_mujoco(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run_folder(args: argparse.Namespace, task: str, config: dict[str, Any]) -> Any:
+    """The run folder of this command (``--out``, ``--overwrite``, ``--resume``)."""
+    from crmgrasp.experiments.runs import RunFolder
+
+    return RunFolder(
+        args.out,
+        args.command,
+        task,
+        config,
+        argv=args.argv,
+        seed=getattr(args, "seed", None),
+        overwrite=args.overwrite,
+        resume=args.resume,
+    )
+
+
+def _progress(args: argparse.Namespace) -> Any:
+    from crmgrasp._progress import make_progress
+
+    return make_progress(args.quiet)
+
+
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from crmgrasp.experiments import reproduce
+    from crmgrasp.experiments.reproduce import select
 
-    check_folder(args.out, "--out")
-    results = reproduce(args.out, args.experiments, seed=args.seed, quick=args.quick, backend=args.backend)
-    root = args.out.resolve()
+    names, _ = select(args.experiments)
+    config = {"experiments": names, "seed": args.seed, "quick": args.quick}
+    with _run_folder(args, "paper-box", config) as run:
+        results = reproduce(
+            run.path, names, seed=args.seed, quick=args.quick, backend=args.backend, store=run, progress=_progress(args)
+        )
+    root = run.path.resolve()
     for name, summary in results.items():
         print(f"{name}: {root / name} ({summary['seconds']} s)")
         for key, value in summary.items():
@@ -124,40 +151,69 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_learn(args: argparse.Namespace) -> int:
-    from crmgrasp.experiments.learning import LearnerSpec, learn, write_learn_outputs
+def _learner_params(args: argparse.Namespace) -> dict[str, Any]:
+    from crmgrasp.agents.training import agent_parameters
 
-    check_folder(args.out, "--out")
-    task = make_task(args.task)
-    params = {
-        flag.lstrip("-").replace("-", "_"): getattr(args, flag.lstrip("-").replace("-", "_"))
-        for flag, _, _ in _AGENT_FLAGS
-    }
-    params = {k: v for k, v in params.items() if v is not None}
+    params = {}
+    for flag, _, _ in _AGENT_FLAGS:
+        key = flag.lstrip("-").replace("-", "_")
+        if getattr(args, key) is not None:
+            if key not in agent_parameters(args.agent):
+                takes = ", ".join("--" + k.replace("_", "-") for k in agent_parameters(args.agent)) or "none"
+                raise CrmgraspError(f"{flag} does not apply to --agent {args.agent} (its options: {takes})")
+            params[key] = getattr(args, key)
     if args.symmetric:
         params["symmetric"] = True
-    if args.k < 0:
-        raise CrmgraspError(f"--k must be >= 0, got {args.k}")
-    run = learn(
-        task,
-        LearnerSpec(args.agent, args.k, params),
-        trials=args.trials,
-        episodes=args.episodes,
-        seed=args.seed,
-        eval_episodes=args.eval_episodes,
-        lockstep=args.lockstep,
-        backend=args.backend,
-    )
-    paths = write_learn_outputs(task, run, args.out)
+    return params
+
+
+def _cmd_learn(args: argparse.Namespace) -> int:
+    from crmgrasp.agents.training import build_agent, check_budget, encoder_for
+    from crmgrasp.experiments.learning import LearnerSpec, learn, write_learn_outputs
+
+    task = resolve_task(args.task)
+    spec = LearnerSpec(args.agent, args.k, _learner_params(args))
+    check_budget(args.trials, args.episodes, args.eval_episodes)
+    build_agent(task, encoder_for(task, spec.k), spec.agent, spec.params)  # bad settings fail before any folder
+    config = {
+        "task": task_to_dict(task),
+        "agent": spec.agent,
+        "k": spec.k,
+        "params": spec.params,
+        "trials": args.trials,
+        "episodes": args.episodes,
+        "eval_episodes": args.eval_episodes,
+        "seed": args.seed,
+    }
+    with _run_folder(args, task.name, config) as folder:
+        run = learn(
+            task,
+            spec,
+            trials=args.trials,
+            episodes=args.episodes,
+            seed=args.seed,
+            eval_episodes=args.eval_episodes,
+            lockstep=args.lockstep,
+            backend=args.backend,
+            store=folder,
+            progress=_progress(args),
+        )
+        paths = write_learn_outputs(task, run, folder.path)
     s = run.summary
     print(f"{s['label']} on {task.name}: {s['trials']} trials x {s['episodes']} episodes in {s['seconds']} s")
     print(
         f"  final_mean_steps={s['final_mean_steps']:.3f}  greedy_mean_steps={s['greedy_mean_steps']:.3f}"
-        f"  episodes_to_5pct={s['episodes_to_5pct']}"
+        f"  episodes_to_5pct={_never(s['episodes_to_5pct'])}"
     )
+    print(f"  run folder: {folder.path.resolve()}")
     for path in paths:
-        print(f"  wrote {path.resolve()}")
+        print(f"  wrote {path.name}")
     return 0
+
+
+def _never(value: object) -> str:
+    """``never`` for a quantity that was not reached (``None``)."""
+    return "never" if value is None else str(value)
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
@@ -165,7 +221,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
     if args.episodes < 1:
         raise CrmgraspError(f"--episodes must be >= 1, got {args.episodes}")
-    policy = GreedyPolicy.load(args.policy, None if args.task is None else make_task(args.task))
+    policy = GreedyPolicy.load(args.policy, None if args.task is None else resolve_task(args.task))
     task = policy.task
     from crmgrasp.kernels import kernel_for
 
@@ -198,11 +254,13 @@ def _print_result(args: argparse.Namespace, result: dict[str, Any], text: str) -
 
 
 def _cmd_references(args: argparse.Namespace) -> int:
-    from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts
+    from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts, ungraspable_fraction
 
-    task = make_task(args.task)
-    starts = sample_starts(task, args.starts, args.seed)
-    clair, belief = clairvoyant_bound(task, starts), belief_optimum(task, starts)
+    task = resolve_task(args.task)
+    with _progress(args).stage(f"references of {task.name}", 0):
+        starts = sample_starts(task, args.starts, args.seed)
+        clair, belief = clairvoyant_bound(task, starts), belief_optimum(task, starts)
+        never = ungraspable_fraction(task, starts)
     res = {
         "task": task.name,
         "starts": args.starts,
@@ -210,12 +268,14 @@ def _cmd_references(args: argparse.Namespace) -> int:
         "clairvoyant_bound": clair,
         "belief_optimum": belief,
         "aliasing_price": belief - clair,
+        "ungraspable_fraction": never,
     }
     return _print_result(
         args,
         res,
         f"{task.name}, {args.starts} starts (seed {args.seed}): clairvoyant bound {clair:.4f} CRMs, "
-        f"belief-space optimum {belief:.4f} CRMs, price of aliasing {belief - clair:.4f}",
+        f"belief-space optimum {belief:.4f} CRMs, price of aliasing {belief - clair:.4f}; "
+        f"{never:.1%} of starts no CRM sequence of at most {task.max_steps} grasps",
     )
 
 
@@ -223,9 +283,8 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     from crmgrasp.agents.deep import RecurrentPPOConfig
     from crmgrasp.experiments.compare import CompareConfig, compare
 
-    make_task(args.task)  # a clear error for an unknown task before any work
-    check_folder(args.out, "--out")
-    cfg = CompareConfig.quick(args.task, args.seed) if args.quick else CompareConfig(task=args.task, seed=args.seed)
+    task = resolve_task(args.task)
+    cfg = CompareConfig.quick(task.name, args.seed) if args.quick else CompareConfig(task=task.name, seed=args.seed)
     if args.deep_steps is not None:
         if args.deep_steps < 0:
             raise CrmgraspError(f"--deep-steps must be >= 0, got {args.deep_steps}")
@@ -233,11 +292,13 @@ def _cmd_compare(args: argparse.Namespace) -> int:
         cfg = dataclasses.replace(
             cfg, deep=dataclasses.replace(deep, total_steps=args.deep_steps) if args.deep_steps else None
         )
-    summary = compare(args.out, cfg, backend=args.backend)
-    print((args.out / "compare.md").read_text(encoding="utf-8"))
+    config = {"task": task_to_dict(task), "quick": args.quick, "seed": args.seed, "deep_steps": args.deep_steps}
+    with _run_folder(args, task.name, config) as run:
+        summary = compare(run.path, cfg, backend=args.backend, progress=_progress(args), task=task, store=run)
+    print((run.path / "compare.md").read_text(encoding="utf-8"))
     for key, value in summary.items():
         print(f"{key}: {value}")
-    print(f"wrote {(args.out / 'compare.csv').resolve()}, compare.md, compare.png")
+    print(f"wrote {(run.path / 'compare.csv').resolve()}, compare.md, compare.png")
     return 0
 
 
@@ -249,7 +310,7 @@ def _cmd_pomdp(args: argparse.Namespace) -> int:
     if args.cell <= 0 or args.samples < 1 or args.episodes < 1:
         raise CrmgraspError("--cell must be > 0, and --samples and --episodes >= 1")
     check_output(args.out, "--out")
-    task = make_task(args.task)
+    task = resolve_task(args.task)
     tp = build_task_pomdp(task, cell=args.cell, samples=args.samples, n_starts=args.starts, seed=args.seed)
     path = write_cassandra(tp.model, args.out)
     agent = POMDPAgent(tp, seed=args.seed)
@@ -313,7 +374,21 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 def _cmd_tasks(args: argparse.Namespace) -> int:
     for name in task_names():
         print(f"{name}: {make_task(name).description}")
+    print("(any command's --task also takes a .toml task file or package.module:factory; see `crmgrasp task-template`)")
     return 0
+
+
+def _cmd_task_template(args: argparse.Namespace) -> int:
+    sys.stdout.write(TEMPLATE)
+    return 0
+
+
+def _cmd_status(args: argparse.Namespace) -> int:
+    from crmgrasp.experiments.runs import read_status
+
+    status = read_status(args.run)
+    print(f"{args.run}: {status}")
+    return 0 if status == "complete" else 1
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -326,6 +401,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         "show": _cmd_show,
         "reproduce": _cmd_reproduce,
         "tasks": _cmd_tasks,
+        "task-template": _cmd_task_template,
+        "status": _cmd_status,
         "learn": _cmd_learn,
         "evaluate": _cmd_evaluate,
         "bench": _cmd_bench,

@@ -19,10 +19,29 @@ __all__ = ["build_parser"]
 _NUMBERISH = re.compile(r"^-[\d.]")
 
 
+class _Help(argparse.HelpFormatter):
+    """Help that shows every option's default (unless its text already states it)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        if (
+            "default" in text
+            or action.default is None
+            or action.default is False
+            or action.default == argparse.SUPPRESS
+            or action.option_strings == []
+            or isinstance(action, (argparse._StoreTrueAction, argparse._VersionAction))
+        ):
+            return text
+        return f"{text} (default: %(default)s)"
+
+
 class _Parser(argparse.ArgumentParser):
-    """argparse with one-line errors and values such as ``-0.15,-0.02``."""
+    """argparse with one-line errors, defaults in the help, and values such as
+    ``-0.15,-0.02``."""
 
     def __init__(self, *args: object, **kwargs: object) -> None:
+        kwargs.setdefault("formatter_class", _Help)
         super().__init__(*args, **kwargs)  # type: ignore[arg-type]
         self._negative_number_matcher = _NUMBERISH
 
@@ -85,8 +104,47 @@ def _resolve_crm(task: Task, text: str) -> CRM:
     return task.hand.check_crm(CRM.parse(text))
 
 
+AGENT_NAMES = ("sarsa", "q", "sarsa-lambda", "dyna-q", "random", "fixed")
+"""The registered agents (a test keeps this equal to :data:`crmgrasp.agents.training.AGENTS`)."""
+
+EXPERIMENT_NAMES = ("figure4", "figure7", "figure8", "figure9", "compare", "figure4-mujoco", "figure9-mujoco")
+"""The experiments of ``reproduce`` (a test keeps this equal to the registry)."""
+
+
+def _add_task(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--task",
+        default="paper-box",
+        metavar="TASK",
+        help="a registered task (`crmgrasp tasks` lists them), a .toml task file "
+        "(`crmgrasp task-template` writes one), or package.module:factory (default: paper-box)",
+    )
+
+
+def _add_run(p: argparse.ArgumentParser, command: str) -> None:
+    """The run-folder and progress options of a command that writes a run."""
+    p.add_argument(
+        "--out",
+        type=_path,
+        default=None,
+        metavar="DIR",
+        help=f"run folder (default: runs/{command}-<task>-<UTC time>); an existing non-empty one is "
+        "refused unless --overwrite or --resume",
+    )
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--overwrite", action="store_true", help="replace the run in --out (it must be a run folder)")
+    g.add_argument(
+        "--resume", action="store_true", help="continue the interrupted run in --out (same settings; done work is kept)"
+    )
+    _add_quiet(p)
+
+
+def _add_quiet(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--quiet", action="store_true", help="no progress display")
+
+
 def _add_scene_args(p: argparse.ArgumentParser, crm_required: bool) -> None:
-    p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
+    _add_task(p)
     p.add_argument(
         "--a", type=_point, required=True, metavar="X,Y", help="point projected onto the boundary for contact a (m)"
     )
@@ -156,22 +214,25 @@ def build_parser() -> argparse.ArgumentParser:
         help="run the paper's experiments",
         description="Run the paper's experiments into one folder with an index README.md.",
     )
-    p.add_argument("experiments", nargs="*", metavar="NAME", help="experiments to run (default: all)")
     p.add_argument(
-        "--out", type=_path, default=Path("crmgrasp-results"), help="output folder (default: ./crmgrasp-results)"
+        "experiments",
+        nargs="*",
+        metavar="NAME",
+        help=f"experiments to run: {', '.join(EXPERIMENT_NAMES)} (default: all; the MuJoCo ones need crmgrasp[mujoco])",
     )
     p.add_argument("--seed", type=_SEED, default=0, help="seed of the run (default 0; 0 to 2**63-1)")
-    p.add_argument("--quick", action="store_true", help="small budgets (under a minute on 2 cores)")
+    p.add_argument("--quick", action="store_true", help="small budgets (under a minute on 2 cores; not converged)")
+    _add_run(p, "reproduce")
     _add_kernel_backend(p)
 
     p = sub.add_parser(
         "learn",
         help="train a learner over independent trials",
-        description="Train a learner on a task; write curve.csv, summary.json, policy.json "
-        "and learning_curve.png to --out.",
+        description="Train a learner on a task; write curve.csv, summary.json, checkpoints.csv, policy.json "
+        "and learning_curve.png to a run folder (with run.json: settings, versions, status).",
     )
-    p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
-    p.add_argument("--agent", default="sarsa", help="sarsa, q, sarsa-lambda, dyna-q, random or fixed")
+    _add_task(p)
+    p.add_argument("--agent", default="sarsa", choices=AGENT_NAMES, help="learner or baseline")
     p.add_argument("--k", type=_int(0, MAX_K), default=2, help=f"history order of the state (default 2; 0 to {MAX_K})")
     p.add_argument("--trials", type=_TRIALS, default=20, help="independent trials (default 20; 1 to 100,000)")
     p.add_argument(
@@ -184,7 +245,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="greedy evaluation episodes per trial (default 1000; 0 to 10,000,000)",
     )
     p.add_argument("--seed", type=_SEED, default=0, help="seed of the run (default 0; 0 to 2**63-1)")
-    p.add_argument("--out", type=_path, required=True, help="output folder")
+    _add_run(p, "learn")
     p.add_argument(
         "--lockstep",
         action="store_true",
@@ -197,18 +258,26 @@ def build_parser() -> argparse.ArgumentParser:
         help="learn on the mirror quotient of the task (tabular learners; the task must declare a symmetry)",
     )
     for flag, kind, text in _AGENT_FLAGS:
-        p.add_argument(flag, type=kind, default=None, help=text)
+        if isinstance(kind, tuple):
+            p.add_argument(flag, choices=kind, default=None, help=text)
+        else:
+            p.add_argument(flag, type=kind, default=None, help=text)
 
     p = sub.add_parser(
         "evaluate",
         help="evaluate a saved policy",
         description="Run a saved policy greedily on fresh episodes of its task.",
     )
-    p.add_argument("--policy", type=_path, required=True, help="policy.json written by `crmgrasp learn`")
-    p.add_argument("--task", default=None, help="task name (default: the one the policy names)")
+    p.add_argument(
+        "--policy", type=_path, required=True, help="policy.json written by `crmgrasp learn` (it carries its task)"
+    )
+    p.add_argument(
+        "--task", default=None, metavar="TASK", help="check the policy against this task (default: the policy's own)"
+    )
     p.add_argument("--episodes", type=_EPISODES, default=1000, help="episodes (default 1000; 1 to 10,000,000)")
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
+    _add_quiet(p)
     _add_kernel_backend(p)
 
     p = sub.add_parser(
@@ -224,23 +293,24 @@ def build_parser() -> argparse.ArgumentParser:
         "references",
         help="clairvoyant bound and belief-space optimum of a task",
         description="Exact reference values on sampled starts: the clairvoyant bound (full information) "
-        "and the belief-space optimum (observations only).",
+        "and the belief-space optimum (observations only), and the share of starts no CRM sequence grasps.",
     )
-    p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
+    _add_task(p)
     p.add_argument("--starts", type=_STARTS, default=4000, help="sampled starts (default 4000; 1 to 1,000,000)")
     p.add_argument("--seed", type=_SEED, default=0, help="seed of the starts (default 0; 0 to 2**63-1)")
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
+    _add_quiet(p)
 
     p = sub.add_parser(
         "compare",
         help="every method on one task, one table",
         description="Learners, baselines, the grasp controller and the exact references on one task, "
-        "same seeds; writes compare.csv, compare.md and compare.png to --out.",
+        "same seeds; writes compare.csv, compare.md and compare.png to the run folder.",
     )
-    p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
+    _add_task(p)
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
-    p.add_argument("--out", type=_path, required=True, help="output folder")
-    p.add_argument("--quick", action="store_true", help="small budgets (seconds)")
+    _add_run(p, "compare")
+    p.add_argument("--quick", action="store_true", help="small budgets (seconds; not converged)")
     p.add_argument(
         "--deep-steps",
         type=_int(0, 100_000_000),
@@ -256,7 +326,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Build an explicit POMDP of a polygonal task by sampling the simulator, solve it by "
         "point-based value iteration, write it in Cassandra's .pomdp format, and run its policy.",
     )
-    p.add_argument("--task", default="paper-box", help="registered task name (default: paper-box)")
+    _add_task(p)
     p.add_argument("--cell", type=_number, default=0.01, help="cell size along each edge, m (default 0.01)")
     p.add_argument(
         "--samples",
@@ -278,6 +348,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
     p.add_argument("--out", type=_path, required=True, help="the .pomdp file to write")
+    _add_quiet(p)
 
     p = sub.add_parser(
         "run",
@@ -289,12 +360,28 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--a", type=_point, required=True, metavar="X,Y", help="start point for contact a (m)")
     p.add_argument("--b", type=_point, required=True, metavar="X,Y", help="start point for contact b (m)")
     p.add_argument("--log", type=_path, required=True, help="CSV step log to write")
-    p.add_argument("--sigma-n", type=_number, default=0.0, metavar="DEG", help="normal sensing noise, degrees")
-    p.add_argument("--sigma-p", type=_number, default=0.0, metavar="M", help="position sensing noise, metres")
+    p.add_argument(
+        "--sigma-n", type=_number, default=0.0, metavar="DEG", help="normal sensing noise, degrees (default 0)"
+    )
+    p.add_argument(
+        "--sigma-p", type=_number, default=0.0, metavar="M", help="position sensing noise, metres (default 0)"
+    )
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
     _add_backend(p)
 
-    sub.add_parser("tasks", help="list registered tasks", description="List the registered tasks.")
+    sub.add_parser("tasks", help="list the built-in tasks", description="List the registered (built-in) tasks.")
+    sub.add_parser(
+        "task-template",
+        help="print a commented example task file",
+        description="Print a commented example task file (TOML): `crmgrasp task-template > my.toml`.",
+    )
+    p = sub.add_parser(
+        "status",
+        help="say whether a run completed",
+        description="Print the status of a run folder: running, complete, interrupted, failed, or killed "
+        "(says running, but its process is gone).",
+    )
+    p.add_argument("run", type=_path, metavar="DIR", help="a run folder")
     return parser
 
 
@@ -304,7 +391,11 @@ _AGENT_FLAGS = (
     ("--epsilon", _number, "exploration probability (default 0: greedy)"),
     ("--q0", _number, "initial Q value (default 0: optimistic)"),
     ("--lam", _number, "sarsa-lambda: trace decay lambda (default 0.9)"),
-    ("--trace", str, "sarsa-lambda: replacing or accumulating"),
-    ("--n-planning", _int(0, 1_000_000), "dyna-q: planning updates (sample) or max sweeps (sweep) per step"),
-    ("--planning", str, "dyna-q: sample or sweep"),
+    ("--trace", ("replacing", "accumulating"), "sarsa-lambda: eligibility traces (default replacing)"),
+    (
+        "--n-planning",
+        _int(0, 1_000_000),
+        "dyna-q: planning updates (sample) or max sweeps (sweep) per step (default 20)",
+    ),
+    ("--planning", ("sample", "sweep"), "dyna-q: sampled updates or value-iteration sweeps (default sample)"),
 )

@@ -4,13 +4,20 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from crmgrasp._progress import Progress
 from crmgrasp.agents import GreedyPolicy
 from crmgrasp.experiments.learning import LearnerSpec, best_policy, learn
 from crmgrasp.tasks import Task
 
 
 def learned_policy(
-    task: Task, policy_path: str | Path | None, seed: int, trials: int, episodes: int, backend: str = "auto"
+    task: Task,
+    policy_path: str | Path | None,
+    seed: int,
+    trials: int,
+    episodes: int,
+    backend: str = "auto",
+    progress: Progress | None = None,
 ) -> GreedyPolicy:
     """Load ``policy_path`` if given, else train the paper's SARSA (``trials`` trials of
     ``episodes`` episodes from ``seed``, on the kernel ``backend``) and take the best
@@ -26,6 +33,7 @@ def learned_policy(
         eval_episodes=200,
         checkpoint_episodes=0,
         backend=backend,
+        progress=progress,
     )
     policy = best_policy(task, run)
     assert policy is not None

@@ -20,10 +20,12 @@ from typing import Any
 import numpy as np
 
 from crmgrasp._io import atomic_write_text, save_figure, write_csv, write_json
+from crmgrasp._progress import Progress
 from crmgrasp.agents.controller import run_controller
 from crmgrasp.agents.deep import RecurrentPPOConfig, deep_available, evaluate_recurrent, train_recurrent_ppo
 from crmgrasp.agents.training import episodes_to_within
 from crmgrasp.experiments.learning import SYMMETRIC_DYNA_Q, LearnerSpec, learn, usable
+from crmgrasp.experiments.runs import RunFolder
 from crmgrasp.planners.pomdp_task import POMDPAgent, build_task_pomdp
 from crmgrasp.planners.references import BeliefPolicy, belief_optimum, clairvoyant_bound, sample_starts
 from crmgrasp.plotting import learning_curve_figure
@@ -84,10 +86,20 @@ def _ci(values: np.ndarray) -> tuple[float, float, float]:
     return m, m - half, m + half
 
 
-def compare(out_dir: str | Path, config: CompareConfig = CompareConfig(), *, backend: str = "auto") -> dict[str, Any]:
+def compare(
+    out_dir: str | Path,
+    config: CompareConfig = CompareConfig(),
+    *,
+    backend: str = "auto",
+    progress: Progress | None = None,
+    task: Task | None = None,
+    store: RunFolder | None = None,
+) -> dict[str, Any]:
     """Run every method (learners and the deep-RL peer on the kernel ``backend``); write
-    the table and the figure; return a summary."""
-    task = make_task(config.task)
+    the table and the figure; return a summary. ``task`` overrides the registered task
+    ``config.task`` names (a task from a file); with a run folder ``store``, each
+    learner's trials are saved there as they finish and reused by a resumed run."""
+    task = make_task(config.task) if task is None else task
     rows: list[list[Any]] = []
     curves = {}
     for spec in usable(task, config.learners):
@@ -99,6 +111,8 @@ def compare(out_dir: str | Path, config: CompareConfig = CompareConfig(), *, bac
             seed=config.seed,
             eval_episodes=config.eval_episodes,
             backend=backend,
+            progress=progress,
+            store=store.sub(spec.name) if store is not None else None,
         )
         res, s = run.result, run.summary
         m, lo, hi = _ci(res.greedy_steps.ravel())

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from crmgrasp._io import save_figure, write_csv, write_json
+from crmgrasp._progress import Progress
 from crmgrasp.experiments.learning import SYMMETRIC_DYNA_Q, LearnerSpec, LearnRun, _mean_sem, best_policy, learn, usable
 from crmgrasp.plotting import checkpoint_figure, learning_curve_figure
 from crmgrasp.tasks import make_task
@@ -60,7 +61,11 @@ def _ms(run: LearnRun) -> tuple[Any, Any]:
 
 
 def figure_7_learning_curve(
-    out_dir: str | Path, config: Figure7Config = Figure7Config(), *, backend: str = "auto"
+    out_dir: str | Path,
+    config: Figure7Config = Figure7Config(),
+    *,
+    backend: str = "auto",
+    progress: Progress | None = None,
 ) -> dict[str, Any]:
     """Run every learner; write ``curves.csv``, ``checkpoints.csv``, ``learners.csv``,
     ``figure7.png``, ``figure7_greedy.png``, ``figure7_k_ablation.png``,
@@ -74,6 +79,7 @@ def figure_7_learning_curve(
         eval_episodes=config.eval_episodes,
         checkpoint_episodes=config.checkpoint_episodes,
         backend=backend,
+        progress=progress,
     )
     runs: list[LearnRun] = [learn(task, spec, **kw) for spec in usable(task, config.learners)]
     ablation = [learn(task, LearnerSpec("sarsa", k, {}, f"SARSA k={k}"), **kw) for k in config.ablation_ks]

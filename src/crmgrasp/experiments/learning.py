@@ -27,10 +27,20 @@ from typing import Any
 
 import numpy as np
 
-from crmgrasp._io import save_figure, write_csv, write_json
+from crmgrasp._io import atomic_path, save_figure, write_csv, write_json
+from crmgrasp._progress import Progress
+from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents import GreedyPolicy, TabularAgent, episodes_to_within, train_trials, train_trials_lockstep
 from crmgrasp.agents.symmetric import SymmetricAgent
-from crmgrasp.agents.training import DEFAULT_CHECKPOINTS, TrialResult, checkpoints_to_within
+from crmgrasp.agents.training import (
+    DEFAULT_CHECKPOINTS,
+    TrialResult,
+    build_agent,
+    check_budget,
+    checkpoints_to_within,
+    encoder_for,
+)
+from crmgrasp.experiments.runs import RunFolder
 from crmgrasp.tasks import Task
 
 __all__ = ["LearnerSpec", "LearnRun", "learn", "write_learn_outputs", "SYMMETRIC_DYNA_Q", "usable"]
@@ -64,11 +74,73 @@ def usable(task: Task, specs: tuple[LearnerSpec, ...]) -> tuple[LearnerSpec, ...
 
 @dataclass
 class LearnRun:
-    """A finished learning run."""
+    """A finished learning run: curves and evaluations of every trial (``result``; its
+    ``agents`` are empty, the trials may have run in other processes or earlier
+    sessions), the summary, and the greedy policy of the trial with the best greedy
+    score (tabular learners; else ``None``)."""
 
     spec: LearnerSpec
     result: TrialResult
     summary: dict[str, Any]
+    policy: GreedyPolicy | None = None
+
+
+@dataclass
+class _Part:
+    """The results of one group of trials."""
+
+    steps: np.ndarray
+    success: np.ndarray
+    greedy_steps: np.ndarray
+    greedy_success: np.ndarray
+    checkpoints: np.ndarray
+    checkpoint_steps: np.ndarray
+    policy: GreedyPolicy | None
+    score: float
+
+
+_ARRAYS = ("steps", "success", "greedy_steps", "greedy_success", "checkpoints", "checkpoint_steps")
+
+
+def _part(task: Task, spec: LearnerSpec, res: TrialResult) -> _Part:
+    arrays: list[Any] = [getattr(res, a) for a in _ARRAYS]
+    scores = res.greedy_steps.mean(axis=1) if res.greedy_steps.size else np.zeros(len(res.agents))
+    best = int(np.argmin(scores))
+    agent = res.agents[best]
+    policy = GreedyPolicy.from_agent(task, spec.k, agent) if isinstance(agent, (TabularAgent, SymmetricAgent)) else None
+    return _Part(*arrays, policy, float(scores[best]))  # type: ignore[misc,call-arg]
+
+
+def _save_part(store: RunFolder, unit: str, part: _Part) -> None:
+    stem = store.path / "trials" / unit.replace("trials ", "").replace("-", "_")
+    with atomic_path(stem.with_suffix(".npz")) as tmp, open(tmp, "wb") as fh:
+        np.savez(fh, **{a: getattr(part, a) for a in _ARRAYS})
+    if part.policy is not None:
+        part.policy.save(stem.with_suffix(".policy.json"))
+    store.complete(unit, {"file": str(stem.relative_to(store.path)), "score": part.score})
+
+
+def _load_part(task: Task, store: RunFolder, unit: str, info: Any, trials: int, episodes: int) -> _Part:
+    if not isinstance(info, dict) or not isinstance(info.get("file"), str) or "score" not in info:
+        raise CrmgraspError(f"run record of {str(store.path)!r} is damaged ({unit})")
+    stem = store.path / info["file"]
+    try:
+        with np.load(stem.with_suffix(".npz"), allow_pickle=False) as z:
+            arrays = [z[a] for a in _ARRAYS]
+    except (OSError, ValueError, KeyError) as exc:
+        raise CrmgraspError(f"cannot resume: {unit} of {str(store.path)!r} is damaged ({exc})") from None
+    if arrays[0].shape != (trials, episodes):
+        raise CrmgraspError(f"cannot resume: {unit} of {str(store.path)!r} has the wrong shape")
+    pol = stem.with_suffix(".policy.json")
+    policy = GreedyPolicy.load(pol, task) if pol.exists() else None
+    return _Part(*arrays, policy, float(info["score"]))  # type: ignore[misc,call-arg]
+
+
+def _groups(trials: int, lockstep: bool) -> list[tuple[int, int]]:
+    """``(first, count)`` of each group of trials run (and saved) together: at most 50
+    groups (10 in lockstep, which gains from large groups)."""
+    size = -(-trials // (10 if lockstep else 50))
+    return [(f, min(size, trials - f)) for f in range(0, trials, size)]
 
 
 def learn(
@@ -82,31 +154,75 @@ def learn(
     checkpoint_episodes: int = 100,
     lockstep: bool = False,
     backend: str = "auto",
+    store: RunFolder | None = None,
+    progress: Progress | None = None,
 ) -> LearnRun:
     """Train ``trials`` independent agents and summarise them. Episodes step through the
     task's kernel on ``backend`` (:func:`crmgrasp.kernels.kernel_for`), one trial after
-    another or, with ``lockstep``, all trials together. Every choice gives the same
-    results."""
+    another or, with ``lockstep``, many trials together. Every choice gives the same
+    results.
+
+    With a run folder ``store``, each group of trials is saved as it completes
+    (``trials/*.npz`` and the group's best policy) and groups already recorded there are
+    loaded instead of trained: a resumed run gives the results of an uninterrupted one.
+    ``progress`` shows the training episodes done."""
+    check_budget(trials, episodes, eval_episodes)
     t0 = time.perf_counter()
     trainer = train_trials_lockstep if lockstep else train_trials
-    res = trainer(
-        task,
-        spec.agent,
-        trials=trials,
-        episodes=episodes,
-        seed=seed,
-        k=spec.k,
-        eval_episodes=eval_episodes,
-        params=spec.params,
-        checkpoints=DEFAULT_CHECKPOINTS if checkpoint_episodes else (),
-        checkpoint_episodes=checkpoint_episodes,
-        backend=backend,
-    )
+    parts = []
+    stage = progress.stage(f"{spec.name} on {task.name}", trials * episodes, "episodes") if progress else None
+    for first, n in _groups(trials, lockstep):
+        unit = f"trials {first:05d}-{first + n - 1:05d}"
+        info = store.done(unit) if store is not None else None
+        if info is not None:
+            parts.append(_load_part(task, store, unit, info, n, episodes))  # type: ignore[arg-type]
+            if stage:
+                stage.advance(n * episodes)
+            continue
+        res = trainer(
+            task,
+            spec.agent,
+            trials=n,
+            episodes=episodes,
+            seed=seed,
+            k=spec.k,
+            eval_episodes=eval_episodes,
+            params=spec.params,
+            checkpoints=DEFAULT_CHECKPOINTS if checkpoint_episodes else (),
+            checkpoint_episodes=checkpoint_episodes,
+            backend=backend,
+            first_trial=first,
+            progress=stage,
+        )
+        parts.append(_part(task, spec, res))
+        if store is not None:
+            _save_part(store, unit, parts[-1])
+    if stage:
+        stage.end()
+    joined = {a: np.concatenate([getattr(p, a) for p in parts]) for a in _ARRAYS if a != "checkpoints"}
+    res = TrialResult(agents=[], checkpoints=parts[0].checkpoints, **joined)
+    best = min(range(len(parts)), key=lambda i: (parts[i].score, i))
+    summary = _summary(task, spec, res, trials, episodes, seed, eval_episodes, checkpoint_episodes)
+    summary["seconds"] = round(time.perf_counter() - t0, 3)
+    return LearnRun(spec, res, summary, parts[best].policy)
+
+
+def _summary(
+    task: Task,
+    spec: LearnerSpec,
+    res: TrialResult,
+    trials: int,
+    episodes: int,
+    seed: int,
+    eval_episodes: int,
+    checkpoint_episodes: int,
+) -> dict[str, Any]:
     curve = res.curve
     ref = task.reference_mean_steps
     per_trial = res.greedy_steps.mean(axis=1) if eval_episodes else np.full(trials, np.nan)
-    params: dict[str, Any] = getattr(res.agents[0], "params", dict)()
-    summary = {
+    agent = build_agent(task, encoder_for(task, spec.k), spec.agent, spec.params)
+    params: dict[str, Any] = getattr(agent, "params", dict)()
+    return {
         "agent": spec.agent,
         "label": spec.name,
         "task": task.name,
@@ -126,18 +242,12 @@ def learn(
             checkpoints_to_within(res.checkpoints, res.checkpoint_steps.mean(axis=0), ref) if ref else None
         ),
         "checkpoint_episodes": checkpoint_episodes,
-        "seconds": round(time.perf_counter() - t0, 3),
     }
-    return LearnRun(spec, res, summary)
 
 
 def best_policy(task: Task, run: LearnRun) -> GreedyPolicy | None:
     """Greedy policy of the trial with the lowest greedy mean (tabular agents only)."""
-    agents = run.result.agents
-    if not isinstance(agents[0], (TabularAgent, SymmetricAgent)):
-        return None
-    best = int(np.argmin(run.result.greedy_steps.mean(axis=1))) if run.result.greedy_steps.size else 0
-    return GreedyPolicy.from_agent(task, run.spec.k, agents[best])  # type: ignore[arg-type]
+    return run.policy
 
 
 def write_learn_outputs(task: Task, run: LearnRun, out_dir: str | Path) -> list[Path]:

@@ -39,7 +39,7 @@ def _figure7(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
     cfg = Figure7Config(seed=seed)
     if quick:
         cfg = replace(cfg, trials=5, episodes=300, eval_episodes=200, checkpoint_episodes=50)
-    s = figure_7_learning_curve(out, cfg, backend=ctx["backend"])
+    s = figure_7_learning_curve(out, cfg, backend=ctx["backend"], progress=ctx.get("progress"))
     if not quick:
         ctx["policy"] = str(out / "policy.json")
     return s, [
@@ -91,7 +91,7 @@ def _figure9(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
 
 def _compare(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
     cfg = CompareConfig.quick(seed=seed) if quick else CompareConfig(seed=seed)
-    s = compare(out, cfg, backend=ctx["backend"])
+    s = compare(out, cfg, backend=ctx["backend"], progress=ctx.get("progress"))
     return s, [
         ("best learner, greedy CRMs", f"{s['best_learner_mean_crms']} ({s['best_learner']})", "1.8"),
         ("belief-space optimum / clairvoyant bound", f"{s['belief_optimum']} / {s['clairvoyant_bound']}", "-"),

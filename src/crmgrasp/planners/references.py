@@ -34,7 +34,14 @@ from crmgrasp.model.sensing import observe
 from crmgrasp.sim import Percept, run_episode
 from crmgrasp.tasks import Task
 
-__all__ = ["clairvoyant_steps", "clairvoyant_bound", "belief_optimum", "sample_starts", "BeliefPolicy"]
+__all__ = [
+    "clairvoyant_steps",
+    "clairvoyant_bound",
+    "belief_optimum",
+    "ungraspable_fraction",
+    "sample_starts",
+    "BeliefPolicy",
+]
 
 Step = tuple[Config, int, bool]  # next configuration, observation index, grasped
 
@@ -45,7 +52,7 @@ class _Model:
     def __init__(self, task: Task) -> None:
         self.task = task
         self._step: dict[tuple[Config, int], Step] = {}
-        self._clair: dict[tuple[Config, int], int] = {}
+        self._clair: dict[tuple[Config, int], int | None] = {}
 
     def step(self, config: Config, action: int) -> Step:
         key = (config, action)
@@ -59,12 +66,17 @@ class _Model:
 
     def clairvoyant(self, config: Config, horizon: int) -> int:
         """Fewest CRMs to a grasp within ``horizon`` (``horizon`` if none is found)."""
+        depth = self.depth(config, horizon)
+        return horizon if depth is None else depth
+
+    def depth(self, config: Config, horizon: int) -> int | None:
+        """Fewest CRMs to a grasp within ``horizon``; ``None`` if no sequence grasps."""
         key = (config, horizon)
         if key not in self._clair:
             self._clair[key] = self._bfs(config, horizon)
         return self._clair[key]
 
-    def _bfs(self, start: Config, horizon: int) -> int:
+    def _bfs(self, start: Config, horizon: int) -> int | None:
         seen = {start}
         frontier = deque([(start, 0)])
         while frontier:
@@ -78,7 +90,7 @@ class _Model:
                 if nxt not in seen:
                     seen.add(nxt)
                     frontier.append((nxt, depth + 1))
-        return horizon
+        return None
 
 
 def sample_starts(task: Task, n: int, seed: int) -> list[Config]:
@@ -100,6 +112,16 @@ def clairvoyant_bound(task: Task, starts: Sequence[Config], horizon: int | None 
     model = _Model(task)
     h = horizon or task.max_steps
     return float(np.mean([model.clairvoyant(c, h) for c in starts]))
+
+
+def ungraspable_fraction(task: Task, starts: Sequence[Config], horizon: int | None = None) -> float:
+    """Share of ``starts`` from which no sequence of at most ``horizon`` (default
+    ``task.max_steps``) CRMs reaches a grasp, even knowing the true configuration."""
+    if not starts:
+        raise CrmgraspError("ungraspable_fraction needs at least one start")
+    model = _Model(task)
+    h = horizon or task.max_steps
+    return sum(model.depth(c, h) is None for c in starts) / len(starts)
 
 
 def belief_optimum(task: Task, starts: Sequence[Config], horizon: int | None = None) -> float:

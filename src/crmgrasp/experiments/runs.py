@@ -1,0 +1,281 @@
+"""Run folders: where a command's results go, and a record that cannot lie.
+
+A run folder holds a command's files and ``run.json``::
+
+    {"format": "crmgrasp-run", "command": "learn", "task": "paper-box",
+     "status": "complete",            # running | complete | interrupted | failed
+     "config": {...},                  # what the results depend on (checked by --resume)
+     "completed": {...},               # units of work done (trials, experiments)
+     "argv": [...], "seed": 0, "started": "...Z", "ended": "...Z", "error": null,
+     "version": "0.1.0", "git_commit": "...", "python": "3.11.7", "platform": "...",
+     "dependencies": {"numpy": "...", ...}, "host": "...", "pid": 1234}
+
+Rules: the default folder is ``runs/<command>-<task>-<UTC time>``; an existing
+non-empty folder is refused unless ``overwrite`` (it must then be a run folder, which
+is emptied) or ``resume`` (it must be a run folder of the same command and config,
+not complete and not still running). ``status`` is ``running`` while the work goes
+on, so a run killed with SIGKILL still says ``running``; its ``pid`` and ``host`` tell
+:func:`read_status` that nobody runs it (reported as ``killed``), and ``--resume``
+takes it up. Ctrl-C ends a run with ``interrupted``; an error with ``failed`` and the
+error's text.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+import platform
+import re
+import shutil
+import socket
+import subprocess
+import sys
+from importlib import metadata
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+from crmgrasp._io import check_folder, read_bounded, write_json
+from crmgrasp._validation import CrmgraspError, shown
+
+__all__ = ["RunFolder", "read_status", "default_run_dir", "STATUSES"]
+
+FORMAT = "crmgrasp-run"
+STATUSES = ("running", "complete", "interrupted", "failed")
+_DEPENDENCIES = ("numpy", "scipy", "matplotlib", "gymnasium", "numba", "mujoco", "torch", "stable-baselines3")
+
+
+def _now() -> str:
+    return _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def default_run_dir(command: str, task: str, root: str | Path = "runs") -> Path:
+    """``runs/<command>-<task>-<UTC YYYYMMDDTHHMMSSZ>``, with ``-2``, ``-3``, ... if taken."""
+    stamp = _dt.datetime.now(_dt.UTC).strftime("%Y%m%dT%H%M%SZ")
+    base = Path(root) / f"{command}-{task}-{stamp}"
+    path, n = base, 1
+    while path.exists():
+        n += 1
+        path = base.with_name(f"{base.name}-{n}")
+    return path
+
+
+def _git_commit() -> str | None:
+    here = Path(__file__).resolve().parents[3]
+    if not (here / ".git").exists():
+        return None
+    try:
+        out = subprocess.run(
+            ["git", "-C", str(here), "rev-parse", "HEAD"], capture_output=True, text=True, timeout=5, check=False
+        )
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return out.stdout.strip() or None if out.returncode == 0 else None
+
+
+def _versions() -> dict[str, str]:
+    out = {}
+    for name in _DEPENDENCIES:
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            continue
+    return out
+
+
+def _alive(pid: object, host: object) -> bool:
+    """Whether process ``pid`` on ``host`` may still be running (unknown hosts: yes)."""
+    if host != socket.gethostname():
+        return True
+    if not isinstance(pid, int) or pid <= 0:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    proc = Path(f"/proc/{pid}")
+    try:  # Linux: a zombie is dead, and a reused pid runs something else
+        if proc.joinpath("stat").read_text().rsplit(")", 1)[1].split()[0] == "Z":
+            return False
+        return b"crmgrasp" in proc.joinpath("cmdline").read_bytes() or pid == os.getpid()
+    except (OSError, IndexError):
+        return True
+
+
+def _read(folder: Path) -> dict[str, Any]:
+    path = folder / "run.json"
+    try:
+        doc = json.loads(read_bounded(path, 16 * 2**20, "run record").decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):
+        raise CrmgraspError(f"run record {str(path)!r} is damaged (not valid JSON)") from None
+    if not isinstance(doc, dict) or doc.get("format") != FORMAT or doc.get("status") not in STATUSES:
+        raise CrmgraspError(f"{str(path)!r} is not a crmgrasp run record")
+    if not isinstance(doc.get("completed", {}), dict) or not isinstance(doc.get("config", {}), dict):
+        raise CrmgraspError(f"run record {str(path)!r} is damaged (bad completed or config)")
+    return doc
+
+
+def read_status(folder: str | Path) -> str:
+    """The status of a run folder: one of :data:`STATUSES`, or ``killed`` for a run
+    that says ``running`` but whose process is gone."""
+    doc = _read(Path(folder))
+    if doc["status"] == "running" and not _alive(doc.get("pid"), doc.get("host")):
+        return "killed"
+    return str(doc["status"])
+
+
+class RunFolder:
+    """The folder and ``run.json`` of one run (a context manager that sets the final
+    status).
+
+    Parameters
+    ----------
+    path : the folder; ``None`` for :func:`default_run_dir`.
+    command, task : names of the command and its task.
+    config : what the results depend on (JSON data); ``--resume`` requires it equal.
+    argv, seed : recorded as given.
+    overwrite, resume : what to do with an existing non-empty folder (see the module).
+    """
+
+    def __init__(
+        self,
+        path: str | Path | None,
+        command: str,
+        task: str,
+        config: dict[str, Any],
+        *,
+        argv: list[str] | None = None,
+        seed: int | None = None,
+        overwrite: bool = False,
+        resume: bool = False,
+    ) -> None:
+        if overwrite and resume:
+            raise CrmgraspError("--overwrite and --resume exclude each other")
+        self.path = default_run_dir(command, task) if path is None else check_folder(path, "--out")
+        self.config = json.loads(json.dumps(config))  # plain JSON data, as it will be read back
+        self.resumed = False
+        previous = self._claim(command, overwrite, resume)
+        self.record: dict[str, Any] = {
+            "format": FORMAT,
+            "command": command,
+            "task": task,
+            "status": "running",
+            "config": self.config,
+            "completed": previous.get("completed", {}) if previous else {},
+            "argv": list(sys.argv[1:] if argv is None else argv),
+            "seed": seed,
+            "started": _now(),
+            "ended": None,
+            "error": None,
+            "version": _version(),
+            "git_commit": _git_commit(),
+            "python": platform.python_version(),
+            "platform": platform.platform(),
+            "dependencies": _versions(),
+            "host": socket.gethostname(),
+            "pid": os.getpid(),
+        }
+        if previous:
+            self.record["resumed_from"] = {k: previous.get(k) for k in ("started", "ended", "status")}
+        self.path.mkdir(parents=True, exist_ok=True)
+        self._save()
+
+    def _claim(self, command: str, overwrite: bool, resume: bool) -> dict[str, Any] | None:
+        """Check what is in the folder already; empty it for ``overwrite``; return the
+        previous record for ``resume``."""
+        p = self.path
+        busy = p.is_dir() and any(p.iterdir())
+        if not busy:
+            if resume:
+                raise CrmgraspError(f"--resume: {str(p)!r} holds no run to resume")
+            return None
+        if not (p / "run.json").is_file():
+            what = "delete" if overwrite else "resume"
+            if overwrite or resume:
+                raise CrmgraspError(f"{str(p)!r} is not a crmgrasp run folder (no run.json); refusing to {what} it")
+            raise CrmgraspError(f"--out {str(p)!r} exists and is not empty; choose another folder")
+        doc = _read(p)
+        if doc["status"] == "running" and _alive(doc.get("pid"), doc.get("host")):
+            raise CrmgraspError(f"{str(p)!r} is in use by a running crmgrasp (pid {doc.get('pid')})")
+        if overwrite:
+            for child in p.iterdir():
+                shutil.rmtree(child) if child.is_dir() and not child.is_symlink() else child.unlink()
+            return None
+        if not resume:
+            raise CrmgraspError(
+                f"--out {str(p)!r} already holds a {doc['status']} {doc.get('command')} run; "
+                "use --resume to continue it, --overwrite to replace it, or another --out"
+            )
+        if doc.get("command") != command:
+            raise CrmgraspError(f"--resume: {str(p)!r} holds a {shown(doc.get('command'))} run, not {command}")
+        old = doc.get("config", {})
+        for key in sorted(set(old) | set(self.config)):
+            if old.get(key) != self.config.get(key):
+                raise CrmgraspError(
+                    f"--resume: the run in {str(p)!r} has {key} = {shown(old.get(key))}, "
+                    f"this command {shown(self.config.get(key))}; resume with the same settings"
+                )
+        self.resumed = True
+        return doc
+
+    # --- units of work -------------------------------------------------------------------
+    def done(self, unit: str) -> Any:
+        """What :meth:`complete` recorded for ``unit`` (``None`` if not done)."""
+        return self.record["completed"].get(unit)
+
+    def complete(self, unit: str, info: Any = True) -> None:
+        """Record ``unit`` as done (``info``: JSON data kept for a resumed run)."""
+        self.record["completed"][unit] = info
+        self._save()
+
+    def sub(self, name: str) -> RunFolder:
+        """A view of this run for one part of it (``name``): its units are recorded here
+        prefixed with ``name``, its files go to a subfolder named after it."""
+        return _Part(self, name)  # type: ignore[return-value]
+
+    # --- final status ----------------------------------------------------------------------
+    def finish(self, status: str, error: str | None = None) -> None:
+        """Set the final status (and error text) and the end time."""
+        if status not in STATUSES:
+            raise ValueError(status)
+        self.record.update(status=status, error=error, ended=_now())
+        self._save()
+
+    def __enter__(self) -> RunFolder:
+        return self
+
+    def __exit__(self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
+        if kind is None:
+            self.finish("complete")
+        elif issubclass(kind, KeyboardInterrupt):
+            self.finish("interrupted")
+        else:
+            self.finish("failed", f"{kind.__name__}: {exc}" if not isinstance(exc, CrmgraspError) else str(exc))
+
+    def _save(self) -> None:
+        write_json(self.path / "run.json", self.record)
+
+
+def _version() -> str:
+    try:
+        return metadata.version("crmgrasp")
+    except metadata.PackageNotFoundError:  # run from a source tree without installing
+        return "unknown"
+
+
+class _Part:
+    """A named part of a run (see :meth:`RunFolder.sub`)."""
+
+    def __init__(self, run: RunFolder, name: str) -> None:
+        self.run, self.name = run, name
+        slug = re.sub(r"[^A-Za-z0-9._-]+", "-", name).strip("-") or "part"
+        self.path = run.path / "parts" / slug
+
+    def done(self, unit: str) -> Any:
+        return self.run.done(f"{self.name}: {unit}")
+
+    def complete(self, unit: str, info: Any = True) -> None:
+        self.run.complete(f"{self.name}: {unit}", info)

@@ -1,0 +1,49 @@
+"""Grasping tasks: object, hand, CRM set, observation bins, starts, goal.
+
+:mod:`crmgrasp.tasks.core` defines :class:`Task`, the start samplers and the registry
+(``"paper-box"`` is the paper's box task); :mod:`crmgrasp.tasks.files` reads tasks
+from TOML files and ``package.module:factory`` strings (:func:`resolve_task`, what
+``--task`` accepts) and writes them back as plain data.
+"""
+
+from crmgrasp.tasks.core import (
+    CornerStarts,
+    StartFilter,
+    StartSampler,
+    Symmetry,
+    Task,
+    UniformStarts,
+    accept_corner_candidates,
+    acceptable,
+    corner_boxes,
+    corner_candidate,
+    corner_proposal,
+    make_task,
+    paper_box,
+    register_task,
+    task_names,
+)
+from crmgrasp.tasks.files import TEMPLATE, load_task_file, resolve_task, task_from_dict, task_to_dict
+
+__all__ = [
+    "StartSampler",
+    "StartFilter",
+    "CornerStarts",
+    "UniformStarts",
+    "Task",
+    "Symmetry",
+    "paper_box",
+    "make_task",
+    "register_task",
+    "task_names",
+    "acceptable",
+    "accept_corner_candidates",
+    "corner_boxes",
+    "corner_candidate",
+    "corner_proposal",
+    "TEMPLATE",
+    "load_task_file",
+    "resolve_task",
+    "task_from_dict",
+    "task_to_dict",
+]

@@ -1,0 +1,344 @@
+"""Tasks from files, from code, and back to plain data.
+
+A task file is TOML (:data:`TEMPLATE` is a commented example; ``crmgrasp
+task-template`` prints it). Every key is checked: an unknown key, a missing one, a
+value of the wrong type or out of range gets a one-line error naming the file and the
+key. :func:`task_to_dict` writes a task in the same schema (as plain data, which is
+how a policy file carries its task), and :func:`task_from_dict` reads it back, so
+``task_from_dict(task_to_dict(t))`` equals ``t`` for every task the schema can state.
+
+:func:`resolve_task` is what ``--task`` accepts: a registered name, a ``.toml`` file,
+or ``package.module:factory`` (a callable returning a :class:`Task`, or a Task).
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+import re
+import tomllib
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from crmgrasp._io import read_bounded
+from crmgrasp._validation import CrmgraspError, shown
+from crmgrasp.model.geometry import Disc, Polygon
+from crmgrasp.model.hand import CRM, Hand
+from crmgrasp.model.sensing import Discretizer, SensorNoise
+from crmgrasp.tasks.core import CornerStarts, Symmetry, Task, UniformStarts, make_task, task_names
+
+__all__ = ["TEMPLATE", "MAX_TASK_FILE_BYTES", "task_from_dict", "task_to_dict", "load_task_file", "resolve_task"]
+
+MAX_TASK_FILE_BYTES = 1 << 20
+"""Largest task file read (1 MiB)."""
+
+_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
+_FACTORY = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*:[A-Za-z_][A-Za-z0-9_]*")
+
+TEMPLATE = """\
+# A crmgrasp task: use it with `crmgrasp learn --task my-u.toml` (any command taking --task).
+# Lengths in metres, angles in radians. Keys marked "optional" may be left out.
+name = "my-u"                      # letters, digits, '.', '_', '-'; names run folders and policies
+description = "a U-shaped handle"  # optional
+mu_goal = 0.05                     # optional: success when min friction <= mu_goal
+max_steps = 10                     # optional: CRMs before an episode is cut off
+# reference_mean_steps = 1.66      # optional: the best mean CRMs per episode, if known
+
+[object]   # exactly one of: polygon = [[x, y], ...] (simple, counter-clockwise or not);
+           # disc = { radius = r, center = [x, y] }; rectangle = { length = l, width = w }
+polygon = [[0, 0], [0.3, 0], [0.3, 0.2], [0.2, 0.2], [0.2, 0.05], [0.1, 0.05], [0.1, 0.2], [0, 0.2]]
+
+[hand]
+aperture = 0.16                    # largest distance between the contacts
+palm_depth = 0.12                  # palm point behind the contacts' midpoint
+backoff = 0.01                     # optional: retreat along the normal before a CRM
+# r_max = 0.2                      # optional: largest |r| of a CRM
+# min_separation = 0.0             # optional: contacts closer than this collide
+
+[[crm]]    # one table per action: contact c moves onto the line through contact f's
+c = "a"    # position offset by r along f's tangent, along f's normal
+f = "b"
+r = 0.0
+
+[[crm]]
+c = "b"
+f = "a"
+r = 0.0
+
+[[crm]]
+c = "a"
+f = "a"
+r = 0.08
+
+[[crm]]
+c = "b"
+f = "b"
+r = -0.08
+
+[bins]     # thresholds per quantity: a value v is in bin k = number of thresholds <= v
+rho = [1.0]
+m_a = [0.1]
+m_b = [0.1]
+abs_moments = true                 # optional: bin moments by magnitude
+
+[starts]
+kind = "uniform"                   # "corners" (polygons: two contacts near one corner) or "uniform"
+
+# [noise]                          # optional sensing noise
+# sigma_n = 0.0                    # normal rotation, radians (<= 0.785)
+# sigma_p = 0.0                    # position, metres (<= 0.1)
+
+# symmetry = [1, 0, 3, 2]          # optional declared mirror symmetry: the action each action maps to
+"""
+
+_TOP = {
+    "name",
+    "description",
+    "mu_goal",
+    "max_steps",
+    "reference_mean_steps",
+    "object",
+    "hand",
+    "crm",
+    "bins",
+    "starts",
+    "noise",
+    "symmetry",
+}
+_HAND = {"aperture", "palm_depth", "backoff", "r_max", "palm_normal_tol", "min_separation"}
+_STARTS: dict[str, type] = {"corners": CornerStarts, "uniform": UniformStarts}
+
+
+def _keys(table: Any, where: str, allowed: set[str], required: set[str] = frozenset()) -> dict[str, Any]:  # type: ignore[assignment]
+    if not isinstance(table, dict):
+        raise CrmgraspError(f"{where} must be a table, got {shown(table)}")
+    for key in table:
+        if key not in allowed:
+            raise CrmgraspError(f"unknown key {key!r} in {where}; known: {', '.join(sorted(allowed))}")
+    for key in sorted(required):
+        if key not in table:
+            raise CrmgraspError(f"{where} needs the key {key!r}")
+    return table
+
+
+def _num(value: Any, key: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise CrmgraspError(f"{key} must be a finite number, got {shown(value)}")
+    return float(value)
+
+
+def _numbers(value: Any, key: str) -> tuple[float, ...]:
+    if not isinstance(value, list):
+        raise CrmgraspError(f"{key} must be a list of numbers, got {shown(value)}")
+    return tuple(_num(v, f"{key}[{i}]") for i, v in enumerate(value))
+
+
+def _object(table: Any) -> Polygon | Disc:
+    t = _keys(table, "[object]", {"polygon", "disc", "rectangle"})
+    if len(t) != 1:
+        raise CrmgraspError("[object] needs exactly one of polygon, disc, rectangle")
+    ((kind, value),) = t.items()
+    if kind == "polygon":
+        if not isinstance(value, list) or not all(isinstance(p, list) and len(p) == 2 for p in value):
+            raise CrmgraspError("object.polygon must be a list of [x, y] pairs")
+        return Polygon([(_num(x, "object.polygon x"), _num(y, "object.polygon y")) for x, y in value])
+    if kind == "disc":
+        d = _keys(value, "object.disc", {"radius", "center"}, {"radius"})
+        center = _numbers(d.get("center", [0.0, 0.0]), "object.disc.center")
+        if len(center) != 2:
+            raise CrmgraspError("object.disc.center must be [x, y]")
+        return Disc(_num(d["radius"], "object.disc.radius"), (center[0], center[1]))
+    r = _keys(value, "object.rectangle", {"length", "width"}, {"length", "width"})
+    hx, hy = _num(r["length"], "object.rectangle.length") / 2, _num(r["width"], "object.rectangle.width") / 2
+    if hx <= 0 or hy <= 0:
+        raise CrmgraspError("object.rectangle length and width must be > 0")
+    return Polygon([(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)])
+
+
+def _hand(table: Any) -> Hand:
+    t = _keys(table, "[hand]", _HAND, {"aperture", "palm_depth"})
+    values: dict[str, Any] = {k: _num(v, f"hand.{k}") for k, v in t.items()}
+    return Hand(**values)
+
+
+def _crms(value: Any) -> tuple[CRM, ...]:
+    if not isinstance(value, list) or not value:
+        raise CrmgraspError("the task needs at least one [[crm]] table")
+    out = []
+    for i, t in enumerate(value):
+        where = f"[[crm]] number {i + 1}"
+        t = _keys(t, where, {"c", "f", "r"}, {"c", "f"})
+        if t["c"] not in ("a", "b") or t["f"] not in ("a", "b"):
+            raise CrmgraspError(f'{where}: c and f must be "a" or "b", got {shown(t["c"])}, {shown(t["f"])}')
+        out.append(CRM(t["c"], t["f"], _num(t.get("r", 0.0), f"{where} r")))
+    return tuple(out)
+
+
+def _bins(table: Any) -> Discretizer:
+    t = _keys(table, "[bins]", {"rho", "m_a", "m_b", "abs_moments"})
+    abs_m = t.get("abs_moments", True)
+    if not isinstance(abs_m, bool):
+        raise CrmgraspError(f"bins.abs_moments must be true or false, got {shown(abs_m)}")
+    kw = {q: _numbers(t[q], f"bins.{q}") for q in ("rho", "m_a", "m_b") if q in t}
+    return Discretizer(**kw, abs_moments=abs_m)  # type: ignore[arg-type]
+
+
+def _starts(table: Any) -> CornerStarts | UniformStarts:
+    t = _keys(table, "[starts]", {"kind"}, {"kind"})
+    if t["kind"] not in _STARTS:
+        raise CrmgraspError(f"starts.kind must be one of {', '.join(_STARTS)}, got {shown(t['kind'])}")
+    return CornerStarts() if t["kind"] == "corners" else UniformStarts()
+
+
+def _section(key: str, build: Callable[[Any], Any], value: Any) -> Any:
+    """``build(value)`` with the key named in any error."""
+    try:
+        return build(value)
+    except CrmgraspError as exc:
+        text = str(exc)
+        raise CrmgraspError(text if key in text else f"{key}: {text}") from None
+    except (TypeError, ValueError) as exc:
+        raise CrmgraspError(f"{key}: {exc}") from None
+
+
+def task_from_dict(doc: Any) -> Task:
+    """The :class:`Task` a task document (parsed TOML, or :func:`task_to_dict`) states."""
+    d = _keys(doc, "the task file", _TOP, {"name", "object", "hand", "crm"})
+    name = d["name"]
+    if not isinstance(name, str) or not _NAME.fullmatch(name):
+        raise CrmgraspError(
+            f"name must be 1-64 letters, digits, '.', '_' or '-' (first a letter or digit), got {shown(name)}"
+        )
+    kw: dict[str, Any] = {
+        "obj": _section("object", _object, d["object"]),
+        "hand": _section("hand", _hand, d["hand"]),
+        "actions": _section("crm", _crms, d["crm"]),
+    }
+    if "bins" in d:
+        kw["discretizer"] = _section("bins", _bins, d["bins"])
+    kw["starts"] = _section("starts", _starts, d.get("starts", {"kind": "uniform"}))
+    if isinstance(kw["starts"], CornerStarts) and not isinstance(kw["obj"], Polygon):
+        raise CrmgraspError('starts.kind "corners" needs a polygon object; use "uniform"')
+    if "noise" in d:
+        t = _section("noise", lambda v: _keys(v, "[noise]", {"sigma_n", "sigma_p"}), d["noise"])
+        kw["noise"] = _section("noise", lambda t: SensorNoise(**{k: _num(v, f"noise.{k}") for k, v in t.items()}), t)
+    if "mu_goal" in d:
+        kw["mu_goal"] = _num(d["mu_goal"], "mu_goal")
+    if "max_steps" in d:
+        m = d["max_steps"]
+        if isinstance(m, bool) or not isinstance(m, int) or not 1 <= m <= 1000:
+            raise CrmgraspError(f"max_steps must be an integer in [1, 1000], got {shown(m)}")
+        kw["max_steps"] = m
+    if d.get("reference_mean_steps") is not None:
+        kw["reference_mean_steps"] = _num(d["reference_mean_steps"], "reference_mean_steps")
+    if "description" in d:
+        if not isinstance(d["description"], str):
+            raise CrmgraspError(f"description must be a string, got {shown(d['description'])}")
+        kw["description"] = d["description"]
+    if d.get("symmetry") is not None:
+        sym = d["symmetry"]
+        if not isinstance(sym, list) or any(isinstance(i, bool) or not isinstance(i, int) for i in sym):
+            raise CrmgraspError(f"symmetry must be a list of action indices, got {shown(sym)}")
+        kw["symmetry"] = Symmetry(tuple(sym))
+    return _section("task", lambda kw: Task(name=name, **kw), kw)
+
+
+def _object_dict(obj: Any) -> dict[str, Any]:
+    if isinstance(obj, Disc):
+        return {"disc": {"radius": obj.radius, "center": list(obj.center)}}
+    if isinstance(obj, Polygon):
+        return {"polygon": [list(v) for v in obj.vertices]}
+    raise CrmgraspError(f"a {type(obj).__name__} cannot be written as a task file object")
+
+
+def task_to_dict(task: Task) -> dict[str, Any]:
+    """The task as plain data in the task-file schema.
+
+    A start sampler other than the built-in kinds is written as ``{"kind": "custom"}``
+    (Python code does not travel); :func:`task_from_dict` refuses it."""
+    h = task.hand
+    hand = {"aperture": h.aperture, "palm_depth": h.palm_depth, "backoff": h.backoff}
+    hand.update({k: getattr(h, k) for k in ("palm_normal_tol", "min_separation")})
+    if h.r_max is not None:
+        hand["r_max"] = h.r_max
+    kinds = {cls: name for name, cls in _STARTS.items()}
+    starts = kinds.get(type(task.starts), "custom")
+    if starts != "custom" and task.starts != type(task.starts)():
+        starts = "custom"  # non-default settings
+    doc: dict[str, Any] = {
+        "name": task.name,
+        "description": task.description,
+        "mu_goal": task.mu_goal,
+        "max_steps": task.max_steps,
+        "object": _object_dict(task.obj),
+        "hand": hand,
+        "crm": [{"c": a.c, "f": a.f, "r": a.r} for a in task.actions],
+        "bins": task.discretizer.to_dict(),
+        "starts": {"kind": starts},
+        "noise": {"sigma_n": task.noise.sigma_n, "sigma_p": task.noise.sigma_p},
+    }
+    if task.reference_mean_steps is not None:
+        doc["reference_mean_steps"] = task.reference_mean_steps
+    if task.symmetry is not None:
+        doc["symmetry"] = list(task.symmetry.actions)
+    return doc
+
+
+def load_task_file(path: str | Path) -> Task:
+    """The task a TOML file states (read with a 1 MiB bound; one-line errors naming
+    the file and the key)."""
+    p = Path(path)
+    data = read_bounded(p, MAX_TASK_FILE_BYTES, "task file")
+    try:
+        doc = tomllib.loads(data.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise CrmgraspError(f"task file {str(p)!r} is not UTF-8 text") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise CrmgraspError(f"task file {str(p)!r} is not valid TOML ({exc})") from None
+    except RecursionError:
+        raise CrmgraspError(f"task file {str(p)!r} is nested too deeply") from None
+    try:
+        return task_from_dict(doc)
+    except CrmgraspError as exc:
+        raise CrmgraspError(f"task file {str(p)!r}: {exc}") from None
+
+
+def _from_factory(spec: str) -> Task:
+    module, attr = spec.split(":")
+    try:
+        mod = importlib.import_module(module)
+    except ImportError as exc:
+        raise CrmgraspError(f"task {spec!r}: cannot import {module!r} ({exc})") from None
+    try:
+        made = getattr(mod, attr)
+    except AttributeError:
+        raise CrmgraspError(f"task {spec!r}: module {module!r} has no {attr!r}") from None
+    if callable(made) and not isinstance(made, Task):
+        try:
+            made = made()
+        except CrmgraspError as exc:
+            raise CrmgraspError(f"task {spec!r}: {exc}") from None
+        except Exception as exc:  # the user's code failed: one line, naming it
+            raise CrmgraspError(f"task {spec!r}: the factory raised {type(exc).__name__}: {exc}") from None
+    if not isinstance(made, Task):
+        raise CrmgraspError(f"task {spec!r} gave a {type(made).__name__}, not a crmgrasp Task")
+    return made
+
+
+def resolve_task(spec: str | Path | Task) -> Task:
+    """The task ``spec`` names: a :class:`Task` itself, a registered name, a ``.toml``
+    file, or ``package.module:factory``."""
+    if isinstance(spec, Task):
+        return spec
+    text = str(spec)
+    if text in task_names():
+        return make_task(text)
+    if _FACTORY.fullmatch(text) and not Path(text).exists():
+        return _from_factory(text)
+    if text.endswith(".toml") or Path(text).is_file():
+        return load_task_file(text)
+    raise CrmgraspError(
+        f"unknown task {shown(text)}; known tasks: {', '.join(task_names())} "
+        "(or a .toml task file, or package.module:factory)"
+    )

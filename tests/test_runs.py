@@ -1,0 +1,145 @@
+"""Run folders (run.json, refusal, --overwrite, --resume, statuses) and progress."""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+
+import pytest
+
+from crmgrasp._progress import Progress, Quiet
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.cli import main
+from crmgrasp.experiments.runs import RunFolder, default_run_dir, read_status
+
+LEARN = ["learn", "--trials", "3", "--episodes", "40", "--eval-episodes", "10", "--quiet"]
+
+
+def test_run_json_records_what_ran(tmp_path):
+    out = tmp_path / "r"
+    assert main([*LEARN, "--out", str(out)]) == 0
+    rec = json.loads((out / "run.json").read_text())
+    assert rec["status"] == "complete" and rec["command"] == "learn" and rec["task"] == "paper-box"
+    assert rec["seed"] == 0 and rec["argv"][0] == "learn" and rec["ended"] >= rec["started"]
+    assert {"numpy", "gymnasium"} <= set(rec["dependencies"]) and rec["config"]["trials"] == 3
+    assert read_status(out) == "complete"
+    assert main(["status", str(out)]) == 0
+
+
+def test_files_respect_the_umask(tmp_path):
+    old = os.umask(0o022)
+    try:
+        assert main([*LEARN, "--out", str(tmp_path / "r")]) == 0
+    finally:
+        os.umask(old)
+    assert (tmp_path / "r" / "summary.json").stat().st_mode & 0o777 == 0o644
+
+
+def test_default_folder_is_under_runs_and_never_reused(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(LEARN) == 0 and main(LEARN) == 0
+    made = sorted(p.name for p in (tmp_path / "runs").iterdir())
+    assert len(made) == 2 and all(n.startswith("learn-paper-box-") for n in made)
+    assert default_run_dir("learn", "paper-box", tmp_path / "runs").name not in made
+
+
+def test_existing_folder_is_refused_then_overwritten_or_resumed(tmp_path, capsys):
+    out = tmp_path / "r"
+    assert main([*LEARN, "--out", str(out)]) == 0
+    before = (out / "curve.csv").read_bytes()
+    assert main([*LEARN, "--out", str(out)]) == 2
+    assert "already holds a complete learn run" in capsys.readouterr().err
+    assert (out / "curve.csv").read_bytes() == before
+    assert main([*LEARN, "--out", str(out), "--resume"]) == 0
+    assert (out / "curve.csv").read_bytes() == before
+    (out / "stray.txt").write_text("x")
+    assert main([*LEARN, "--out", str(out), "--overwrite"]) == 0
+    assert not (out / "stray.txt").exists() and (out / "curve.csv").read_bytes() == before
+
+
+def test_foreign_folders_are_never_deleted(tmp_path, capsys):
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "thesis.tex").write_text("precious")
+    for flag in ([], ["--overwrite"], ["--resume"]):
+        assert main([*LEARN, "--out", str(mine), *flag]) == 2
+        err = capsys.readouterr().err
+        assert "not a crmgrasp run folder" in err or "not empty" in err, err
+    assert (mine / "thesis.tex").read_text() == "precious"
+
+
+def test_resume_refuses_other_settings_and_damaged_records(tmp_path, capsys):
+    out = tmp_path / "r"
+    assert main([*LEARN, "--out", str(out)]) == 0
+    assert main([*LEARN[:2], "5", *LEARN[3:], "--out", str(out), "--resume"]) == 2
+    assert "trials = 3" in capsys.readouterr().err
+    (out / "run.json").write_text("{not json")
+    assert main([*LEARN, "--out", str(out), "--resume"]) == 2
+    assert "damaged" in capsys.readouterr().err
+    assert main([*LEARN, "--out", str(tmp_path / "empty"), "--resume"]) == 2
+
+
+def test_interrupted_run_resumes_to_identical_results(tmp_path, monkeypatch):
+    import crmgrasp.experiments.learning as learning
+
+    full, cut = tmp_path / "full", tmp_path / "cut"
+    argv = ["learn", "--trials", "6", "--episodes", "60", "--eval-episodes", "10", "--quiet"]
+    assert main([*argv, "--out", str(full)]) == 0
+    real, calls = learning._save_part, []
+
+    def save_then_stop(*a, **k):
+        real(*a, **k)
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(learning, "_save_part", save_then_stop)
+    assert main([*argv, "--out", str(cut)]) == 130
+    assert read_status(cut) == "interrupted"
+    assert len(json.loads((cut / "run.json").read_text())["completed"]) == 3
+    monkeypatch.setattr(learning, "_save_part", real)
+    assert main([*argv, "--out", str(cut), "--resume"]) == 0
+    for name in ("curve.csv", "checkpoints.csv", "policy.json"):
+        assert (cut / name).read_bytes() == (full / name).read_bytes(), name
+
+
+def test_a_killed_run_is_not_complete(tmp_path):
+    run = RunFolder(tmp_path / "r", "learn", "paper-box", {"a": 1})
+    rec = json.loads((run.path / "run.json").read_text())
+    assert rec["status"] == "running" and read_status(run.path) == "running"  # this process is alive
+    rec["pid"] = 2**22 + 12345  # a pid that does not exist
+    (run.path / "run.json").write_text(json.dumps(rec))
+    assert read_status(run.path) == "killed"
+    assert main(["status", str(run.path)]) == 1
+    again = RunFolder(run.path, "learn", "paper-box", {"a": 1}, resume=True)
+    assert again.resumed
+
+
+def test_failed_run_says_why(tmp_path):
+    with pytest.raises(CrmgraspError):
+        with RunFolder(tmp_path / "r", "learn", "paper-box", {}):
+            raise CrmgraspError("boom")
+    rec = json.loads((tmp_path / "r" / "run.json").read_text())
+    assert rec["status"] == "failed" and rec["error"] == "boom"
+
+
+def test_progress_lines_and_quiet():
+    buf = io.StringIO()
+    p = Progress(buf, live=False, interval=0.0)
+    with p.stage("learn", 200, "episodes"):
+        p.advance(100)
+        p.advance(100)
+    text = buf.getvalue()
+    assert "100/200 episodes" in text and "learn: done 200/200 episodes" in text
+    live = io.StringIO()
+    q = Progress(live, live=True)
+    q.stage("x", 4, "steps")
+    q.advance(2)
+    assert "50%" in q.line() and "2/4 steps" in q.line()
+    q.end()
+    assert live.getvalue().startswith("\rx  [") and live.getvalue().endswith("\r")  # redrawn, then cleared
+    silent = Quiet()
+    silent.stage("x", 3)
+    silent.advance(3)
+    silent.end()  # nothing to check but that it is silent and does not fail
