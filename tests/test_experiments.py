@@ -107,13 +107,22 @@ def test_reproduce_index_and_cli(tmp_path, capsys):
     res = reproduce(tmp_path / "a", ["figure4"], quick=True)
     assert set(res) == {"figure4"}
     index = (tmp_path / "a" / "README.md").read_text()
-    assert "figure4/figure4.png" in index and "| figure | quantity | ours | paper |" in index
-    assert main(["reproduce", "--quick", "--out", str(tmp_path / "b")]) == 0
+    assert "figure4/figure4.png" in index and "| figure | quantity | ours | full run | paper |" in index
+    assert main(["reproduce", "--quick", "--quiet", "--out", str(tmp_path / "b")]) == 0
     out = capsys.readouterr().out
     for name in ("figure4:", "figure7:", "figure8:", "figure9:", "index:"):
         assert name in out
     index = (tmp_path / "b" / "README.md").read_text()
     assert "figure9/figure9.png" in index and "1.8" in index
+    assert "paper SARSA: greedy CRMs per episode | " in index and "(not converged at 5 trials x 300 episodes)" in index
+    assert "None" not in index
+    # a second reproduce into the same folder is refused; --resume reuses every finished experiment
+    assert main(["reproduce", "--quick", "--quiet", "--out", str(tmp_path / "b")]) == 2
+    before = (tmp_path / "b" / "README.md").read_bytes()
+    assert main(["reproduce", "--quick", "--quiet", "--resume", "--out", str(tmp_path / "b")]) == 0
+    assert (tmp_path / "b" / "README.md").read_bytes() == before
+    assert main(["reproduce", "figure4", "--quick", "--resume", "--out", str(tmp_path / "b")]) == 2
+    assert "experiments" in capsys.readouterr().err
 
 
 def test_reproduce_writes_the_same_files_on_every_kernel_backend(tmp_path):

@@ -141,12 +141,14 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
         results = reproduce(
             run.path, names, seed=args.seed, quick=args.quick, backend=args.backend, store=run, progress=_progress(args)
         )
+    from crmgrasp.experiments.stats import fmt
+
     root = run.path.resolve()
     for name, summary in results.items():
-        print(f"{name}: {root / name} ({summary['seconds']} s)")
+        print(f"{name}: {root / name} ({fmt(summary['seconds'], 1)} s)")
         for key, value in summary.items():
             if key != "seconds":
-                print(f"  {key}: {value}")
+                print(f"  {key}: {fmt(value) if not isinstance(value, (dict, list)) else value}")
     print(f"index: {root / 'README.md'}")
     return 0
 
@@ -199,21 +201,23 @@ def _cmd_learn(args: argparse.Namespace) -> int:
             progress=_progress(args),
         )
         paths = write_learn_outputs(task, run, folder.path)
+    from crmgrasp.experiments.stats import budget, fmt
+
     s = run.summary
-    print(f"{s['label']} on {task.name}: {s['trials']} trials x {s['episodes']} episodes in {s['seconds']} s")
+    lo, hi = s["greedy_ci95_over_trials"]
+    print(f"{s['label']} on {task.name}: {budget(s['trials'], s['episodes'], s['seed'])}, {fmt(s['seconds'], 1)} s")
+    print(f"  CRMs per episode, last 10 training episodes: {fmt(s['final_mean_steps'])}")
     print(
-        f"  final_mean_steps={s['final_mean_steps']:.3f}  greedy_mean_steps={s['greedy_mean_steps']:.3f}"
-        f"  episodes_to_5pct={_never(s['episodes_to_5pct'])}"
+        f"  greedy policy: {fmt(s['greedy_mean_steps'])} CRMs (95% CI over trials {fmt(lo)}-{fmt(hi)}, "
+        f"IQM {fmt(s['greedy_iqm_steps'])}), success {s['greedy_success_rate']:.1%}"
     )
+    if s["reference_mean_steps"]:
+        mark = "" if s["converged"] else f" (not converged at {budget(s['trials'], s['episodes'])})"
+        print(f"  episodes until within 5% of {fmt(s['reference_mean_steps'], 2)}: {fmt(s['episodes_to_5pct'])}{mark}")
     print(f"  run folder: {folder.path.resolve()}")
     for path in paths:
         print(f"  wrote {path.name}")
     return 0
-
-
-def _never(value: object) -> str:
-    """``never`` for a quantity that was not reached (``None``)."""
-    return "never" if value is None else str(value)
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
@@ -282,6 +286,7 @@ def _cmd_references(args: argparse.Namespace) -> int:
 def _cmd_compare(args: argparse.Namespace) -> int:
     from crmgrasp.agents.deep import RecurrentPPOConfig
     from crmgrasp.experiments.compare import CompareConfig, compare
+    from crmgrasp.experiments.stats import fmt
 
     task = resolve_task(args.task)
     cfg = CompareConfig.quick(task.name, args.seed) if args.quick else CompareConfig(task=task.name, seed=args.seed)
@@ -297,7 +302,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
         summary = compare(run.path, cfg, backend=args.backend, progress=_progress(args), task=task, store=run)
     print((run.path / "compare.md").read_text(encoding="utf-8"))
     for key, value in summary.items():
-        print(f"{key}: {value}")
+        print(f"{key}: {fmt(value) if not isinstance(value, (dict, list)) else value}")
     print(f"wrote {(run.path / 'compare.csv').resolve()}, compare.md, compare.png")
     return 0
 

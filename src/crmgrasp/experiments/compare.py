@@ -26,6 +26,7 @@ from crmgrasp.agents.deep import RecurrentPPOConfig, deep_available, evaluate_re
 from crmgrasp.agents.training import episodes_to_within
 from crmgrasp.experiments.learning import SYMMETRIC_DYNA_Q, LearnerSpec, learn, usable
 from crmgrasp.experiments.runs import RunFolder
+from crmgrasp.experiments.stats import bootstrap_ci, budget, fmt, iqm
 from crmgrasp.planners.pomdp_task import POMDPAgent, build_task_pomdp
 from crmgrasp.planners.references import BeliefPolicy, belief_optimum, clairvoyant_bound, sample_starts
 from crmgrasp.plotting import learning_curve_figure
@@ -51,6 +52,8 @@ COLUMNS = [
     "mean_crms",
     "ci95_low",
     "ci95_high",
+    "ci_over",
+    "iqm_crms",
     "success_rate",
     "episodes_to_5pct",
     "greedy_episodes_to_5pct",
@@ -81,9 +84,17 @@ class CompareConfig:
 
 
 def _ci(values: np.ndarray) -> tuple[float, float, float]:
+    """Mean and normal 95% interval over episodes: for fixed policies (no training seed),
+    whose only variation is between episodes."""
     m = float(values.mean())
     half = 1.96 * float(values.std(ddof=1)) / math.sqrt(values.size) if values.size > 1 else 0.0
     return m, m - half, m + half
+
+
+def _fixed_row(name: str, kind: str, steps: np.ndarray, ok: float, t0: float) -> list[Any]:
+    """A table row of a fixed policy: interval over its episodes."""
+    m, lo, hi = _ci(steps)
+    return [name, kind, m, lo, hi, "episodes", None, ok, None, None, round(time.perf_counter() - t0, 3)]
 
 
 def compare(
@@ -115,15 +126,18 @@ def compare(
             store=store.sub(spec.name) if store is not None else None,
         )
         res, s = run.result, run.summary
-        m, lo, hi = _ci(res.greedy_steps.ravel())
+        per_trial = res.greedy_steps.mean(axis=1)
+        lo, hi = bootstrap_ci(per_trial, config.seed)
         kind = "baseline" if spec.agent in ("random", "fixed") else "learner"
         rows.append(
             [
                 spec.name,
                 kind,
-                m,
+                float(per_trial.mean()),
                 lo,
                 hi,
+                "trials",
+                iqm(per_trial),
                 float(res.greedy_success.mean()),
                 s["episodes_to_5pct"],
                 s["greedy_episodes_to_5pct"],
@@ -134,11 +148,8 @@ def compare(
             curves[spec.name] = (res.curve, res.sem)
     t0 = time.perf_counter()
     steps, ok = run_controller(task, config.trials * config.eval_episodes, np.random.default_rng(config.seed))
-    m, lo, hi = _ci(steps)
-    rows.append(
-        ["grasp controller", "baseline", m, lo, hi, float(ok.mean()), None, None, round(time.perf_counter() - t0, 3)]
-    )
-    controller = m
+    rows.append(_fixed_row("grasp controller", "baseline", steps, float(ok.mean()), t0))
+    controller = rows[-1][2]
     starts = sample_starts(task, config.reference_starts, config.seed)
     fresh = sample_starts(task, config.trials * config.eval_episodes, config.seed + 1)
     deep = _deep_row(task, config, fresh, curves, controller, Path(out_dir), backend)
@@ -157,7 +168,8 @@ def compare(
     for name, fn in (("belief-space optimum", belief_optimum), ("clairvoyant bound", clairvoyant_bound)):
         t0 = time.perf_counter()
         refs[name] = fn(task, starts)
-        rows.append([name, "reference", refs[name], None, None, 1.0, None, None, round(time.perf_counter() - t0, 3)])
+        seconds = round(time.perf_counter() - t0, 3)
+        rows.append([name, "reference", refs[name], None, None, "exact", None, 1.0, None, None, seconds])
     out = Path(out_dir)
     write_csv(out / "compare.csv", COLUMNS, rows)
     atomic_write_text(out / "compare.md", _markdown(rows, config))
@@ -206,7 +218,7 @@ def _deep_row(
     t0 = time.perf_counter()
     run = train_recurrent_ppo(task, config.seed, config.deep, backend=backend)
     steps, ok = evaluate_recurrent(run.model, task, fresh, np.random.default_rng(config.seed + 1))
-    m, lo, hi = _ci(steps.astype(float))
+    m, lo, hi = _ci(steps.astype(float))  # one training run: the interval is over episodes only
     ref = task.reference_mean_steps
     to5 = episodes_to_within(run.episode_steps, ref) if ref else None
     greedy5 = run.greedy_episodes_to_within(ref) if ref else None
@@ -222,12 +234,17 @@ def _deep_row(
         out / "deep_checkpoints.csv", ["episode", "greedy_mean_steps"], zip(run.checkpoints, run.checkpoint_steps)
     )
     above = np.flatnonzero(smooth > controller)
-    row = [name, "learner", m, lo, hi, float(ok.mean()), to5, greedy5, round(time.perf_counter() - t0, 3)]
+    if len(above) and above[-1] == len(smooth) - 1:
+        below: int | None = None  # the average ends above the controller: never
+    else:
+        below = int(above[-1] + window + 1) if len(above) else window
+    seconds = round(time.perf_counter() - t0, 3)
+    row = [name, "learner", m, lo, hi, "episodes (1 run)", None, float(ok.mean()), to5, greedy5, seconds]
     info = {
         "mean_crms": round(m, 3),
         "failures": int((~ok).sum()),
         "training_episodes": len(run.episode_steps),
-        "episodes_until_average_stays_below_controller": int(above[-1] + window + 1) if len(above) else window,
+        "episodes_until_average_stays_below_controller": below,
         "greedy_episodes_to_5pct": greedy5,
         "train_seconds": round(run.seconds, 2),
     }
@@ -237,26 +254,29 @@ def _deep_row(
 def _executed_row(name: str, run: Any, starts: list, t0: float) -> list[Any]:
     """A planner's table row: ``run(start) -> (CRMs, success)`` over ``starts``; time since ``t0``."""
     executed = [run(c) for c in starts]
-    m, lo, hi = _ci(np.array([n for n, _ in executed]))
     ok = float(np.mean([g for _, g in executed]))
-    return [name, "planner", m, lo, hi, ok, None, None, round(time.perf_counter() - t0, 3)]
+    return _fixed_row(name, "planner", np.array([n for n, _ in executed], dtype=float), ok, t0)
 
 
 def _markdown(rows: list[list[Any]], config: CompareConfig) -> str:
-    def fmt(v: Any) -> str:
-        if v is None:
-            return "-"
-        return f"{v:.3f}" if isinstance(v, float) else str(v)
-
+    """The table for reading: rounded, ``never`` for a threshold not reached, and a
+    learner not within 5% of the optimum at the end of its budget marked."""
     lines = [
-        f"# {config.task}: method comparison (seed {config.seed})",
+        f"# {config.task}: method comparison ({budget(config.trials, config.episodes, config.seed)})",
         "",
-        f"Learners: {config.trials} trials x {config.episodes} episodes; greedy evaluation on "
-        f"{config.eval_episodes} episodes per trial. References: exact, on {config.reference_starts} "
-        "sampled starts, noise-free.",
+        f"Learners: {budget(config.trials, config.episodes)}; greedy evaluation on {config.eval_episodes:,} "
+        "episodes per trial; 95% intervals by bootstrap over the trials (over the episodes for fixed policies "
+        f"and the single deep-RL run). References: exact, on {config.reference_starts:,} sampled starts, "
+        "noise-free. `episodes_to_5pct`: first episode after which the 10-episode average stays within 5% of "
+        'the belief-space optimum; "never" = not within the budget.',
         "",
         "| " + " | ".join(COLUMNS) + " |",
         "|" + " --- |" * len(COLUMNS),
     ]
-    lines += ["| " + " | ".join(fmt(v) for v in r) + " |" for r in rows]
+    for r in rows:
+        learner = r[1] == "learner"
+        cells = ["-" if v is None and not (learner and i in (8, 9)) else fmt(v) for i, v in enumerate(r)]
+        if learner and r[5] == "trials" and r[8] is None:
+            cells[8] = f"never (not converged at {budget(config.trials, config.episodes)})"
+        lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"

@@ -7,12 +7,13 @@ Used by ``crmgrasp learn`` and by Figure 7. Files written to the output folder:
 * ``summary.json``: agent, task, k, parameters, trials, episodes, seed,
   ``final_mean_steps`` (mean of the last 10 points of the curve),
   ``greedy_mean_steps`` (greedy evaluation on ``eval_episodes`` fresh episodes,
-  averaged over trials), ``greedy_success_rate``, ``episodes_to_5pct`` (first
+  averaged over trials) with ``greedy_ci95_over_trials`` (bootstrap over the
+  per-trial means) and ``greedy_iqm_steps``, ``greedy_success_rate``, ``episodes_to_5pct`` (first
   episode after which the 10-episode moving average stays at or below 1.05 x the
   task's ``reference_mean_steps``), ``greedy_episodes_to_5pct`` (first
   checkpoint from which the greedy policy, evaluated on the same fixed starts at
-  every checkpoint and averaged over trials, stays at or below that bound), wall
-  time;
+  every checkpoint and averaged over trials, stays at or below that bound; ``null``
+  = never), ``converged`` (whether ``episodes_to_5pct`` was reached), wall time;
 * ``checkpoints.csv``: ``episode,greedy_mean_steps,greedy_sem_steps``;
 * ``policy.json``: the greedy policy of the trial with the best greedy score;
 * ``learning_curve.png``.
@@ -41,6 +42,7 @@ from crmgrasp.agents.training import (
     encoder_for,
 )
 from crmgrasp.experiments.runs import RunFolder
+from crmgrasp.experiments.stats import bootstrap_ci, iqm
 from crmgrasp.tasks import Task
 
 __all__ = ["LearnerSpec", "LearnRun", "learn", "write_learn_outputs", "SYMMETRIC_DYNA_Q", "usable"]
@@ -235,6 +237,8 @@ def _summary(
         "final_mean_steps": float(curve[-10:].mean()),
         "greedy_mean_steps": float(per_trial.mean()),
         "greedy_sem_steps": float(per_trial.std(ddof=1) / np.sqrt(trials)) if trials > 1 else 0.0,
+        "greedy_ci95_over_trials": list(bootstrap_ci(per_trial, seed)),
+        "greedy_iqm_steps": iqm(per_trial),
         "greedy_success_rate": float(res.greedy_success.mean()) if eval_episodes else float("nan"),
         "reference_mean_steps": ref,
         "episodes_to_5pct": episodes_to_within(curve, ref) if ref else None,
@@ -242,6 +246,7 @@ def _summary(
             checkpoints_to_within(res.checkpoints, res.checkpoint_steps.mean(axis=0), ref) if ref else None
         ),
         "checkpoint_episodes": checkpoint_episodes,
+        "converged": (episodes_to_within(curve, ref) is not None) if ref else None,
     }
 
 

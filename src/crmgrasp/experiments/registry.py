@@ -16,6 +16,7 @@ from crmgrasp.experiments.figure4 import Figure4Config, figure_4_opposition_qual
 from crmgrasp.experiments.figure7 import Figure7Config, figure_7_learning_curve
 from crmgrasp.experiments.figure8 import Figure8Config, figure_8_strategies
 from crmgrasp.experiments.figure9 import Figure9Config, figure_9_robonaut_trials
+from crmgrasp.experiments.stats import fmt
 
 __all__ = ["EXPERIMENTS", "NEEDS_MUJOCO", "IMAGES", "Row", "Runner"]
 
@@ -52,11 +53,11 @@ def _figure7(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
             s["paper_sarsa_episodes_to_5pct"],
             "about 60 (to its own plateau)",
         ),
-        ("best learner: episodes to within 5%", f"{s['best_episodes_to_5pct']} ({s['best_learner']})", "-"),
+        ("best learner: episodes to within 5%", f"{fmt(s['best_episodes_to_5pct'])} ({s['best_learner']})", "-"),
         ("paper SARSA: greedy policy within 5% after", s["paper_sarsa_greedy_episodes_to_5pct"], "-"),
         (
             "best learner: greedy policy within 5% after",
-            f"{s['best_greedy_episodes_to_5pct']} ({s['best_greedy_learner']})",
+            f"{fmt(s['best_greedy_episodes_to_5pct'])} ({s['best_greedy_learner']})",
             "about 60 (SARSA)",
         ),
         ("SARSA k=0 (memoryless) greedy CRMs", s["sarsa_k0_greedy_mean_steps"], "(not run; k = 2 used)"),
@@ -93,8 +94,12 @@ def _compare(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
     cfg = CompareConfig.quick(seed=seed) if quick else CompareConfig(seed=seed)
     s = compare(out, cfg, backend=ctx["backend"], progress=ctx.get("progress"))
     return s, [
-        ("best learner, greedy CRMs", f"{s['best_learner_mean_crms']} ({s['best_learner']})", "1.8"),
-        ("belief-space optimum / clairvoyant bound", f"{s['belief_optimum']} / {s['clairvoyant_bound']}", "-"),
+        ("best learner, greedy CRMs", f"{fmt(s['best_learner_mean_crms'])} ({s['best_learner']})", "1.8"),
+        (
+            "belief-space optimum / clairvoyant bound",
+            f"{fmt(s['belief_optimum'], 4)} / {fmt(s['clairvoyant_bound'], 4)}",
+            "-",
+        ),
         ("grasp controller (no learning), CRMs", s["grasp_controller_mean_crms"], "-"),
         ("belief-space policy executed on fresh starts, CRMs", s["belief_policy_executed_mean_crms"], "-"),
     ]
@@ -129,7 +134,7 @@ def _figure9_mujoco(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> t
         ("MuJoCo grasps / trials (kinematic policy)", f"{s['successes']} / {s['trials']}", "11 / 11 (Robonaut)"),
         (
             "CRMs per trial: MuJoCo / kinematic, same starts",
-            f"{s['mean_crms_mujoco']} / {s['mean_crms_kinematic']}",
+            f"{fmt(s['mean_crms_mujoco'])} / {fmt(s['mean_crms_kinematic'])}",
             "2",
         ),
         ("most extra CRMs on MuJoCo in one trial", s["max_extra_crms"], "-"),
@@ -151,6 +156,13 @@ EXPERIMENTS: dict[str, tuple[str, Runner]] = {
     "figure9-mujoco": ("Fig. 9 on the MuJoCo stand-in: the kinematic policy transferred, 11 trials", _figure9_mujoco),
 }
 """Experiment name -> (description, runner(out_dir, seed, quick, context))."""
+
+QUICK_BUDGETS = {
+    "figure7": ("5 trials x 300 episodes", ("paper SARSA", "best learner", "SARSA k=0")),
+    "compare": ("5 trials x 300 episodes", ("best learner",)),
+}
+"""Experiments whose learned numbers ``--quick`` computes on a smaller budget: that
+budget, and the first words of the quantities that depend on it."""
 
 NEEDS_MUJOCO = ("figure4-mujoco", "figure9-mujoco")
 """The experiments that need the extra ``crmgrasp[mujoco]`` (skipped without it)."""

@@ -3,23 +3,58 @@ index ``README.md`` with every figure and our numbers beside the paper's."""
 
 from __future__ import annotations
 
+import json
+import sys
 import time
 from pathlib import Path
 from typing import Any
 
-from crmgrasp._io import atomic_write_text, json_safe
+from crmgrasp._io import atomic_write_text, json_safe, write_json
 from crmgrasp._progress import Progress
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.experiments.registry import EXPERIMENTS, IMAGES, NEEDS_MUJOCO
+from crmgrasp.experiments.registry import EXPERIMENTS, IMAGES, NEEDS_MUJOCO, QUICK_BUDGETS
 from crmgrasp.experiments.runs import RunFolder
+from crmgrasp.experiments.stats import fmt
 from crmgrasp.kernels import BACKENDS
 
 __all__ = ["reproduce", "select"]
 
 
 def _cell(value: object) -> str:
-    """Markdown table cell: pipes escaped."""
-    return str(value).replace("|", "\\|")
+    """Markdown table cell: numbers rounded (:func:`~crmgrasp.experiments.stats.fmt`),
+    pipes escaped."""
+    return fmt(value).replace("|", "\\|")
+
+
+FULL_RUN = Path(__file__).with_name("full_run.json")
+"""The index rows of a full ``crmgrasp reproduce --seed 0`` (all extras), shown beside a
+quick run's numbers; rewritten by ``python -m crmgrasp.experiments.reproduce RUN_DIR``."""
+
+
+def full_run_rows() -> dict[str, str]:
+    """``"figure | quantity" -> ours`` of the recorded full run (empty if none)."""
+    try:
+        doc = json.loads(FULL_RUN.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return {str(k): str(v) for k, v in doc.get("rows", {}).items()} if isinstance(doc, dict) else {}
+
+
+def record_full_run(run_dir: str | Path) -> Path:
+    """Write :data:`FULL_RUN` from a complete full-budget reproduce run folder."""
+    from crmgrasp.experiments.runs import _read
+
+    rec = _read(Path(run_dir))
+    if rec.get("command") != "reproduce" or rec["status"] != "complete" or rec["config"].get("quick"):
+        raise CrmgraspError(f"{str(run_dir)!r} is not a complete full-budget reproduce run")
+    rows = {f"{name} | {row[0]}": _cell(row[1]) for name, done in rec["completed"].items() for row in done["rows"]}
+    doc = {
+        "seed": rec["config"]["seed"],
+        "git_commit": rec.get("git_commit"),
+        "version": rec.get("version"),
+        "rows": rows,
+    }
+    return write_json(FULL_RUN, doc)
 
 
 def select(names: list[str] | None) -> tuple[list[str], list[str]]:
@@ -65,15 +100,24 @@ def reproduce(
     out = Path(out_dir)
     results: dict[str, dict[str, Any]] = {}
     ctx: dict[str, Any] = {"backend": backend, "progress": progress}
-    budget = "quick budgets (not converged; see the full run)" if quick else "full budgets"
+    full = full_run_rows() if quick else {}
     lines = [
         "# crmgrasp reproduction",
         "",
-        f"seed {seed}, {budget}. Regenerate with `crmgrasp reproduce{' --quick' if quick else ''} --seed {seed}`.",
+        f"seed {seed}, {'quick budgets' if quick else 'full budgets'}. "
+        f"Regenerate with `crmgrasp reproduce{' --quick' if quick else ''} --seed {seed}`.",
         "",
-        "| figure | quantity | ours | paper |",
-        "| --- | --- | --- | --- |",
     ]
+    if quick:
+        lines += [
+            "A quick run learns on small budgets: its learned numbers have not converged (marked with their "
+            "budget); the column *full run* shows the same quantity from a full run with seed 0.",
+            "",
+            "| figure | quantity | ours | full run | paper |",
+            "| --- | --- | --- | --- | --- |",
+        ]
+    else:
+        lines += ["| figure | quantity | ours | paper |", "| --- | --- | --- | --- |"]
     body: list[str] = []
     stage = progress.stage("reproduce", len(names), "experiments") if progress else None
     for name in names:
@@ -95,13 +139,27 @@ def reproduce(
         if stage:
             stage.advance()
         results[name] = summary
-        lines += [f"| {name} | {_cell(q)} | {_cell(ours)} | {_cell(paper)} |" for q, ours, paper in rows]
+        for q, ours, paper in rows:
+            if quick:
+                small, learned = QUICK_BUDGETS.get(name, ("", ()))
+                mark = f" (not converged at {small})" if q.startswith(tuple(learned)) and learned else ""
+                ref = full.get(f"{name} | {q}", "-")
+                lines.append(f"| {name} | {_cell(q)} | {_cell(ours)}{mark} | {ref} | {_cell(paper)} |")
+            else:
+                lines.append(f"| {name} | {_cell(q)} | {_cell(ours)} | {_cell(paper)} |")
         body += [f"## {name}", "", desc, ""] + [
             f"![{name}]({name}/{img})" for img in IMAGES[name] if (out / name / img).exists()
         ]
         body += ["", f"Data and config: `{name}/` ({summary['seconds']} s).", ""]
     if stage:
         stage.end()
-    lines += [f"| {name} | skipped: needs `pip install 'crmgrasp[mujoco]'` | - | - |" for name in skipped]
+    dash = " - |" * (3 if quick else 2)
+    lines += [f"| {name} | skipped: needs `pip install 'crmgrasp[mujoco]'` |{dash}" for name in skipped]
     atomic_write_text(out / "README.md", "\n".join([*lines, "", *body]))
     return results
+
+
+if __name__ == "__main__":  # python -m crmgrasp.experiments.reproduce RUN_DIR
+    if len(sys.argv) != 2:
+        sys.exit("usage: python -m crmgrasp.experiments.reproduce RUN_DIR  (a complete full reproduce run)")
+    print(f"wrote {record_full_run(sys.argv[1])}")

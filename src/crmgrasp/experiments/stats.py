@@ -1,0 +1,92 @@
+"""Honest numbers: intervals over independent trials, and values written for reading.
+
+A learner's score varies with its training seed; the variation that matters is
+between trials, not between the episodes of one trial. So every interval of a
+learned result is a bootstrap interval of the mean over per-trial values
+(:func:`bootstrap_ci`, percentile method, 10,000 resamples, seeded), and the
+interquartile mean (:func:`iqm`, the mean of the middle 50%) is given beside the
+mean. Text shows rounded numbers and ``never`` for a threshold not reached; CSV
+and JSON files keep full precision and ``null``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+__all__ = ["bootstrap_ci", "iqm", "fmt", "never", "budget"]
+
+
+def bootstrap_ci(values: Any, seed: int = 0, confidence: float = 0.95, resamples: int = 10_000) -> tuple[float, float]:
+    """Percentile bootstrap interval of the mean of ``values`` (one value per trial);
+    ``(nan, nan)`` for fewer than two values, ``(v, v)`` when all are equal.
+
+    Examples
+    --------
+    >>> lo, hi = bootstrap_ci([1.0, 2.0, 3.0, 4.0], seed=0)
+    >>> 1.0 <= lo < 2.5 < hi <= 4.0
+    True
+    """
+    x = np.asarray(values, dtype=np.float64).ravel()
+    if x.size < 2 or not np.all(np.isfinite(x)):
+        return (math.nan, math.nan)
+    if np.all(x == x[0]):
+        return (float(x[0]), float(x[0]))
+    from scipy.stats import bootstrap
+
+    res = bootstrap(
+        (x,),
+        np.mean,
+        confidence_level=confidence,
+        n_resamples=resamples,
+        method="percentile",
+        random_state=np.random.default_rng(seed),
+    )
+    return float(res.confidence_interval.low), float(res.confidence_interval.high)
+
+
+def iqm(values: Any) -> float:
+    """Interquartile mean: the mean of the middle 50% of ``values``.
+
+    Examples
+    --------
+    >>> iqm([0.0, 1.0, 2.0, 3.0, 100.0, -100.0, 1.5, 2.5])
+    1.75
+    """
+    from scipy.stats import trim_mean
+
+    x = np.asarray(values, dtype=np.float64).ravel()
+    return float(trim_mean(x, 0.25)) if x.size else math.nan
+
+
+def never(value: Any) -> str:
+    """``"never"`` for a threshold not reached (``None``), else the value as text."""
+    return "never" if value is None else fmt(value)
+
+
+def fmt(value: Any, digits: int = 3) -> str:
+    """A number for reading: ``digits`` decimals with trailing zeros kept (floats),
+    thousands separators (integers), ``never`` for ``None``, ``n/a`` for NaN.
+
+    Examples
+    --------
+    >>> fmt(2.3636363636363638), fmt(1049), fmt(None), fmt(float("nan")), fmt("text")
+    ('2.364', '1,049', 'never', 'n/a', 'text')
+    """
+    if value is None:
+        return "never"
+    if isinstance(value, bool):
+        return str(value)
+    if isinstance(value, (int, np.integer)):
+        return f"{int(value):,}"
+    if isinstance(value, (float, np.floating)):
+        return "n/a" if not math.isfinite(value) else f"{float(value):.{digits}f}"
+    return str(value)
+
+
+def budget(trials: int, episodes: int, seed: int | None = None) -> str:
+    """``"20 trials x 2,000 episodes, seed 0"`` (singular for one trial)."""
+    text = f"{trials:,} trial{'s' if trials != 1 else ''} x {episodes:,} episodes"
+    return text if seed is None else f"{text}, seed {seed}"
