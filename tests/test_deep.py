@@ -108,3 +108,45 @@ def test_compare_cli_deep_steps(tmp_path, capsys):
     with pytest.raises(SystemExit) as info:  # refused by the parser, before any work
         main(["compare", "--quick", "--deep-steps", "-5", "--out", str(tmp_path)])
     assert info.value.code == 2
+
+
+@needs_deep
+def test_recurrent_policy_saves_loads_predicts_and_runs(tmp_path, capsys):
+    from crmgrasp.agents.deep import RecurrentPolicy
+    from crmgrasp.agents.policy import load_policy
+    from crmgrasp.cli import main
+    from crmgrasp.model.sensing import observe
+
+    task = make_task("paper-box")
+    run = train_recurrent_ppo(task, 3, TINY)
+    path = RecurrentPolicy(run.model, task).save(tmp_path / "deep.zip")
+    policy = load_policy(path)  # by path alone: the file carries its task
+    assert isinstance(policy, RecurrentPolicy) and policy.task == task
+    starts = [task.sample_start(np.random.default_rng(i)) for i in range(10)]
+    a = evaluate_recurrent(run.model, task, starts, np.random.default_rng(0))
+    b = evaluate_recurrent(policy.model, task, starts, np.random.default_rng(0))
+    np.testing.assert_array_equal(a[0], b[0])  # the same model
+    first = (*observe(starts[0]), 0)
+    assert policy.predict([first]) == int(
+        run.model.predict(
+            np.array([list(policy_features(task, first))], dtype=np.float32),
+            deterministic=True,
+            episode_start=np.array([True]),
+        )[0][0]
+    )
+    assert main(["evaluate", "--policy", str(path), "--episodes", "5", "--json"]) == 0
+    assert '"kind": "deep"' in capsys.readouterr().out
+    log = tmp_path / "log.csv"
+    assert main(["run", "--policy", str(path), "--a", "-0.15,-0.02", "--b", "-0.10,-0.05", "--log", str(log)]) == 0
+    data = bytearray(path.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    (tmp_path / "bad.zip").write_bytes(bytes(data))
+    assert main(["evaluate", "--policy", str(tmp_path / "bad.zip")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and ("damaged" in err or "checksum" in err)
+
+
+def policy_features(task, obs):
+    from crmgrasp.agents.deep import features
+
+    return features(obs[0], obs[1], obs[2], obs[3], task.hand.aperture)

@@ -17,9 +17,16 @@ checkpoints (:func:`~crmgrasp.agents.training.checkpoint_generators`).
 
 from __future__ import annotations
 
+import hashlib
 import importlib
+import io
+import json
+import os
 import time
+import zipfile
+from collections.abc import Sequence
 from dataclasses import dataclass, fields
+from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
@@ -41,6 +48,7 @@ __all__ = [
     "deep_available",
     "train_recurrent_ppo",
     "evaluate_recurrent",
+    "RecurrentPolicy",
 ]
 
 N_ERRORS = len(Error)
@@ -116,6 +124,108 @@ class DeepRun:
     def greedy_episodes_to_within(self, reference: float, factor: float = 1.05) -> int | None:
         """First checkpoint (in training episodes) from which the greedy policy stays within ``factor``."""
         return checkpoints_to_within(self.checkpoints, self.checkpoint_steps, reference, factor)
+
+
+DEEP_FORMAT = "crmgrasp-deep-policy"
+_META = "crmgrasp.json"  # our member of the model's zip archive
+MAX_MODEL_BYTES = 256 * 2**20
+"""Largest deep policy file read (256 MiB)."""
+
+
+def _model_digest(archive: zipfile.ZipFile) -> str:
+    """SHA-256 over the names and contents of the model's members (ours excluded)."""
+    h = hashlib.sha256()
+    for name in sorted(n for n in archive.namelist() if n != _META):
+        h.update(name.encode() + b"\0" + archive.read(name) + b"\0")
+    return h.hexdigest()
+
+
+class RecurrentPolicy:
+    """A trained RecurrentPPO model with the task it was trained on.
+
+    Saved as the model's own zip archive (stable-baselines3 format) with one more
+    member, ``crmgrasp.json``: format, version, the task (task-file schema) and a
+    SHA-256 of the model's members, so the file loads by path alone and an edited or
+    truncated file is refused. Loading runs stable-baselines3's loader, which unpickles
+    parts of the archive: load deep policies only from sources you trust.
+    """
+
+    def __init__(self, model: Any, task: Task) -> None:
+        self.model = model
+        self.task = task
+
+    def predict(
+        self, observations: Sequence[Any], actions: Sequence[int] = (), rng: np.random.Generator | None = None
+    ) -> int:
+        """The deterministic action after an episode's history (observations
+        ``(rho, m_a, m_b, error)``, one more than ``actions``; the LSTM reads the
+        observations from the episode's start; ``actions`` are checked, ``rng`` unused)."""
+        from crmgrasp.agents.policy import observation_indices
+
+        observation_indices(self.task, [tuple(o) for o in observations], actions)  # checks
+        state, action = None, None
+        for i, o in enumerate(observations):
+            f = features(float(o[0]), float(o[1]), float(o[2]), int(o[3]), self.task.hand.aperture)
+            action, state = self.model.predict(
+                f[None], state=state, episode_start=np.array([i == 0]), deterministic=True
+            )
+        return int(np.asarray(action).ravel()[0])
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the model and its task atomically to ``path`` (a .zip)."""
+        from crmgrasp._io import atomic_write_bytes, dumps_json
+        from crmgrasp.tasks import task_to_dict
+
+        buf = io.BytesIO()
+        self.model.save(buf)
+        out = io.BytesIO()
+        with zipfile.ZipFile(io.BytesIO(buf.getvalue())) as src, zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as dst:
+            digest = _model_digest(src)
+            for name in src.namelist():
+                dst.writestr(name, src.read(name))
+            meta = {
+                "format": DEEP_FORMAT,
+                "version": 1,
+                "algorithm": "RecurrentPPO",
+                "task": self.task.name,
+                "task_spec": task_to_dict(self.task),
+                "model_sha256": digest,
+            }
+            dst.writestr(_META, dumps_json(meta))
+        return atomic_write_bytes(path, out.getvalue())
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str], task: Task | None = None) -> RecurrentPolicy:
+        """Read a saved deep policy (one-line errors for a damaged file or another task)."""
+        from crmgrasp._io import read_bounded
+        from crmgrasp.agents.policy import first_difference, policy_task
+        from crmgrasp.tasks import task_to_dict
+
+        where = f"policy file {str(path)!r}"
+        data = read_bounded(path, MAX_MODEL_BYTES, "policy file")
+        try:
+            with zipfile.ZipFile(io.BytesIO(data)) as archive:
+                meta = json.loads(archive.read(_META))
+                digest = _model_digest(archive)
+        except KeyError:
+            raise CrmgraspError(f"{where} is a zip archive but not a crmgrasp deep policy") from None
+        except (zipfile.BadZipFile, ValueError, OSError, RecursionError) as exc:
+            raise CrmgraspError(f"{where} is damaged ({exc})") from None
+        if not isinstance(meta, dict) or meta.get("format") != DEEP_FORMAT or meta.get("version") != 1:
+            raise CrmgraspError(f"{where} is not a crmgrasp deep policy (version 1)")
+        if meta.get("model_sha256") != digest:
+            raise CrmgraspError(f"{where}: the checksum does not match: the file was edited or damaged")
+        own = policy_task(meta, where)
+        if task is not None:
+            diff = first_difference(task_to_dict(own), task_to_dict(task))
+            if diff is not None:
+                raise CrmgraspError(f"{where} was made for another task than {task.name!r} (it differs in {diff})")
+        _, contrib, _, _ = _modules()
+        try:
+            model = contrib.RecurrentPPO.load(io.BytesIO(data), device="cpu")
+        except Exception as exc:  # stable-baselines3's own errors, in one line
+            raise CrmgraspError(f"{where}: the model does not load ({type(exc).__name__}: {exc})") from None
+        return cls(model, task or own)
 
 
 def _modules() -> tuple[Any, Any, Any, Any]:

@@ -34,6 +34,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -42,13 +43,24 @@ import numpy as np
 from crmgrasp._io import read_bounded, write_json
 from crmgrasp._validation import CrmgraspError, shown
 from crmgrasp.agents.tabular import TabularAgent
+from crmgrasp.model.hand import Error
 from crmgrasp.model.history import MAX_K, KOrderEncoder
 from crmgrasp.tasks import Task, make_task, task_from_dict, task_names, task_to_dict
 
 if TYPE_CHECKING:
     from crmgrasp.agents.symmetric import SymmetricAgent
 
-__all__ = ["GreedyPolicy", "FORMAT", "VERSION", "MAX_BYTES", "read_policy_document", "policy_digest", "policy_task"]
+__all__ = [
+    "GreedyPolicy",
+    "FORMAT",
+    "VERSION",
+    "MAX_BYTES",
+    "read_policy_document",
+    "policy_digest",
+    "policy_task",
+    "load_policy",
+    "observation_indices",
+]
 
 FORMAT = "crmgrasp-policy"
 VERSION = 2
@@ -103,17 +115,17 @@ def read_policy_document(path: str | os.PathLike[str]) -> Any:
         raise CrmgraspError(f"policy file {str(p)!r} is not valid JSON ({exc})") from None
 
 
-def _first_difference(a: Any, b: Any, where: str = "") -> str | None:
+def first_difference(a: Any, b: Any, where: str = "") -> str | None:
     """The first key path at which two JSON values differ (``None`` if equal)."""
     if isinstance(a, dict) and isinstance(b, dict):
         for key in sorted(set(a) | set(b), key=str):
-            sub = _first_difference(a.get(key), b.get(key), f"{where}.{key}" if where else str(key))
+            sub = first_difference(a.get(key), b.get(key), f"{where}.{key}" if where else str(key))
             if sub is not None:
                 return sub
         return None
     if isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
         for i, (x, y) in enumerate(zip(a, b)):
-            sub = _first_difference(x, y, f"{where}[{i}]")
+            sub = first_difference(x, y, f"{where}[{i}]")
             if sub is not None:
                 return sub
         return None
@@ -137,6 +149,50 @@ def policy_task(doc: Any, source: str = "policy") -> Task:
     if not isinstance(name, str):
         raise CrmgraspError(f"{source} names no task")
     return make_task(name)
+
+
+ObservationLike = int | tuple[float, float, float, int] | Sequence[float]
+"""A discrete observation index, or ``(rho, m_a, m_b, error)``."""
+
+
+def observation_indices(task: Task, observations: Sequence[ObservationLike], actions: Sequence[int]) -> list[int]:
+    """Check a history (``len(observations) == len(actions) + 1``, indices in range) and
+    turn every observation into its discrete index (one-line errors)."""
+    if len(observations) < 1 or len(observations) != len(actions) + 1:
+        raise CrmgraspError(
+            f"a history needs one more observation than actions, got {len(observations)} and {len(actions)}"
+        )
+    n = len(task.actions)
+    for a in actions:
+        if isinstance(a, bool) or not isinstance(a, (int, np.integer)) or not 0 <= a < n:
+            raise CrmgraspError(f"action {shown(a)} is not an integer in [0, {n})")
+    out = []
+    for o in observations:
+        if isinstance(o, (int, np.integer)) and not isinstance(o, bool):
+            if not 0 <= o < task.discretizer.size:
+                raise CrmgraspError(f"observation index {o} is outside [0, {task.discretizer.size})")
+            out.append(int(o))
+            continue
+        try:
+            rho, m_a, m_b, err = o  # type: ignore[misc]
+            values = [float(rho), float(m_a), float(m_b)]
+        except (TypeError, ValueError):
+            raise CrmgraspError(f"an observation is an index or (rho, m_a, m_b, error), got {shown(o)}") from None
+        if not all(np.isfinite(values)) or err not in range(len(Error)):
+            raise CrmgraspError(f"observation {shown(o)} is not finite or has an unknown error flag")
+        out.append(task.discretizer.index_of(values[0], values[1], values[2], int(err)))
+    return out
+
+
+def load_policy(path: str | os.PathLike[str], task: Task | None = None) -> Any:
+    """A saved policy of any kind: a tabular :class:`GreedyPolicy` (JSON) or a deep
+    :class:`~crmgrasp.agents.deep.RecurrentPolicy` (zip; needs the extra ``deep``)."""
+    head = read_bounded(path, MAX_BYTES, "policy file")[:2] if not str(path).endswith(".json") else b"{"
+    if head == b"PK":
+        from crmgrasp.agents.deep import RecurrentPolicy
+
+        return RecurrentPolicy.load(path, task)
+    return GreedyPolicy.load(path, task)
 
 
 class GreedyPolicy:
@@ -174,6 +230,24 @@ class GreedyPolicy:
         return acts[0] if len(acts) == 1 else acts[int(rng.integers(len(acts)))]
 
     act = greedy
+
+    def predict(
+        self,
+        observations: Sequence[ObservationLike],
+        actions: Sequence[int] = (),
+        rng: np.random.Generator | None = None,
+    ) -> int:
+        """The action after an episode's history: ``observations`` ``o_0 .. o_t`` and the
+        ``actions`` ``a_0 .. a_{t-1}`` taken between them (one fewer).
+
+        Each observation is a discrete index of the task's bins, or a tuple
+        ``(rho, m_a, m_b, error)`` (binned here). Ties and unlisted states draw from
+        ``rng`` (default: a generator seeded with 0, so a call is repeatable)."""
+        codes = observation_indices(self.task, observations, actions)
+        hist = self.encoder.start(codes[0])
+        for a, o in zip(actions, codes[1:]):
+            hist = self.encoder.push(hist, int(a), o)
+        return self.greedy(self.encoder.encode(hist), rng if rng is not None else np.random.default_rng(0))
 
     def update(self, *args: Any) -> None:
         """A saved policy does not learn."""
@@ -226,7 +300,7 @@ class GreedyPolicy:
         if doc["task"] != task.name:
             raise bad(f"policy is for task {doc['task']!r}, not {task.name!r}")
         if "task_spec" in doc:
-            where = _first_difference(doc["task_spec"], task_to_dict(task))
+            where = first_difference(doc["task_spec"], task_to_dict(task))
             if where is not None:
                 raise bad(f"policy was made for another version of task {task.name!r} (it differs in {where})")
         k = doc["k"]

@@ -221,21 +221,28 @@ def _cmd_learn(args: argparse.Namespace) -> int:
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
-    from crmgrasp.agents import GreedyPolicy, evaluate
-
-    if args.episodes < 1:
-        raise CrmgraspError(f"--episodes must be >= 1, got {args.episodes}")
-    policy = GreedyPolicy.load(args.policy, None if args.task is None else resolve_task(args.task))
-    task = policy.task
+    from crmgrasp.agents import evaluate
+    from crmgrasp.agents.policy import GreedyPolicy, load_policy
     from crmgrasp.kernels import kernel_for
 
-    kernel = kernel_for(task, args.backend)
+    policy = load_policy(args.policy, None if args.task is None else resolve_task(args.task))
+    task = policy.task
     rng = np.random.default_rng(args.seed)
-    steps, success = evaluate(task, policy, policy.encoder, args.episodes, rng, kernel=kernel)
+    with _progress(args).stage(f"evaluate {args.policy.name} on {task.name}", 0):
+        if isinstance(policy, GreedyPolicy):
+            steps, success = evaluate(
+                task, policy, policy.encoder, args.episodes, rng, kernel=kernel_for(task, args.backend)
+            )
+        else:
+            from crmgrasp.agents.deep import evaluate_recurrent
+
+            starts = [task.sample_start(rng) for _ in range(args.episodes)]
+            steps, success = evaluate_recurrent(policy.model, task, starts, rng)
     half = 1.96 * float(steps.std(ddof=1)) / math.sqrt(len(steps)) if len(steps) > 1 else 0.0
     result = {
         "task": task.name,
         "policy": str(args.policy),
+        "kind": "tabular" if isinstance(policy, GreedyPolicy) else "deep",
         "episodes": args.episodes,
         "seed": args.seed,
         "mean_steps": float(steps.mean()),
@@ -246,8 +253,8 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
         args,
         result,
         f"{args.policy} on {task.name}: {result['mean_steps']:.3f} CRMs per episode "
-        f"(95% CI {result['ci95'][0]:.3f}-{result['ci95'][1]:.3f}), success {result['success_rate']:.1%} "
-        f"over {args.episodes} episodes",
+        f"(95% CI over episodes {result['ci95'][0]:.3f}-{result['ci95'][1]:.3f}), "
+        f"success {result['success_rate']:.1%} over {args.episodes:,} episodes",
     )
 
 
@@ -331,11 +338,11 @@ def _cmd_pomdp(args: argparse.Namespace) -> int:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from crmgrasp.agents import GreedyPolicy
+    from crmgrasp.agents.policy import load_policy
     from crmgrasp.hardware.runner import KinematicHand, PolicyRunner
 
     check_output(args.log, "--log")
-    policy = GreedyPolicy.load(args.policy)
+    policy = load_policy(args.policy)
     task = policy.task
     start = task.hand.contact(task.obj, args.a, args.b)
     if task.hand.feasible(task.obj, start) is not Error.NONE:
@@ -432,6 +439,16 @@ def main(argv: Sequence[str] | None = None) -> int:
             f"crmgrasp {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), file=sys.stderr
         )
         return 2
+    except Exception as exc:  # a bug: one line for the user, the traceback with CRMGRASP_DEBUG=1
+        if os.environ.get("CRMGRASP_DEBUG"):
+            raise
+        text = " ".join(str(exc).split())[:300]
+        print(
+            f"crmgrasp {args.command}: internal error ({type(exc).__name__}: {text}); please report it "
+            "(CRMGRASP_DEBUG=1 shows the traceback)",
+            file=sys.stderr,
+        )
+        return 1
 
 
 if __name__ == "__main__":  # pragma: no cover

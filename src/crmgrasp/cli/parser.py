@@ -269,7 +269,11 @@ def build_parser() -> argparse.ArgumentParser:
         description="Run a saved policy greedily on fresh episodes of its task.",
     )
     p.add_argument(
-        "--policy", type=_path, required=True, help="policy.json written by `crmgrasp learn` (it carries its task)"
+        "--policy",
+        type=_path,
+        required=True,
+        help="a saved policy, carrying its task: policy.json (`crmgrasp learn`) or recurrent_ppo.zip "
+        "(`crmgrasp compare`, needs crmgrasp[deep])",
     )
     p.add_argument(
         "--task", default=None, metavar="TASK", help="check the policy against this task (default: the policy's own)"
@@ -356,7 +360,9 @@ def build_parser() -> argparse.ArgumentParser:
         description="Run a saved policy through the hand interface (here: the kinematic simulator) from the "
         "configuration given by --a and --b; write the step log to --log.",
     )
-    p.add_argument("--policy", type=_path, required=True, help="policy.json written by `crmgrasp learn`")
+    p.add_argument(
+        "--policy", type=_path, required=True, help="a saved policy: policy.json or recurrent_ppo.zip (deep)"
+    )
     p.add_argument("--a", type=_point, required=True, metavar="X,Y", help="start point for contact a (m)")
     p.add_argument("--b", type=_point, required=True, metavar="X,Y", help="start point for contact b (m)")
     p.add_argument("--log", type=_path, required=True, help="CSV step log to write")

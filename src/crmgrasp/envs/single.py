@@ -228,6 +228,7 @@ def register() -> None:
             entry_point="crmgrasp.envs.single:CRMGraspEnv",
             vector_entry_point="crmgrasp.envs.vector:CRMGraspVectorEnv",
             kwargs={"task": "paper-box"},
+            max_episode_steps=10,  # paper-box's max_steps: the env cuts episodes there itself
         )
 
 

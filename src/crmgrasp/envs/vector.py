@@ -19,6 +19,7 @@ bit (tested).
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -41,13 +42,22 @@ class CRMGraspVectorEnv(VectorEnv):
     metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}  # noqa: RUF012 - Gymnasium's convention
 
     def __init__(
-        self, num_envs: int = 1, task: Task | str = "paper-box", render_mode: str | None = None, backend: str = "auto"
+        self,
+        num_envs: int = 1,
+        task: Task | str = "paper-box",
+        render_mode: str | None = None,
+        backend: str = "auto",
+        max_episode_steps: int | None = None,
     ) -> None:
+        """``max_episode_steps`` (given by ``gymnasium.make_vec`` from the registration)
+        replaces the task's ``max_steps``: episodes are cut off inside the batch."""
         if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
             raise CrmgraspError(f"num_envs must be an integer >= 1, got {num_envs!r}")
         if render_mode is not None:
             raise CrmgraspError("the vector environment does not render; use CRMGraspEnv")
         self.task = make_task(task) if isinstance(task, str) else task
+        if max_episode_steps is not None and max_episode_steps != self.task.max_steps:
+            self.task = dataclasses.replace(self.task, max_steps=max_episode_steps)
         self.kernel: Kernel = kernel_for(self.task, backend)
         self.num_envs = num_envs
         self.render_mode = None

@@ -22,7 +22,13 @@ import numpy as np
 from crmgrasp._io import atomic_write_text, save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
 from crmgrasp.agents.controller import run_controller
-from crmgrasp.agents.deep import RecurrentPPOConfig, deep_available, evaluate_recurrent, train_recurrent_ppo
+from crmgrasp.agents.deep import (
+    RecurrentPolicy,
+    RecurrentPPOConfig,
+    deep_available,
+    evaluate_recurrent,
+    train_recurrent_ppo,
+)
 from crmgrasp.agents.training import episodes_to_within
 from crmgrasp.experiments.learning import SYMMETRIC_DYNA_Q, LearnerSpec, learn, usable
 from crmgrasp.experiments.runs import RunFolder
@@ -229,6 +235,7 @@ def _deep_row(
         np.concatenate([np.full(window - 1, np.nan), smooth]),
         np.zeros(len(run.episode_steps)),
     )
+    RecurrentPolicy(run.model, task).save(out / "recurrent_ppo.zip")
     write_csv(out / "deep_curve.csv", ["episode", "crms"], [[i + 1, int(v)] for i, v in enumerate(run.episode_steps)])
     write_csv(
         out / "deep_checkpoints.csv", ["episode", "greedy_mean_steps"], zip(run.checkpoints, run.checkpoint_steps)

@@ -96,9 +96,11 @@ class RunResult:
 
 
 class PolicyRunner:
-    """Drives a :class:`~crmgrasp.agents.policy.GreedyPolicy` on a :class:`HandInterface`."""
+    """Drives a saved policy (a tabular :class:`~crmgrasp.agents.policy.GreedyPolicy` or a
+    deep :class:`~crmgrasp.agents.deep.RecurrentPolicy`: anything with ``task`` and
+    ``predict(observations, actions, rng)``) on a :class:`HandInterface`."""
 
-    def __init__(self, policy: GreedyPolicy, task: Task | None = None) -> None:
+    def __init__(self, policy: GreedyPolicy | Any, task: Task | None = None) -> None:
         """``task`` (default: the policy's) may be a variant, e.g. with noise or another
         palm tolerance, but must keep the policy's name, CRM set and bins."""
         self.policy = policy
@@ -111,9 +113,11 @@ class PolicyRunner:
         self, hand: HandInterface, rng: np.random.Generator, log: str | os.PathLike[str] | None = None
     ) -> RunResult:
         """Run one episode; write the step log to ``log`` (CSV) if given."""
-        t, enc = self.task, self.policy.encoder
+        t = self.task
         rows: list[list[Any]] = []
-        error, action, hist = Error.NONE, None, None
+        error = Error.NONE
+        seen: list[tuple[float, float, float, int]] = []
+        taken: list[int] = []
         result = None
         for step in range(t.max_steps + 1):
             reading = hand.sense()
@@ -122,7 +126,7 @@ class PolicyRunner:
                 break
             obs = observe(reading)
             index = t.discretizer.index(obs, error)
-            hist = enc.start(index) if hist is None or action is None else enc.push(hist, action, index)
+            seen.append((obs.rho, obs.m_a, obs.m_b, int(error)))
             raw: dict[str, Any] = getattr(hand, "raw_reading", dict)()
             row = [step, *reading.a, *reading.b, *obs, index, t.discretizer.label(index)]
             if t.is_success(reading):
@@ -133,7 +137,8 @@ class PolicyRunner:
                 rows.append([*row, "", "", "", dumps_json(raw, indent=None)])
                 result = RunResult(step, False, "step limit")
                 break
-            action = self.policy.greedy(enc.encode(hist), rng)
+            action = self.policy.predict(seen, taken, rng)
+            taken.append(action)
             crm = t.actions[action]
             error = hand.execute(crm)
             rows.append([*row, action, str(crm), error.name.lower(), dumps_json(raw, indent=None)])
