@@ -20,7 +20,19 @@ from crmgrasp.model.contacts import LABELS, Config
 from crmgrasp.model.geometry import Disc, Polygon, Shape
 from crmgrasp.model.hand import Hand, Outcome
 
-__all__ = ["draw_object", "draw_scene", "scene_figure", "friction_histogram"]
+__all__ = [
+    "draw_object",
+    "draw_scene",
+    "scene_figure",
+    "friction_histogram",
+    "learning_curve_figure",
+    "checkpoint_figure",
+    "learner_color",
+    "rollout_panels",
+    "rollout_animation",
+    "cluster_figure",
+    "scene_legend",
+]
 
 COLORS = {"a": "tab:blue", "b": "tab:orange"}
 
@@ -90,7 +102,7 @@ def _draw_config(ax: Axes, hand: Hand, config: Config, scale: float, *, alpha: f
             lab + ("'" if primed else ""),
             (c.x, c.y),
             textcoords="offset points",
-            xytext=(-12 * c.nx - 4, -12 * c.ny - 4),
+            xytext=(-16 * c.nx - 4, -16 * c.ny - 4),
             color=COLORS[lab],
             alpha=alpha,
             fontsize=11,
@@ -129,6 +141,54 @@ def friction_histogram(values: Sequence[float], failures: int, title: str) -> Fi
     return fig
 
 
+LEARNER_COLORS = {
+    "SARSA k=2 (paper)": "black",
+    "Q-learning k=2": "0.45",
+    "SARSA(0.9) k=2": "tab:blue",
+    "Dyna-Q k=2 (20 samples)": "tab:orange",
+    "Dyna-Q k=1 (VI sweeps)": "tab:green",
+    "Dyna-Q k=1 (VI sweeps, mirror quotient)": "tab:red",
+    "fixed sequence": "tab:brown",
+    "random": "tab:pink",
+    "SARSA k=0": "tab:cyan",
+    "SARSA k=1": "tab:olive",
+    "SARSA k=2": "black",
+    "SARSA k=3": "tab:purple",
+}
+"""One colour per learner in every figure."""
+
+_SPARE = ("tab:purple", "tab:cyan", "tab:olive", "tab:gray", "gold", "navy", "teal", "maroon")
+
+
+def learner_color(name: str) -> str:
+    """The colour of a learner: fixed for the built-in ones, else chosen from its name
+    (the same in every figure and run)."""
+    if name in LEARNER_COLORS:
+        return LEARNER_COLORS[name]
+    return _SPARE[sum(name.encode()) % len(_SPARE)]
+
+
+def _smoothed(mean: np.ndarray, sem: np.ndarray, smooth: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Moving averages plotted at each window's last episode (1-based)."""
+    n = len(mean)
+    if smooth > 1 and n >= smooth:
+        kernel = np.ones(smooth) / smooth
+        mean, sem = np.convolve(mean, kernel, mode="valid"), np.convolve(sem, kernel, mode="valid")
+    return np.arange(n - len(mean) + 1, n + 1), mean, sem
+
+
+def _twins(curves: dict[str, tuple[np.ndarray, np.ndarray]]) -> dict[str, str]:
+    """Curve name -> the earlier curve it equals exactly (drawn dashed, named in the legend)."""
+    out: dict[str, str] = {}
+    names = list(curves)
+    for i, name in enumerate(names):
+        for other in names[:i]:
+            if other not in out and np.array_equal(curves[name][0], curves[other][0]):
+                out[name] = other
+                break
+    return out
+
+
 def learning_curve_figure(
     curves: dict[str, tuple[np.ndarray, np.ndarray]],
     reference: float | None,
@@ -138,86 +198,147 @@ def learning_curve_figure(
     paper: tuple[float, float] | None = None,
     smooth: int = 10,
     hlines: dict[str, float] | None = None,
+    per_panel: int = 4,
+    log_x: bool = False,
+    ylabel: str = "CRMs per episode",
 ) -> Figure:
-    """Mean CRMs per episode vs episode, one line per learner with a standard-error
-    band, the task's reference optimum as a dashed line, optionally the paper's
-    reported (episode, CRMs) point. Curves and bands are ``smooth``-episode moving
-    averages (plotted at the window's last episode); log-scaled episode axis."""
-    fig = Figure(figsize=(7.5, 4.5), layout="constrained")
-    ax = fig.add_subplot()
-    for name, (mean, sem) in curves.items():
-        if smooth > 1 and len(mean) >= smooth:
-            kernel = np.ones(smooth) / smooth
-            mean = np.convolve(mean, kernel, mode="valid")
-            sem = np.convolve(sem, kernel, mode="valid")
-        ep = np.arange(len(curves[name][0]) - len(mean) + 1, len(curves[name][0]) + 1)
-        lw = 2.2 if name == highlight else 1.2
-        (line,) = ax.plot(ep, mean, lw=lw, label=name)
-        ax.fill_between(ep, mean - sem, mean + sem, color=line.get_color(), alpha=0.2, lw=0)
-    if reference:
-        ax.axhline(reference, color="k", ls="--", lw=1, label=f"belief-space optimum {reference:g}")
-        ax.axhline(1.05 * reference, color="k", ls=":", lw=0.8, label="optimum + 5%")
-    for (label, value), style in zip((hlines or {}).items(), ["-.", (0, (5, 1)), (0, (1, 1)), "--"]):
-        ax.axhline(value, color="0.35", ls=style, lw=1.2, label=f"{label} {value:.3g}")
-    if paper:
-        ax.plot(*paper, "k*", ms=12, label=f"paper: {paper[1]:g} CRMs at ~{paper[0]:g} episodes")
-    ax.set_xscale("log")
-    ax.set_xlabel("episode")
-    ax.set_ylabel(f"CRMs per episode ({smooth}-episode mean)" if smooth > 1 else "CRMs per episode")
-    ax.set_ylim(bottom=0)
-    ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=7, loc="upper right")
+    """Mean CRMs per episode vs episode, one line per learner (its fixed colour,
+    :func:`learner_color`) with a standard-error band, at most ``per_panel`` bands per
+    panel (more learners: more panels, side by side, the same axes), the task's
+    reference optimum dashed and the paper's (episode, CRMs) point. A curve equal to an
+    earlier one is drawn dashed and named in the legend ("= SARSA ..."). Curves and bands
+    are ``smooth``-episode moving averages plotted at the window's last episode; linear
+    episode axis unless ``log_x``."""
+    twins = _twins(curves)
+    banded = [n for n in curves if n not in twins]
+    groups = [banded[i : i + per_panel] for i in range(0, max(len(banded), 1), per_panel)] or [[]]
+    fig = Figure(figsize=(6.0 * len(groups) + 1.5, 4.6), layout="constrained")
+    axes = fig.subplots(1, len(groups), squeeze=False, sharey=True)[0]
+    for ax, group in zip(axes, groups):
+        for name in group + [t for t in twins if twins[t] in group]:
+            ep, mean, sem = _smoothed(*curves[name], smooth)
+            color = learner_color(name)
+            if name in twins:
+                ax.plot(ep, mean, lw=1.4, ls=(0, (4, 3)), color=color, zorder=5, label=f"{name} (= {twins[name]})")
+                continue
+            lw = 2.4 if name == highlight else 1.3
+            ax.plot(ep, mean, lw=lw, color=color, zorder=4 if name == highlight else 3, label=name)
+            ax.fill_between(ep, mean - sem, mean + sem, color=color, alpha=0.15, lw=0)
+        if reference:
+            ax.axhline(reference, color="k", ls="--", lw=1, label=f"belief-space optimum {reference:g}")
+            ax.axhline(1.05 * reference, color="k", ls=":", lw=0.8, label="optimum + 5%")
+        for (label, value), style in zip((hlines or {}).items(), ["-.", (0, (5, 1)), (0, (1, 1)), "--"]):
+            ax.axhline(value, color="0.35", ls=style, lw=1.2, label=f"{label} {value:.3g}")
+        if paper:
+            ax.plot(
+                *paper,
+                "*",
+                color="gold",
+                mec="k",
+                ms=14,
+                zorder=6,
+                label=f"paper: {paper[1]:g} CRMs at ~{paper[0]:g} ep.",
+            )
+        if log_x:
+            ax.set_xscale("log")
+        ax.set_xlabel("training episode")
+        ax.set_ylim(bottom=0)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+    axes[0].set_ylabel(f"{ylabel} ({smooth}-episode moving average)" if smooth > 1 else ylabel)
+    fig.suptitle(title, fontsize=10)
     return fig
+
+
+def scene_legend() -> tuple[list[Any], list[str]]:
+    """Legend handles for the scene's marks (contacts, normals, palm, goal line, path)."""
+    from matplotlib.lines import Line2D
+
+    handles = [
+        Line2D([], [], marker="o", ls="", color=COLORS["a"], ms=7),
+        Line2D([], [], marker="o", ls="", color=COLORS["b"], ms=7),
+        Line2D([], [], marker="s", ls="-", color="0.3", ms=6, lw=0.8),
+        Line2D([], [], ls="--", color="tab:green"),
+        Line2D([], [], ls=":", color="0.5"),
+        Line2D([], [], ls="-", marker=".", color="tab:purple"),
+    ]
+    labels = [
+        "contact a (arrow: sensed inward normal)",
+        "contact b",
+        "palm point (behind the contacts)",
+        "goal line within reach",
+        "goal line beyond reach",
+        "moving contact's path",
+    ]
+    return handles, labels
+
+
+def _limits(obj: Shape, points: np.ndarray) -> tuple[float, float, float, float]:
+    """A view holding the object and ``points`` with a margin."""
+    x0, y0, x1, y1 = obj.bounds()
+    pad = 0.25 * max(x1 - x0, y1 - y0)
+    return (
+        min(x0, points[:, 0].min()) - pad,
+        max(x1, points[:, 0].max()) + pad,
+        min(y0, points[:, 1].min()) - pad,
+        max(y1, points[:, 1].max()) + pad,
+    )
+
+
+def _rollout_points(steps: Sequence[Any]) -> list[tuple[float, float]]:
+    return [p for st in steps for p in (*st.outcome.path, st.config.a.point, st.config.b.point)]
 
 
 def rollout_panels(
     obj: Shape, hand: Hand, rows: Sequence[tuple[str, Sequence[Any]]], action_names: Sequence[str]
 ) -> Figure:
-    """One row per rollout, one panel per CRM: the configuration before it, the goal
-    line, the moving contact's path and the result (paper Fig. 8)."""
+    """One row per rollout, named, one panel per CRM (no empty panels): the
+    configuration before it, the goal line, the moving contact's path and the result
+    (paper Fig. 8). Every panel has the same scale; one legend explains the marks."""
     ncols = max(len(steps) for _, steps in rows)
-    fig = Figure(figsize=(3.6 * ncols, 3.2 * len(rows)), layout="constrained")
-    axes = fig.subplots(len(rows), ncols, squeeze=False)
-    for r, (label, steps) in enumerate(rows):
-        for c in range(ncols):
-            ax = axes[r][c]
+    fig = Figure(figsize=(3.6 * ncols, 3.3 * len(rows) + 0.9), layout="constrained")
+    subs = fig.subfigures(len(rows), 1, squeeze=False)[:, 0]
+    view = _limits(obj, np.array([p for _, steps in rows for p in _rollout_points(steps)]))
+    for sub, (label, steps) in zip(subs, rows):
+        sub.suptitle(f"start: {label}", fontsize=10, x=0.02, ha="left")
+        axes = sub.subplots(1, ncols, squeeze=False)[0]
+        for c, ax in enumerate(axes):
             if c >= len(steps):
-                ax.set_axis_off()
+                ax.remove()
                 continue
             st = steps[c]
-            title = f"{label}\n" if c == 0 else "\n"
-            title += f"CRM {c + 1}: {action_names[st.action]} -> {st.outcome.error.name.lower()}"
+            title = f"CRM {c + 1}: {action_names[st.action]} -> {st.outcome.error.name.lower()}"
             draw_scene(ax, obj, hand, st.config, st.outcome, title=title)
+            ax.set_xlim(view[0], view[1])
+            ax.set_ylim(view[2], view[3])
             if st.outcome.error == 0 and st.min_friction == 0.0:
                 ax.text(0.02, 0.04, "grasp (min friction 0)", transform=ax.transAxes, fontsize=8, color="tab:green")
+    handles, labels = scene_legend()
+    fig.legend(handles, labels, loc="outside lower center", ncols=3, fontsize=8, frameon=False)
     return fig
 
 
-def rollout_animation(obj: Shape, hand: Hand, steps: Sequence[Any], action_names: Sequence[str], path: Any) -> None:
-    """Animated GIF of one rollout: the moving contact travels each CRM's path."""
+def rollout_animation(
+    obj: Shape, hand: Hand, steps: Sequence[Any], action_names: Sequence[str], path: Any, label: str = ""
+) -> None:
+    """Animated GIF of one rollout: the moving contact travels each CRM's path; every
+    frame is titled with the start ``label``, the CRM and its outcome."""
     from matplotlib.animation import FuncAnimation, PillowWriter
 
     frames: list[tuple[int, int]] = []
     for i, st in enumerate(steps):
         frames += [(i, j) for j in range(1, len(st.outcome.path) + 1)]
     frames.append((len(steps) - 1, -1))
-    fig = Figure(figsize=(6, 4.5), layout="constrained")
+    fig = Figure(figsize=(6, 4.8), layout="constrained")
     ax = fig.add_subplot()
-    pts = np.array([p for st in steps for p in (*st.outcome.path, st.config.a.point, st.config.b.point)])
-    x0, y0, x1, y1 = obj.bounds()
-    pad = 0.25 * max(x1 - x0, y1 - y0)
-    limits = (
-        min(x0, pts[:, 0].min()) - pad,
-        max(x1, pts[:, 0].max()) + pad,
-        min(y0, pts[:, 1].min()) - pad,
-        max(y1, pts[:, 1].max()) + pad,
-    )
+    limits = _limits(obj, np.array(_rollout_points(steps)))
+    head = f"{label}\n" if label else ""
 
     def draw(frame: tuple[int, int]) -> list[Any]:
         i, j = frame
         st = steps[i]
         ax.clear()
-        title = f"CRM {i + 1}: {action_names[st.action]}"
+        title = f"{head}CRM {i + 1} of {len(steps)}: {action_names[st.action]}"
         if j == -1:
             done = f" -> {st.outcome.error.name.lower()} (done)"
             draw_scene(ax, obj, hand, st.config, st.outcome, title=title + done)
@@ -258,7 +379,9 @@ def checkpoint_figure(
     fig = Figure(figsize=(7.5, 4.5), layout="constrained")
     ax = fig.add_subplot()
     for name, (mean, sem) in curves.items():
-        ax.errorbar(checkpoints, mean, yerr=sem, marker="o", ms=3, lw=1.2, capsize=2, label=name)
+        ax.errorbar(
+            checkpoints, mean, yerr=sem, marker="o", ms=3, lw=1.2, capsize=2, color=learner_color(name), label=name
+        )
     if reference:
         ax.axhline(reference, color="k", ls="--", lw=1, label=f"belief-space optimum {reference:g}")
         ax.axhline(1.05 * reference, color="k", ls=":", lw=0.8, label="optimum + 5%")

@@ -182,7 +182,8 @@ def compare(
     fig = learning_curve_figure(
         curves,
         None,
-        f"{task.name}: learners, references and the grasp controller",
+        f"{task.name}: learners ({budget(config.trials, config.episodes, config.seed)}), references and the "
+        "grasp controller",
         hlines={**refs, "grasp controller": controller},
     )
     save_figure(fig, out / "compare.png", dpi=120)
@@ -231,10 +232,7 @@ def _deep_row(
     name = f"RecurrentPPO (LSTM {config.deep.lstm_hidden}), {config.deep.total_steps} steps"
     window = min(100, max(1, len(run.episode_steps)))
     smooth = np.convolve(run.episode_steps, np.ones(window) / window, mode="valid")
-    curves[f"{name}, {window}-ep. avg"] = (
-        np.concatenate([np.full(window - 1, np.nan), smooth]),
-        np.zeros(len(run.episode_steps)),
-    )
+    curves[f"{name}, one run (its own episodes)"] = (run.episode_steps, np.zeros(len(run.episode_steps)))
     RecurrentPolicy(run.model, task).save(out / "recurrent_ppo.zip")
     write_csv(out / "deep_curve.csv", ["episode", "crms"], [[i + 1, int(v)] for i, v in enumerate(run.episode_steps)])
     write_csv(

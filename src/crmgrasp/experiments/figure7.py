@@ -17,6 +17,7 @@ from typing import Any
 from crmgrasp._io import save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
 from crmgrasp.experiments.learning import SYMMETRIC_DYNA_Q, LearnerSpec, LearnRun, _mean_sem, best_policy, learn, usable
+from crmgrasp.experiments.stats import budget
 from crmgrasp.plotting import checkpoint_figure, learning_curve_figure
 from crmgrasp.tasks import make_task
 
@@ -110,7 +111,8 @@ def figure_7_learning_curve(
     fig = learning_curve_figure(
         {r.spec.name: (r.result.curve, r.result.sem) for r in runs},
         ref,
-        f"{task.name}: CRMs per episode, mean of {config.trials} trials (paper Fig. 7)",
+        f"{task.name}: CRMs per episode, mean of {budget(config.trials, config.episodes, config.seed)} "
+        "(paper Fig. 7; bands: standard error over trials)",
         highlight=paper_name,
         paper=(60.0, 1.8),
     )
@@ -118,7 +120,7 @@ def figure_7_learning_curve(
     fig = learning_curve_figure(
         {r.spec.name: (r.result.curve, r.result.sem) for r in ablation},
         ref,
-        f"History order ablation (SARSA, {config.trials} trials)",
+        f"History order ablation (SARSA, {budget(config.trials, config.episodes, config.seed)})",
     )
     save_figure(fig, out / "figure7_k_ablation.png", dpi=120)
     ckpt = runs[0].result.checkpoints
@@ -131,7 +133,8 @@ def figure_7_learning_curve(
         ckpt,
         {r.spec.name: _ms(r) for r in everything if r.spec.agent not in ("random", "fixed")},
         ref,
-        f"Greedy policy after N training episodes, {config.checkpoint_episodes} fixed starts x {config.trials} trials",
+        f"Greedy policy after N training episodes, {config.checkpoint_episodes} fixed starts x {config.trials} trials, "
+        f"seed {config.seed}",
     )
     save_figure(fig, out / "figure7_greedy.png", dpi=120)
     policy = best_policy(task, runs[0])

@@ -101,6 +101,6 @@ def figure_8_strategies(
     )
     save_figure(rollout_panels(task.obj, task.hand, rows, names), out / "figure8.png", dpi=100)
     with atomic_path(out / "figure8.gif") as tmp:
-        rollout_animation(task.obj, task.hand, rows[-1][1], names, tmp)
+        rollout_animation(task.obj, task.hand, rows[-1][1], names, tmp, label=f"start: {rows[-1][0]}")
     write_json(out / "config.json", {"experiment": "figure8", "config": asdict(config), "summary": summary})
     return summary

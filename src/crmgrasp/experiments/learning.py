@@ -42,7 +42,7 @@ from crmgrasp.agents.training import (
     encoder_for,
 )
 from crmgrasp.experiments.runs import RunFolder
-from crmgrasp.experiments.stats import bootstrap_ci, iqm
+from crmgrasp.experiments.stats import bootstrap_ci, budget, iqm
 from crmgrasp.tasks import Task
 
 __all__ = ["LearnerSpec", "LearnRun", "learn", "write_learn_outputs", "SYMMETRIC_DYNA_Q", "usable"]
@@ -281,7 +281,7 @@ def write_learn_outputs(task: Task, run: LearnRun, out_dir: str | Path) -> list[
     fig = learning_curve_figure(
         {run.spec.name: (res.curve, res.sem)},
         task.reference_mean_steps,
-        f"{run.spec.name} on {task.name}, {run.summary['trials']} trials",
+        f"{run.spec.name} on {task.name}, " + budget(*(run.summary[k] for k in ("trials", "episodes", "seed"))),
     )
     paths.append(save_figure(fig, out / "learning_curve.png", dpi=120))
     return paths
