@@ -119,11 +119,11 @@ def scene_figure(
     obj: Shape, hand: Hand, config: Config, outcome: Outcome | None = None, title: str | None = None
 ) -> Figure:
     """A one-panel figure of :func:`draw_scene`."""
-    fig = Figure(figsize=(6, 4.5), layout="constrained")
+    fig = Figure(figsize=(6, 5.2), layout="constrained")
     ax = fig.add_subplot()
     draw_scene(ax, obj, hand, config, outcome, title=title)
-    if outcome is not None:
-        ax.legend(loc="upper right", fontsize=8)
+    handles, labels = scene_legend()
+    fig.legend(handles, labels, loc="outside lower center", ncols=2, fontsize=7, frameon=False)
     return fig
 
 
