@@ -84,7 +84,19 @@ def test_bad_numbers_and_names(argv, msg, capsys, tmp_path, monkeypatch):
 
 def test_sigint_ends_a_run_with_one_line_and_status_130(tmp_path):
     proc = subprocess.Popen(
-        [sys.executable, "-m", "crmgrasp", "learn", "--trials", "50", "--episodes", "100000", "--out", str(tmp_path)],
+        [
+            sys.executable,
+            "-m",
+            "crmgrasp",
+            "learn",
+            "--trials",
+            "50",
+            "--episodes",
+            "100000",
+            "--quiet",
+            "--out",
+            str(tmp_path),
+        ],
         stderr=subprocess.PIPE,
         text=True,
     )
@@ -93,6 +105,9 @@ def test_sigint_ends_a_run_with_one_line_and_status_130(tmp_path):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130
     assert err.strip() == "crmgrasp learn: interrupted"
+    from crmgrasp.experiments.runs import read_status
+
+    assert read_status(tmp_path) == "interrupted"
 
 
 def test_api_budgets_and_history_orders_are_bounded(task):
@@ -321,3 +336,55 @@ def test_near_coincident_contacts_after_a_noisy_crm_are_a_palm_error(task):
     assert close > 0 and reclassified == close
     with pytest.raises(CrmgraspError, match="min_separation must be below the aperture"):
         replace(task.hand, min_separation=1.0)
+
+
+def test_crossed_contacts_are_a_palm_error_and_no_noisy_crm_ends_in_one(task):
+    """Two contacts on one side whose order is reversed put the palm on the object's side
+    (the surfaces face the palm): the model calls that a palm error. Under the largest
+    noise allowed, every CRM that reports no error ends in a feasible configuration,
+    crossed or coincident contacts included."""
+    import math
+
+    from crmgrasp import SensorNoise
+    from crmgrasp.model.hand import Error, execute_crm, feasible
+
+    hand, obj = task.hand, task.obj
+    side_by_side = Config(Contact(-0.10, -0.05, 0.0, 1.0), Contact(-0.05, -0.05, 0.0, 1.0))
+    crossed = Config(side_by_side.b, side_by_side.a)
+    assert feasible(obj, hand, side_by_side) is Error.NONE
+    assert feasible(obj, hand, crossed) is Error.PALM
+    assert feasible(obj, hand, Config(side_by_side.a, side_by_side.a)) is Error.PALM  # coincident
+    rng = np.random.default_rng(1)
+    seen = {Error.NONE: 0, Error.PALM: 0, Error.APERTURE: 0}
+    for sigma in (math.radians(30), math.radians(45)):
+        noise = SensorNoise(sigma, 0.01)
+        for _ in range(1500):
+            cfg = task.sample_start(rng)
+            for crm in task.actions:
+                out = execute_crm(obj, hand, cfg, crm, noise.sense(cfg, rng))
+                seen[out.error] += 1
+                if out.error is Error.NONE:
+                    assert feasible(obj, hand, out.config) is Error.NONE
+                    assert out.config.separation > 0.0
+    assert min(seen.values()) > 0  # every outcome occurs at this noise
+
+
+def test_public_functions_check_configurations(task):
+    from crmgrasp import min_friction, observe
+
+    good = task.sample_start(np.random.default_rng(0))
+    nan = Config(Contact(np.nan, 0.0, 1.0, 0.0), good.b)
+    long = Config(good.a, Contact(0.0, -0.05, 0.0, 2.0))
+    for fn in (min_friction, observe):
+        with pytest.raises(CrmgraspError, match="contact a must be finite"):
+            fn(nan)
+        with pytest.raises(CrmgraspError, match="contact b's normal must be a unit vector"):
+            fn(long)
+        with pytest.raises(CrmgraspError, match="must be a Config of two Contacts"):
+            fn("abc")  # type: ignore[arg-type]
+    with pytest.raises(CrmgraspError, match=re.escape("is 0.35 m off the object")):
+        task.hand.feasible(task.obj, Config(Contact(-0.5, 0.0, 1.0, 0.0), good.b))
+    with pytest.raises(CrmgraspError, match="contact a"):
+        task.hand.contact(task.obj, (np.nan, 0.0), (0.0, -0.05))
+    with pytest.raises(CrmgraspError, match="contact b"):
+        task.hand.contact(task.obj, (0.0, 0.05), (1.0, 2.0, 3.0))

@@ -27,6 +27,8 @@ __all__ = [
     "config_from_row",
     "configs_to_array",
     "array_to_configs",
+    "check_contacts",
+    "UNIT_TOL",
 ]
 
 LABELS = ("a", "b")
@@ -128,3 +130,40 @@ def array_to_configs(arr: ArrayLike) -> list[Config]:
     if a.ndim != 2 or a.shape[1] != 8:
         raise CrmgraspError(f"configuration array must have shape (N, 8), got {a.shape}")
     return [config_from_row(r) for r in a.tolist()]
+
+
+UNIT_TOL = 1e-6
+"""How far a contact normal's length may be from 1 before :func:`check_contacts` refuses it."""
+
+
+_NORM2_TOL = 2.0 * UNIT_TOL  # on the squared length
+
+
+def check_contacts(config: object, name: str = "configuration") -> Config:
+    """``config`` if it is a :class:`Config` of two :class:`Contact` with finite
+    coordinates and unit normals (within :data:`UNIT_TOL`); else a one-line
+    :class:`~crmgrasp._validation.CrmgraspError`. The public functions taking a
+    configuration call it; the compiled kernels do not (their inputs come from the model).
+
+    Examples
+    --------
+    >>> check_contacts(Config(Contact(0, 0, 1, 0), Contact(1, 0, -1, 0))).b.nx
+    -1
+    >>> check_contacts(Config(Contact(0, 0, 2, 0), Contact(1, 0, -1, 0)))
+    Traceback (most recent call last):
+    ...
+    crmgrasp._validation.CrmgraspError: configuration: contact a's normal must be a unit vector, got (2, 0)
+    """
+    if type(config) is not Config or type(config.a) is not Contact or type(config.b) is not Contact:
+        if not isinstance(config, Config) or not all(isinstance(c, Contact) for c in config):
+            raise CrmgraspError(f"{name} must be a Config of two Contacts, got {config!r:.80}")
+    (ax, ay, anx, any_), (bx, by, bnx, bny) = config
+    if not math.isfinite(ax + ay + anx + any_ + bx + by + bnx + bny):  # a NaN or inf (or an overflow)
+        for label, c in zip("ab", config):
+            if not all(math.isfinite(v) for v in c):
+                raise CrmgraspError(f"{name}: contact {label} must be finite, got {tuple(c)}")
+    if abs(anx * anx + any_ * any_ - 1.0) > _NORM2_TOL or abs(bnx * bnx + bny * bny - 1.0) > _NORM2_TOL:
+        for label, nx, ny in (("a", anx, any_), ("b", bnx, bny)):
+            if abs(nx * nx + ny * ny - 1.0) > _NORM2_TOL:
+                raise CrmgraspError(f"{name}: contact {label}'s normal must be a unit vector, got ({nx:g}, {ny:g})")
+    return config

@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from crmgrasp._validation import CrmgraspError, finite, non_negative, positive, shown
+from crmgrasp._validation import CrmgraspError, as_point, finite, non_negative, positive, shown
 from crmgrasp.model.contacts import Config, Contact, label_index
 from crmgrasp.model.geometry import Shape
 
@@ -216,8 +216,9 @@ class Hand:
         return crm
 
     def contact(self, obj: Shape, a: ArrayLike, b: ArrayLike) -> Config:
-        """Configuration with contacts at the boundary points nearest ``a`` and ``b``."""
-        pa, pb = obj.project(a), obj.project(b)
+        """Configuration with contacts at the boundary points nearest ``a`` and ``b``
+        (each a finite ``(x, y)`` in metres)."""
+        pa, pb = obj.project(as_point(a, "contact a")), obj.project(as_point(b, "contact b"))
         return Config(Contact(*pa.point, *pa.normal), Contact(*pb.point, *pb.normal))
 
     def palm(self, config: Config) -> tuple[float, float]:
@@ -225,8 +226,9 @@ class Hand:
         return palm_point(config, self.palm_depth)
 
     def feasible(self, obj: Shape, config: Config) -> Error:
-        """``Error.NONE`` if ``config`` is feasible, else the violated constraint."""
-        return feasible(obj, self, config)
+        """``Error.NONE`` if ``config`` is feasible, else the violated constraint;
+        ``config`` is checked first (:func:`check_config`: finite, unit normals, on ``obj``)."""
+        return feasible(obj, self, check_config(obj, config))
 
     def execute(
         self,

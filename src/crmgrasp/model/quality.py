@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from crmgrasp._validation import CrmgraspError, non_negative
-from crmgrasp.model.contacts import Config
+from crmgrasp.model.contacts import Config, check_contacts
 
 __all__ = [
     "min_friction",
@@ -66,7 +66,7 @@ def min_friction(config: Config) -> float:
 
     Examples
     --------
-    >>> from crmgrasp.model.contacts import Config, Contact
+    >>> from crmgrasp.model.contacts import Config, check_contacts, Contact
     >>> min_friction(Config(Contact(0, 0.05, 0, -1), Contact(0, -0.05, 0, 1)))
     0.0
     >>> round(min_friction(Config(Contact(0, 0.05, 0, -1), Contact(0.01, -0.05, 0, 1))), 6)
@@ -75,8 +75,11 @@ def min_friction(config: Config) -> float:
     3.0
     >>> min_friction(Config(Contact(-0.15, 0, 1, 0), Contact(0.15, 0, 0, 1)))   # 90 degrees
     inf
+
+    A configuration with a non-finite coordinate or a normal that is not a unit vector is
+    refused (:func:`~crmgrasp.model.contacts.check_contacts`).
     """
-    a, b = config
+    a, b = check_contacts(config, "min_friction")
     return max(tan_term(a.x, a.y, a.nx, a.ny, b.x, b.y), tan_term(b.x, b.y, b.nx, b.ny, a.x, a.y))
 
 

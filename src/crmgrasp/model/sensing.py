@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from crmgrasp._validation import CrmgraspError, finite, non_negative
-from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.contacts import Config, Contact, check_contacts
 from crmgrasp.model.hand import Error
 
 __all__ = [
@@ -54,8 +54,11 @@ def observe(config: Config) -> Observation:
     >>> cfg = Config(Contact(-0.15, -0.02, 1.0, 0.0), Contact(-0.10, -0.05, 0.0, 1.0))
     >>> [round(v, 12) for v in observe(cfg)]
     [2.0, 0.05, -0.03]
+
+    A configuration with a non-finite coordinate or a normal that is not a unit vector is
+    refused (:func:`~crmgrasp.model.contacts.check_contacts`).
     """
-    a, b = config
+    a, b = check_contacts(config, "observe")
     sx, sy = a.nx + b.nx, a.ny + b.ny
     dx, dy = b.x - a.x, b.y - a.y
     return Observation(sx * sx + sy * sy, dx * b.ny - dy * b.nx, -dx * a.ny + dy * a.nx)
