@@ -153,3 +153,18 @@ def test_cli_with_a_task_file_and_the_policy_carrying_it(tmp_path, capsys):
     assert main(["references", "--starts", "200", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["ungraspable_fraction"] == 0.0
     assert main(["tasks"]) == 0 and "paper-box" in capsys.readouterr().out
+
+
+def test_cli_bad_task_files_are_one_line_exit_2_and_write_nothing(tmp_path, capsys):
+    bad = _write(tmp_path, TEMPLATE.replace("aperture = 0.16", "aperture = 0.16\naperture = 0.2"))
+    out = tmp_path / "run"
+    for argv in (
+        ["learn", "--task", str(bad), "--out", str(out)],
+        ["references", "--task", str(bad)],
+        ["compare", "--task", str(tmp_path / "missing.toml"), "--out", str(out)],
+        ["crm", "--task", "os:getcwd", "--a", "0,0", "--b", "0,0", "--crm", "C1"],
+    ):
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "error:" in err, err
+    assert not out.exists()

@@ -97,6 +97,11 @@ def _ci(values: np.ndarray) -> tuple[float, float, float]:
     return m, m - half, m + half
 
 
+def _note(progress: Progress | None, text: str) -> None:
+    if progress is not None:
+        progress.note(text)
+
+
 def _fixed_row(name: str, kind: str, steps: np.ndarray, ok: float, t0: float) -> list[Any]:
     """A table row of a fixed policy: interval over its episodes."""
     m, lo, hi = _ci(steps)
@@ -158,9 +163,11 @@ def compare(
     controller = rows[-1][2]
     starts = sample_starts(task, config.reference_starts, config.seed)
     fresh = sample_starts(task, config.trials * config.eval_episodes, config.seed + 1)
+    _note(progress, "compare: the deep-RL peer (RecurrentPPO) ...")
     deep = _deep_row(task, config, fresh, curves, controller, Path(out_dir), backend)
     rows += deep[0]
     t0 = time.perf_counter()
+    _note(progress, "compare: belief-space policy, sampled POMDP, exact references ...")
     policy = BeliefPolicy(task, starts)
     rows.append(_executed_row("belief-space policy, executed", policy.run, fresh, t0))
     belief_executed = rows[-1][2]
