@@ -3,6 +3,7 @@ import json
 import math
 
 import numpy as np
+import pytest
 
 from crmgrasp import Error, min_friction
 from crmgrasp.cli.main import main
@@ -104,6 +105,9 @@ def test_figures_8_and_9(tmp_path):
 
 
 def test_reproduce_index_and_cli(tmp_path, capsys):
+    from crmgrasp._validation import CrmgraspError
+    from crmgrasp.experiments.reproduce import full_run_rows, record_full_run
+
     res = reproduce(tmp_path / "a", ["figure4"], quick=True)
     assert set(res) == {"figure4"}
     index = (tmp_path / "a" / "README.md").read_text()
@@ -116,6 +120,10 @@ def test_reproduce_index_and_cli(tmp_path, capsys):
     assert "figure9/figure9.png" in index and "1.8" in index
     assert "paper SARSA: greedy CRMs per episode | " in index and "(not converged at 5 trials x 300 episodes)" in index
     assert "None" not in index
+    full = full_run_rows()["figure7 | paper SARSA: greedy CRMs per episode"]
+    assert f"| {full} |" in index.split("paper SARSA: greedy CRMs per episode", 1)[1].splitlines()[0]
+    with pytest.raises(CrmgraspError, match="not a complete full-budget reproduce run"):
+        record_full_run(tmp_path / "b")  # a quick run is no reference
     # a second reproduce into the same folder is refused; --resume reuses every finished experiment
     assert main(["reproduce", "--quick", "--quiet", "--out", str(tmp_path / "b")]) == 2
     before = (tmp_path / "b" / "README.md").read_bytes()

@@ -4,7 +4,6 @@ index ``README.md`` with every figure and our numbers beside the paper's."""
 from __future__ import annotations
 
 import json
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -28,7 +27,7 @@ def _cell(value: object) -> str:
 
 FULL_RUN = Path(__file__).with_name("full_run.json")
 """The index rows of a full ``crmgrasp reproduce --seed 0`` (all extras), shown beside a
-quick run's numbers; rewritten by ``python -m crmgrasp.experiments.reproduce RUN_DIR``."""
+quick run's numbers; rewritten by ``python scripts/record_full_run.py RUN_DIR``."""
 
 
 def full_run_rows() -> dict[str, str]:
@@ -157,9 +156,3 @@ def reproduce(
     lines += [f"| {name} | skipped: needs `pip install 'crmgrasp[mujoco]'` |{dash}" for name in skipped]
     atomic_write_text(out / "README.md", "\n".join([*lines, "", *body]))
     return results
-
-
-if __name__ == "__main__":  # python -m crmgrasp.experiments.reproduce RUN_DIR
-    if len(sys.argv) != 2:
-        sys.exit("usage: python -m crmgrasp.experiments.reproduce RUN_DIR  (a complete full reproduce run)")
-    print(f"wrote {record_full_run(sys.argv[1])}")
