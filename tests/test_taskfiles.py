@@ -36,7 +36,7 @@ def test_disc_and_rectangle_objects(tmp_path):
     rect = TEMPLATE.replace("polygon = [[0, 0]", "rectangle = { length = 0.3, width = 0.1 }\n# polygon = [[0, 0]")
     assert load_task_file(_write(tmp_path, rect)).obj == paper_box().obj
     corners = disc.replace('kind = "uniform"', 'kind = "corners"')
-    with pytest.raises(CrmgraspError, match=r"corners.*needs a polygon"):
+    with pytest.raises(CrmgraspError, match=r"need a polygon object"):
         load_task_file(_write(tmp_path, corners))
 
 
@@ -48,11 +48,13 @@ def test_disc_and_rectangle_objects(tmp_path):
         ("aperture = 0.16", "apertur = 0.16", "unknown key 'apertur' in [hand]"),
         ('c = "a"    # position', 'c = "x"    # position', '[[crm]] number 1: c and f must be "a" or "b"'),
         ("rho = [1.0]", "rho = [2.0, 1.0]", "rho"),
-        ('kind = "uniform"', 'kind = "everywhere"', "starts.kind must be one of corners, uniform"),
+        ('kind = "uniform"', 'kind = "everywhere"', "[starts] kind must be one of corners, uniform"),
         ('name = "my-u"', 'name = "../evil"', "name must be"),
         ("max_steps = 10", "max_steps = 0", "max_steps must be an integer"),
         ("[0.1, 0.2], [0, 0.2]]", "[0.1, 0.2], [0.3, 0.2]]", "polygon"),
         ("mu_goal = 0.05", "mu_goal = nan", "mu_goal must be a finite number"),
+        ("grasp_reward = -1.0", 'grasp_reward = "zero"', "grasp_reward must be a finite number"),
+        ('kind = "uniform"', 'kind = "near-corner"\nlo = 1', "takes no lo"),
         ("# symmetry = [1, 0, 3, 2]", "symmetry = [0, 1, 2, 3]", "symmetry"),
         ("name = ", "nom = ", "unknown key 'nom'"),
         ("[hand]", "[hand]\n[hand.extra]", "unknown key 'extra' in [hand]"),

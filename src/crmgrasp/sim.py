@@ -72,7 +72,8 @@ class Percept(NamedTuple):
 
 
 class StepResult(NamedTuple):
-    """Outcome of one CRM (reward -1 per CRM)."""
+    """Outcome of one CRM (reward :func:`step_reward`: -1 per CRM, ``task.grasp_reward``
+    for the grasping one)."""
 
     state: SimState
     observation: Observation
@@ -152,7 +153,7 @@ def step(task: Task, state: SimState, action: int | CRM, rng: np.random.Generato
         obs,
         out.error,
         task.discretizer.index(obs, out.error),
-        -1.0,
+        step_reward(task, terminated),
         terminated,
         truncated,
         mu,
@@ -191,6 +192,19 @@ def episode_end(task: Task, mu: Any, steps: Any) -> tuple[Any, Any]:
     executed without one. Works on numbers or, elementwise, on arrays."""
     terminated = task.grasped(mu)
     return terminated, (steps >= task.max_steps) > terminated  # a > b on booleans: a and not b
+
+
+STEP_REWARD = -1.0
+"""The reward of every CRM that does not end in a grasp."""
+
+
+def step_reward(task: Task, terminated: Any) -> Any:
+    """The reward of a CRM: ``task.grasp_reward`` for the one that reaches a grasp
+    (``-1`` in the paper's reading, ``0`` in the "-1 in every non-goal state" reading),
+    :data:`STEP_REWARD` for every other; elementwise on an array of ``terminated``."""
+    if isinstance(terminated, np.ndarray):
+        return np.where(terminated, task.grasp_reward, STEP_REWARD)
+    return task.grasp_reward if terminated else STEP_REWARD
 
 
 class Policy(Protocol):

@@ -31,7 +31,7 @@ from crmgrasp.model.contacts import config_from_row
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.model.sensing import Observation
-from crmgrasp.sim import Percept, reset
+from crmgrasp.sim import Percept, reset, step_reward
 from crmgrasp.tasks import Task
 
 __all__ = ["train_trials_lockstep"]
@@ -135,7 +135,13 @@ def train_trials_lockstep(
             terminated = bool(done[i])
             truncated = tr.steps >= task.max_steps and not terminated
             percept = Percept(
-                Observation(*obs), Error(errors[i]), int(index[i]), config_from_row(srow), -1.0, terminated, truncated
+                Observation(*obs),
+                Error(errors[i]),
+                int(index[i]),
+                config_from_row(srow),
+                step_reward(task, terminated),
+                terminated,
+                truncated,
             )
             tr.policy.tell(percept)
             if (not (terminated or truncated)) or finish(t, tr, terminated):

@@ -29,8 +29,18 @@ from crmgrasp.tasks import TEMPLATE, Task, make_task, resolve_task, task_names, 
 __all__ = ["main", "build_parser"]
 
 
+def _task(args: argparse.Namespace, spec: str | None = None) -> Task:
+    """The task of ``--task`` (or ``spec``) with ``--start-preset`` and ``--grasp-reward`` applied."""
+    from crmgrasp.tasks.presets import with_reading
+
+    task = resolve_task(args.task if spec is None else spec)
+    return with_reading(
+        task, starts=getattr(args, "start_preset", None), grasp_reward=getattr(args, "grasp_reward", None)
+    )
+
+
 def _scene(args: argparse.Namespace) -> tuple[Task, Config, CRM | None, SensorNoise, np.random.Generator]:
-    task = resolve_task(args.task)
+    task = _task(args)
     config = task.hand.contact(task.obj, args.a, args.b)
     crm = _resolve_crm(task, args.crm) if args.crm is not None else None
     noise = SensorNoise(math.radians(args.sigma_n), args.sigma_p)
@@ -173,7 +183,7 @@ def _cmd_learn(args: argparse.Namespace) -> int:
     from crmgrasp.agents.training import build_agent, check_budget, encoder_for
     from crmgrasp.experiments.learning import LearnerSpec, learn, write_learn_outputs
 
-    task = resolve_task(args.task)
+    task = _task(args)
     spec = LearnerSpec(args.agent, args.k, _learner_params(args))
     check_budget(args.trials, args.episodes, args.eval_episodes)
     build_agent(task, encoder_for(task, spec.k), spec.agent, spec.params)  # bad settings fail before any folder
@@ -225,7 +235,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     from crmgrasp.agents.policy import GreedyPolicy, load_policy
     from crmgrasp.kernels import kernel_for
 
-    policy = load_policy(args.policy, None if args.task is None else resolve_task(args.task))
+    policy = load_policy(args.policy, None if args.task is None else _task(args))
     task = policy.task
     rng = np.random.default_rng(args.seed)
     with _progress(args).stage(f"evaluate {args.policy.name} on {task.name}", 0):
@@ -267,7 +277,7 @@ def _print_result(args: argparse.Namespace, result: dict[str, Any], text: str) -
 def _cmd_references(args: argparse.Namespace) -> int:
     from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts, ungraspable_fraction
 
-    task = resolve_task(args.task)
+    task = _task(args)
     with _progress(args).stage(f"references of {task.name}", 0):
         starts = sample_starts(task, args.starts, args.seed)
         clair, belief = clairvoyant_bound(task, starts), belief_optimum(task, starts)
@@ -295,7 +305,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     from crmgrasp.experiments.compare import CompareConfig, compare
     from crmgrasp.experiments.stats import fmt
 
-    task = resolve_task(args.task)
+    task = _task(args)
     cfg = CompareConfig.quick(task.name, args.seed) if args.quick else CompareConfig(task=task.name, seed=args.seed)
     if args.deep_steps is not None:
         if args.deep_steps < 0:
@@ -322,7 +332,7 @@ def _cmd_pomdp(args: argparse.Namespace) -> int:
     if args.cell <= 0 or args.samples < 1 or args.episodes < 1:
         raise CrmgraspError("--cell must be > 0, and --samples and --episodes >= 1")
     check_output(args.out, "--out")
-    task = resolve_task(args.task)
+    task = _task(args)
     with _progress(args).stage(f"pomdp of {task.name}: sample, solve, execute", 0):
         tp = build_task_pomdp(task, cell=args.cell, samples=args.samples, n_starts=args.starts, seed=args.seed)
         path = write_cassandra(tp.model, args.out)

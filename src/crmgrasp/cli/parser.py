@@ -104,10 +104,22 @@ def _resolve_crm(task: Task, text: str) -> CRM:
     return task.hand.check_crm(CRM.parse(text))
 
 
+START_PRESET_NAMES = ("corners", "near-corner", "long-side", "mixture")
+"""The start presets (a test keeps this equal to :data:`crmgrasp.tasks.presets.START_PRESETS`)."""
+
 AGENT_NAMES = ("sarsa", "q", "sarsa-lambda", "dyna-q", "random", "fixed")
 """The registered agents (a test keeps this equal to :data:`crmgrasp.agents.training.AGENTS`)."""
 
-EXPERIMENT_NAMES = ("figure4", "figure7", "figure8", "figure9", "compare", "figure4-mujoco", "figure9-mujoco")
+EXPERIMENT_NAMES = (
+    "figure4",
+    "figure7",
+    "figure8",
+    "figure9",
+    "compare",
+    "figure7-sensitivity",
+    "figure4-mujoco",
+    "figure9-mujoco",
+)
 """The experiments of ``reproduce`` (a test keeps this equal to the registry)."""
 
 
@@ -118,6 +130,22 @@ def _add_task(p: argparse.ArgumentParser) -> None:
         metavar="TASK",
         help="a registered task (`crmgrasp tasks` lists them), a .toml task file "
         "(`crmgrasp task-template` writes one), or package.module:factory (default: paper-box)",
+    )
+    p.add_argument(
+        "--start-preset",
+        choices=START_PRESET_NAMES,
+        default=None,
+        help="replace the task's start distribution by a preset: corners (the paper-box rule), near-corner "
+        "(both contacts within 0.10 m of a corner, like Fig. 8a), long-side (the long-side contact over 0.10 m "
+        "from the corner, like Fig. 9), mixture (40%% near-corner, 60%% long-side) (default: the task's own)",
+    )
+    p.add_argument(
+        "--grasp-reward",
+        type=_number,
+        default=None,
+        metavar="R",
+        help="reward of the grasping CRM, every other CRM -1 (default: the task's own, -1 for paper-box; "
+        "0 reads the paper's reward as -1 in every non-goal state)",
     )
 
 

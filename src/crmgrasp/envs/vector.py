@@ -30,7 +30,7 @@ from gymnasium.vector.utils import batch_space
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.envs.single import observation_space
 from crmgrasp.kernels import Kernel, kernel_for
-from crmgrasp.sim import episode_end
+from crmgrasp.sim import episode_end, step_reward
 from crmgrasp.tasks import Task, make_task
 
 __all__ = ["CRMGraspVectorEnv"]
@@ -126,6 +126,6 @@ class CRMGraspVectorEnv(VectorEnv):
         steps[done] = 0
         terminated, truncated = episode_end(self.task, res.min_friction, steps)
         terminated = terminated & ~done  # a reset row neither terminates nor truncates (its steps are 0)
-        reward = done - 1.0  # 0 on a reset row, -1 per CRM
+        reward = np.where(done, 0.0, step_reward(self.task, terminated))  # 0 on a reset row
         self._prev_done = terminated | truncated
         return res.obs, reward, terminated, truncated, self._info(res.obs_index, res.min_friction)

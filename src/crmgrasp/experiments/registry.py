@@ -105,6 +105,24 @@ def _compare(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
     ]
 
 
+def _sensitivity(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    from crmgrasp.experiments.sensitivity import SensitivityConfig, figure_7_sensitivity
+
+    cfg = SensitivityConfig.quick(seed) if quick else replace(SensitivityConfig(), seeds=(seed, seed + 1, seed + 2))
+    s = figure_7_sensitivity(out, cfg, backend=ctx["backend"], progress=ctx.get("progress"))
+    rows: list[Row] = []
+    for label, r in s.items():
+        rows.append(
+            (
+                f"{label}: plateau / optimum; episodes to own plateau; to <= 1.89",
+                f"{r['plateau']} / {fmt(r['belief_optimum'])}; {r['episodes_to_own_plateau']}; "
+                f"{r['episodes_to_paper_level']}",
+                "1.8; about 60",
+            )
+        )
+    return s, rows
+
+
 def _sensing_row(s: dict[str, Any]) -> Row:
     cs = s["contact_sensing"]
     return (
@@ -152,6 +170,10 @@ EXPERIMENTS: dict[str, tuple[str, Runner]] = {
     "figure8": ("Fig. 8: the learned strategies on aliased and far-from-corner starts", _figure8),
     "figure9": ("Fig. 9: the learned policy, 11 noisy trials, in the (rho, moment) plane", _figure9),
     "compare": ("Every method on paper-box: learners, baselines, grasp controller, exact references", _compare),
+    "figure7-sensitivity": (
+        "Fig. 7 under each paper-consistent reading (starts, grasp reward, Q0, k): plateau, optimum, episodes",
+        _sensitivity,
+    ),
     "figure4-mujoco": ("Fig. 4 on the MuJoCo stand-in hand, and intrinsic contact sensing accuracy", _figure4_mujoco),
     "figure9-mujoco": ("Fig. 9 on the MuJoCo stand-in: the kinematic policy transferred, 11 trials", _figure9_mujoco),
 }
@@ -160,6 +182,7 @@ EXPERIMENTS: dict[str, tuple[str, Runner]] = {
 QUICK_BUDGETS = {
     "figure7": ("5 trials x 300 episodes", ("paper SARSA", "best learner", "SARSA k=0")),
     "compare": ("5 trials x 300 episodes", ("best learner",)),
+    "figure7-sensitivity": ("20 trials x 300 episodes, 1 seed", ("",)),
 }
 """Experiments whose learned numbers ``--quick`` computes on a smaller budget: that
 budget, and the first words of the quantities that depend on it."""
@@ -173,6 +196,7 @@ IMAGES = {
     "figure8": ["figure8.png", "figure8.gif"],
     "figure9": ["figure9.png"],
     "compare": ["compare.png"],
+    "figure7-sensitivity": ["figure7_sensitivity.png", "figure7_mechanism.png"],
     "figure4-mujoco": ["figure4_mujoco.png"],
     "figure9-mujoco": ["figure9_mujoco.png", "figure9_mujoco.gif"],
 }

@@ -20,7 +20,7 @@ from crmgrasp.model import quality, shape
 from crmgrasp.model.contacts import Config, config_from_row
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.model.hand import CRM, Error
-from crmgrasp.sim import OneStep, SimState, episode_end
+from crmgrasp.sim import OneStep, SimState, episode_end, step_reward
 from crmgrasp.tasks import Task
 
 __all__ = ["PolygonKernel", "FusedPolygonKernel", "params"]
@@ -146,7 +146,8 @@ class FusedPolygonKernel(PolygonKernel):
         steps = state.steps + 1
         terminated, truncated = episode_end(self.task, o[11], steps)
         state = SimState(config, config, steps)
-        return OneStep(state, o[8], o[9], o[10], _ERRORS[code], index, o[11], -1.0, terminated, truncated)
+        reward = step_reward(self.task, terminated)
+        return OneStep(state, o[8], o[9], o[10], _ERRORS[code], index, o[11], reward, terminated, truncated)
 
     def step_batch(
         self, cfg: F64, sen: F64, actions: I64, resets: NDArray[np.bool_], starts: F64, rng: np.random.Generator

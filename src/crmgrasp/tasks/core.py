@@ -16,7 +16,7 @@ from typing import Protocol, overload, runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
-from crmgrasp._validation import CrmgraspError, non_negative
+from crmgrasp._validation import CrmgraspError, finite, non_negative
 from crmgrasp.model.contacts import Config, Contact, config_from_row
 from crmgrasp.model.geometry import Polygon, Rectangle, Shape
 from crmgrasp.model.hand import CRM, Error, Hand, feasible
@@ -150,6 +150,7 @@ class CornerStarts:
     """
 
     max_tries: int = 10_000
+    takes_corner_filter = True  # class attribute: decides candidates through a start filter
 
     def __call__(
         self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator, accept: StartFilter | None = None
@@ -285,6 +286,10 @@ class Task:
         belief-space optimum where known), used to report ``episodes_to_5pct``.
     symmetry
         A declared mirror symmetry (:class:`Symmetry`), or None.
+    grasp_reward
+        Reward of the CRM that reaches a grasp (every other CRM: -1). The paper's "-1
+        in all states" read literally gives -1 (the default); read as "in all non-goal
+        states" it gives 0.
     """
 
     name: str
@@ -299,6 +304,7 @@ class Task:
     reference_mean_steps: float | None = None
     description: str = ""
     symmetry: Symmetry | None = None
+    grasp_reward: float = -1.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.obj, Shape):
@@ -323,6 +329,7 @@ class Task:
                 raise CrmgraspError(
                     f"{exc} (a task made from a symmetric one with other CRMs or bins needs symmetry=None)"
                 ) from None
+        object.__setattr__(self, "grasp_reward", finite(self.grasp_reward, "grasp_reward"))
         if self.reference_mean_steps is not None and not (
             math.isfinite(self.reference_mean_steps) and self.reference_mean_steps > 0
         ):
@@ -330,9 +337,10 @@ class Task:
 
     def sample_start(self, rng: np.random.Generator, accept: StartFilter | None = None) -> Config:
         """A start configuration drawn from ``rng``. ``accept``: a compiled start filter,
-        used by :class:`CornerStarts` (the same start either way), ignored by others."""
-        if accept is not None and isinstance(self.starts, CornerStarts):
-            return self.starts(self.obj, self.hand, self.mu_goal, rng, accept)
+        used by samplers built on corner candidates (:class:`CornerStarts` and the presets
+        of :mod:`crmgrasp.tasks.presets`; the same start either way), ignored by others."""
+        if accept is not None and getattr(self.starts, "takes_corner_filter", False):
+            return self.starts(self.obj, self.hand, self.mu_goal, rng, accept)  # type: ignore[call-arg]
         return self.starts(self.obj, self.hand, self.mu_goal, rng)
 
     def sample_starts(self, rng: np.random.Generator, n: int, accept: StartFilter | None = None) -> np.ndarray:

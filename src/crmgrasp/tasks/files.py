@@ -27,6 +27,7 @@ from crmgrasp.model.geometry import Disc, Polygon
 from crmgrasp.model.hand import CRM, Hand
 from crmgrasp.model.sensing import Discretizer, SensorNoise
 from crmgrasp.tasks.core import CornerStarts, Symmetry, Task, UniformStarts, make_task, task_names
+from crmgrasp.tasks.presets import LongSideStarts, MixtureStarts, NearCornerStarts
 
 __all__ = ["TEMPLATE", "MAX_TASK_FILE_BYTES", "task_from_dict", "task_to_dict", "load_task_file", "resolve_task"]
 
@@ -43,6 +44,7 @@ name = "my-u"                      # letters, digits, '.', '_', '-'; names run f
 description = "a U-shaped handle"  # optional
 mu_goal = 0.05                     # optional: success when min friction <= mu_goal
 max_steps = 10                     # optional: CRMs before an episode is cut off
+grasp_reward = -1.0                # optional: reward of the grasping CRM (every other CRM: -1)
 # reference_mean_steps = 1.66      # optional: the best mean CRMs per episode, if known
 
 [object]   # exactly one of: polygon = [[x, y], ...] (simple, counter-clockwise or not);
@@ -83,7 +85,11 @@ m_b = [0.1]
 abs_moments = true                 # optional: bin moments by magnitude
 
 [starts]
-kind = "uniform"                   # "corners" (polygons: two contacts near one corner) or "uniform"
+kind = "uniform"                   # "uniform" on the whole boundary; for polygons also "corners" (one
+                                   # contact on each side of a random corner), "near-corner" (within =
+                                   # 0.10 m of it), "long-side" (corner starts whose contact on the
+                                   # longer side is lo..hi from the corner), or "mixture" with
+                                   # mix = [{ kind = "near-corner", weight = 0.4 }, ...]
 
 # [noise]                          # optional sensing noise
 # sigma_n = 0.0                    # normal rotation, radians (<= 0.785)
@@ -94,6 +100,7 @@ kind = "uniform"                   # "corners" (polygons: two contacts near one 
 
 _TOP = {
     "name",
+    "grasp_reward",
     "description",
     "mu_goal",
     "max_steps",
@@ -107,7 +114,13 @@ _TOP = {
     "symmetry",
 }
 _HAND = {"aperture", "palm_depth", "backoff", "r_max", "palm_normal_tol", "min_separation"}
-_STARTS: dict[str, type] = {"corners": CornerStarts, "uniform": UniformStarts}
+_STARTS: dict[str, type] = {
+    "corners": CornerStarts,
+    "uniform": UniformStarts,
+    "near-corner": NearCornerStarts,
+    "long-side": LongSideStarts,
+    "mixture": MixtureStarts,
+}
 
 
 def _keys(table: Any, where: str, allowed: set[str], required: set[str] = frozenset()) -> dict[str, Any]:  # type: ignore[assignment]
@@ -184,11 +197,46 @@ def _bins(table: Any) -> Discretizer:
     return Discretizer(**kw, abs_moments=abs_m)  # type: ignore[arg-type]
 
 
-def _starts(table: Any) -> CornerStarts | UniformStarts:
-    t = _keys(table, "[starts]", {"kind"}, {"kind"})
-    if t["kind"] not in _STARTS:
-        raise CrmgraspError(f"starts.kind must be one of {', '.join(_STARTS)}, got {shown(t['kind'])}")
-    return CornerStarts() if t["kind"] == "corners" else UniformStarts()
+def _starts(table: Any, where: str = "[starts]") -> Any:
+    t = _keys(table, where, {"kind", "within", "lo", "hi", "weight", "mix"}, {"kind"})
+    kind = t["kind"]
+    if kind not in _STARTS:
+        raise CrmgraspError(f"{where} kind must be one of {', '.join(_STARTS)}, got {shown(kind)}")
+    allowed = {"corners": set(), "uniform": set(), "near-corner": {"within"}, "long-side": {"lo", "hi"}}
+    allowed["mixture"] = {"mix"}
+    extra = set(t) - {"kind", "weight"} - allowed[kind]
+    if extra:
+        raise CrmgraspError(f"{where}: kind {kind!r} takes no {', '.join(sorted(extra))}")
+    if kind == "corners":
+        return CornerStarts()
+    if kind == "uniform":
+        return UniformStarts()
+    if kind == "near-corner":
+        return NearCornerStarts(_num(t.get("within", 0.10), f"{where} within"))
+    if kind == "long-side":
+        return LongSideStarts(_num(t.get("lo", 0.10), f"{where} lo"), float(t["hi"]) if "hi" in t else math.inf)
+    mix = t.get("mix")
+    if not isinstance(mix, list) or not mix:
+        raise CrmgraspError(f"{where}: a mixture needs mix = [{{ kind = ..., weight = ... }}, ...]")
+    parts = [_starts(m, f"{where} mix[{i}]") for i, m in enumerate(mix)]
+    weights = [_num(m.get("weight", 1.0), f"{where} mix[{i}] weight") for i, m in enumerate(mix)]
+    return MixtureStarts(tuple(parts), tuple(weights))
+
+
+def _starts_dict(starts: Any) -> dict[str, Any]:
+    """A start sampler in the task-file schema (``{"kind": "custom"}`` for Python code)."""
+    if type(starts) is CornerStarts and starts == CornerStarts():
+        return {"kind": "corners"}
+    if type(starts) is UniformStarts and starts == UniformStarts():
+        return {"kind": "uniform"}
+    if type(starts) is NearCornerStarts:
+        return {"kind": "near-corner", "within": starts.within}
+    if type(starts) is LongSideStarts:
+        return {"kind": "long-side", "lo": starts.lo, **({"hi": starts.hi} if math.isfinite(starts.hi) else {})}
+    if type(starts) is MixtureStarts:
+        mix = [{**_starts_dict(c), "weight": w} for c, w in zip(starts.components, starts.weights)]
+        return {"kind": "custom"} if any(m["kind"] == "custom" for m in mix) else {"kind": "mixture", "mix": mix}
+    return {"kind": "custom"}
 
 
 def _section(key: str, build: Callable[[Any], Any], value: Any) -> Any:
@@ -218,13 +266,15 @@ def task_from_dict(doc: Any) -> Task:
     if "bins" in d:
         kw["discretizer"] = _section("bins", _bins, d["bins"])
     kw["starts"] = _section("starts", _starts, d.get("starts", {"kind": "uniform"}))
-    if isinstance(kw["starts"], CornerStarts) and not isinstance(kw["obj"], Polygon):
-        raise CrmgraspError('starts.kind "corners" needs a polygon object; use "uniform"')
+    if getattr(kw["starts"], "takes_corner_filter", False) and not isinstance(kw["obj"], Polygon):
+        raise CrmgraspError('starts kinds "corners", "near-corner", "long-side" need a polygon object; use "uniform"')
     if "noise" in d:
         t = _section("noise", lambda v: _keys(v, "[noise]", {"sigma_n", "sigma_p"}), d["noise"])
         kw["noise"] = _section("noise", lambda t: SensorNoise(**{k: _num(v, f"noise.{k}") for k, v in t.items()}), t)
     if "mu_goal" in d:
         kw["mu_goal"] = _num(d["mu_goal"], "mu_goal")
+    if "grasp_reward" in d:
+        kw["grasp_reward"] = _num(d["grasp_reward"], "grasp_reward")
     if "max_steps" in d:
         m = d["max_steps"]
         if isinstance(m, bool) or not isinstance(m, int) or not 1 <= m <= 1000:
@@ -262,10 +312,6 @@ def task_to_dict(task: Task) -> dict[str, Any]:
     hand.update({k: getattr(h, k) for k in ("palm_normal_tol", "min_separation")})
     if h.r_max is not None:
         hand["r_max"] = h.r_max
-    kinds = {cls: name for name, cls in _STARTS.items()}
-    starts = kinds.get(type(task.starts), "custom")
-    if starts != "custom" and task.starts != type(task.starts)():
-        starts = "custom"  # non-default settings
     doc: dict[str, Any] = {
         "name": task.name,
         "description": task.description,
@@ -275,7 +321,8 @@ def task_to_dict(task: Task) -> dict[str, Any]:
         "hand": hand,
         "crm": [{"c": a.c, "f": a.f, "r": a.r} for a in task.actions],
         "bins": task.discretizer.to_dict(),
-        "starts": {"kind": starts},
+        "starts": _starts_dict(task.starts),
+        "grasp_reward": task.grasp_reward,
         "noise": {"sigma_n": task.noise.sigma_n, "sigma_p": task.noise.sigma_p},
     }
     if task.reference_mean_steps is not None:

@@ -1,0 +1,116 @@
+"""Start presets and the grasp-reward reading: distributions, streams, every step path."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.agents.lockstep import train_trials_lockstep
+from crmgrasp.agents.training import train_trials
+from crmgrasp.cli import main
+from crmgrasp.envs import CRMGraspEnv, CRMGraspVectorEnv
+from crmgrasp.kernels import kernel_for
+from crmgrasp.tasks import paper_box, task_from_dict, task_to_dict
+from crmgrasp.tasks.core import acceptable
+from crmgrasp.tasks.presets import START_PRESETS, LongSideStarts, MixtureStarts, NearCornerStarts, with_reading
+
+
+def _near(task, cfg, within=0.10):
+    return any(max(math.dist(c.point, v) for c in cfg) <= within + 1e-12 for v in task.obj.vertices)
+
+
+def _long_far(task, cfg, lo=0.10):
+    obj = task.obj
+    (la, da), (lb, db) = (
+        (obj.edge_length(obj.edge_index(c.point)), min(math.dist(c.point, v) for v in obj.vertices)) for c in cfg
+    )
+    return la != lb and (da if la > lb else db) > lo
+
+
+@pytest.mark.parametrize("name", list(START_PRESETS))
+def test_presets_draw_acceptable_starts_and_the_compiled_filter_changes_nothing(name):
+    task = with_reading(paper_box(), starts=name)
+    kernel = kernel_for(task, "numba")
+    a, b = np.random.default_rng(4), np.random.default_rng(4)
+    for _ in range(300):
+        cfg = task.sample_start(a)
+        assert cfg == task.sample_start(b, kernel.start_filter)
+        assert acceptable(task.obj, task.hand, task.mu_goal, cfg)
+        if name == "near-corner":
+            assert _near(task, cfg)
+        if name == "long-side":
+            assert _long_far(task, cfg)
+
+
+def test_mixture_weights():
+    task = with_reading(paper_box(), starts="mixture")
+    rng = np.random.default_rng(0)
+    n = 2000
+    near = sum(_near(task, task.sample_start(rng)) for _ in range(n))
+    se = math.sqrt(0.4 * 0.6 / n)
+    assert abs(near / n - 0.4) < 4 * se  # the two kinds are disjoint: near-corner has no far long-side contact
+
+
+def test_preset_errors_and_task_round_trip():
+    with pytest.raises(CrmgraspError, match="unknown start preset"):
+        with_reading(paper_box(), starts="nowhere")
+    with pytest.raises(CrmgraspError, match="within"):
+        NearCornerStarts(-1.0)
+    with pytest.raises(CrmgraspError, match="lo < hi"):
+        LongSideStarts(0.2, 0.1)
+    with pytest.raises(CrmgraspError, match="weights"):
+        MixtureStarts((NearCornerStarts(),), (1.0, 2.0))
+    for name in START_PRESETS:
+        task = with_reading(paper_box(), starts=name, grasp_reward=0.0)
+        assert task_from_dict(task_to_dict(task)) == task
+    t = with_reading(paper_box(), starts="long-side")
+    assert t.symmetry is None and t.reference_mean_steps is None
+    assert with_reading(paper_box(), starts="near-corner").symmetry is not None
+
+
+def test_grasp_reward_reaches_every_step_path():
+    task = with_reading(paper_box(), grasp_reward=0.0)
+    for backend in ("numba", "reference"):
+        env = CRMGraspEnv(task, backend=backend)
+        env.reset(seed=1)
+        rewards, done = [], False
+        while not done:
+            _, r, term, trunc, _ = env.step(0)
+            rewards.append((r, term))
+            done = term or trunc
+        assert all(r == (0.0 if term else -1.0) for r, term in rewards)
+    venv = CRMGraspVectorEnv(64, task)
+    venv.reset(seed=0)
+    seen = set()
+    for _ in range(20):
+        _, r, term, trunc, _ = venv.step(np.zeros(64, dtype=np.int64))
+        seen |= {(float(x), bool(t)) for x, t in zip(r, term)}
+    assert (0.0, True) in seen and (-1.0, False) in seen and (-1.0, True) not in seen
+    kw = dict(trials=4, episodes=60, seed=3, eval_episodes=20, params={})
+    a = train_trials(task, "sarsa", **kw)
+    b = train_trials_lockstep(task, "sarsa", **kw)
+    np.testing.assert_array_equal(a.steps, b.steps)
+    c = train_trials(paper_box(), "sarsa", **kw)
+    assert not np.array_equal(a.steps, c.steps)  # the reading changes learning
+
+
+def test_cli_reading_options(tmp_path, capsys):
+    import json
+
+    from crmgrasp.cli.parser import START_PRESET_NAMES
+
+    assert START_PRESET_NAMES == tuple(START_PRESETS)
+    argv = ["learn", "--start-preset", "near-corner", "--grasp-reward", "0", "--trials", "2", "--episodes", "30"]
+    assert main([*argv, "--eval-episodes", "5", "--quiet", "--out", str(tmp_path / "r")]) == 0
+    capsys.readouterr()
+    rec = json.loads((tmp_path / "r" / "run.json").read_text())
+    assert rec["config"]["task"]["grasp_reward"] == 0.0 and rec["config"]["task"]["starts"]["kind"] == "near-corner"
+    assert main(["references", "--start-preset", "long-side", "--starts", "300", "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["belief_optimum"] > 1.0
+    with pytest.raises(SystemExit) as exit_:
+        main(["references", "--start-preset", "everywhere"])
+    assert exit_.value.code == 2 and "invalid choice" in capsys.readouterr().err
