@@ -141,16 +141,17 @@ def _measure(curve: np.ndarray) -> dict[str, Any]:
     }
 
 
-def _spread(values: list[Any]) -> str:
-    """``median [min-max]`` over seeds, ``never`` counted as larger than any number."""
+def _spread(values: list[Any], digits: int = 3) -> str:
+    """``median [min-max]`` over seeds (just the value when all agree), ``never``
+    counted as larger than any number."""
     big = float("inf")
     xs = sorted(big if v is None else float(v) for v in values)
     med = xs[len(xs) // 2] if len(xs) % 2 else 0.5 * (xs[len(xs) // 2 - 1] + xs[len(xs) // 2])
 
     def show(v: float) -> str:
-        return "never" if v == big else fmt(int(v) if float(v).is_integer() else v)
+        return "never" if v == big else fmt(int(v) if float(v).is_integer() and digits == 0 else v, digits)
 
-    return show(med) if len(xs) == 1 else f"{show(med)} [{show(xs[0])}-{show(xs[-1])}]"
+    return show(med) if xs[0] == xs[-1] else f"{show(med)} [{show(xs[0])}-{show(xs[-1])}]"
 
 
 def figure_7_sensitivity(
@@ -203,11 +204,11 @@ def figure_7_sensitivity(
                 mechanism[reading.label] = (err, res.steps[:, :n].mean(axis=0) - err)
         summary[reading.label] = {
             "belief_optimum": round(optimum, 4),
-            "plateau": _spread([round(m["plateau"], 3) for m in per_seed]),
-            "episodes_to_own_plateau": _spread([m["episodes_to_own_plateau"] for m in per_seed]),
-            "episodes_to_paper_level": _spread([m["episodes_to_paper_level"] for m in per_seed]),
-            "states_at_60": _spread([round(m["states_at_60"], 1) for m in per_seed]),
-            "error_crms_per_episode_1_60": _spread([round(m["error_crms_per_episode_1_60"], 2) for m in per_seed]),
+            "plateau": _spread([m["plateau"] for m in per_seed]),
+            "episodes_to_own_plateau": _spread([m["episodes_to_own_plateau"] for m in per_seed], 0),
+            "episodes_to_paper_level": _spread([m["episodes_to_paper_level"] for m in per_seed], 0),
+            "states_at_60": _spread([m["states_at_60"] for m in per_seed], 1),
+            "error_crms_per_episode_1_60": _spread([m["error_crms_per_episode_1_60"] for m in per_seed], 2),
         }
     if stage:
         stage.end()
