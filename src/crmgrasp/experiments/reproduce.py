@@ -40,18 +40,23 @@ def full_run_rows() -> dict[str, str]:
 
 
 def record_full_run(run_dir: str | Path) -> Path:
-    """Write :data:`FULL_RUN` from a complete full-budget reproduce run folder."""
+    """Update :data:`FULL_RUN` with the rows of a complete full-budget reproduce run folder
+    (rows of experiments it did not run are kept)."""
     from crmgrasp.experiments.runs import _read
 
     rec = _read(Path(run_dir))
     if rec.get("command") != "reproduce" or rec["status"] != "complete" or rec["config"].get("quick"):
         raise CrmgraspError(f"{str(run_dir)!r} is not a complete full-budget reproduce run")
     rows = {f"{name} | {row[0]}": _cell(row[1]) for name, done in rec["completed"].items() for row in done["rows"]}
+    try:
+        old = json.loads(FULL_RUN.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        old = {}
+    source = {"experiments": list(rec["completed"]), "git_commit": rec.get("git_commit"), "version": rec.get("version")}
     doc = {
         "seed": rec["config"]["seed"],
-        "git_commit": rec.get("git_commit"),
-        "version": rec.get("version"),
-        "rows": rows,
+        "sources": [*old.get("sources", []), source],
+        "rows": {**old.get("rows", {}), **rows},  # a run of some experiments updates their rows only
     }
     return write_json(FULL_RUN, doc)
 
