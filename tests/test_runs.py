@@ -143,3 +143,37 @@ def test_progress_lines_and_quiet():
     silent.stage("x", 3)
     silent.advance(3)
     silent.end()  # nothing to check but that it is silent and does not fail
+
+
+def test_worker_processes_give_the_same_results(tmp_path):
+    from crmgrasp.experiments.learning import LearnerSpec, learn, usable_jobs
+    from crmgrasp.tasks import paper_box
+
+    task = paper_box()
+    kw = dict(trials=6, episodes=50, seed=2, eval_episodes=10, checkpoint_episodes=5)
+    one = learn(task, LearnerSpec("sarsa", 2), **kw)
+    two = learn(task, LearnerSpec("sarsa", 2), jobs=2, **kw)
+    for name in ("steps", "success", "greedy_steps", "checkpoint_steps"):
+        assert (getattr(one.result, name) == getattr(two.result, name)).all(), name
+    assert one.policy.to_dict() == two.policy.to_dict()
+    assert usable_jobs(0) >= 1 and usable_jobs(3) == 3
+    with pytest.raises(CrmgraspError, match="jobs must be an integer >= 0"):
+        usable_jobs(-1)
+    out = tmp_path / "r"
+    argv = ["learn", "--trials", "4", "--episodes", "30", "--eval-episodes", "5", "--quiet", "--jobs", "2"]
+    assert main([*argv, "--out", str(out)]) == 0 and read_status(out) == "complete"
+
+
+def test_ctrl_c_with_workers_is_one_line_and_interrupted(tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    argv = ["learn", "--trials", "8", "--episodes", "200000", "--jobs", "2", "--quiet", "--out", str(tmp_path / "r")]
+    proc = subprocess.Popen([sys.executable, "-m", "crmgrasp", *argv], stderr=subprocess.PIPE, text=True)
+    time.sleep(4)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and err.strip() == "crmgrasp learn: interrupted", err
+    assert read_status(tmp_path / "r") == "interrupted"

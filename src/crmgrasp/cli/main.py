@@ -149,7 +149,14 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     config = {"experiments": names, "seed": args.seed, "quick": args.quick}
     with _run_folder(args, "paper-box", config) as run:
         results = reproduce(
-            run.path, names, seed=args.seed, quick=args.quick, backend=args.backend, store=run, progress=_progress(args)
+            run.path,
+            names,
+            seed=args.seed,
+            quick=args.quick,
+            backend=args.backend,
+            store=run,
+            progress=_progress(args),
+            jobs=args.jobs,
         )
     from crmgrasp.experiments.stats import fmt
 
@@ -209,6 +216,7 @@ def _cmd_learn(args: argparse.Namespace) -> int:
             backend=args.backend,
             store=folder,
             progress=_progress(args),
+            jobs=args.jobs,
         )
         paths = write_learn_outputs(task, run, folder.path)
     from crmgrasp.experiments.stats import budget, fmt
@@ -316,7 +324,9 @@ def _cmd_compare(args: argparse.Namespace) -> int:
         )
     config = {"task": task_to_dict(task), "quick": args.quick, "seed": args.seed, "deep_steps": args.deep_steps}
     with _run_folder(args, task.name, config) as run:
-        summary = compare(run.path, cfg, backend=args.backend, progress=_progress(args), task=task, store=run)
+        summary = compare(
+            run.path, cfg, backend=args.backend, progress=_progress(args), task=task, store=run, jobs=args.jobs
+        )
     print((run.path / "compare.md").read_text(encoding="utf-8"))
     for key, value in summary.items():
         print(f"{key}: {fmt(value) if not isinstance(value, (dict, list)) else value}")

@@ -167,6 +167,17 @@ def _add_run(p: argparse.ArgumentParser, command: str) -> None:
     _add_quiet(p)
 
 
+def _add_jobs(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--jobs",
+        type=_int(0, 1024),
+        default=1,
+        metavar="N",
+        help="worker processes training the learners' trials at once, 0 for every usable core (the same "
+        "results) (default 1)",
+    )
+
+
 def _add_quiet(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress display")
 
@@ -251,6 +262,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=_SEED, default=0, help="seed of the run (default 0; 0 to 2**63-1)")
     p.add_argument("--quick", action="store_true", help="small budgets (under a minute on 2 cores; not converged)")
     _add_run(p, "reproduce")
+    _add_jobs(p)
     _add_kernel_backend(p)
 
     p = sub.add_parser(
@@ -274,6 +286,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--seed", type=_SEED, default=0, help="seed of the run (default 0; 0 to 2**63-1)")
     _add_run(p, "learn")
+    _add_jobs(p)
     p.add_argument(
         "--lockstep",
         action="store_true",
@@ -342,6 +355,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_task(p)
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
     _add_run(p, "compare")
+    _add_jobs(p)
     p.add_argument("--quick", action="store_true", help="small budgets (seconds; not converged)")
     p.add_argument(
         "--deep-steps",

@@ -116,6 +116,7 @@ def compare(
     progress: Progress | None = None,
     task: Task | None = None,
     store: RunFolder | None = None,
+    jobs: int = 1,
 ) -> dict[str, Any]:
     """Run every method (learners and the deep-RL peer on the kernel ``backend``); write
     the table and the figure; return a summary. ``task`` overrides the registered task
@@ -135,6 +136,7 @@ def compare(
             backend=backend,
             progress=progress,
             store=store.sub(spec.name) if store is not None else None,
+            jobs=jobs,
         )
         res, s = run.result, run.summary
         per_trial = res.greedy_steps.mean(axis=1)

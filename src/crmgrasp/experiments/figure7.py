@@ -67,6 +67,7 @@ def figure_7_learning_curve(
     *,
     backend: str = "auto",
     progress: Progress | None = None,
+    jobs: int = 1,
 ) -> dict[str, Any]:
     """Run every learner; write ``curves.csv``, ``checkpoints.csv``, ``learners.csv``,
     ``figure7.png``, ``figure7_greedy.png``, ``figure7_k_ablation.png``,
@@ -81,6 +82,7 @@ def figure_7_learning_curve(
         checkpoint_episodes=config.checkpoint_episodes,
         backend=backend,
         progress=progress,
+        jobs=jobs,
     )
     runs: list[LearnRun] = [learn(task, spec, **kw) for spec in usable(task, config.learners)]
     ablation = [learn(task, LearnerSpec("sarsa", k, {}, f"SARSA k={k}"), **kw) for k in config.ablation_ks]

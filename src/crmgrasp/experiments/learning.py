@@ -21,7 +21,11 @@ Used by ``crmgrasp learn`` and by Figure 7. Files written to the output folder:
 
 from __future__ import annotations
 
+import multiprocessing
+import os
+import signal
 import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -145,6 +149,72 @@ def _groups(trials: int, lockstep: bool) -> list[tuple[int, int]]:
     return [(f, min(size, trials - f)) for f in range(0, trials, size)]
 
 
+@dataclass(frozen=True)
+class _GroupJob:
+    """Trains one group of trials (picklable: runs in a worker process too)."""
+
+    task: Task
+    spec: LearnerSpec
+    lockstep: bool
+    episodes: int
+    seed: int
+    eval_episodes: int
+    checkpoint_episodes: int
+    backend: str
+
+    def __call__(self, first: int, n: int, progress: Progress | None = None) -> _Part:
+        trainer = train_trials_lockstep if self.lockstep else train_trials
+        res = trainer(
+            self.task,
+            self.spec.agent,
+            trials=n,
+            episodes=self.episodes,
+            seed=self.seed,
+            k=self.spec.k,
+            eval_episodes=self.eval_episodes,
+            params=self.spec.params,
+            checkpoints=DEFAULT_CHECKPOINTS if self.checkpoint_episodes else (),
+            checkpoint_episodes=self.checkpoint_episodes,
+            backend=self.backend,
+            first_trial=first,
+            progress=progress,
+        )
+        return _part(self.task, self.spec, res)
+
+
+def usable_jobs(jobs: int) -> int:
+    """Worker processes for ``jobs``: itself if >= 1, every usable core if 0."""
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 0:
+        raise CrmgraspError(f"jobs must be an integer >= 0 (0: every usable core), got {jobs!r}")
+    if jobs:
+        return jobs
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def _pool(workers: int) -> ProcessPoolExecutor:
+    """Worker processes forked from this one where possible (compiled kernels are
+    inherited), else spawned."""
+    methods = multiprocessing.get_all_start_methods()
+    context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+    return ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_ignore_sigint)
+
+
+def _stop(pool: ProcessPoolExecutor) -> None:
+    """Terminate the pool's worker processes (they ignore Ctrl-C)."""
+    procs = getattr(pool, "_processes", None)
+    for proc in list(procs.values()) if isinstance(procs, dict) else []:
+        if hasattr(proc, "terminate"):
+            proc.terminate()
+
+
+def _ignore_sigint() -> None:
+    """Workers leave Ctrl-C to the parent, which stops them (one message, no tracebacks)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def learn(
     task: Task,
     spec: LearnerSpec,
@@ -158,6 +228,7 @@ def learn(
     backend: str = "auto",
     store: RunFolder | None = None,
     progress: Progress | None = None,
+    jobs: int = 1,
 ) -> LearnRun:
     """Train ``trials`` independent agents and summarise them. Episodes step through the
     task's kernel on ``backend`` (:func:`crmgrasp.kernels.kernel_for`), one trial after
@@ -167,46 +238,56 @@ def learn(
     With a run folder ``store``, each group of trials is saved as it completes
     (``trials/*.npz`` and the group's best policy) and groups already recorded there are
     loaded instead of trained: a resumed run gives the results of an uninterrupted one.
-    ``progress`` shows the training episodes done."""
+    ``progress`` shows the training episodes done. ``jobs`` worker processes (0: every
+    usable core) train groups of trials at once; the results do not depend on it."""
     check_budget(trials, episodes, eval_episodes)
+    workers = usable_jobs(jobs)
     t0 = time.perf_counter()
-    trainer = train_trials_lockstep if lockstep else train_trials
-    parts = []
+    job = _GroupJob(task, spec, lockstep, episodes, seed, eval_episodes, checkpoint_episodes, backend)
+    parts: dict[int, _Part] = {}
     stage = progress.stage(f"{spec.name} on {task.name}", trials * episodes, "episodes") if progress else None
+    pending = []
     for first, n in _groups(trials, lockstep):
         unit = f"trials {first:05d}-{first + n - 1:05d}"
         info = store.done(unit) if store is not None else None
         if info is not None:
-            parts.append(_load_part(task, store, unit, info, n, episodes))  # type: ignore[arg-type]
+            parts[first] = _load_part(task, store, unit, info, n, episodes)  # type: ignore[arg-type]
             if stage:
                 stage.advance(n * episodes)
-            continue
-        res = trainer(
-            task,
-            spec.agent,
-            trials=n,
-            episodes=episodes,
-            seed=seed,
-            k=spec.k,
-            eval_episodes=eval_episodes,
-            params=spec.params,
-            checkpoints=DEFAULT_CHECKPOINTS if checkpoint_episodes else (),
-            checkpoint_episodes=checkpoint_episodes,
-            backend=backend,
-            first_trial=first,
-            progress=stage,
-        )
-        parts.append(_part(task, spec, res))
+        else:
+            pending.append((first, n, unit))
+
+    def finished(first: int, unit: str, part: _Part) -> None:
+        parts[first] = part
         if store is not None:
-            _save_part(store, unit, parts[-1])
+            _save_part(store, unit, part)
+
+    if workers > 1 and len(pending) > 1:
+        pool = _pool(workers)
+        try:
+            futures = {pool.submit(job, first, n): (first, n, unit) for first, n, unit in pending}
+            for future in as_completed(futures):
+                first, n, unit = futures[future]
+                finished(first, unit, future.result())
+                if stage:
+                    stage.advance(n * episodes)
+        except BaseException:  # Ctrl-C or an error: stop the workers now, keep what is saved
+            _stop(pool)
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+        pool.shutdown()
+    else:
+        for first, n, unit in pending:
+            finished(first, unit, job(first, n, stage))
+    parts_list = [parts[f] for f in sorted(parts)]
     if stage:
         stage.end()
-    joined = {a: np.concatenate([getattr(p, a) for p in parts]) for a in _ARRAYS if a != "checkpoints"}
-    res = TrialResult(agents=[], checkpoints=parts[0].checkpoints, **joined)
-    best = min(range(len(parts)), key=lambda i: (parts[i].score, i))
+    joined = {a: np.concatenate([getattr(p, a) for p in parts_list]) for a in _ARRAYS if a != "checkpoints"}
+    res = TrialResult(agents=[], checkpoints=parts_list[0].checkpoints, **joined)
+    best = min(range(len(parts_list)), key=lambda i: (parts_list[i].score, i))
     summary = _summary(task, spec, res, trials, episodes, seed, eval_episodes, checkpoint_episodes)
     summary["seconds"] = round(time.perf_counter() - t0, 3)
-    return LearnRun(spec, res, summary, parts[best].policy)
+    return LearnRun(spec, res, summary, parts_list[best].policy)
 
 
 def _summary(

@@ -40,7 +40,7 @@ def _figure7(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
     cfg = Figure7Config(seed=seed)
     if quick:
         cfg = replace(cfg, trials=5, episodes=300, eval_episodes=200, checkpoint_episodes=50)
-    s = figure_7_learning_curve(out, cfg, backend=ctx["backend"], progress=ctx.get("progress"))
+    s = figure_7_learning_curve(out, cfg, backend=ctx["backend"], progress=ctx.get("progress"), jobs=ctx.get("jobs", 1))
     if not quick:
         ctx["policy"] = str(out / "policy.json")
     return s, [
@@ -92,7 +92,7 @@ def _figure9(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
 
 def _compare(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
     cfg = CompareConfig.quick(seed=seed) if quick else CompareConfig(seed=seed)
-    s = compare(out, cfg, backend=ctx["backend"], progress=ctx.get("progress"))
+    s = compare(out, cfg, backend=ctx["backend"], progress=ctx.get("progress"), jobs=ctx.get("jobs", 1))
     return s, [
         ("best learner, greedy CRMs", f"{fmt(s['best_learner_mean_crms'])} ({s['best_learner']})", "1.8"),
         (

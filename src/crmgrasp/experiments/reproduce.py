@@ -90,6 +90,7 @@ def reproduce(
     backend: str = "auto",
     store: RunFolder | None = None,
     progress: Progress | None = None,
+    jobs: int = 1,
 ) -> dict[str, dict[str, Any]]:
     """Run the named experiments (all by default) into ``out_dir/<name>/`` and write
     ``out_dir/README.md`` with every figure and our numbers beside the paper's.
@@ -97,13 +98,14 @@ def reproduce(
 
     With a run folder ``store``, each finished experiment is recorded there, and one
     recorded already (a resumed run) is not run again. ``progress`` shows the
-    experiments and the training inside them."""
+    experiments and the training inside them. ``jobs`` worker processes train the learners'
+    trials (:func:`~crmgrasp.experiments.learning.learn`; the same results)."""
     if backend not in BACKENDS:
         raise CrmgraspError(f"unknown backend {backend!r}; choose one of {', '.join(BACKENDS)}")
     names, skipped = select(names)
     out = Path(out_dir)
     results: dict[str, dict[str, Any]] = {}
-    ctx: dict[str, Any] = {"backend": backend, "progress": progress}
+    ctx: dict[str, Any] = {"backend": backend, "progress": progress, "jobs": jobs}
     full = full_run_rows() if quick else {}
     lines = [
         "# crmgrasp reproduction",
@@ -133,12 +135,12 @@ def reproduce(
         else:
             if progress:
                 progress.note(f"reproduce: {name} ...")
-            before = {k: v for k, v in ctx.items() if k != "progress"}
+            before = {k: v for k, v in ctx.items() if k not in ("progress", "jobs")}
             t0 = time.perf_counter()
             summary, rows = run(out / name, seed, quick, ctx)
             summary["seconds"] = round(time.perf_counter() - t0, 3)
             if store is not None:
-                added = {k: v for k, v in ctx.items() if k != "progress" and before.get(k) != v}
+                added = {k: v for k, v in ctx.items() if k not in ("progress", "jobs") and before.get(k) != v}
                 store.complete(name, json_safe({"summary": summary, "rows": rows, "context": added}))
         if stage:
             stage.advance()
