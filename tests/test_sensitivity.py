@@ -77,3 +77,9 @@ def test_quick_study_writes_its_files(tmp_path):
         assert (tmp_path / name).exists(), name
     assert "[" in s[SPEC.label]["plateau"]  # median [min-max] over the two seeds
     assert figure_7_sensitivity(tmp_path / "again", cfg) == s
+
+
+def test_worker_processes_give_the_same_study(tmp_path):
+    cfg = SensitivityConfig(trials=2, episodes=40, seeds=(0, 1), reference_starts=50, mechanism_episodes=10)
+    assert figure_7_sensitivity(tmp_path / "a", cfg, jobs=2) == figure_7_sensitivity(tmp_path / "b", cfg)
+    assert (tmp_path / "a" / "sensitivity.csv").read_bytes() == (tmp_path / "b" / "sensitivity.csv").read_bytes()

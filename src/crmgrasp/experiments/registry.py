@@ -109,7 +109,7 @@ def _sensitivity(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tupl
     from crmgrasp.experiments.sensitivity import SensitivityConfig, figure_7_sensitivity
 
     cfg = SensitivityConfig.quick(seed) if quick else replace(SensitivityConfig(), seeds=(seed, seed + 1, seed + 2))
-    s = figure_7_sensitivity(out, cfg, backend=ctx["backend"], progress=ctx.get("progress"))
+    s = figure_7_sensitivity(out, cfg, backend=ctx["backend"], progress=ctx.get("progress"), jobs=ctx.get("jobs", 1))
     rows: list[Row] = []
     for label, r in s.items():
         rows.append(

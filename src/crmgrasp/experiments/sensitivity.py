@@ -23,7 +23,9 @@ episode), ``config.json``.
 
 from __future__ import annotations
 
+from concurrent.futures import as_completed
 from dataclasses import asdict, dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -160,9 +162,11 @@ def figure_7_sensitivity(
     *,
     backend: str = "auto",
     progress: Progress | None = None,
+    jobs: int = 1,
 ) -> dict[str, Any]:
-    """Run every reading on every seed; write the table and the figures; return a summary
-    (per reading: the median plateau and episodes, and the optimum)."""
+    """Run every reading on every seed (``jobs`` worker processes at once, the same
+    results); write the table and the figures; return a summary (per reading: the median
+    plateau and episodes, and the optimum)."""
     from crmgrasp.planners.references import belief_optimum, sample_starts
     from crmgrasp.plotting import learning_curve_figure
 
@@ -174,20 +178,13 @@ def figure_7_sensitivity(
     summary: dict[str, Any] = {}
     total = len(config.readings) * len(config.seeds) * config.trials * config.episodes
     stage = progress.stage("figure7-sensitivity", total, "episodes") if progress else None
+    traces = _traces(base, config, backend, stage, jobs)
     for reading in config.readings:
         task = reading.task(base)
         optimum = belief_optimum(task, sample_starts(task, config.reference_starts, config.seeds[0]))
         per_seed = []
         for seed in config.seeds:
-            res = trace_trials(
-                task,
-                reading,
-                trials=config.trials,
-                episodes=config.episodes,
-                seed=seed,
-                backend=backend,
-                progress=stage,
-            )
+            res = traces[(reading.label, seed)]
             curve = res.steps.mean(axis=0)
             m = _measure(curve)
             early = slice(0, min(60, config.episodes))
@@ -228,6 +225,33 @@ def figure_7_sensitivity(
         {"experiment": "figure7-sensitivity", "config": asdict(config), "summary": summary, "rows": rows},
     )
     return summary
+
+
+def _traces(
+    base: Task, config: SensitivityConfig, backend: str, stage: Progress | None, jobs: int
+) -> dict[tuple[str, int], TraceResult]:
+    """:func:`trace_trials` of every (reading, seed), in worker processes when ``jobs`` > 1."""
+    from crmgrasp.experiments.learning import _pool, _stop, usable_jobs
+
+    cells = [(r, seed) for r in config.readings for seed in config.seeds]
+    kw: dict[str, Any] = dict(trials=config.trials, episodes=config.episodes, backend=backend)
+    workers = usable_jobs(jobs)
+    if workers <= 1 or len(cells) <= 1:
+        return {(r.label, s): trace_trials(r.task(base), r, seed=s, progress=stage, **kw) for r, s in cells}
+    out: dict[tuple[str, int], TraceResult] = {}
+    pool = _pool(workers)
+    try:
+        futures = {pool.submit(partial(trace_trials, r.task(base), r, seed=s, **kw)): (r.label, s) for r, s in cells}
+        for future in as_completed(futures):
+            out[futures[future]] = future.result()
+            if stage:
+                stage.advance(config.trials * config.episodes)
+    except BaseException:
+        _stop(pool)
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown()
+    return out
 
 
 _KEYS = (
