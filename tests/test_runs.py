@@ -146,7 +146,8 @@ def test_progress_lines_and_quiet():
 
 
 def test_worker_processes_give_the_same_results(tmp_path):
-    from crmgrasp.experiments.learning import LearnerSpec, learn, usable_jobs
+    from crmgrasp.experiments.learning import LearnerSpec, learn
+    from crmgrasp.experiments.parallel import usable_jobs
     from crmgrasp.tasks import paper_box
 
     task = paper_box()

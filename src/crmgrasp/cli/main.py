@@ -404,6 +404,27 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from crmgrasp.experiments.sweep import load_study, report, run_study
+
+    if args.target == "report":
+        if args.folder is None:
+            raise CrmgraspError("sweep report needs the study's run folder: crmgrasp sweep report DIR")
+        print(f"wrote {report(args.folder).resolve()}")
+        return 0
+    if args.folder is not None:
+        raise CrmgraspError(f"unexpected argument {str(args.folder)!r} (use --out for the run folder)")
+    study = load_study(args.target)
+    with _run_folder(args, study.name, {"study": study.to_dict()}) as run:
+        counts = run_study(study, run, jobs=args.jobs, backend=args.backend, progress=_progress(args))
+    print(
+        f"study {study.name}: {len(study.cells)} cells x {len(study.seeds)} seeds: {counts.get('ok', 0)} runs ok, "
+        f"{counts.get('failed', 0)} failed"
+    )
+    print(f"wrote {(run.path / 'results.csv').resolve()}, cells.csv; report: crmgrasp sweep report {run.path}")
+    return 1 if counts.get("failed") else 0
+
+
 def _cmd_tasks(args: argparse.Namespace) -> int:
     for name in task_names():
         print(f"{name}: {make_task(name).description}")
@@ -435,6 +456,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "reproduce": _cmd_reproduce,
         "tasks": _cmd_tasks,
         "task-template": _cmd_task_template,
+        "sweep": _cmd_sweep,
         "status": _cmd_status,
         "learn": _cmd_learn,
         "evaluate": _cmd_evaluate,

@@ -417,6 +417,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
     _add_backend(p)
 
+    p = sub.add_parser(
+        "sweep",
+        help="run a study (grid of tasks, learners, parameters, seeds) or report on one",
+        description="`crmgrasp sweep STUDY.toml` runs every (cell, seed) of a study into a run folder "
+        "(results.csv, cells.csv, Parquet with pyarrow); `crmgrasp sweep report DIR` writes report.md and "
+        "figures (bootstrap intervals over trials, interquartile means, a performance profile).",
+    )
+    p.add_argument("target", metavar="STUDY.toml|report", help="a study file, or the word report")
+    p.add_argument("folder", nargs="?", type=_path, metavar="DIR", help="with report: the study's run folder")
+    _add_run(p, "sweep")
+    _add_jobs(p)
+    _add_kernel_backend(p)
+
     sub.add_parser("tasks", help="list the built-in tasks", description="List the registered (built-in) tasks.")
     sub.add_parser(
         "task-template",

@@ -21,12 +21,9 @@ Used by ``crmgrasp learn`` and by Figure 7. Files written to the output folder:
 
 from __future__ import annotations
 
-import multiprocessing
-import os
-import signal
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -45,6 +42,7 @@ from crmgrasp.agents.training import (
     checkpoints_to_within,
     encoder_for,
 )
+from crmgrasp.experiments.parallel import run_parallel, usable_jobs
 from crmgrasp.experiments.runs import RunFolder
 from crmgrasp.experiments.stats import bootstrap_ci, budget, iqm
 from crmgrasp.tasks import Task
@@ -182,39 +180,6 @@ class _GroupJob:
         return _part(self.task, self.spec, res)
 
 
-def usable_jobs(jobs: int) -> int:
-    """Worker processes for ``jobs``: itself if >= 1, every usable core if 0."""
-    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 0:
-        raise CrmgraspError(f"jobs must be an integer >= 0 (0: every usable core), got {jobs!r}")
-    if jobs:
-        return jobs
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        return os.cpu_count() or 1
-
-
-def _pool(workers: int) -> ProcessPoolExecutor:
-    """Worker processes forked from this one where possible (compiled kernels are
-    inherited), else spawned."""
-    methods = multiprocessing.get_all_start_methods()
-    context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-    return ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_ignore_sigint)
-
-
-def _stop(pool: ProcessPoolExecutor) -> None:
-    """Terminate the pool's worker processes (they ignore Ctrl-C)."""
-    procs = getattr(pool, "_processes", None)
-    for proc in list(procs.values()) if isinstance(procs, dict) else []:
-        if hasattr(proc, "terminate"):
-            proc.terminate()
-
-
-def _ignore_sigint() -> None:
-    """Workers leave Ctrl-C to the parent, which stops them (one message, no tracebacks)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
 def learn(
     task: Task,
     spec: LearnerSpec,
@@ -241,7 +206,7 @@ def learn(
     ``progress`` shows the training episodes done. ``jobs`` worker processes (0: every
     usable core) train groups of trials at once; the results do not depend on it."""
     check_budget(trials, episodes, eval_episodes)
-    workers = usable_jobs(jobs)
+    usable_jobs(jobs)  # a bad value fails before any work
     t0 = time.perf_counter()
     job = _GroupJob(task, spec, lockstep, episodes, seed, eval_episodes, checkpoint_episodes, backend)
     parts: dict[int, _Part] = {}
@@ -262,20 +227,12 @@ def learn(
         if store is not None:
             _save_part(store, unit, part)
 
-    if workers > 1 and len(pending) > 1:
-        pool = _pool(workers)
-        try:
-            futures = {pool.submit(job, first, n): (first, n, unit) for first, n, unit in pending}
-            for future in as_completed(futures):
-                first, n, unit = futures[future]
-                finished(first, unit, future.result())
-                if stage:
-                    stage.advance(n * episodes)
-        except BaseException:  # Ctrl-C or an error: stop the workers now, keep what is saved
-            _stop(pool)
-            pool.shutdown(wait=False, cancel_futures=True)
-            raise
-        pool.shutdown()
+    if usable_jobs(jobs) > 1 and len(pending) > 1:
+        calls = [((first, n, unit), partial(job, first, n)) for first, n, unit in pending]
+        for (first, n, unit), part in run_parallel(calls, jobs):
+            finished(first, unit, part)
+            if stage:
+                stage.advance(n * episodes)
     else:
         for first, n, unit in pending:
             finished(first, unit, job(first, n, stage))

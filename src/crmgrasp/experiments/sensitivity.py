@@ -23,7 +23,6 @@ episode), ``config.json``.
 
 from __future__ import annotations
 
-from concurrent.futures import as_completed
 from dataclasses import asdict, dataclass
 from functools import partial
 from pathlib import Path
@@ -35,6 +34,7 @@ from crmgrasp._io import atomic_write_text, save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
 from crmgrasp.agents.base import LearnerPolicy
 from crmgrasp.agents.training import build_agent, encoder_for, episodes_to_within, trial_generators
+from crmgrasp.experiments.parallel import run_parallel, usable_jobs
 from crmgrasp.experiments.stats import budget, fmt
 from crmgrasp.kernels import kernel_for
 from crmgrasp.model.hand import Error
@@ -231,26 +231,16 @@ def _traces(
     base: Task, config: SensitivityConfig, backend: str, stage: Progress | None, jobs: int
 ) -> dict[tuple[str, int], TraceResult]:
     """:func:`trace_trials` of every (reading, seed), in worker processes when ``jobs`` > 1."""
-    from crmgrasp.experiments.learning import _pool, _stop, usable_jobs
-
     cells = [(r, seed) for r in config.readings for seed in config.seeds]
     kw: dict[str, Any] = dict(trials=config.trials, episodes=config.episodes, backend=backend)
-    workers = usable_jobs(jobs)
-    if workers <= 1 or len(cells) <= 1:
+    if usable_jobs(jobs) <= 1:
         return {(r.label, s): trace_trials(r.task(base), r, seed=s, progress=stage, **kw) for r, s in cells}
     out: dict[tuple[str, int], TraceResult] = {}
-    pool = _pool(workers)
-    try:
-        futures = {pool.submit(partial(trace_trials, r.task(base), r, seed=s, **kw)): (r.label, s) for r, s in cells}
-        for future in as_completed(futures):
-            out[futures[future]] = future.result()
-            if stage:
-                stage.advance(config.trials * config.episodes)
-    except BaseException:
-        _stop(pool)
-        pool.shutdown(wait=False, cancel_futures=True)
-        raise
-    pool.shutdown()
+    calls = [((r.label, s), partial(trace_trials, r.task(base), r, seed=s, **kw)) for r, s in cells]
+    for key, res in run_parallel(calls, jobs):
+        out[key] = res
+        if stage:
+            stage.advance(config.trials * config.episodes)
     return out
 
 

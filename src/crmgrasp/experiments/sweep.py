@@ -1,0 +1,390 @@
+"""Studies: many learning runs (tasks x learners x parameters x seeds), one tidy table.
+
+A study file is TOML::
+
+    name = "alpha-study"
+    trials = 20
+    episodes = 500
+    eval_episodes = 200        # optional (default 200)
+    seeds = [0, 1, 2]
+    [grid]                     # every combination of these values is a cell ...
+    task = ["paper-box"]
+    agent = ["sarsa", "dyna-q"]
+    alpha = [0.1, 0.3, 0.6]
+    # [[cell]]                 # ... and/or cells listed one by one
+    # agent = "q"
+    # epsilon = 0.1
+
+Cell keys: ``task`` (a name, a .toml file or ``package.module:factory``),
+``start_preset``, ``grasp_reward``, ``agent``, ``k``, ``symmetric`` and the agents'
+parameters (``alpha``, ``gamma``, ``epsilon``, ``q0``, ``lam``, ``trace``,
+``n_planning``, ``planning``). Each (cell, seed) is one
+:func:`~crmgrasp.experiments.learning.learn` run; its results depend only on the cell and
+the seed, so any number of worker processes gives the same table. A cell that fails
+(a parameter its agent does not take, say) is recorded with its error; the others go
+on. The run folder holds ``run.json`` (the study, the status of every (cell, seed)),
+``units/`` (one file per finished unit, which ``--resume`` keeps), ``results.csv`` (one
+row per cell, seed and trial: the cell's settings and the trial's greedy CRMs per
+episode, success rate and CRMs per episode over the last 10 training episodes),
+``cells.csv`` (one row per cell and seed: the summary) and, when ``pyarrow`` is
+installed, the same tables as Parquet. :func:`report` turns a study folder into
+``report.md`` and figures (:mod:`crmgrasp.experiments.stats` conventions: bootstrap
+intervals over trials, interquartile means, a performance profile).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+import tomllib
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from crmgrasp._io import atomic_write_text, read_bounded, save_figure, write_csv, write_json
+from crmgrasp._progress import Progress
+from crmgrasp._validation import SEED_MAX, CrmgraspError, integer, shown
+from crmgrasp.experiments.learning import LearnerSpec, learn
+from crmgrasp.experiments.parallel import run_parallel
+from crmgrasp.experiments.runs import RunFolder
+from crmgrasp.experiments.stats import bootstrap_ci, fmt, iqm
+
+__all__ = ["Study", "load_study", "run_study", "report", "CELL_KEYS"]
+
+AGENT_PARAMS = ("alpha", "gamma", "epsilon", "q0", "lam", "trace", "n_planning", "planning")
+CELL_KEYS = ("task", "start_preset", "grasp_reward", "agent", "k", "symmetric", *AGENT_PARAMS)
+"""The keys a cell may set."""
+
+_DEFAULT_CELL = {"task": "paper-box", "agent": "sarsa", "k": 2}
+
+
+@dataclass(frozen=True)
+class Study:
+    """A parsed study: budgets, seeds and the cells (each a dict of cell keys)."""
+
+    name: str
+    trials: int
+    episodes: int
+    eval_episodes: int
+    seeds: tuple[int, ...]
+    cells: tuple[dict[str, Any], ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data (what ``run.json`` records and ``--resume`` compares)."""
+        return {
+            "name": self.name,
+            "trials": self.trials,
+            "episodes": self.episodes,
+            "eval_episodes": self.eval_episodes,
+            "seeds": list(self.seeds),
+            "cells": [dict(c) for c in self.cells],
+        }
+
+
+def cell_id(cell: dict[str, Any]) -> str:
+    """A short stable name of a cell: agent, k and a digest of its settings."""
+    digest = hashlib.sha256(json.dumps(cell, sort_keys=True).encode()).hexdigest()[:8]
+    return f"{cell.get('agent', 'sarsa')}-k{cell.get('k', 2)}-{digest}"
+
+
+def _scalar(key: str, value: Any, where: str) -> Any:
+    if isinstance(value, (dict, list)):
+        raise CrmgraspError(f"{where}: {key} must be a single value, got {shown(value)}")
+    if isinstance(value, float) and not math.isfinite(value):
+        raise CrmgraspError(f"{where}: {key} must be finite, got {value}")
+    return value
+
+
+def _cell(raw: dict[str, Any], where: str) -> dict[str, Any]:
+    for key in raw:
+        if key not in CELL_KEYS:
+            raise CrmgraspError(f"{where}: unknown key {key!r}; cell keys: {', '.join(CELL_KEYS)}")
+    return {**_DEFAULT_CELL, **{k: _scalar(k, v, where) for k, v in raw.items()}}
+
+
+def study_from_dict(doc: Any) -> Study:
+    """The :class:`Study` a parsed study file states (one-line errors naming the key)."""
+    if not isinstance(doc, dict):
+        raise CrmgraspError("a study must be a table")
+    known = {"name", "trials", "episodes", "eval_episodes", "seeds", "grid", "cell"}
+    for key in doc:
+        if key not in known:
+            raise CrmgraspError(f"unknown key {key!r}; study keys: {', '.join(sorted(known))}")
+    name = doc.get("name", "study")
+    if not isinstance(name, str) or not name:
+        raise CrmgraspError(f"name must be a non-empty string, got {shown(name)}")
+    trials = integer(doc.get("trials", 20), "trials", 1, 100_000)
+    episodes = integer(doc.get("episodes", 500), "episodes", 1, 10_000_000)
+    eval_episodes = integer(doc.get("eval_episodes", 200), "eval_episodes", 0, 10_000_000)
+    seeds = doc.get("seeds", [0])
+    if not isinstance(seeds, list) or not seeds:
+        raise CrmgraspError(f"seeds must be a non-empty list of integers, got {shown(seeds)}")
+    seeds = tuple(integer(s, "seed", 0, SEED_MAX) for s in seeds)
+    if len(set(seeds)) != len(seeds):
+        raise CrmgraspError("seeds must not repeat")
+    cells: list[dict[str, Any]] = []
+    grid = doc.get("grid")
+    if grid is not None:
+        if not isinstance(grid, dict) or not grid:
+            raise CrmgraspError("[grid] must be a table of lists")
+        keys = list(grid)
+        values = []
+        for key in keys:
+            v = grid[key]
+            if not isinstance(v, list) or not v:
+                raise CrmgraspError(f"[grid] {key} must be a non-empty list, got {shown(v)}")
+            values.append(v)
+        cells += [_cell(dict(zip(keys, combo)), "[grid]") for combo in itertools.product(*values)]
+    listed = doc.get("cell", [])
+    if not isinstance(listed, list):
+        raise CrmgraspError("[[cell]] must be an array of tables")
+    cells += [_cell(c if isinstance(c, dict) else {"?": c}, f"[[cell]] number {i + 1}") for i, c in enumerate(listed)]
+    if not cells:
+        raise CrmgraspError("a study needs a [grid] or at least one [[cell]]")
+    if len(cells) * len(seeds) > 100_000:
+        raise CrmgraspError(f"{len(cells) * len(seeds):,} runs exceed the 100,000 one study may hold")
+    ids = [cell_id(c) for c in cells]
+    if len(set(ids)) != len(ids):
+        raise CrmgraspError("two cells of the study are the same")
+    return Study(name, trials, episodes, eval_episodes, seeds, tuple(cells))
+
+
+def load_study(path: str | Path) -> Study:
+    """Read a study file (1 MiB at most; one-line errors naming the file and the key)."""
+    p = Path(path)
+    data = read_bounded(p, 1 << 20, "study file")
+    try:
+        return study_from_dict(tomllib.loads(data.decode("utf-8")))
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise CrmgraspError(f"study file {str(p)!r} is not valid TOML ({exc})") from None
+    except CrmgraspError as exc:
+        raise CrmgraspError(f"study file {str(p)!r}: {exc}") from None
+
+
+@dataclass(frozen=True)
+class _Unit:
+    """One (cell, seed) run; picklable, so it runs in a worker process too."""
+
+    cell: dict[str, Any]
+    seed: int
+    trials: int
+    episodes: int
+    eval_episodes: int
+    backend: str
+
+    def __call__(self) -> dict[str, Any]:
+        from crmgrasp.tasks import resolve_task
+        from crmgrasp.tasks.presets import with_reading
+
+        c = self.cell
+        try:
+            task = with_reading(
+                resolve_task(c["task"]), starts=c.get("start_preset"), grasp_reward=c.get("grasp_reward")
+            )
+            params = {k: c[k] for k in AGENT_PARAMS if k in c}
+            if c.get("symmetric"):
+                params["symmetric"] = True
+            run = learn(
+                task,
+                LearnerSpec(c["agent"], c["k"], params),
+                trials=self.trials,
+                episodes=self.episodes,
+                seed=self.seed,
+                eval_episodes=self.eval_episodes,
+                checkpoint_episodes=0,
+                backend=self.backend,
+            )
+        except CrmgraspError as exc:
+            return {"status": "failed", "error": str(exc)}
+        res = run.result
+        greedy = res.greedy_steps.mean(axis=1) if self.eval_episodes else np.full(self.trials, np.nan)
+        success = res.greedy_success.mean(axis=1) if self.eval_episodes else np.full(self.trials, np.nan)
+        return {
+            "status": "ok",
+            "summary": run.summary,
+            "trials": {
+                "greedy_mean_steps": greedy.tolist(),
+                "greedy_success_rate": success.tolist(),
+                "final_mean_steps": res.steps[:, -10:].mean(axis=1).tolist(),
+            },
+            "curve": res.curve.tolist(),
+        }
+
+
+def run_study(
+    study: Study, store: RunFolder, *, jobs: int = 1, backend: str = "auto", progress: Progress | None = None
+) -> dict[str, int]:
+    """Run every (cell, seed) not yet recorded in ``store`` (``jobs`` at once), then
+    write the tables. Returns the number of units ok and failed."""
+    units = [
+        (f"{cell_id(c)} seed {s}", _Unit(c, s, study.trials, study.episodes, study.eval_episodes, backend))
+        for c in study.cells
+        for s in study.seeds
+    ]
+    todo = [(name, unit) for name, unit in units if store.done(name) is None]
+    stage = progress.stage(f"sweep {study.name}", len(units), "runs") if progress else None
+    if stage:
+        stage.advance(len(units) - len(todo))
+
+    def record(name: str, result: dict[str, Any]) -> None:
+        file = f"units/{name.replace(' ', '_')}.json"
+        if result["status"] == "ok":
+            write_json(store.path / file, result)
+        store.complete(name, {"status": result["status"], "error": result.get("error"), "file": file})
+        if stage:
+            stage.advance()
+            if result["status"] == "failed":
+                stage.note(f"sweep: {name} failed: {result['error']}")
+
+    for name, result in run_parallel(todo, jobs):
+        record(name, result)
+    if stage:
+        stage.end()
+    return write_tables(study, store.path, store.record["completed"])
+
+
+def write_tables(study: Study, out: Path, completed: dict[str, Any]) -> dict[str, int]:
+    """``results.csv`` (cell x seed x trial), ``cells.csv`` (cell x seed) and Parquet copies."""
+    keys = list(CELL_KEYS)
+    rows, cells, counts = [], [], {"ok": 0, "failed": 0}
+    for c in study.cells:
+        for s in study.seeds:
+            name = f"{cell_id(c)} seed {s}"
+            info = completed.get(name) or {}
+            status = info.get("status", "missing")
+            counts[status] = counts.get(status, 0) + 1
+            settings = [cell_id(c), *(c.get(k) for k in keys), s]
+            if status != "ok":
+                cells.append([*settings, status, info.get("error"), None, None, None, None, None])
+                continue
+            doc = json.loads((out / info["file"]).read_text(encoding="utf-8"))
+            t = doc["trials"]
+            for i, (g, ok, fin) in enumerate(
+                zip(t["greedy_mean_steps"], t["greedy_success_rate"], t["final_mean_steps"])
+            ):
+                rows.append([*settings, i, g, ok, fin])
+            sm = doc["summary"]
+            lo, hi = sm["greedy_ci95_over_trials"]
+            cells.append(
+                [*settings, "ok", None, sm["greedy_mean_steps"], lo, hi, sm["greedy_iqm_steps"], sm["seconds"]]
+            )
+    head = ["cell", *keys, "seed"]
+    write_csv(
+        out / "results.csv", [*head, "trial", "greedy_mean_steps", "greedy_success_rate", "final_mean_steps"], rows
+    )
+    write_csv(
+        out / "cells.csv",
+        [*head, "status", "error", "greedy_mean_steps", "ci95_low", "ci95_high", "greedy_iqm_steps", "seconds"],
+        cells,
+    )
+    _parquet(out, ("results", "cells"))
+    return counts
+
+
+def _parquet(out: Path, names: Sequence[str]) -> None:
+    """Parquet copies of the CSV tables when ``pyarrow`` is installed."""
+    try:
+        import pyarrow.csv as pacsv
+        import pyarrow.parquet as pq
+    except ImportError:
+        return
+    from crmgrasp._io import atomic_path
+
+    for name in names:
+        table = pacsv.read_csv(out / f"{name}.csv")
+        with atomic_path(out / f"{name}.parquet") as tmp:
+            pq.write_table(table, tmp)
+
+
+def report(folder: str | Path) -> Path:
+    """``report.md``, ``profile.png`` and one ``param_<key>.png`` per swept key, from a
+    study folder: per cell, the mean greedy CRMs per episode with a bootstrap 95%
+    interval over all its trials (every seed), the interquartile mean, and a performance
+    profile (the share of a cell's trials whose greedy CRMs are at most tau)."""
+    from crmgrasp.experiments.runs import _read
+
+    out = Path(folder)
+    rec = _read(out)
+    if rec.get("command") != "sweep":
+        raise CrmgraspError(f"{str(out)!r} is not a study folder (command {shown(rec.get('command'))})")
+    doc = rec["config"].get("study")
+    if not isinstance(doc, dict):
+        raise CrmgraspError(f"run record of {str(out)!r} holds no study")
+    study = Study(
+        doc["name"], doc["trials"], doc["episodes"], doc["eval_episodes"], tuple(doc["seeds"]), tuple(doc["cells"])
+    )
+    per_cell: dict[str, np.ndarray] = {}
+    for c in study.cells:
+        vals = []
+        for s in study.seeds:
+            info = rec["completed"].get(f"{cell_id(c)} seed {s}") or {}
+            if info.get("status") == "ok":
+                vals += json.loads((out / info["file"]).read_text())["trials"]["greedy_mean_steps"]
+        per_cell[cell_id(c)] = np.asarray(vals, dtype=float)
+    swept = [k for k in CELL_KEYS if len({json.dumps(c.get(k)) for c in study.cells}) > 1]
+    lines = [
+        f"# Study {study.name}: {len(study.cells)} cells x {len(study.seeds)} seeds x {study.trials} trials",
+        "",
+        f"{study.episodes:,} training episodes per trial, greedy evaluation on {study.eval_episodes:,} episodes; "
+        "mean over all trials of the cell with a percentile-bootstrap 95% interval over trials, and the "
+        f"interquartile mean. Status: {rec['status']}.",
+        "",
+        "| cell | " + " | ".join(swept) + " | trials | mean CRMs | 95% CI | IQM |",
+        "| --- | " + " | ".join("---" for _ in swept) + " | --- | --- | --- | --- |",
+    ]
+    for c in sorted(
+        study.cells, key=lambda c: float(np.mean(per_cell[cell_id(c)])) if per_cell[cell_id(c)].size else math.inf
+    ):
+        v = per_cell[cell_id(c)]
+        lo, hi = bootstrap_ci(v, 0)
+        mean = fmt(float(v.mean())) if v.size else "failed"
+        settings = " | ".join(str(c.get(k)) for k in swept)
+        middle = fmt(iqm(v)) if v.size else "-"
+        lines.append(f"| {cell_id(c)} | {settings} | {v.size} | {mean} | {fmt(lo)}-{fmt(hi)} | {middle} |")
+    atomic_write_text(out / "report.md", "\n".join(lines) + "\n")
+    _figures(out, study, per_cell, swept)
+    return out / "report.md"
+
+
+def _figures(out: Path, study: Study, per_cell: dict[str, np.ndarray], swept: list[str]) -> None:
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.5, 4.2), layout="constrained")
+    ax = fig.add_subplot()
+    scores = [v for v in per_cell.values() if v.size]
+    if scores:
+        taus = np.linspace(min(float(v.min()) for v in scores), max(float(v.max()) for v in scores), 200)
+        for c in study.cells:
+            v = per_cell[cell_id(c)]
+            if v.size:
+                ax.plot(taus, [(v <= t).mean() for t in taus], label=cell_id(c), lw=1.2)
+    ax.set_xlabel("tau: greedy CRMs per episode")
+    ax.set_ylabel("share of trials at or below tau")
+    ax.set_title(f"Performance profile, study {study.name}", fontsize=10)
+    ax.grid(alpha=0.3)
+    if len(study.cells) <= 12:
+        ax.legend(fontsize=6)
+    save_figure(fig, out / "profile.png", dpi=110)
+    for key in swept:
+        fig = Figure(figsize=(5.5, 4.0), layout="constrained")
+        ax = fig.add_subplot()
+        xs = sorted({json.dumps(c.get(key)) for c in study.cells})
+        for i, x in enumerate(xs):
+            v = np.concatenate(
+                [per_cell[cell_id(c)] for c in study.cells if json.dumps(c.get(key)) == x] or [np.zeros(0)]
+            )
+            if v.size:
+                lo, hi = bootstrap_ci(v, 0)
+                m = float(v.mean())
+                yerr = [[m - lo if math.isfinite(lo) else 0], [hi - m if math.isfinite(hi) else 0]]
+                ax.errorbar([i], [m], yerr=yerr, marker="o", capsize=3, color="k")
+        ax.set_xticks(range(len(xs)), [json.loads(x) if json.loads(x) is not None else "-" for x in xs])
+        ax.set_xlabel(key)
+        ax.set_ylabel("greedy CRMs per episode (all cells with this value)")
+        ax.set_title(f"{study.name}: by {key} (mean, 95% bootstrap CI)", fontsize=9)
+        save_figure(fig, out / f"param_{key}.png", dpi=110)

@@ -1,0 +1,102 @@
+"""Studies: parsing, identical results for any number of workers, failures kept apart,
+resume, tables and the report."""
+
+from __future__ import annotations
+
+import csv
+
+import pytest
+
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.cli import main
+from crmgrasp.experiments import sweep as sweep_mod
+from crmgrasp.experiments.runs import read_status
+from crmgrasp.experiments.sweep import cell_id, load_study, study_from_dict
+
+STUDY = """
+name = "tiny"
+trials = 3
+episodes = 40
+eval_episodes = 10
+seeds = [0, 1]
+[grid]
+agent = ["sarsa", "q"]
+alpha = [0.3, 0.6]
+[[cell]]
+agent = "random"
+alpha = 0.5
+"""
+
+
+def _write(tmp_path, text=STUDY):
+    p = tmp_path / "study.toml"
+    p.write_text(text)
+    return p
+
+
+def test_grid_and_cells_are_expanded(tmp_path):
+    study = load_study(_write(tmp_path))
+    assert len(study.cells) == 5 and study.seeds == (0, 1)
+    assert study.cells[0] == {"task": "paper-box", "agent": "sarsa", "k": 2, "alpha": 0.3}
+    assert len({cell_id(c) for c in study.cells}) == 5
+
+
+@pytest.mark.parametrize(
+    ("doc", "message"),
+    [
+        ({"grid": {"agent": ["sarsa"]}, "foo": 1}, "unknown key 'foo'"),
+        ({"grid": {"alpah": [0.1]}}, "unknown key 'alpah'"),
+        ({"grid": {"agent": []}}, "must be a non-empty list"),
+        ({}, "needs a [grid]"),
+        ({"grid": {"agent": ["sarsa"]}, "seeds": [1, 1]}, "must not repeat"),
+        ({"grid": {"agent": ["sarsa"]}, "seeds": [-1]}, "seed"),
+        ({"grid": {"agent": ["sarsa"]}, "trials": 0}, "trials"),
+        ({"cell": [{"agent": ["sarsa"]}]}, "must be a single value"),
+        ({"cell": [{"agent": "sarsa"}, {"agent": "sarsa"}]}, "the same"),
+    ],
+)
+def test_bad_studies_are_one_line(doc, message):
+    with pytest.raises(CrmgraspError, match=message.replace("[", r"\[")):
+        study_from_dict(doc)
+
+
+def test_sweep_runs_tables_report_and_resume(tmp_path, capsys, monkeypatch):
+    path = _write(tmp_path)
+    one, two = tmp_path / "one", tmp_path / "two"
+    assert main(["sweep", str(path), "--quiet", "--out", str(one)]) == 1  # the random cell fails
+    assert "8 runs ok, 2 failed" in capsys.readouterr().out
+    assert main(["sweep", str(path), "--quiet", "--jobs", "2", "--out", str(two)]) == 1
+    assert (one / "results.csv").read_bytes() == (two / "results.csv").read_bytes()
+    with open(one / "results.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == 4 * 2 * 3 and {r["agent"] for r in rows} == {"sarsa", "q"}
+    with open(one / "cells.csv") as fh:
+        cells = list(csv.DictReader(fh))
+    failed = [c for c in cells if c["status"] == "failed"]
+    assert len(failed) == 2 and "has no parameter 'alpha'" in failed[0]["error"]
+    assert read_status(one) == "complete"
+    calls = []
+    monkeypatch.setattr(sweep_mod._Unit, "__call__", lambda self: calls.append(1) or {"status": "failed", "error": "x"})
+    assert main(["sweep", str(path), "--quiet", "--resume", "--out", str(one)]) == 1
+    assert calls == []  # every unit was recorded: nothing runs again
+    assert main(["sweep", "report", str(one)]) == 0
+    report = (one / "report.md").read_text()
+    assert "| cell | agent | alpha |" in report and "failed" in report
+    for name in ("profile.png", "param_agent.png", "param_alpha.png"):
+        assert (one / name).exists()
+
+
+def test_sweep_cli_errors(tmp_path, capsys):
+    assert main(["sweep", "report"]) == 2
+    assert "needs the study's run folder" in capsys.readouterr().err
+    assert main(["sweep", str(_write(tmp_path, "name = 3\n[grid]\nagent=['sarsa']"))]) == 2
+    assert "name must be a non-empty string" in capsys.readouterr().err
+    assert main(["sweep", "report", str(tmp_path)]) == 2
+
+
+def test_parquet_tables(tmp_path):
+    pq = pytest.importorskip("pyarrow.parquet", reason="needs the extra: pip install 'crmgrasp[sweep]'")
+    out = tmp_path / "run"
+    assert main(["sweep", str(_write(tmp_path)), "--quiet", "--out", str(out)]) == 1
+    assert pq.read_table(out / "results.parquet").num_rows == 24
+    assert pq.read_table(out / "cells.parquet").num_rows == 10
