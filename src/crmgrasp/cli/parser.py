@@ -167,14 +167,14 @@ def _add_run(p: argparse.ArgumentParser, command: str) -> None:
     _add_quiet(p)
 
 
-def _add_jobs(p: argparse.ArgumentParser) -> None:
+def _add_jobs(p: argparse.ArgumentParser, default: int = 1) -> None:
     p.add_argument(
         "--jobs",
         type=_int(0, 1024),
-        default=1,
+        default=default,
         metavar="N",
-        help="worker processes training the learners' trials at once, 0 for every usable core (the same "
-        "results) (default 1)",
+        help="worker processes running at once, 0 for every usable core (the same results) "
+        f"(default {default}{': every usable core' if default == 0 else ''})",
     )
 
 
@@ -427,7 +427,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("target", metavar="STUDY.toml|report", help="a study file, or the word report")
     p.add_argument("folder", nargs="?", type=_path, metavar="DIR", help="with report: the study's run folder")
     _add_run(p, "sweep")
-    _add_jobs(p)
+    _add_jobs(p, default=0)
     _add_kernel_backend(p)
 
     sub.add_parser("tasks", help="list the built-in tasks", description="List the registered (built-in) tasks.")
