@@ -100,3 +100,23 @@ def test_parquet_tables(tmp_path):
     assert main(["sweep", str(_write(tmp_path)), "--quiet", "--out", str(out)]) == 1
     assert pq.read_table(out / "results.parquet").num_rows == 24
     assert pq.read_table(out / "cells.parquet").num_rows == 10
+
+
+def test_ray_gives_the_local_results_on_one_and_two_nodes(tmp_path, capsys):
+    ray = pytest.importorskip("ray", reason="needs the extra: pip install 'crmgrasp[ray]'")
+    from ray.cluster_utils import Cluster
+
+    path = _write(tmp_path)
+    local, on_ray, on_cluster = tmp_path / "local", tmp_path / "ray", tmp_path / "cluster"
+    assert main(["sweep", str(path), "--quiet", "--jobs", "1", "--out", str(local)]) == 1
+    assert main(["sweep", str(path), "--quiet", "--jobs", "2", "--backend", "ray", "--out", str(on_ray)]) == 1
+    assert (on_ray / "results.csv").read_bytes() == (local / "results.csv").read_bytes()
+    cluster = Cluster(initialize_head=True, head_node_args={"num_cpus": 1})
+    cluster.add_node(num_cpus=1)
+    try:
+        argv = ["sweep", str(path), "--quiet", "--backend", "ray", "--address", cluster.address]
+        assert main([*argv, "--out", str(on_cluster)]) == 1
+    finally:
+        ray.shutdown()
+        cluster.shutdown()
+    assert (on_cluster / "results.csv").read_bytes() == (local / "results.csv").read_bytes()

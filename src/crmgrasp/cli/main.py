@@ -416,7 +416,15 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         raise CrmgraspError(f"unexpected argument {str(args.folder)!r} (use --out for the run folder)")
     study = load_study(args.target)
     with _run_folder(args, study.name, {"study": study.to_dict()}) as run:
-        counts = run_study(study, run, jobs=args.jobs, backend=args.backend, progress=_progress(args))
+        counts = run_study(
+            study,
+            run,
+            jobs=args.jobs,
+            backend=args.kernel,
+            progress=_progress(args),
+            executor=args.backend,
+            address=args.address,
+        )
     print(
         f"study {study.name}: {len(study.cells)} cells x {len(study.seeds)} seeds: {counts.get('ok', 0)} runs ok, "
         f"{counts.get('failed', 0)} failed"

@@ -428,7 +428,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("folder", nargs="?", type=_path, metavar="DIR", help="with report: the study's run folder")
     _add_run(p, "sweep")
     _add_jobs(p, default=0)
-    _add_kernel_backend(p)
+    p.add_argument(
+        "--backend",
+        choices=("local", "ray"),
+        default="local",
+        help="local worker processes, or Ray tasks (extra crmgrasp[ray]); the same results",
+    )
+    p.add_argument(
+        "--address",
+        default=None,
+        metavar="auto|HOST:PORT",
+        help="with --backend ray: the cluster to use (default: a local Ray instance of --jobs CPUs)",
+    )
+    p.add_argument(
+        "--kernel",
+        choices=("auto", "numba", "reference"),
+        default="auto",
+        help="kernel that episodes step through (as --backend of learn); all give the same results",
+    )
 
     sub.add_parser("tasks", help="list the built-in tasks", description="List the registered (built-in) tasks.")
     sub.add_parser(

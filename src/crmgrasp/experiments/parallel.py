@@ -14,7 +14,7 @@ import os
 import signal
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from typing import TypeVar
+from typing import Any, TypeVar
 
 from crmgrasp._validation import CrmgraspError
 
@@ -36,11 +36,24 @@ def usable_jobs(jobs: int) -> int:
         return os.cpu_count() or 1
 
 
-def run_parallel(calls: Sequence[tuple[K, Callable[[], T]]], jobs: int) -> Iterator[tuple[K, T]]:
+EXECUTORS = ("local", "ray")
+"""Where :func:`run_parallel` runs calls: worker processes on this machine, or Ray."""
+
+
+def run_parallel(
+    calls: Sequence[tuple[K, Callable[[], T]]], jobs: int, executor: str = "local", address: str | None = None
+) -> Iterator[tuple[K, T]]:
     """``(key, call())`` for every call, in completion order: in this process when
     ``jobs`` is 1 (or there is one call), else in ``jobs`` worker processes (0: every
-    usable core). The calls must be picklable (module-level functions, frozen
+    usable core); with ``executor="ray"``, as Ray tasks (one per call) on the cluster at
+    ``address`` (``"auto"``, ``"HOST:PORT"``) or, without one, on a local Ray instance of
+    ``jobs`` CPUs. The calls must be picklable (module-level functions, frozen
     dataclasses, :func:`functools.partial`)."""
+    if executor not in EXECUTORS:
+        raise CrmgraspError(f"unknown executor {executor!r}; choose one of {', '.join(EXECUTORS)}")
+    if executor == "ray":
+        yield from _run_ray(calls, jobs, address)
+        return
     workers = usable_jobs(jobs)
     if workers <= 1 or len(calls) <= 1:
         for key, call in calls:
@@ -61,6 +74,49 @@ def run_parallel(calls: Sequence[tuple[K, Callable[[], T]]], jobs: int) -> Itera
         pool.shutdown(wait=False, cancel_futures=True)
         raise
     pool.shutdown()
+
+
+def _call(call: Callable[[], T]) -> T:
+    return call()
+
+
+def _run_ray(calls: Sequence[tuple[K, Callable[[], T]]], jobs: int, address: str | None) -> Iterator[tuple[K, T]]:
+    """:func:`run_parallel` on Ray (extra ``crmgrasp[ray]``)."""
+    try:
+        import ray
+    except ImportError:
+        raise CrmgraspError("the Ray executor needs the optional extra: pip install 'crmgrasp[ray]'") from None
+    import logging
+
+    started = not ray.is_initialized()
+    if started:
+        options: dict[str, Any] = {
+            "include_dashboard": False,
+            "log_to_driver": False,
+            "logging_level": logging.ERROR,
+        }
+        if address:
+            options["address"] = address
+        else:
+            options["num_cpus"] = usable_jobs(jobs)
+        try:
+            ray.init(**options)
+        except Exception as exc:  # Ray's own errors (no cluster at the address, ...), in one line
+            raise CrmgraspError(f"cannot start or reach Ray ({type(exc).__name__}: {exc})") from None
+    remote: Any = ray.remote(_call)
+    pending = {remote.remote(call): key for key, call in calls}
+    try:
+        while pending:
+            done, _ = ray.wait(list(pending), num_returns=1)
+            for ref in done:
+                yield pending.pop(ref), ray.get(ref)
+    except BaseException:
+        for ref in pending:
+            ray.cancel(ref, force=True)
+        raise
+    finally:
+        if started:
+            ray.shutdown()
 
 
 def _ignore_sigint() -> None:

@@ -217,10 +217,18 @@ class _Unit:
 
 
 def run_study(
-    study: Study, store: RunFolder, *, jobs: int = 1, backend: str = "auto", progress: Progress | None = None
+    study: Study,
+    store: RunFolder,
+    *,
+    jobs: int = 1,
+    backend: str = "auto",
+    progress: Progress | None = None,
+    executor: str = "local",
+    address: str | None = None,
 ) -> dict[str, int]:
-    """Run every (cell, seed) not yet recorded in ``store`` (``jobs`` at once), then
-    write the tables. Returns the number of units ok and failed."""
+    """Run every (cell, seed) not yet recorded in ``store`` (``jobs`` at once, in local
+    worker processes or as Ray tasks: :func:`~crmgrasp.experiments.parallel.run_parallel`),
+    then write the tables. Returns the number of units ok and failed."""
     units = [
         (f"{cell_id(c)} seed {s}", _Unit(c, s, study.trials, study.episodes, study.eval_episodes, backend))
         for c in study.cells
@@ -241,7 +249,7 @@ def run_study(
             if result["status"] == "failed":
                 stage.note(f"sweep: {name} failed: {result['error']}")
 
-    for name, result in run_parallel(todo, jobs):
+    for name, result in run_parallel(todo, jobs, executor, address):
         record(name, result)
     if stage:
         stage.end()
