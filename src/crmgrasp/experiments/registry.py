@@ -187,6 +187,15 @@ QUICK_BUDGETS = {
 """Experiments whose learned numbers ``--quick`` computes on a smaller budget: that
 budget, and the first words of the quantities that depend on it."""
 
+GROUPS = (
+    ("compare",),
+    ("figure7-sensitivity",),
+    ("figure7", "figure8", "figure9", "figure9-mujoco"),
+    ("figure4", "figure4-mujoco"),
+)
+"""Experiments that run in one process, in this order, when ``reproduce`` runs groups in
+parallel (Figures 8 and 9 execute Figure 7's policy); longest expected group first."""
+
 NEEDS_MUJOCO = ("figure4-mujoco", "figure9-mujoco")
 """The experiments that need the extra ``crmgrasp[mujoco]`` (skipped without it)."""
 

@@ -5,13 +5,15 @@ from __future__ import annotations
 
 import json
 import time
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 from crmgrasp._io import atomic_write_text, json_safe, write_json
 from crmgrasp._progress import Progress
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.experiments.registry import EXPERIMENTS, IMAGES, NEEDS_MUJOCO, QUICK_BUDGETS
+from crmgrasp.experiments.parallel import run_parallel, usable_jobs
+from crmgrasp.experiments.registry import EXPERIMENTS, GROUPS, IMAGES, NEEDS_MUJOCO, QUICK_BUDGETS
 from crmgrasp.experiments.runs import RunFolder
 from crmgrasp.experiments.stats import fmt
 from crmgrasp.kernels import BACKENDS
@@ -81,6 +83,40 @@ def select(names: list[str] | None) -> tuple[list[str], list[str]]:
     return sorted(names, key=list(EXPERIMENTS).index), []
 
 
+def _groups(names: list[str]) -> list[tuple[str, ...]]:
+    """``names`` in groups that must run in one process, in order (:data:`GROUPS`: an
+    experiment using another's result runs after it), longest expected first."""
+    out: list[tuple[str, ...]] = []
+    for group in GROUPS:
+        chosen = tuple(n for n in group if n in names)
+        if chosen:
+            out.append(chosen)
+    grouped = {n for g in out for n in g}
+    return out + [(n,) for n in names if n not in grouped]
+
+
+def _run_one(
+    name: str, out: Path, seed: int, quick: bool, ctx: dict[str, Any], progress: Progress | None = None
+) -> tuple[str, dict[str, Any], list[Any], dict[str, Any]]:
+    """Run one experiment; its summary (with ``seconds``), rows and what it added to ``ctx``."""
+    if progress:
+        progress.note(f"reproduce: {name} ...")
+    before = {k: v for k, v in ctx.items() if k not in ("progress", "jobs")}
+    t0 = time.perf_counter()
+    summary, rows = EXPERIMENTS[name][1](out / name, seed, quick, ctx)
+    summary["seconds"] = round(time.perf_counter() - t0, 3)
+    added = {k: v for k, v in ctx.items() if k not in ("progress", "jobs") and before.get(k) != v}
+    return name, summary, rows, added
+
+
+def _run_group(
+    names: tuple[str, ...], out: str, seed: int, quick: bool, shared: dict[str, Any]
+) -> list[tuple[str, dict[str, Any], list[Any], dict[str, Any]]]:
+    """The experiments of one group, in order, in one (worker) process."""
+    ctx = {**shared, "progress": None, "jobs": 1}
+    return [_run_one(name, Path(out), seed, quick, ctx) for name in names]
+
+
 def reproduce(
     out_dir: str | Path,
     names: list[str] | None = None,
@@ -98,8 +134,10 @@ def reproduce(
 
     With a run folder ``store``, each finished experiment is recorded there, and one
     recorded already (a resumed run) is not run again. ``progress`` shows the
-    experiments and the training inside them. ``jobs`` worker processes train the learners'
-    trials (:func:`~crmgrasp.experiments.learning.learn`; the same results)."""
+    experiments and the training inside them. With ``jobs`` > 1 the experiments run in
+    worker processes, in groups (:data:`~crmgrasp.experiments.registry.GROUPS`) whose
+    members depend on each other; with one group left, its learners' trials use the
+    workers (:func:`~crmgrasp.experiments.learning.learn`). The results are the same."""
     if backend not in BACKENDS:
         raise CrmgraspError(f"unknown backend {backend!r}; choose one of {', '.join(BACKENDS)}")
     names, skipped = select(names)
@@ -126,24 +164,31 @@ def reproduce(
         lines += ["| figure | quantity | ours | paper |", "| --- | --- | --- | --- |"]
     body: list[str] = []
     stage = progress.stage("reproduce", len(names), "experiments") if progress else None
+    outcomes: dict[str, tuple[dict[str, Any], list[Any]]] = {}
     for name in names:
-        desc, run = EXPERIMENTS[name]
         done = store.done(name) if store is not None else None
         if isinstance(done, dict) and {"summary", "rows"} <= set(done):
-            summary, rows = done["summary"], [tuple(r) for r in done["rows"]]
+            outcomes[name] = done["summary"], [tuple(r) for r in done["rows"]]
             ctx.update(done.get("context", {}))
-        else:
-            if progress:
-                progress.note(f"reproduce: {name} ...")
-            before = {k: v for k, v in ctx.items() if k not in ("progress", "jobs")}
-            t0 = time.perf_counter()
-            summary, rows = run(out / name, seed, quick, ctx)
-            summary["seconds"] = round(time.perf_counter() - t0, 3)
-            if store is not None:
-                added = {k: v for k, v in ctx.items() if k not in ("progress", "jobs") and before.get(k) != v}
-                store.complete(name, json_safe({"summary": summary, "rows": rows, "context": added}))
+            if stage:
+                stage.advance()
+    pending = [n for n in names if n not in outcomes]
+    groups = _groups(pending)
+    shared = {k: v for k, v in ctx.items() if k not in ("progress", "jobs")}
+    if usable_jobs(jobs) > 1 and len(groups) > 1:
+        calls = [(g, partial(_run_group, g, str(out), seed, quick, shared)) for g in groups]
+        finished = (item for _, items in run_parallel(calls, min(usable_jobs(jobs), len(groups))) for item in items)
+    else:
+        finished = (_run_one(name, out, seed, quick, ctx, progress) for name in pending)
+    for name, summary, rows, added in finished:
+        outcomes[name] = summary, rows
+        if store is not None:
+            store.complete(name, json_safe({"summary": summary, "rows": rows, "context": added}))
         if stage:
             stage.advance()
+    for name in names:
+        desc = EXPERIMENTS[name][0]
+        summary, rows = outcomes[name]
         results[name] = summary
         for q, ours, paper in rows:
             if quick:
