@@ -24,7 +24,7 @@ agent = ["sarsa", "q"]
 alpha = [0.3, 0.6]
 [[cell]]
 agent = "random"
-alpha = 0.5
+task = "missing.toml"
 """
 
 
@@ -53,6 +53,8 @@ def test_grid_and_cells_are_expanded(tmp_path):
         ({"grid": {"agent": ["sarsa"]}, "trials": 0}, "trials"),
         ({"cell": [{"agent": ["sarsa"]}]}, "must be a single value"),
         ({"cell": [{"agent": "sarsa"}, {"agent": "sarsa"}]}, "the same"),
+        ({"cell": [{"agent": "random", "alpha": 0.5}]}, "agent 'random' takes no alpha"),
+        ({"cell": [{"agent": "nope"}]}, "unknown agent 'nope'"),
     ],
 )
 def test_bad_studies_are_one_line(doc, message):
@@ -73,7 +75,8 @@ def test_sweep_runs_tables_report_and_resume(tmp_path, capsys, monkeypatch):
     with open(one / "cells.csv") as fh:
         cells = list(csv.DictReader(fh))
     failed = [c for c in cells if c["status"] == "failed"]
-    assert len(failed) == 2 and "has no parameter 'alpha'" in failed[0]["error"]
+    assert len(failed) == 2 and "missing.toml" in failed[0]["error"]
+    assert '"failed": 2' in (one / "study.json").read_text()
     assert read_status(one) == "complete"
     calls = []
     monkeypatch.setattr(sweep_mod._Unit, "__call__", lambda self: calls.append(1) or {"status": "failed", "error": "x"})
@@ -81,7 +84,7 @@ def test_sweep_runs_tables_report_and_resume(tmp_path, capsys, monkeypatch):
     assert calls == []  # every unit was recorded: nothing runs again
     assert main(["sweep", "report", str(one)]) == 0
     report = (one / "report.md").read_text()
-    assert "| cell | agent | alpha |" in report and "failed" in report
+    assert "| cell | task | agent | alpha |" in report and "failed" in report
     for name in ("profile.png", "param_agent.png", "param_alpha.png"):
         assert (one / name).exists()
 
@@ -120,3 +123,40 @@ def test_ray_gives_the_local_results_on_one_and_two_nodes(tmp_path, capsys):
         ray.shutdown()
         cluster.shutdown()
     assert (on_cluster / "results.csv").read_bytes() == (local / "results.csv").read_bytes()
+
+
+def test_ctrl_c_leaves_a_resumable_study(tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    path = _write(
+        tmp_path, STUDY.replace("episodes = 40", "episodes = 20000").replace("seeds = [0, 1]", "seeds = [0, 1, 2, 3]")
+    )
+    out = tmp_path / "run"
+    argv = [sys.executable, "-m", "crmgrasp", "sweep", str(path), "--quiet", "--jobs", "2", "--out", str(out)]
+    proc = subprocess.Popen(argv, stderr=subprocess.PIPE, text=True)
+    time.sleep(5)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and err.strip().endswith("crmgrasp sweep: interrupted"), err
+    assert read_status(out) == "interrupted"
+    assert not (out / "results.csv").exists()  # tables are written only when every unit has run
+
+
+def test_unreachable_ray_address_is_one_line(tmp_path, capsys):
+    pytest.importorskip("ray", reason="needs the extra: pip install 'crmgrasp[ray]'")
+    argv = ["sweep", str(_write(tmp_path)), "--quiet", "--backend", "ray", "--address", "127.0.0.1:9"]
+    assert main([*argv, "--out", str(tmp_path / "run")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Ray address 127.0.0.1:9 is unreachable" in err
+    assert main([*argv[:-1], "nowhere", "--out", str(tmp_path / "run2")]) == 2
+    assert "must be auto or HOST:PORT" in capsys.readouterr().err
+
+
+def test_the_example_study_loads():
+    from pathlib import Path
+
+    study = load_study(Path(__file__).resolve().parents[1] / "examples" / "sarsa-alpha-q0.toml")
+    assert len(study.cells) == 8 and len(study.seeds) == 10

@@ -65,6 +65,11 @@ class Progress:
             self._stack[-1][2] += n
             self._show()
 
+    def relabel(self, label: str) -> None:
+        """Rename the innermost stage (e.g. to show failures so far)."""
+        if self._stack:
+            self._stack[-1][0] = label
+
     def end(self) -> None:
         """End the innermost stage (a final line when not live)."""
         if not self._stack:

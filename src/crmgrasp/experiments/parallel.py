@@ -99,9 +99,11 @@ def _run_ray(calls: Sequence[tuple[K, Callable[[], T]]], jobs: int, address: str
             options["address"] = address
         else:
             options["num_cpus"] = usable_jobs(jobs)
+        if address and address != "auto":
+            _reachable(address)
         try:
             ray.init(**options)
-        except Exception as exc:  # Ray's own errors (no cluster at the address, ...), in one line
+        except (Exception, SystemExit) as exc:  # Ray's own errors (it may also exit), in one line
             raise CrmgraspError(f"cannot start or reach Ray ({type(exc).__name__}: {exc})") from None
     remote: Any = ray.remote(_call)
     pending = {remote.remote(call): key for key, call in calls}
@@ -117,6 +119,20 @@ def _run_ray(calls: Sequence[tuple[K, Callable[[], T]]], jobs: int, address: str
     finally:
         if started:
             ray.shutdown()
+
+
+def _reachable(address: str) -> None:
+    """A one-line error within 5 s for a ``HOST:PORT`` that accepts no connection (Ray
+    itself retries for minutes)."""
+    import socket
+
+    host, _, port = address.rpartition(":")
+    if not host or not port.isdigit():
+        raise CrmgraspError(f"Ray address must be auto or HOST:PORT, got {address!r}")
+    try:
+        socket.create_connection((host, int(port)), timeout=5).close()
+    except OSError as exc:
+        raise CrmgraspError(f"Ray address {address} is unreachable ({exc.strerror or exc})") from None
 
 
 def _ignore_sigint() -> None:

@@ -101,10 +101,20 @@ def _scalar(key: str, value: Any, where: str) -> Any:
 
 
 def _cell(raw: dict[str, Any], where: str) -> dict[str, Any]:
+    from crmgrasp.agents.training import AGENTS, agent_parameters
+
     for key in raw:
         if key not in CELL_KEYS:
             raise CrmgraspError(f"{where}: unknown key {key!r}; cell keys: {', '.join(CELL_KEYS)}")
-    return {**_DEFAULT_CELL, **{k: _scalar(k, v, where) for k, v in raw.items()}}
+    cell = {**_DEFAULT_CELL, **{k: _scalar(k, v, where) for k, v in raw.items()}}
+    agent = cell["agent"]
+    if agent not in AGENTS:
+        raise CrmgraspError(f"{where}: unknown agent {shown(agent)}; known agents: {', '.join(AGENTS)}")
+    extra = [k for k in AGENT_PARAMS if k in cell and k not in agent_parameters(agent)]
+    if extra:
+        takes = ", ".join(agent_parameters(agent)) or "none"
+        raise CrmgraspError(f"{where}: agent {agent!r} takes no {', '.join(extra)} (it takes {takes})")
+    return cell
 
 
 def study_from_dict(doc: Any) -> Study:
@@ -239,6 +249,8 @@ def run_study(
     if stage:
         stage.advance(len(units) - len(todo))
 
+    failed = [0]
+
     def record(name: str, result: dict[str, Any]) -> None:
         file = f"units/{name.replace(' ', '_')}.json"
         if result["status"] == "ok":
@@ -247,13 +259,18 @@ def run_study(
         if stage:
             stage.advance()
             if result["status"] == "failed":
+                failed[0] += 1
                 stage.note(f"sweep: {name} failed: {result['error']}")
+                stage.relabel(f"sweep {study.name} ({failed[0]} failed)")
 
     for name, result in run_parallel(todo, jobs, executor, address):
         record(name, result)
     if stage:
         stage.end()
     return write_tables(study, store.path, store.record["completed"])
+
+
+_CELL_COLUMNS = ("greedy_mean_steps", "ci95_low", "ci95_high", "greedy_iqm_steps", "episodes_to_5pct", "seconds")
 
 
 def write_tables(study: Study, out: Path, completed: dict[str, Any]) -> dict[str, int]:
@@ -268,7 +285,7 @@ def write_tables(study: Study, out: Path, completed: dict[str, Any]) -> dict[str
             counts[status] = counts.get(status, 0) + 1
             settings = [cell_id(c), *(c.get(k) for k in keys), s]
             if status != "ok":
-                cells.append([*settings, status, info.get("error"), None, None, None, None, None])
+                cells.append([*settings, status, info.get("error"), None, None, None, None, None, None])
                 continue
             doc = json.loads((out / info["file"]).read_text(encoding="utf-8"))
             t = doc["trials"]
@@ -278,19 +295,20 @@ def write_tables(study: Study, out: Path, completed: dict[str, Any]) -> dict[str
                 rows.append([*settings, i, g, ok, fin])
             sm = doc["summary"]
             lo, hi = sm["greedy_ci95_over_trials"]
-            cells.append(
-                [*settings, "ok", None, sm["greedy_mean_steps"], lo, hi, sm["greedy_iqm_steps"], sm["seconds"]]
-            )
+            ok = [sm["greedy_mean_steps"], lo, hi, sm["greedy_iqm_steps"], sm["episodes_to_5pct"], sm["seconds"]]
+            cells.append([*settings, "ok", None, *ok])
     head = ["cell", *keys, "seed"]
     write_csv(
         out / "results.csv", [*head, "trial", "greedy_mean_steps", "greedy_success_rate", "final_mean_steps"], rows
     )
     write_csv(
         out / "cells.csv",
-        [*head, "status", "error", "greedy_mean_steps", "ci95_low", "ci95_high", "greedy_iqm_steps", "seconds"],
+        [*head, "status", "error", *_CELL_COLUMNS],
         cells,
     )
     _parquet(out, ("results", "cells"))
+    units = {name: {k: v for k, v in info.items() if k != "file"} for name, info in completed.items()}
+    write_json(out / "study.json", {"study": study.to_dict(), "units": units, "counts": counts, "run": "run.json"})
     return counts
 
 
@@ -327,12 +345,15 @@ def report(folder: str | Path) -> Path:
         doc["name"], doc["trials"], doc["episodes"], doc["eval_episodes"], tuple(doc["seeds"]), tuple(doc["cells"])
     )
     per_cell: dict[str, np.ndarray] = {}
+    to5: dict[str, list[Any]] = {}
     for c in study.cells:
-        vals = []
+        vals: list[float] = []
         for s in study.seeds:
             info = rec["completed"].get(f"{cell_id(c)} seed {s}") or {}
             if info.get("status") == "ok":
-                vals += json.loads((out / info["file"]).read_text())["trials"]["greedy_mean_steps"]
+                doc = json.loads((out / info["file"]).read_text())
+                vals += doc["trials"]["greedy_mean_steps"]
+                to5.setdefault(cell_id(c), []).append(doc["summary"].get("episodes_to_5pct"))
         per_cell[cell_id(c)] = np.asarray(vals, dtype=float)
     swept = [k for k in CELL_KEYS if len({json.dumps(c.get(k)) for c in study.cells}) > 1]
     lines = [
@@ -340,10 +361,12 @@ def report(folder: str | Path) -> Path:
         "",
         f"{study.episodes:,} training episodes per trial, greedy evaluation on {study.eval_episodes:,} episodes; "
         "mean over all trials of the cell with a percentile-bootstrap 95% interval over trials, and the "
-        f"interquartile mean. Status: {rec['status']}.",
+        "interquartile mean; episodes to 5%: first training episode after which the 10-episode average "
+        "stays within 5% of the task's optimum (median of the seeds' runs; never = beyond the budget). "
+        f"Status: {rec['status']}.",
         "",
-        "| cell | " + " | ".join(swept) + " | trials | mean CRMs | 95% CI | IQM |",
-        "| --- | " + " | ".join("---" for _ in swept) + " | --- | --- | --- | --- |",
+        "| cell | " + " | ".join(swept) + " | trials | mean CRMs | 95% CI | IQM | episodes to 5% (median of seeds) |",
+        "| --- | " + " | ".join("---" for _ in swept) + " | --- | --- | --- | --- | --- |",
     ]
     for c in sorted(
         study.cells, key=lambda c: float(np.mean(per_cell[cell_id(c)])) if per_cell[cell_id(c)].size else math.inf
@@ -353,7 +376,12 @@ def report(folder: str | Path) -> Path:
         mean = fmt(float(v.mean())) if v.size else "failed"
         settings = " | ".join(str(c.get(k)) for k in swept)
         middle = fmt(iqm(v)) if v.size else "-"
-        lines.append(f"| {cell_id(c)} | {settings} | {v.size} | {mean} | {fmt(lo)}-{fmt(hi)} | {middle} |")
+        seeds_to5 = sorted(math.inf if x is None else x for x in to5.get(cell_id(c), []))
+        med = seeds_to5[len(seeds_to5) // 2] if seeds_to5 else None
+        shown_to5 = "-" if med is None else ("never" if med == math.inf else f"{int(med):,}")
+        lines.append(
+            f"| {cell_id(c)} | {settings} | {v.size} | {mean} | {fmt(lo)}-{fmt(hi)} | {middle} | {shown_to5} |"
+        )
     atomic_write_text(out / "report.md", "\n".join(lines) + "\n")
     _figures(out, study, per_cell, swept)
     return out / "report.md"
