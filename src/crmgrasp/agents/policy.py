@@ -34,6 +34,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import stat
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -184,11 +185,22 @@ def observation_indices(task: Task, observations: Sequence[ObservationLike], act
     return out
 
 
+def _is_zip(path: str | os.PathLike[str]) -> bool:
+    """Whether ``path`` is a regular file starting with a zip signature (two bytes read;
+    anything else is left to the loaders, which report it)."""
+    try:
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            return False
+        with open(path, "rb") as fh:
+            return fh.read(2) == b"PK"
+    except OSError:
+        return False
+
+
 def load_policy(path: str | os.PathLike[str], task: Task | None = None) -> Any:
     """A saved policy of any kind: a tabular :class:`GreedyPolicy` (JSON) or a deep
     :class:`~crmgrasp.agents.deep.RecurrentPolicy` (zip; needs the extra ``deep``)."""
-    head = read_bounded(path, MAX_BYTES, "policy file")[:2] if not str(path).endswith(".json") else b"{"
-    if head == b"PK":
+    if _is_zip(path):
         from crmgrasp.agents.deep import RecurrentPolicy
 
         return RecurrentPolicy.load(path, task)

@@ -24,18 +24,19 @@ from crmgrasp.model.contacts import Config
 from crmgrasp.model.hand import CRM, Error
 from crmgrasp.model.quality import min_friction
 from crmgrasp.model.sensing import SensorNoise, observe
-from crmgrasp.tasks import TEMPLATE, Task, make_task, resolve_task, task_names, task_to_dict
+from crmgrasp.tasks import TEMPLATE, Task, make_task, task_names, task_to_dict
 
 __all__ = ["main", "build_parser"]
 
 
 def _task(args: argparse.Namespace, spec: str | None = None) -> Task:
     """The task of ``--task`` (or ``spec``) with ``--start-preset`` and ``--grasp-reward`` applied."""
-    from crmgrasp.tasks.presets import with_reading
+    from crmgrasp.tasks.presets import resolve_reading
 
-    task = resolve_task(args.task if spec is None else spec)
-    return with_reading(
-        task, starts=getattr(args, "start_preset", None), grasp_reward=getattr(args, "grasp_reward", None)
+    return resolve_reading(
+        args.task if spec is None else spec,
+        starts=getattr(args, "start_preset", None),
+        grasp_reward=getattr(args, "grasp_reward", None),
     )
 
 
@@ -256,15 +257,17 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
             starts = [task.sample_start(rng) for _ in range(args.episodes)]
             steps, success = evaluate_recurrent(policy.model, task, starts, rng)
-    half = 1.96 * float(steps.std(ddof=1)) / math.sqrt(len(steps)) if len(steps) > 1 else 0.0
+    from crmgrasp.experiments.stats import normal_ci
+
+    mean, lo, hi = normal_ci(steps)
     result = {
         "task": task.name,
         "policy": str(args.policy),
         "kind": "tabular" if isinstance(policy, GreedyPolicy) else "deep",
         "episodes": args.episodes,
         "seed": args.seed,
-        "mean_steps": float(steps.mean()),
-        "ci95": [float(steps.mean()) - half, float(steps.mean()) + half],
+        "mean_steps": mean,
+        "ci95": [lo, hi],
         "success_rate": float(success.mean()),
     }
     return _print_result(

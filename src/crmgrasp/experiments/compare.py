@@ -11,7 +11,6 @@ learning curves with the references and the controller as horizontal lines), and
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -32,7 +31,7 @@ from crmgrasp.agents.deep import (
 from crmgrasp.agents.training import episodes_to_within
 from crmgrasp.experiments.learning import SYMMETRIC_DYNA_Q, LearnerSpec, learn, usable
 from crmgrasp.experiments.runs import RunFolder
-from crmgrasp.experiments.stats import bootstrap_ci, budget, fmt, iqm
+from crmgrasp.experiments.stats import bootstrap_ci, budget, fmt, iqm, normal_ci
 from crmgrasp.planners.pomdp_task import POMDPAgent, build_task_pomdp
 from crmgrasp.planners.references import BeliefPolicy, belief_optimum, clairvoyant_bound, sample_starts
 from crmgrasp.plotting import learning_curve_figure
@@ -89,14 +88,6 @@ class CompareConfig:
         return cls(task=task, seed=seed, trials=5, episodes=300, eval_episodes=200, reference_starts=1000, deep=deep)
 
 
-def _ci(values: np.ndarray) -> tuple[float, float, float]:
-    """Mean and normal 95% interval over episodes: for fixed policies (no training seed),
-    whose only variation is between episodes."""
-    m = float(values.mean())
-    half = 1.96 * float(values.std(ddof=1)) / math.sqrt(values.size) if values.size > 1 else 0.0
-    return m, m - half, m + half
-
-
 def _note(progress: Progress | None, text: str) -> None:
     if progress is not None:
         progress.note(text)
@@ -104,7 +95,7 @@ def _note(progress: Progress | None, text: str) -> None:
 
 def _fixed_row(name: str, kind: str, steps: np.ndarray, ok: float, t0: float) -> list[Any]:
     """A table row of a fixed policy: interval over its episodes."""
-    m, lo, hi = _ci(steps)
+    m, lo, hi = normal_ci(steps)
     return [name, kind, m, lo, hi, "episodes", None, ok, None, None, round(time.perf_counter() - t0, 3)]
 
 
@@ -234,7 +225,7 @@ def _deep_row(
     t0 = time.perf_counter()
     run = train_recurrent_ppo(task, config.seed, config.deep, backend=backend)
     steps, ok = evaluate_recurrent(run.model, task, fresh, np.random.default_rng(config.seed + 1))
-    m, lo, hi = _ci(steps.astype(float))  # one training run: the interval is over episodes only
+    m, lo, hi = normal_ci(steps)  # one training run: the interval is over episodes only
     ref = task.reference_mean_steps
     to5 = episodes_to_within(run.episode_steps, ref) if ref else None
     greedy5 = run.greedy_episodes_to_within(ref) if ref else None

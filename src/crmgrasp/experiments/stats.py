@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["bootstrap_ci", "iqm", "fmt", "never", "budget"]
+__all__ = ["bootstrap_ci", "normal_ci", "iqm", "fmt", "never", "budget"]
 
 
 def bootstrap_ci(values: Any, seed: int = 0, confidence: float = 0.95, resamples: int = 10_000) -> tuple[float, float]:
@@ -45,6 +45,21 @@ def bootstrap_ci(values: Any, seed: int = 0, confidence: float = 0.95, resamples
         random_state=np.random.default_rng(seed),
     )
     return float(res.confidence_interval.low), float(res.confidence_interval.high)
+
+
+def normal_ci(values: Any) -> tuple[float, float, float]:
+    """Mean and normal 95% interval ``mean +- 1.96 sd / sqrt(n)`` of ``values``: for a
+    fixed policy, whose only variation is between its episodes (0 width for one value).
+
+    Examples
+    --------
+    >>> normal_ci([1.0, 2.0, 3.0])[0]
+    2.0
+    """
+    x = np.asarray(values, dtype=np.float64).ravel()
+    m = float(x.mean())
+    half = 1.96 * float(x.std(ddof=1)) / math.sqrt(x.size) if x.size > 1 else 0.0
+    return m, m - half, m + half
 
 
 def iqm(values: Any) -> float:

@@ -188,14 +188,11 @@ class _Unit:
     backend: str
 
     def __call__(self) -> dict[str, Any]:
-        from crmgrasp.tasks import resolve_task
-        from crmgrasp.tasks.presets import with_reading
+        from crmgrasp.tasks.presets import resolve_reading
 
         c = self.cell
         try:
-            task = with_reading(
-                resolve_task(c["task"]), starts=c.get("start_preset"), grasp_reward=c.get("grasp_reward")
-            )
+            task = resolve_reading(c["task"], starts=c.get("start_preset"), grasp_reward=c.get("grasp_reward"))
             params = {k: c[k] for k in AGENT_PARAMS if k in c}
             if c.get("symmetric"):
                 params["symmetric"] = True

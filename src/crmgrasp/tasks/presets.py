@@ -39,7 +39,7 @@ from crmgrasp.tasks.core import (
     corner_candidate,
 )
 
-__all__ = ["NearCornerStarts", "LongSideStarts", "MixtureStarts", "START_PRESETS", "with_reading"]
+__all__ = ["NearCornerStarts", "LongSideStarts", "MixtureStarts", "START_PRESETS", "with_reading", "resolve_reading"]
 
 
 def _polygon(obj: Shape, what: str) -> Polygon:
@@ -179,3 +179,11 @@ def with_reading(task: Task, *, starts: str | None = None, grasp_reward: float |
     if grasp_reward is not None:
         changes["grasp_reward"] = grasp_reward
     return dataclasses.replace(task, **changes) if changes else task  # type: ignore[arg-type]
+
+
+def resolve_reading(spec: str | Task, *, starts: str | None = None, grasp_reward: float | None = None) -> Task:
+    """:func:`with_reading` of the task ``spec`` names (:func:`~crmgrasp.tasks.files.resolve_task`):
+    what ``--task``, ``--start-preset`` and ``--grasp-reward`` (or a study cell) state."""
+    from crmgrasp.tasks.files import resolve_task
+
+    return with_reading(resolve_task(spec), starts=starts, grasp_reward=grasp_reward)
