@@ -18,21 +18,23 @@ Draw order: ``reset`` draws the start (the task's sampler) then one reading;
 from __future__ import annotations
 
 from collections.abc import Callable
-from functools import partial
 from typing import Any, NamedTuple, Protocol, overload
 
 import numpy as np
 from numpy.typing import NDArray
 
+from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.contacts import Config
 from crmgrasp.model.hand import CRM, Error, Outcome, execute_crm
 from crmgrasp.model.quality import min_friction
 from crmgrasp.model.sensing import Observation, observe
-from crmgrasp.tasks import Task
+from crmgrasp.tasks import Task, World
 
 __all__ = [
     "OneStep",
     "Stepper",
+    "TaskSteps",
+    "FamilyStepper",
     "begin_one",
     "step_one",
     "Episode",
@@ -235,6 +237,51 @@ class Stepper(Protocol):
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep: ...
 
 
+class TaskSteps:
+    """The reference :class:`Stepper` of one task: :meth:`Task.sample_start`,
+    :func:`begin_one` and :func:`step_one`."""
+
+    def __init__(self, task: Task) -> None:
+        self.task = task
+
+    def sample_start(self, rng: np.random.Generator) -> Config:
+        return self.task.sample_start(rng)
+
+    def begin(self, config: Config, rng: np.random.Generator) -> OneStep:
+        return begin_one(self.task, config, rng)
+
+    def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
+        return step_one(self.task, state, action, rng)
+
+
+class FamilyStepper:
+    """A :class:`Stepper` for a task with an object family: :meth:`sample_start` draws
+    the episode's object (:meth:`Task.instance`), then a start on it; :meth:`begin` and
+    :meth:`step_one` step that object's task through ``make(instance)`` (the reference
+    :class:`TaskSteps`, or a kernel). :meth:`use` puts a given world's object in place
+    (an episode from a fixed :class:`~crmgrasp.tasks.World`)."""
+
+    def __init__(self, task: Task, make: Callable[[Task], Stepper] = TaskSteps) -> None:
+        self.task, self._make = task, make
+        self.current: Stepper = make(task.with_object(task.obj))
+        self.instance: Task = task.with_object(task.obj)
+
+    def use(self, instance: Task) -> None:
+        """Step ``instance`` (a task on one object) from now on."""
+        self.instance, self.current = instance, self._make(instance)
+
+    def sample_start(self, rng: np.random.Generator) -> Config:
+        """Draw the episode's object, then a start on it."""
+        self.use(self.task.instance(rng))
+        return self.current.sample_start(rng)
+
+    def begin(self, config: Config, rng: np.random.Generator) -> OneStep:
+        return self.current.begin(config, rng)
+
+    def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
+        return self.current.step_one(state, action, rng)
+
+
 class Transition(NamedTuple):
     """One step of a traced episode: the step before it, the action taken, its result."""
 
@@ -256,21 +303,26 @@ def run_episode(
     policy: Policy,
     rng: np.random.Generator,
     *,
-    start: Config | None = None,
+    start: Config | World | None = None,
     trace: bool = False,
     kernel: Stepper | None = None,
 ) -> Episode:
     """Run ``policy`` for one episode of ``task``: from a start drawn from ``rng`` (the
-    task's scalar sampler) or from ``start``, one step per action until the episode
-    ends; starts and readings draw from ``rng``. Steps are :func:`begin_one` and
-    :func:`step_one`, or the same steps of ``kernel`` (faster, the same results)."""
-    advance: Callable[[SimState, int | CRM, np.random.Generator], OneStep]
+    task's scalar sampler, after the object for a family task) or from ``start`` (a
+    :class:`~crmgrasp.tasks.World` for a family task), one step per action until the
+    episode ends; starts and readings draw from ``rng``. Steps are :func:`begin_one`
+    and :func:`step_one` (of the episode's object), or the same steps of ``kernel``
+    (faster, the same results)."""
     if kernel is None:
-        config = task.sample_start(rng) if start is None else start
-        now, advance = begin_one(task, config, rng), partial(step_one, task)
+        kernel = FamilyStepper(task) if task.family is not None else TaskSteps(task)
+    if isinstance(start, World):
+        if not hasattr(kernel, "use"):
+            raise CrmgraspError("a World start needs a family task")
+        kernel.use(start.task)  # type: ignore[attr-defined]
+        config = start.config
     else:
         config = kernel.sample_start(rng) if start is None else start
-        now, advance = kernel.begin(config, rng), kernel.step_one
+    now, advance = kernel.begin(config, rng), kernel.step_one
     policy.begin(now.percept)
     steps: list[Transition] = []
     while True:

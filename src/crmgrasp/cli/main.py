@@ -346,11 +346,15 @@ def _cmd_pomdp(args: argparse.Namespace) -> int:
         raise CrmgraspError("--cell must be > 0, and --samples and --episodes >= 1")
     check_output(args.out, "--out")
     task = _task(args)
+    if task.family is not None:
+        raise CrmgraspError(
+            f"pomdp: task {task.name!r} draws an object per episode; the sampled POMDP needs one object"
+        )
     with _progress(args).stage(f"pomdp of {task.name}: sample, solve, execute", 0):
         tp = build_task_pomdp(task, cell=args.cell, samples=args.samples, n_starts=args.starts, seed=args.seed)
         path = write_cassandra(tp.model, args.out)
         agent = POMDPAgent(tp, seed=args.seed)
-        runs = [agent.run(c) for c in sample_starts(task, args.episodes, args.seed + 1)]
+        runs = [agent.run(c) for c in sample_starts(task, args.episodes, args.seed + 1)]  # type: ignore[arg-type]
     counts = ", ".join(f"{k} {v}" for k, v in tp.model.counts.items())
     print(
         f"{task.name}: sampled POMDP ({counts}); model value {agent.model_value():.4f} CRMs; executed on "

@@ -14,13 +14,14 @@ from gymnasium import spaces
 
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.kernels import Kernel, kernel_for
+from crmgrasp.kernels.family import FamilyKernel
 from crmgrasp.model.contacts import Config, config_from_row
 from crmgrasp.model.hand import Error, check_config, execute_crm
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.sim import OneStep, SimState
-from crmgrasp.tasks import Task, make_task
+from crmgrasp.tasks import Task, World, make_task
 
-__all__ = ["CRMGraspEnv", "KOrderHistory", "ENV_ID", "observation_space"]
+__all__ = ["CRMGraspEnv", "KOrderHistory", "ENV_ID", "FAMILY_ENVS", "observation_space"]
 
 ENV_ID = "crmgrasp/PaperBox-v0"
 _empty = np.empty
@@ -131,11 +132,17 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, Any], dict[str, Any]]:
-        """Start an episode. ``options={"config": Config}`` starts from a given configuration."""
+        """Start an episode. ``options={"config": Config}`` starts from a given
+        configuration; on a family task, ``options={"world": World}`` from a given
+        object and configuration (a family draws the object of each episode)."""
         super().reset(seed=seed)
         self._last = None
-        if options and "config" in options:
-            cfg = check_config(self.task.obj, options["config"], "options['config']")
+        if options and "world" in options:
+            cfg = self._use_world(options["world"])
+        elif options and "config" in options:
+            cfg = check_config(self.scene_task.obj, options["config"], "options['config']")
+        elif self.task.family is not None:
+            cfg = self.kernel.sample_start(self.np_random)
         else:
             if seed is not None:
                 self._starts, self._next, self._block = [], 0, _FIRST_BLOCK
@@ -158,6 +165,20 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         obs, info = self._emit(res)
         return obs, res.reward, res.terminated, res.truncated, info
 
+    @property
+    def scene_task(self) -> Task:
+        """The task on this episode's object (the task itself without a family)."""
+        return self.kernel.instance if isinstance(self.kernel, FamilyKernel) else self.task
+
+    def _use_world(self, world: Any) -> Config:
+        if not isinstance(self.kernel, FamilyKernel):
+            raise CrmgraspError("options['world'] needs a family task; use options['config']")
+        if not isinstance(world, World) or not isinstance(world.task, Task) or world.task.family is not None:
+            raise CrmgraspError(f"options['world'] must be a World(task on one object, config), got {world!r}")
+        cfg = check_config(world.task.obj, world.config, "options['world'].config")
+        self.kernel.use(world.task)
+        return cfg
+
     def _next_start(self) -> Config:
         """The next start, from blocks drawn by the kernel's vectorised sampler: 16 after
         each seeding, doubling up to 1,024 (starts are i.i.d., so drawing them in
@@ -178,14 +199,13 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         from crmgrasp.plotting import scene_figure
 
         title = f"{self.task.name}: after {self._state.steps} CRMs"
+        t = self.scene_task
         if self._last is None:
-            fig = scene_figure(self.task.obj, self.task.hand, self._state.config, None, title)
+            fig = scene_figure(t.obj, t.hand, self._state.config, None, title)
         else:
             prev, action = self._last
-            outcome = execute_crm(self.task.obj, self.task.hand, prev.config, self.task.actions[action], prev.sensed)
-            fig = scene_figure(
-                self.task.obj, self.task.hand, prev.config, outcome, f"{title} ({outcome.error.name.lower()})"
-            )
+            outcome = execute_crm(t.obj, t.hand, prev.config, t.actions[action], prev.sensed)
+            fig = scene_figure(t.obj, t.hand, prev.config, outcome, f"{title} ({outcome.error.name.lower()})")
         canvas = FigureCanvasAgg(fig)
         canvas.draw()
         return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
@@ -220,8 +240,19 @@ class KOrderHistory(gym.Wrapper[int, np.int64, dict[str, Any], np.int64]):
         return self.encoder.encode(self._history), float(reward), terminated, truncated, info
 
 
+FAMILY_ENVS = {
+    "crmgrasp/BoxFamily-v0": "box-family",
+    "crmgrasp/CupFamily-v0": "cup-family",
+    "crmgrasp/PolygonFamily-v0": "polygon-family",
+    "crmgrasp/UHandle-v0": "u-handle",
+    "crmgrasp/LShape-v0": "l-shape",
+    "crmgrasp/Mixed-v0": "mixed",
+}
+"""Registered family environments: id -> task name (each episode draws its object)."""
+
+
 def register() -> None:
-    """Register ``crmgrasp/PaperBox-v0`` (idempotent)."""
+    """Register ``crmgrasp/PaperBox-v0`` and the :data:`FAMILY_ENVS` (idempotent)."""
     if ENV_ID not in gym.registry:
         gym.register(
             id=ENV_ID,
@@ -230,6 +261,15 @@ def register() -> None:
             kwargs={"task": "paper-box"},
             max_episode_steps=10,  # paper-box's max_steps: the env cuts episodes there itself
         )
+    for env_id, task in FAMILY_ENVS.items():
+        if env_id not in gym.registry:
+            gym.register(
+                id=env_id,
+                entry_point="crmgrasp.envs.single:CRMGraspEnv",
+                vector_entry_point="crmgrasp.envs.vector:FamilyVectorEnv",
+                kwargs={"task": task},
+                max_episode_steps=10,  # every family task's max_steps
+            )
 
 
 register()

@@ -33,7 +33,7 @@ from crmgrasp.kernels import Kernel, kernel_for
 from crmgrasp.sim import episode_end, step_reward
 from crmgrasp.tasks import Task, make_task
 
-__all__ = ["CRMGraspVectorEnv"]
+__all__ = ["CRMGraspVectorEnv", "FamilyVectorEnv"]
 
 
 class CRMGraspVectorEnv(VectorEnv):
@@ -58,6 +58,7 @@ class CRMGraspVectorEnv(VectorEnv):
         self.task = make_task(task) if isinstance(task, str) else task
         if max_episode_steps is not None and max_episode_steps != self.task.max_steps:
             self.task = dataclasses.replace(self.task, max_steps=max_episode_steps)
+        self._backend = backend
         self.kernel: Kernel = kernel_for(self.task, backend)
         self.num_envs = num_envs
         self.render_mode = None
@@ -84,6 +85,18 @@ class CRMGraspVectorEnv(VectorEnv):
         self._next += n
         return out
 
+    def _check_actions(self, actions: Any) -> np.ndarray:
+        """``actions`` as checked integers (one line naming the problem otherwise)."""
+        if not self._ready:
+            raise CrmgraspError("call reset() before step()")
+        a = np.asarray(actions)
+        n_actions = len(self.task.actions)
+        if a.shape != (self.num_envs,) or a.dtype.kind not in "iu":
+            raise CrmgraspError(f"actions must be {self.num_envs} integers, got shape {a.shape} dtype {a.dtype}")
+        if a.min() < 0 or a.max() >= n_actions:
+            raise CrmgraspError(f"actions must be in [0, {n_actions})")
+        return a
+
     def _info(self, index: np.ndarray, mu: np.ndarray) -> dict[str, Any]:
         config = self._cfg.view()  # a read-only view: each step builds new rows
         config.flags.writeable = False
@@ -109,14 +122,7 @@ class CRMGraspVectorEnv(VectorEnv):
 
     def step(self, actions: Any) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """One CRM in every sub-environment (or a reset where the last step ended it)."""
-        if not self._ready:
-            raise CrmgraspError("call reset() before step()")
-        a = np.asarray(actions)
-        n_actions = len(self.task.actions)
-        if a.shape != (self.num_envs,) or a.dtype.kind not in "iu":
-            raise CrmgraspError(f"actions must be {self.num_envs} integers, got shape {a.shape} dtype {a.dtype}")
-        if a.min() < 0 or a.max() >= n_actions:
-            raise CrmgraspError(f"actions must be in [0, {n_actions})")
+        a = self._check_actions(actions)
         done = self._prev_done  # these rows reset: their action is ignored
         starts = self._starts(int(np.count_nonzero(done)))
         res = self.kernel.step_batch(self._cfg, self._sensed, a, done, starts, self.np_random)
@@ -129,3 +135,60 @@ class CRMGraspVectorEnv(VectorEnv):
         reward = np.where(done, 0.0, step_reward(self.task, terminated))  # 0 on a reset row
         self._prev_done = terminated | truncated
         return res.obs, reward, terminated, truncated, self._info(res.obs_index, res.min_friction)
+
+
+class FamilyVectorEnv(CRMGraspVectorEnv):
+    """``num_envs`` episodes of a family task, each on its own object: the rows step one
+    at a time through one :class:`~crmgrasp.kernels.family.FamilyKernel` each (a family
+    draws the object of every episode, so rows cannot share a batched kernel). The
+    interface, spaces and autoreset are those of :class:`CRMGraspVectorEnv`; all draws
+    come from ``self.np_random``, row by row."""
+
+    def __init__(self, num_envs: int = 1, task: Task | str = "box-family", **kwargs: Any) -> None:
+        super().__init__(num_envs, task, **kwargs)
+        if self.task.family is None:
+            raise CrmgraspError(f"task {self.task.name!r} has no object family; use CRMGraspVectorEnv")
+        self._rows: list[Any] = [kernel_for(self.task, self._backend) for _ in range(num_envs)]
+        self._states: list[Any] = [None] * num_envs
+
+    def _collect(self, results: list[Any]) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        self._states = [r.state for r in results]
+        self._cfg = np.array([(*r.state.config.a, *r.state.config.b) for r in results])
+        rho, m_a, m_b = (np.array([getattr(r, k) for r in results]) for k in ("rho", "m_a", "m_b"))
+        err = np.array([int(r.error) for r in results], dtype=np.int64)
+        index = np.array([r.obs_index for r in results], dtype=np.int64)
+        mu = np.array([r.min_friction for r in results])
+        return self.kernel.clip(rho, m_a, m_b, err), self._info(index, mu)
+
+    def _begin(self, j: int) -> Any:
+        kernel = self._rows[j]
+        return kernel.begin(kernel.sample_start(self.np_random), self.np_random)
+
+    def reset(
+        self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """Reset every sub-environment: a new object and start per row."""
+        if isinstance(seed, list):
+            raise CrmgraspError("the vector environment takes one integer seed for its generator")
+        VectorEnv.reset(self, seed=seed)
+        self._steps[:] = 0
+        self._prev_done[:] = False
+        self._ready = True
+        return self._collect([self._begin(j) for j in range(self.num_envs)])
+
+    def step(self, actions: Any) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        """One CRM per row (or a new object and start where the last step ended it)."""
+        a = self._check_actions(actions)
+        done = self._prev_done
+        results = [
+            self._begin(j) if done[j] else self._rows[j].step_one(self._states[j], int(a[j]), self.np_random)
+            for j in range(self.num_envs)
+        ]
+        obs, info = self._collect(results)
+        self._steps[:] = [r.state.steps for r in results]
+        terminated = np.array([r.terminated for r in results]) & ~done
+        truncated = np.array([r.truncated for r in results]) & ~done
+        reward = np.where(done, 0.0, [r.reward for r in results])
+        self._prev_done = terminated | truncated
+        info["steps"] = self._steps.copy()
+        return obs, reward, terminated, truncated, info

@@ -10,7 +10,13 @@ backend                   object                       kernel
 ``"auto"``                a shape without a kernel     :class:`ReferenceKernel`
 ``"auto"``, ``"numba"``   polygon, sensing noise       ``PolygonKernel``
 ``"auto"``, ``"numba"``   polygon, noise-free          ``FusedPolygonKernel``
+any                       a family (one per episode)   ``FamilyKernel`` over the above
 ========================  ===========================  ==============================
+
+A family task (:attr:`crmgrasp.tasks.Task.family`) gets a
+:class:`~crmgrasp.kernels.family.FamilyKernel`, which builds the kernel of each
+episode's object by this same rule (``"numba"`` with a disc family is an error on
+the first disc).
 
 Every kernel gives the reference kernel's results bit for bit (the tests check
 each path). The compiled kernels (:mod:`crmgrasp.kernels.polygon`) import numba
@@ -46,6 +52,10 @@ def kernel_for(task: Task, backend: str = "auto") -> Kernel:
     """The kernel that steps ``task`` on ``backend`` (see the module docstring)."""
     if backend not in BACKENDS:
         raise CrmgraspError(f"unknown backend {backend!r}; choose one of {', '.join(BACKENDS)}")
+    if task.family is not None:
+        from crmgrasp.kernels.family import FamilyKernel
+
+        return FamilyKernel(task, lambda instance: kernel_for(instance, backend))
     compiled = isinstance(task.obj, Polygon)
     if backend == "reference" or (backend == "auto" and not compiled):
         return ReferenceKernel(task)

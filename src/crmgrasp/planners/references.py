@@ -1,7 +1,8 @@
 """Reference values a learner is measured against, computed exactly on sampled starts.
 
 Both treat a finite set of sampled start configurations as the possible hidden
-states, with noise-free (deterministic) dynamics, and count CRMs per episode as
+states (on a family task, sampled worlds: each an object and a start on it), with
+noise-free (deterministic) dynamics, and count CRMs per episode as
 the learners do (success ends an episode; ``task.max_steps`` truncates it).
 
 * :func:`clairvoyant_steps`: an agent that sees the true configuration needs the
@@ -32,7 +33,7 @@ from crmgrasp.model.contacts import Config
 from crmgrasp.model.hand import Error, execute_crm
 from crmgrasp.model.sensing import observe
 from crmgrasp.sim import Percept, run_episode
-from crmgrasp.tasks import Task
+from crmgrasp.tasks import Task, World
 
 __all__ = [
     "clairvoyant_steps",
@@ -43,102 +44,145 @@ __all__ = [
     "BeliefPolicy",
 ]
 
-Step = tuple[Config, int, bool]  # next configuration, observation index, grasped
+Start = Config | World
+State = tuple[int, Config]  # the world's object (an index into _Model.tasks) and the configuration
+Step = tuple[State, int, bool]  # next state, observation index, grasped
 
 
 class _Model:
-    """Cached deterministic transitions of a task (noise ignored)."""
+    """Cached deterministic transitions of a task (noise ignored) over hidden states
+    ``(object, configuration)``: object 0 is the task's own; each
+    :class:`~crmgrasp.tasks.World` adds its object."""
 
     def __init__(self, task: Task) -> None:
         self.task = task
-        self._step: dict[tuple[Config, int], Step] = {}
-        self._clair: dict[tuple[Config, int], int | None] = {}
+        self.tasks: list[Task] = [task]
+        self._ids: dict[int, int] = {}
+        self._step: dict[tuple[State, int], Step] = {}
+        self._clair: dict[tuple[State, int], int | None] = {}
 
-    def step(self, config: Config, action: int) -> Step:
-        key = (config, action)
+    def state(self, start: Start) -> State:
+        """The hidden state of a start (a configuration of the task, or a world)."""
+        if isinstance(start, World):
+            i = self._ids.get(id(start.task))
+            if i is None:
+                i = self._ids[id(start.task)] = len(self.tasks)
+                self.tasks.append(start.task)
+            return (i, start.config)
+        if self.task.family is not None:
+            raise CrmgraspError(f"task {self.task.name!r} draws an object per episode: give worlds, not configurations")
+        return (0, start)
+
+    def step(self, state: State, action: int) -> Step:
+        key = (state, action)
         hit = self._step.get(key)
         if hit is None:
-            t = self.task
+            i, config = state
+            t = self.tasks[i]
             out = execute_crm(t.obj, t.hand, config, t.actions[action], config)
             index = t.discretizer.index(observe(out.config), out.error)
-            hit = self._step[key] = (out.config, index, t.is_success(out.config))
+            hit = self._step[key] = ((i, out.config), index, t.is_success(out.config))
         return hit
 
-    def clairvoyant(self, config: Config, horizon: int) -> int:
+    def clairvoyant(self, state: State, horizon: int) -> int:
         """Fewest CRMs to a grasp within ``horizon`` (``horizon`` if none is found)."""
-        depth = self.depth(config, horizon)
+        depth = self.depth(state, horizon)
         return horizon if depth is None else depth
 
-    def depth(self, config: Config, horizon: int) -> int | None:
+    def depth(self, state: State, horizon: int) -> int | None:
         """Fewest CRMs to a grasp within ``horizon``; ``None`` if no sequence grasps."""
-        key = (config, horizon)
+        key = (state, horizon)
         if key not in self._clair:
-            self._clair[key] = self._bfs(config, horizon)
+            self._clair[key] = self._bfs(state, horizon)
         return self._clair[key]
 
-    def _bfs(self, start: Config, horizon: int) -> int | None:
-        seen = {start}
+    def _bfs(self, start: State, horizon: int) -> int | None:
+        """Breadth-first search over CRM sequences. Configurations are visited once up
+        to :data:`SAME`: one reached again within rounding (a slide and its reverse)
+        is the same place, and searching it again cannot find a shorter sequence."""
+        seen = {_key(start)}
         frontier = deque([(start, 0)])
         while frontier:
             cfg, depth = frontier.popleft()
             if depth == horizon:
                 continue
-            for a in range(len(self.task.actions)):
+            for a in range(len(self.tasks[cfg[0]].actions)):
                 nxt, _, grasped = self.step(cfg, a)
                 if grasped:
                     return depth + 1
-                if nxt not in seen:
-                    seen.add(nxt)
+                k = _key(nxt)
+                if k not in seen:
+                    seen.add(k)
                     frontier.append((nxt, depth + 1))
         return None
 
 
-def sample_starts(task: Task, n: int, seed: int) -> list[Config]:
-    """``n`` starts from the task's sampler, seeded."""
+SAME = 1e-9
+"""Metres (and unit-normal components) within which two configurations count as one
+place in the clairvoyant search."""
+
+
+def _key(state: State) -> tuple[int, tuple[int, ...]]:
+    i, c = state
+    return i, tuple(round(v / SAME) for v in (*c.a, *c.b))
+
+
+def sample_starts(task: Task, n: int, seed: int) -> list[Config] | list[World]:
+    """``n`` starts from the task's sampler, seeded (worlds, for a family task)."""
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
         raise CrmgraspError(f"number of starts must be an integer >= 1, got {n!r}")
     rng = np.random.default_rng(seed)
+    if task.family is not None:
+        return [task.sample_world(rng) for _ in range(n)]
     return [task.sample_start(rng) for _ in range(n)]
 
 
-def clairvoyant_steps(task: Task, config: Config, horizon: int | None = None) -> int:
-    """Fewest CRMs from ``config`` to a grasp (``horizon``, default ``task.max_steps``,
-    if none is reachable within it)."""
-    return _Model(task).clairvoyant(config, horizon or task.max_steps)
+def clairvoyant_steps(task: Task, config: Start, horizon: int | None = None) -> int:
+    """Fewest CRMs from ``config`` (or a world) to a grasp (``horizon``, default
+    ``task.max_steps``, if none is reachable within it)."""
+    model = _Model(task)
+    return model.clairvoyant(model.state(config), horizon or task.max_steps)
 
 
-def clairvoyant_bound(task: Task, starts: Sequence[Config], horizon: int | None = None) -> float:
+def clairvoyant_bound(task: Task, starts: Sequence[Start], horizon: int | None = None) -> float:
     """Mean of :func:`clairvoyant_steps` over ``starts``."""
     model = _Model(task)
     h = horizon or task.max_steps
-    return float(np.mean([model.clairvoyant(c, h) for c in starts]))
+    return float(np.mean([model.clairvoyant(model.state(c), h) for c in starts]))
 
 
-def ungraspable_fraction(task: Task, starts: Sequence[Config], horizon: int | None = None) -> float:
+def ungraspable_fraction(task: Task, starts: Sequence[Start], horizon: int | None = None) -> float:
     """Share of ``starts`` from which no sequence of at most ``horizon`` (default
     ``task.max_steps``) CRMs reaches a grasp, even knowing the true configuration."""
     if not starts:
         raise CrmgraspError("ungraspable_fraction needs at least one start")
     model = _Model(task)
     h = horizon or task.max_steps
-    return sum(model.depth(c, h) is None for c in starts) / len(starts)
+    return sum(model.depth(model.state(c), h) is None for c in starts) / len(starts)
 
 
-def belief_optimum(task: Task, starts: Sequence[Config], horizon: int | None = None) -> float:
+def _first_groups(model: _Model, starts: Sequence[Start]) -> dict[int, tuple[State, ...]]:
+    """The starts' hidden states grouped by their first observation."""
+    groups: dict[int, tuple[State, ...]] = {}
+    for c in starts:
+        st = model.state(c)
+        k = model.task.discretizer.index(observe(st[1]), Error.NONE)
+        groups[k] = (*groups.get(k, ()), st)
+    return groups
+
+
+def belief_optimum(task: Task, starts: Sequence[Start], horizon: int | None = None) -> float:
     """Exact optimal expected CRMs per episode over ``starts`` from observations only."""
     if not starts:
         raise CrmgraspError("belief_optimum needs at least one start")
     model = _Model(task)
     h = horizon or task.max_steps
-    groups: dict[int, list[Config]] = {}
-    for c in starts:
-        groups.setdefault(task.discretizer.index(observe(c), Error.NONE), []).append(c)
-    memo: dict[tuple[tuple[Config, ...], int], float] = {}
-    total = sum(len(g) * _value(model, tuple(g), h, memo) for g in groups.values())
+    memo: dict[tuple[tuple[State, ...], int], float] = {}
+    total = sum(len(g) * _value(model, g, h, memo) for g in _first_groups(model, starts).values())
     return total / len(starts)
 
 
-def _value(model: _Model, belief: tuple[Config, ...], h: int, memo: dict, acts: dict | None = None) -> float:
+def _value(model: _Model, belief: tuple[State, ...], h: int, memo: dict, acts: dict | None = None) -> float:
     """``V(B, h)``: expected further CRMs, mean over the starts in ``belief``; the
     minimising action goes to ``acts[(belief, h)]`` when ``acts`` is given."""
     if h == 0 or not belief:
@@ -151,7 +195,7 @@ def _value(model: _Model, belief: tuple[Config, ...], h: int, memo: dict, acts: 
     best_action = 0
     options = []
     for a in range(len(model.task.actions)):
-        children: dict[int, list[Config]] = {}
+        children: dict[int, list[State]] = {}
         for c in belief:
             nxt, index, grasped = model.step(c, a)
             if not grasped:
@@ -175,7 +219,7 @@ def _value(model: _Model, belief: tuple[Config, ...], h: int, memo: dict, acts: 
     return best
 
 
-def _lower(model: _Model, belief: tuple[Config, ...], h: int) -> float:
+def _lower(model: _Model, belief: tuple[State, ...], h: int) -> float:
     """Admissible bound on ``V(belief, h)``: the mean clairvoyant CRMs (full
     information cannot do worse), capped by the horizon."""
     if h == 0:
@@ -194,21 +238,18 @@ class BeliefPolicy:
     starts whose first observation equals the current one, with the steps left.
     """
 
-    def __init__(self, task: Task, starts: Sequence[Config]) -> None:
+    def __init__(self, task: Task, starts: Sequence[Start]) -> None:
         if not starts:
             raise CrmgraspError("BeliefPolicy needs at least one start")
         self.task = task
         self._model = _Model(task)
         self._memo: dict = {}
         self._acts: dict = {}
-        self._belief: tuple[Config, ...] = ()
+        self._belief: tuple[State, ...] = ()
         self._left, self._a = task.max_steps, 0
-        self._groups: dict[int, tuple[Config, ...]] = {}
-        for c in starts:
-            k = task.discretizer.index(observe(c), Error.NONE)
-            self._groups[k] = (*self._groups.get(k, ()), c)
+        self._groups = _first_groups(self._model, starts)
 
-    def _action(self, belief: tuple[Config, ...], h: int) -> int:
+    def _action(self, belief: tuple[State, ...], h: int) -> int:
         key = (belief, h)
         if key not in self._acts:
             _value(self._model, belief, h, self._memo, self._acts)
@@ -238,8 +279,8 @@ class BeliefPolicy:
         self._belief = tuple(nxt) or self._groups.get(percept.obs_index, ())
         self._left -= 1
 
-    def run(self, config: Config, rng: np.random.Generator | None = None) -> tuple[int, bool]:
-        """Execute the policy from ``config`` (:func:`crmgrasp.sim.run_episode`; ``rng``
+    def run(self, config: Start, rng: np.random.Generator | None = None) -> tuple[int, bool]:
+        """Execute the policy from ``config`` or a world (:func:`crmgrasp.sim.run_episode`; ``rng``
         is drawn from only if the task has sensing noise); return (CRMs, success)."""
         ep = run_episode(self.task, self, rng if rng is not None else np.random.default_rng(0), start=config)
         return ep.steps, ep.success

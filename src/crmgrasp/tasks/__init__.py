@@ -13,6 +13,7 @@ from crmgrasp.tasks.core import (
     Symmetry,
     Task,
     UniformStarts,
+    World,
     accept_corner_candidates,
     acceptable,
     corner_boxes,
@@ -23,6 +24,7 @@ from crmgrasp.tasks.core import (
     register_task,
     task_names,
 )
+from crmgrasp.tasks.families import FAMILY_TASKS, BoundaryStarts, default_crms, family_task, mirror_symmetry
 from crmgrasp.tasks.files import TEMPLATE, load_task_file, resolve_task, task_from_dict, task_to_dict
 
 __all__ = [
@@ -31,6 +33,12 @@ __all__ = [
     "CornerStarts",
     "UniformStarts",
     "Task",
+    "World",
+    "BoundaryStarts",
+    "default_crms",
+    "family_task",
+    "mirror_symmetry",
+    "FAMILY_TASKS",
     "Symmetry",
     "paper_box",
     "make_task",

@@ -8,16 +8,18 @@ factory under a new name with :func:`register_task`.
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Protocol, overload, runtime_checkable
+from typing import NamedTuple, Protocol, overload, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
 
 from crmgrasp._validation import CrmgraspError, finite, non_negative
 from crmgrasp.model.contacts import Config, Contact, config_from_row
+from crmgrasp.model.families import ShapeFamily
 from crmgrasp.model.geometry import Polygon, Rectangle, Shape
 from crmgrasp.model.hand import CRM, Error, Hand, feasible
 from crmgrasp.model.quality import min_friction
@@ -29,6 +31,7 @@ __all__ = [
     "CornerStarts",
     "UniformStarts",
     "Task",
+    "World",
     "Symmetry",
     "paper_box",
     "make_task",
@@ -290,6 +293,11 @@ class Task:
         Reward of the CRM that reaches a grasp (every other CRM: -1). The paper's "-1
         in all states" read literally gives -1 (the default); read as "in all non-goal
         states" it gives 0.
+    family
+        An object family (:mod:`crmgrasp.model.families`), or None. With a family, each
+        episode draws its object (:meth:`instance`) and ``obj`` is only the shape
+        scenes show (the family's nominal one); the smallest object the family can
+        draw must fit the hand's aperture.
     """
 
     name: str
@@ -305,6 +313,7 @@ class Task:
     description: str = ""
     symmetry: Symmetry | None = None
     grasp_reward: float = -1.0
+    family: ShapeFamily | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.obj, Shape):
@@ -330,15 +339,46 @@ class Task:
                     f"{exc} (a task made from a symmetric one with other CRMs or bins needs symmetry=None)"
                 ) from None
         object.__setattr__(self, "grasp_reward", finite(self.grasp_reward, "grasp_reward"))
+        if self.family is not None:
+            if not isinstance(self.family, ShapeFamily):
+                raise CrmgraspError(f"task family must be a ShapeFamily, got {self.family!r}")
+            w = self.family.min_width()
+            if w > self.hand.aperture:
+                raise CrmgraspError(
+                    f"family {self.family.describe()['kind']!r}: its smallest object is {w:.4g} m wide, "
+                    f"beyond the hand's aperture {self.hand.aperture:g} m; no object it draws can be grasped"
+                )
         if self.reference_mean_steps is not None and not (
             math.isfinite(self.reference_mean_steps) and self.reference_mean_steps > 0
         ):
             raise CrmgraspError(f"reference_mean_steps must be > 0, got {self.reference_mean_steps!r}")
 
+    def instance(self, rng: np.random.Generator) -> Task:
+        """This task with an object drawn from its family (one episode's world; the
+        family's draws from ``rng``); the task itself if it has no family."""
+        return self if self.family is None else self.with_object(self.family.sample(rng))
+
+    def with_object(self, obj: Shape) -> Task:
+        """This task on the object ``obj``, without a family (the object is not checked
+        again: families draw valid shapes)."""
+        out = copy.copy(self)
+        object.__setattr__(out, "obj", obj)
+        object.__setattr__(out, "family", None)
+        return out
+
+    def sample_world(self, rng: np.random.Generator, accept: StartFilter | None = None) -> World:
+        """An episode's hidden world: :meth:`instance`, then a start on it."""
+        inst = self.instance(rng)
+        return World(inst, inst.sample_start(rng, accept))
+
     def sample_start(self, rng: np.random.Generator, accept: StartFilter | None = None) -> Config:
         """A start configuration drawn from ``rng``. ``accept``: a compiled start filter,
         used by samplers built on corner candidates (:class:`CornerStarts` and the presets
         of :mod:`crmgrasp.tasks.presets`; the same start either way), ignored by others."""
+        if self.family is not None:
+            raise CrmgraspError(
+                f"task {self.name!r} draws an object per episode: use sample_world (the object and a start on it)"
+            )
         if accept is not None and getattr(self.starts, "takes_corner_filter", False):
             return self.starts(self.obj, self.hand, self.mu_goal, rng, accept)  # type: ignore[call-arg]
         return self.starts(self.obj, self.hand, self.mu_goal, rng)
@@ -347,6 +387,8 @@ class Task:
         """``n`` starts as ``(n, 8)`` rows: :meth:`CornerStarts.batch` (another stream than
         :meth:`sample_start`'s, the same distribution; ``accept`` as there), or ``n``
         scalar draws for other samplers."""
+        if self.family is not None:
+            self.sample_start(rng)  # refuses with the reason
         if isinstance(self.starts, CornerStarts):
             return self.starts.batch(self.obj, self.hand, self.mu_goal, rng, n, accept or accept_corner_candidates)
         return np.array([(*c.a, *c.b) for c in (self.sample_start(rng) for _ in range(n))]).reshape(n, 8)
@@ -369,6 +411,13 @@ class Task:
     def action_names(self) -> tuple[str, ...]:
         """``('C1 (a,b,0)', ...)``: readable action names in index order."""
         return tuple(f"C{i + 1} {crm}" for i, crm in enumerate(self.actions))
+
+
+class World(NamedTuple):
+    """One episode's hidden world: the task on the object drawn for it, and the start."""
+
+    task: Task
+    config: Config
 
 
 def paper_box() -> Task:

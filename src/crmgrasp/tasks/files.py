@@ -13,6 +13,7 @@ or ``package.module:factory`` (a callable returning a :class:`Task`, or a Task).
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import math
 import re
@@ -23,10 +24,12 @@ from typing import Any
 
 from crmgrasp._io import read_bounded
 from crmgrasp._validation import CrmgraspError, shown
+from crmgrasp.model import families as fam
 from crmgrasp.model.geometry import Disc, Polygon
 from crmgrasp.model.hand import CRM, Hand
 from crmgrasp.model.sensing import Discretizer, SensorNoise
 from crmgrasp.tasks.core import CornerStarts, Symmetry, Task, UniformStarts, make_task, task_names
+from crmgrasp.tasks.families import BoundaryStarts
 from crmgrasp.tasks.presets import LongSideStarts, MixtureStarts, NearCornerStarts
 
 __all__ = ["TEMPLATE", "MAX_TASK_FILE_BYTES", "task_from_dict", "task_to_dict", "load_task_file", "resolve_task"]
@@ -89,7 +92,16 @@ kind = "uniform"                   # "uniform" on the whole boundary; for polygo
                                    # contact on each side of a random corner), "near-corner" (within =
                                    # 0.10 m of it), "long-side" (corner starts whose contact on the
                                    # longer side is lo..hi from the corner), or "mixture" with
-                                   # mix = [{ kind = "near-corner", weight = 0.4 }, ...]
+                                   # mix = [{ kind = "near-corner", weight = 0.4 }, ...];
+                                   # "boundary": contacts anywhere on the boundary within
+                                   # the aperture of each other (near_vertex = d: within d
+                                   # of a vertex); the default of family tasks
+# A family task draws its object anew each episode: replace [object] by, e.g.,
+# [family]
+# kind = "box"                     # box, disc, regular-polygon, convex-polygon, u-handle,
+# length = [0.20, 0.40]            # l-shape, t-shape, star (ranges [low, high]), or
+# width = [0.06, 0.14]             # mixed with members = [{ kind = ... }, ...], weights = [...]
+# pose = { angle = [0.0, 6.2832], offset = [-0.05, 0.05] }
 
 # [noise]                          # optional sensing noise
 # sigma_n = 0.0                    # normal rotation, radians (<= 0.785)
@@ -106,6 +118,7 @@ _TOP = {
     "max_steps",
     "reference_mean_steps",
     "object",
+    "family",
     "hand",
     "crm",
     "bins",
@@ -120,6 +133,20 @@ _STARTS: dict[str, type] = {
     "near-corner": NearCornerStarts,
     "long-side": LongSideStarts,
     "mixture": MixtureStarts,
+    "boundary": BoundaryStarts,
+}
+_FAMILIES: dict[str, type] = {
+    cls.kind: cls  # type: ignore[attr-defined]
+    for cls in (
+        fam.BoxFamily,
+        fam.DiscFamily,
+        fam.RegularPolygonFamily,
+        fam.ConvexPolygonFamily,
+        fam.UHandleFamily,
+        fam.LShapeFamily,
+        fam.TShapeFamily,
+        fam.StarFamily,
+    )
 }
 
 
@@ -198,12 +225,12 @@ def _bins(table: Any) -> Discretizer:
 
 
 def _starts(table: Any, where: str = "[starts]") -> Any:
-    t = _keys(table, where, {"kind", "within", "lo", "hi", "weight", "mix"}, {"kind"})
+    t = _keys(table, where, {"kind", "within", "lo", "hi", "weight", "mix", "near_vertex"}, {"kind"})
     kind = t["kind"]
     if kind not in _STARTS:
         raise CrmgraspError(f"{where} kind must be one of {', '.join(_STARTS)}, got {shown(kind)}")
     allowed = {"corners": set(), "uniform": set(), "near-corner": {"within"}, "long-side": {"lo", "hi"}}
-    allowed["mixture"] = {"mix"}
+    allowed["mixture"], allowed["boundary"] = {"mix"}, {"near_vertex"}
     extra = set(t) - {"kind", "weight"} - allowed[kind]
     if extra:
         raise CrmgraspError(f"{where}: kind {kind!r} takes no {', '.join(sorted(extra))}")
@@ -211,6 +238,9 @@ def _starts(table: Any, where: str = "[starts]") -> Any:
         return CornerStarts()
     if kind == "uniform":
         return UniformStarts()
+    if kind == "boundary":
+        near = t.get("near_vertex")
+        return BoundaryStarts(None if near is None else _num(near, f"{where} near_vertex"))
     if kind == "near-corner":
         return NearCornerStarts(_num(t.get("within", 0.10), f"{where} within"))
     if kind == "long-side":
@@ -229,6 +259,9 @@ def _starts_dict(starts: Any) -> dict[str, Any]:
         return {"kind": "corners"}
     if type(starts) is UniformStarts and starts == UniformStarts():
         return {"kind": "uniform"}
+    if type(starts) is BoundaryStarts and starts.max_tries == BoundaryStarts().max_tries:
+        near = {} if starts.near_vertex is None else {"near_vertex": starts.near_vertex}
+        return {"kind": "boundary", **near}
     if type(starts) is NearCornerStarts:
         return {"kind": "near-corner", "within": starts.within}
     if type(starts) is LongSideStarts:
@@ -237,6 +270,42 @@ def _starts_dict(starts: Any) -> dict[str, Any]:
         mix = [{**_starts_dict(c), "weight": w} for c, w in zip(starts.components, starts.weights)]
         return {"kind": "custom"} if any(m["kind"] == "custom" for m in mix) else {"kind": "mixture", "mix": mix}
     return {"kind": "custom"}
+
+
+def _family(table: Any, where: str = "[family]") -> Any:
+    """An object family: ``kind`` and its ranges as ``[low, high]``, an optional
+    ``pose = { angle = [..], offset = [..] }``; ``kind = "mixed"`` takes
+    ``members = [{ kind = ..., ... }, ...]`` and optional ``weights``."""
+    kinds = [*_FAMILIES, "mixed"]
+    t = _keys(
+        table, where, {"kind", "pose", "members", "weights"} | {f for c in _FAMILIES.values() for f in _fields(c)}
+    )
+    kind = t.get("kind")
+    if kind not in kinds:
+        raise CrmgraspError(f"{where} kind must be one of {', '.join(kinds)}, got {shown(kind)}")
+    if kind == "mixed":
+        extra = set(t) - {"kind", "members", "weights"}
+        members = t.get("members")
+        if extra or not isinstance(members, list) or not members:
+            raise CrmgraspError(f"{where}: a mixed family takes members = [{{ kind = ... }}, ...] and weights only")
+        parts = tuple(_family(m, f"{where} members[{i}]") for i, m in enumerate(members))
+        weights = _numbers(t["weights"], f"{where} weights") if "weights" in t else ()
+        return fam.MixedFamily(parts, weights)
+    cls = _FAMILIES[kind]
+    extra = set(t) - {"kind", "pose", *_fields(cls)}
+    if extra:
+        raise CrmgraspError(
+            f"{where}: kind {kind!r} takes no {', '.join(sorted(extra))}; it takes {', '.join(_fields(cls))}"
+        )
+    kw: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in t.items() if k not in ("kind", "pose")}
+    if "pose" in t:
+        pose = _keys(t["pose"], f"{where} pose", {"angle", "offset"})
+        kw["pose"] = fam.Pose(**{k: tuple(v) if isinstance(v, list) else v for k, v in pose.items()})
+    return cls(**kw)
+
+
+def _fields(cls: type) -> tuple[str, ...]:
+    return tuple(f.name for f in dataclasses.fields(cls) if f.name != "pose")
 
 
 def _section(key: str, build: Callable[[Any], Any], value: Any) -> Any:
@@ -252,20 +321,26 @@ def _section(key: str, build: Callable[[Any], Any], value: Any) -> Any:
 
 def task_from_dict(doc: Any) -> Task:
     """The :class:`Task` a task document (parsed TOML, or :func:`task_to_dict`) states."""
-    d = _keys(doc, "the task file", _TOP, {"name", "object", "hand", "crm"})
+    d = _keys(doc, "the task file", _TOP, {"name", "hand", "crm"})
     name = d["name"]
     if not isinstance(name, str) or not _NAME.fullmatch(name):
         raise CrmgraspError(
             f"name must be 1-64 letters, digits, '.', '_' or '-' (first a letter or digit), got {shown(name)}"
         )
     kw: dict[str, Any] = {
-        "obj": _section("object", _object, d["object"]),
         "hand": _section("hand", _hand, d["hand"]),
         "actions": _section("crm", _crms, d["crm"]),
     }
+    if ("object" in d) == ("family" in d):
+        raise CrmgraspError("the task file needs exactly one of [object] and [family]")
+    if "family" in d:
+        kw["family"] = _section("family", _family, d["family"])
+        kw["obj"] = kw["family"].nominal()
+    else:
+        kw["obj"] = _section("object", _object, d["object"])
     if "bins" in d:
         kw["discretizer"] = _section("bins", _bins, d["bins"])
-    kw["starts"] = _section("starts", _starts, d.get("starts", {"kind": "uniform"}))
+    kw["starts"] = _section("starts", _starts, d.get("starts", {"kind": "boundary" if "family" in d else "uniform"}))
     if getattr(kw["starts"], "takes_corner_filter", False) and not isinstance(kw["obj"], Polygon):
         raise CrmgraspError('starts kinds "corners", "near-corner", "long-side" need a polygon object; use "uniform"')
     if "noise" in d:
@@ -317,7 +392,6 @@ def task_to_dict(task: Task) -> dict[str, Any]:
         "description": task.description,
         "mu_goal": task.mu_goal,
         "max_steps": task.max_steps,
-        "object": _object_dict(task.obj),
         "hand": hand,
         "crm": [{"c": a.c, "f": a.f, "r": a.r} for a in task.actions],
         "bins": task.discretizer.to_dict(),
@@ -325,6 +399,10 @@ def task_to_dict(task: Task) -> dict[str, Any]:
         "grasp_reward": task.grasp_reward,
         "noise": {"sigma_n": task.noise.sigma_n, "sigma_p": task.noise.sigma_p},
     }
+    if task.family is None:
+        doc["object"] = _object_dict(task.obj)
+    else:
+        doc["family"] = task.family.describe()  # a sampler family (Python code) is written, not read back
     if task.reference_mean_steps is not None:
         doc["reference_mean_steps"] = task.reference_mean_steps
     if task.symmetry is not None:

@@ -1,0 +1,74 @@
+"""The kernel of a task with an object family: a fresh kernel per episode's object.
+
+A family task draws its object per episode (:meth:`crmgrasp.tasks.Task.instance`), so
+the rows of a batch would each need their own object. :class:`FamilyKernel` therefore
+steps one episode at a time: :meth:`sample_start` draws the object and builds its
+kernel through :func:`crmgrasp.kernels.kernel_for` (compiled for polygons, the
+reference for discs), and every step goes to that kernel. Batched steps over rows
+(:meth:`step_batch`, :meth:`sample_starts`) are refused with the reason.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.kernels.base import F64, I64, BatchStep, Kernel
+from crmgrasp.model.hand import CRM
+from crmgrasp.sim import FamilyStepper, OneStep, SimState
+from crmgrasp.tasks import Task
+
+__all__ = ["FamilyKernel"]
+
+
+class FamilyKernel(Kernel):
+    """Steps a family task through per-object kernels ``make(instance)``."""
+
+    name = "family"
+
+    def __init__(self, task: Task, make: Callable[[Task], Kernel]) -> None:
+        super().__init__(task)
+        self.stepper = FamilyStepper(task, make)  # type: ignore[arg-type]
+
+    @property
+    def current(self) -> Kernel:
+        """The kernel of the current episode's object."""
+        return self.stepper.current  # type: ignore[return-value]
+
+    @property
+    def instance(self) -> Task:
+        """The task on the current episode's object."""
+        return self.stepper.instance
+
+    def use(self, instance: Task) -> None:
+        """Step ``instance`` from now on (:meth:`crmgrasp.sim.FamilyStepper.use`)."""
+        self.stepper.use(instance)
+
+    def execute_crms(
+        self, cfg: F64, sen: F64, c_is_b: NDArray[np.bool_], f_is_b: NDArray[np.bool_], r: F64
+    ) -> tuple[F64, NDArray[np.int8]]:
+        return self.current.execute_crms(cfg, sen, c_is_b, f_is_b, r)
+
+    def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[F64, F64, F64, I64, F64]:
+        return self.current.observe(cfg, sen, err)
+
+    def sample_start(self, rng: np.random.Generator) -> Any:
+        return self.stepper.sample_start(rng)
+
+    def sample_starts(self, rng: np.random.Generator, n: int) -> F64:
+        raise CrmgraspError(f"task {self.task.name!r} draws an object per episode: starts come one at a time")
+
+    def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
+        return self.stepper.begin(config, rng)
+
+    def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
+        return self.stepper.step_one(state, action, rng)
+
+    def step_batch(
+        self, cfg: F64, sen: F64, actions: I64, resets: NDArray[np.bool_], starts: F64, rng: np.random.Generator
+    ) -> BatchStep:
+        raise CrmgraspError(f"task {self.task.name!r} draws an object per episode: it steps one episode at a time")

@@ -1,0 +1,532 @@
+"""Object families: distributions over shapes and poses, one object per episode.
+
+A family draws an object anew for each episode: its size and shape from ranges, then
+a pose (a rotation about the origin by an angle, then a translation) from the
+family's :class:`Pose`. The hand model has no world-fixed direction (docs/model.md:
+every rule is written in the contacts' own frames), so the pose changes where the
+object lies, not what any CRM does to it; families draw it anyway, so that scenes
+look like the world and the invariance is tested, not assumed.
+
+Every family is a frozen dataclass with ``sample(rng) -> Shape`` (all draws from
+``rng``, in a documented order: the shape's parameters, then the angle, then the
+offset), ``nominal()`` (the shape at the middle of every range, unposed: what a
+scene shows for the family), ``min_width()`` (the smallest width, metres, of any
+object it can draw: the width a parallel grasp must span at least, compared with
+the hand's aperture) and ``describe()`` (its parameters as plain data).
+
+Ranges are ``(low, high)`` with ``low <= high`` (equal: a fixed value); bad ranges,
+and parameters that would give non-simple polygons, are refused with one line
+naming the parameter. Rejection loops are bounded by :data:`MAX_TRIES`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.model.disc import Disc
+from crmgrasp.model.polygon import Polygon
+from crmgrasp.model.shape import Shape
+
+__all__ = [
+    "MAX_TRIES",
+    "ShapeFamily",
+    "Pose",
+    "place",
+    "BoxFamily",
+    "DiscFamily",
+    "RegularPolygonFamily",
+    "ConvexPolygonFamily",
+    "UHandleFamily",
+    "LShapeFamily",
+    "TShapeFamily",
+    "StarFamily",
+    "MixedFamily",
+    "SamplerFamily",
+    "width",
+]
+
+MAX_TRIES = 1000
+"""Most draws a family makes for one object before it gives up with an error."""
+
+Range = tuple[float, float]
+
+
+def _range(value: Any, name: str, *, low: float = 0.0, integer: bool = False) -> tuple[Any, Any]:
+    """A checked ``(low, high)``: two finite numbers (integers if ``integer``),
+    ``low <= high``, both above ``low`` (or at least it, for integers)."""
+    try:
+        lo, hi = value
+    except (TypeError, ValueError):
+        raise CrmgraspError(f"{name} must be a range (low, high), got {value!r}") from None
+    kind = (int,) if integer else (int, float)
+    for v in (lo, hi):
+        if isinstance(v, bool) or not isinstance(v, kind) or not math.isfinite(v):
+            what = "integers" if integer else "finite numbers"
+            raise CrmgraspError(f"{name} must be a range of two {what}, got {value!r}")
+    if lo > hi:
+        raise CrmgraspError(f"{name} range ({lo}, {hi}) is inverted: low > high")
+    if integer and lo < low:
+        raise CrmgraspError(f"{name} range ({lo}, {hi}) must start at {low} or more")
+    if not integer and lo <= low:
+        raise CrmgraspError(f"{name} range ({lo}, {hi}) must be above {low}")
+    return (int(lo), int(hi)) if integer else (float(lo), float(hi))
+
+
+def _uniform(rng: np.random.Generator, r: Range) -> float:
+    """One draw uniform in ``r`` (one draw even for a fixed value, so the stream's
+    layout does not depend on the ranges)."""
+    u = float(rng.random())
+    return r[0] + u * (r[1] - r[0])
+
+
+def _mid(r: Range) -> float:
+    return 0.5 * (r[0] + r[1])
+
+
+def width(shape: Shape) -> float:
+    """The minimum width of ``shape``'s convex hull, metres: the smallest distance
+    between two parallel lines enclosing it (for a polygon, attained with one line
+    along a hull edge; for a disc, its diameter)."""
+    if isinstance(shape, Disc):
+        return 2.0 * shape.radius
+    assert isinstance(shape, Polygon)
+    pts = np.array(shape.vertices)
+    best = math.inf
+    n = len(pts)
+    for i in range(n):
+        e = pts[(i + 1) % n] - pts[i]
+        length = math.hypot(*e)
+        if length == 0.0:
+            continue
+        rel = pts - pts[i]
+        d = np.abs(e[0] * rel[:, 1] - e[1] * rel[:, 0]) / length
+        best = min(best, float(d.max()))
+    return best
+
+
+@dataclass(frozen=True)
+class Pose:
+    """The pose distribution: a rotation by an angle uniform in ``angle`` (radians)
+    about the origin, then a translation uniform in ``offset`` along x and along y
+    (metres)."""
+
+    angle: Range = (0.0, 2.0 * math.pi)
+    offset: Range = (-0.05, 0.05)
+
+    def __post_init__(self) -> None:
+        for name in ("angle", "offset"):
+            lo, hi = _range(getattr(self, name), f"pose {name}", low=-math.inf)
+            object.__setattr__(self, name, (lo, hi))
+
+    def draw(self, rng: np.random.Generator) -> tuple[float, float, float]:
+        """``(angle, dx, dy)``: three draws."""
+        return _uniform(rng, self.angle), _uniform(rng, self.offset), _uniform(rng, self.offset)
+
+
+def place(shape: Shape, angle: float, dx: float, dy: float) -> Shape:
+    """``shape`` rotated by ``angle`` (radians) about the origin, then moved by ``(dx, dy)``."""
+    c, s = math.cos(angle), math.sin(angle)
+    if isinstance(shape, Disc):
+        x, y = shape.center
+        return Disc(shape.radius, (c * x - s * y + dx, s * x + c * y + dy))
+    if isinstance(shape, Polygon):
+        return Polygon([(c * x - s * y + dx, s * x + c * y + dy) for x, y in shape.vertices])
+    raise CrmgraspError(f"cannot place a {type(shape).__name__}; families draw polygons and discs")
+
+
+@runtime_checkable
+class ShapeFamily(Protocol):
+    """A distribution over objects (see the module docstring)."""
+
+    @property
+    def pose(self) -> Pose: ...
+
+    def sample(self, rng: np.random.Generator) -> Shape: ...
+
+    def nominal(self) -> Shape: ...
+
+    def min_width(self) -> float: ...
+
+    def describe(self) -> dict[str, Any]: ...
+
+
+class _Family:
+    """Shared ``sample``: the unposed shape of ``_shape(rng)``, then the pose."""
+
+    pose: Pose
+    kind: str = "family"
+
+    def _shape(self, rng: np.random.Generator) -> Shape:  # pragma: no cover - every family overrides it
+        raise NotImplementedError
+
+    def sample(self, rng: np.random.Generator) -> Shape:
+        """One object: the shape's draws, then the pose's three."""
+        return place(self._shape(rng), *self.pose.draw(rng))
+
+    def describe(self) -> dict[str, Any]:
+        """The family's kind and parameters as plain data (ranges as lists)."""
+        out: dict[str, Any] = {"kind": self.kind}
+        for k, v in vars(self).items():
+            if k == "pose":
+                out["pose"] = {"angle": list(v.angle), "offset": list(v.offset)}
+            elif isinstance(v, tuple):
+                out[k] = list(v)
+            else:
+                out[k] = v
+        return out
+
+
+def _poly(vertices: list[tuple[float, float]]) -> Polygon:
+    """The polygon of ``vertices``, centred on its vertices' bounding box."""
+    xs, ys = [v[0] for v in vertices], [v[1] for v in vertices]
+    cx, cy = 0.5 * (min(xs) + max(xs)), 0.5 * (min(ys) + max(ys))
+    return Polygon([(x - cx, y - cy) for x, y in vertices])
+
+
+@dataclass(frozen=True)
+class BoxFamily(_Family):
+    """Rectangles of length and width uniform in their ranges (metres)."""
+
+    length: Range = (0.20, 0.40)
+    width: Range = (0.06, 0.14)
+    pose: Pose = field(default_factory=Pose)
+    kind = "box"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "length", _range(self.length, "box length"))
+        object.__setattr__(self, "width", _range(self.width, "box width"))
+
+    def _box(self, length: float, w: float) -> Polygon:
+        return _poly([(0.0, 0.0), (length, 0.0), (length, w), (0.0, w)])
+
+    def _shape(self, rng: np.random.Generator) -> Shape:
+        return self._box(_uniform(rng, self.length), _uniform(rng, self.width))
+
+    def nominal(self) -> Shape:
+        """The box at the middle of both ranges."""
+        return self._box(_mid(self.length), _mid(self.width))
+
+    def min_width(self) -> float:
+        return min(self.length[0], self.width[0])
+
+
+@dataclass(frozen=True)
+class DiscFamily(_Family):
+    """Discs of radius uniform in ``radius`` (metres): the planar cup."""
+
+    radius: Range = (0.03, 0.07)
+    pose: Pose = field(default_factory=Pose)
+    kind = "disc"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "radius", _range(self.radius, "disc radius"))
+
+    def _shape(self, rng: np.random.Generator) -> Shape:
+        return Disc(_uniform(rng, self.radius))
+
+    def nominal(self) -> Shape:
+        return Disc(_mid(self.radius))
+
+    def min_width(self) -> float:
+        return 2.0 * self.radius[0]
+
+
+def _regular(n: int, r: float) -> Polygon:
+    return Polygon([(r * math.cos(2 * math.pi * k / n), r * math.sin(2 * math.pi * k / n)) for k in range(n)])
+
+
+@dataclass(frozen=True)
+class RegularPolygonFamily(_Family):
+    """Regular ``n``-gons, ``n`` uniform among the integers of ``sides``, circumradius
+    uniform in ``radius`` (metres)."""
+
+    sides: tuple[int, int] = (3, 8)
+    radius: Range = (0.04, 0.08)
+    pose: Pose = field(default_factory=Pose)
+    kind = "regular-polygon"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "sides", _range(self.sides, "regular polygon sides", low=3, integer=True))
+        object.__setattr__(self, "radius", _range(self.radius, "regular polygon radius"))
+
+    def _shape(self, rng: np.random.Generator) -> Shape:
+        n = self.sides[0] + int(rng.random() * (self.sides[1] - self.sides[0] + 1))
+        return _regular(n, _uniform(rng, self.radius))
+
+    def nominal(self) -> Shape:
+        return _regular((self.sides[0] + self.sides[1]) // 2, _mid(self.radius))
+
+    def min_width(self) -> float:
+        # the width of a regular n-gon grows with n at a fixed circumradius: 3 sides are the narrowest
+        return width(_regular(self.sides[0], self.radius[0]))
+
+
+@dataclass(frozen=True)
+class ConvexPolygonFamily(_Family):
+    """Random convex polygons: ``n`` (uniform among the integers of ``vertices``)
+    points at angles uniform on the circle of a radius uniform in ``radius``,
+    redrawn until the centre lies inside with margin (no gap between consecutive
+    angles above 150 degrees) and no side is shorter than ``0.1 radius`` (every
+    gap at least 2 asin(0.05) rad)."""
+
+    vertices: tuple[int, int] = (3, 8)
+    radius: Range = (0.04, 0.08)
+    pose: Pose = field(default_factory=Pose)
+    kind = "convex-polygon"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "vertices", _range(self.vertices, "convex polygon vertices", low=3, integer=True))
+        object.__setattr__(self, "radius", _range(self.radius, "convex polygon radius"))
+        if self.vertices[0] > 12:
+            raise CrmgraspError(f"convex polygon vertices range {self.vertices} must start at 12 or fewer")
+
+    def _shape(self, rng: np.random.Generator) -> Shape:
+        n = self.vertices[0] + int(rng.random() * (self.vertices[1] - self.vertices[0] + 1))
+        r = _uniform(rng, self.radius)
+        min_gap, max_gap = 2.0 * math.asin(0.05), math.radians(150.0)
+        for _ in range(MAX_TRIES):
+            a = np.sort(rng.random(n) * 2.0 * math.pi)
+            gaps = np.diff(np.append(a, a[0] + 2.0 * math.pi))
+            if gaps.max() <= max_gap and gaps.min() >= min_gap:
+                return Polygon([(r * math.cos(t), r * math.sin(t)) for t in a.tolist()])
+        raise CrmgraspError(
+            f"convex polygon family: no polygon with {n} vertices met the gap rules in {MAX_TRIES} draws "
+            "(too many vertices for the minimum side)"
+        )
+
+    def nominal(self) -> Shape:
+        return _regular((self.vertices[0] + self.vertices[1]) // 2, _mid(self.radius))
+
+    def min_width(self) -> float:
+        # an inscribed polygon containing the centre with margin: a triangle with gaps of at most
+        # 150 degrees has width at least that of this isosceles one
+        r = self.radius[0]
+        t = math.radians(150.0)
+        return width(Polygon([(r, 0.0), (r * math.cos(t), r * math.sin(t)), (r * math.cos(-t), r * math.sin(-t))]))
+
+
+def _check_thickness(kind: str, t: Range, **limits: tuple[Range, float]) -> None:
+    """Refuse bars that could reach ``factor`` times the smallest of a dimension."""
+    for name, (r, factor) in limits.items():
+        if t[1] >= factor * r[0]:
+            part = "" if factor == 1.0 else f"{factor:g} x "
+            raise CrmgraspError(
+                f"{kind} thickness range {t} must stay below {part}the smallest {name} {r[0]}: "
+                "thicker bars would give a non-simple polygon"
+            )
+
+
+@dataclass(frozen=True)
+class UHandleFamily(_Family):
+    """U-shaped handles: outer ``width`` and ``height``, bars of ``thickness``
+    (metres); the opening faces +y before the pose. Needs ``2 thickness < width``
+    and ``thickness < height`` over the whole ranges."""
+
+    width: Range = (0.16, 0.26)
+    height: Range = (0.10, 0.18)
+    thickness: Range = (0.03, 0.05)
+    pose: Pose = field(default_factory=Pose)
+    kind = "u-handle"
+
+    def __post_init__(self) -> None:
+        for name in ("width", "height", "thickness"):
+            object.__setattr__(self, name, _range(getattr(self, name), f"U handle {name}"))
+        _check_thickness("U handle", self.thickness, width=(self.width, 0.5), height=(self.height, 1.0))
+
+    def _u(self, w: float, h: float, t: float) -> Polygon:
+        return _poly([(0, 0), (w, 0), (w, h), (w - t, h), (w - t, t), (t, t), (t, h), (0, h)])
+
+    def _shape(self, rng: np.random.Generator) -> Shape:
+        return self._u(_uniform(rng, self.width), _uniform(rng, self.height), _uniform(rng, self.thickness))
+
+    def nominal(self) -> Shape:
+        return self._u(_mid(self.width), _mid(self.height), _mid(self.thickness))
+
+    def min_width(self) -> float:
+        return self.thickness[0]  # a bar, gripped from inside the U and outside
+
+
+@dataclass(frozen=True)
+class LShapeFamily(_Family):
+    """L shapes: two arms of length uniform in ``arm`` (drawn independently) and bars
+    of ``thickness`` (metres). Needs ``thickness < arm``."""
+
+    arm: Range = (0.12, 0.24)
+    thickness: Range = (0.03, 0.06)
+    pose: Pose = field(default_factory=Pose)
+    kind = "l-shape"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "arm", _range(self.arm, "L shape arm"))
+        object.__setattr__(self, "thickness", _range(self.thickness, "L shape thickness"))
+        _check_thickness("L shape", self.thickness, arm=(self.arm, 1.0))
+
+    def _l(self, a1: float, a2: float, t: float) -> Polygon:
+        return _poly([(0, 0), (a1, 0), (a1, t), (t, t), (t, a2), (0, a2)])
+
+    def _shape(self, rng: np.random.Generator) -> Shape:
+        return self._l(_uniform(rng, self.arm), _uniform(rng, self.arm), _uniform(rng, self.thickness))
+
+    def nominal(self) -> Shape:
+        return self._l(_mid(self.arm), _mid(self.arm), _mid(self.thickness))
+
+    def min_width(self) -> float:
+        return self.thickness[0]
+
+
+@dataclass(frozen=True)
+class TShapeFamily(_Family):
+    """T shapes: a top bar of ``width``, a total ``height``, bars of ``thickness``
+    (metres). Needs ``thickness < width`` and ``thickness < height``."""
+
+    width: Range = (0.14, 0.24)
+    height: Range = (0.12, 0.20)
+    thickness: Range = (0.03, 0.05)
+    pose: Pose = field(default_factory=Pose)
+    kind = "t-shape"
+
+    def __post_init__(self) -> None:
+        for name in ("width", "height", "thickness"):
+            object.__setattr__(self, name, _range(getattr(self, name), f"T shape {name}"))
+        _check_thickness("T shape", self.thickness, width=(self.width, 1.0), height=(self.height, 1.0))
+
+    def _t(self, w: float, h: float, t: float) -> Polygon:
+        s = t / 2.0
+        return _poly(
+            [(-s, 0), (s, 0), (s, h - t), (w / 2, h - t), (w / 2, h), (-w / 2, h), (-w / 2, h - t), (-s, h - t)]
+        )
+
+    def _shape(self, rng: np.random.Generator) -> Shape:
+        return self._t(_uniform(rng, self.width), _uniform(rng, self.height), _uniform(rng, self.thickness))
+
+    def nominal(self) -> Shape:
+        return self._t(_mid(self.width), _mid(self.height), _mid(self.thickness))
+
+    def min_width(self) -> float:
+        return self.thickness[0]
+
+
+@dataclass(frozen=True)
+class StarFamily(_Family):
+    """Stars: ``points`` tips (uniform among its integers) on a circle of radius
+    ``outer`` (metres), the notches between them at ``inner`` times that radius."""
+
+    points: tuple[int, int] = (4, 6)
+    outer: Range = (0.05, 0.09)
+    inner: Range = (0.45, 0.7)
+    pose: Pose = field(default_factory=Pose)
+    kind = "star"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "points", _range(self.points, "star points", low=3, integer=True))
+        object.__setattr__(self, "outer", _range(self.outer, "star outer"))
+        inner = _range(self.inner, "star inner")
+        if inner[1] >= 1.0:
+            raise CrmgraspError(f"star inner range {inner} must stay below 1 (a fraction of the outer radius)")
+        object.__setattr__(self, "inner", inner)
+
+    def _star(self, n: int, r: float, f: float) -> Polygon:
+        return Polygon(
+            [
+                (
+                    (r if k % 2 == 0 else f * r) * math.cos(math.pi * k / n),
+                    (r if k % 2 == 0 else f * r) * math.sin(math.pi * k / n),
+                )
+                for k in range(2 * n)
+            ]
+        )
+
+    def _shape(self, rng: np.random.Generator) -> Shape:
+        n = self.points[0] + int(rng.random() * (self.points[1] - self.points[0] + 1))
+        return self._star(n, _uniform(rng, self.outer), _uniform(rng, self.inner))
+
+    def nominal(self) -> Shape:
+        return self._star((self.points[0] + self.points[1]) // 2, _mid(self.outer), _mid(self.inner))
+
+    def min_width(self) -> float:
+        return width(self._star(self.points[0], self.outer[0], self.inner[0]))
+
+
+@dataclass(frozen=True)
+class MixedFamily:
+    """A mixture: member ``i`` with probability ``weights[i] / sum(weights)`` (one
+    draw), then that member's draws."""
+
+    members: tuple[Any, ...]
+    weights: tuple[float, ...] = ()
+    kind = "mixed"
+
+    def __post_init__(self) -> None:
+        members = tuple(self.members)
+        if not members or not all(isinstance(m, ShapeFamily) for m in members):
+            raise CrmgraspError("a mixed family needs one or more member families")
+        w = tuple(float(x) for x in (self.weights or [1.0] * len(members)))
+        if len(w) != len(members) or not all(math.isfinite(x) and x >= 0 for x in w) or sum(w) <= 0:
+            raise CrmgraspError(
+                f"mixed family weights must be {len(members)} numbers >= 0 with a positive sum, got {self.weights!r}"
+            )
+        object.__setattr__(self, "members", members)
+        object.__setattr__(self, "weights", w)
+
+    @property
+    def pose(self) -> Pose:
+        """The first member's pose (each member draws its own)."""
+        return self.members[0].pose
+
+    def sample(self, rng: np.random.Generator) -> Shape:
+        u = float(rng.random()) * sum(self.weights)
+        acc = 0.0
+        for m, w in zip(self.members, self.weights, strict=True):
+            acc += w
+            if u < acc:
+                return m.sample(rng)
+        return self.members[-1].sample(rng)
+
+    def nominal(self) -> Shape:
+        return self.members[int(np.argmax(self.weights))].nominal()
+
+    def min_width(self) -> float:
+        return min(m.min_width() for m, w in zip(self.members, self.weights, strict=True) if w > 0)
+
+    def describe(self) -> dict[str, Any]:
+        return {"kind": self.kind, "weights": list(self.weights), "members": [m.describe() for m in self.members]}
+
+
+@dataclass(frozen=True)
+class SamplerFamily(_Family):
+    """A user's family: ``sampler(rng) -> Shape`` draws the unposed shape, then the
+    pose is drawn. ``nominal_shape`` is what scenes show; ``smallest_width`` the
+    :meth:`min_width` (default: the nominal shape's width)."""
+
+    sampler: Callable[[np.random.Generator], Shape]
+    nominal_shape: Shape
+    smallest_width: float | None = None
+    pose: Pose = field(default_factory=Pose)
+    kind = "sampler"
+
+    def __post_init__(self) -> None:
+        if not callable(self.sampler):
+            raise CrmgraspError(f"a sampler family needs a callable sampler(rng) -> Shape, got {self.sampler!r}")
+        if not isinstance(self.nominal_shape, (Polygon, Disc)):
+            raise CrmgraspError(f"nominal_shape must be a Polygon or Disc, got {self.nominal_shape!r}")
+
+    def _shape(self, rng: np.random.Generator) -> Shape:
+        s = self.sampler(rng)
+        if not isinstance(s, (Polygon, Disc)):
+            raise CrmgraspError(f"the family's sampler returned {type(s).__name__}, not a Polygon or Disc")
+        return s
+
+    def nominal(self) -> Shape:
+        return self.nominal_shape
+
+    def min_width(self) -> float:
+        return width(self.nominal_shape) if self.smallest_width is None else float(self.smallest_width)
+
+    def describe(self) -> dict[str, Any]:
+        return {"kind": self.kind, "sampler": getattr(self.sampler, "__qualname__", repr(self.sampler))}
