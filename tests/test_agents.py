@@ -17,6 +17,7 @@ LEARNERS = [
     ("sarsa-lambda", {"trace": "accumulating", "lam": 0.5}),
     ("dyna-q", {"n_planning": 10}),
     ("dyna-q", {"planning": "sweep", "n_planning": 100}),
+    ("model-vi", {}),
 ]
 
 
@@ -49,7 +50,8 @@ def test_learners_solve_a_chain_to_its_optimum(name, params):
         _chain_episode(agent, rng)
     assert _chain_episode(agent, rng, learn=False) == 4
     optimum = [-(1 - 0.9 ** (4 - s)) / 0.1 for s in range(4)]
-    assert [max(agent.value(s)) for s in range(4)] == pytest.approx(optimum, abs=0.05)
+    values = agent.greedy_table if name == "model-vi" else agent.q
+    assert [max(values[s]) for s in range(4)] == pytest.approx(optimum, abs=0.05)
 
 
 def test_baselines_and_agent_errors():
@@ -190,3 +192,66 @@ def test_greedy_prefers_tried_actions():
     agent4 = make_agent("q", 4)
     agent4.update(7, 2, -1.0, 8, None, True, rng)
     assert GreedyPolicy.from_agent(task, 2, agent4).table[7] == (2,)
+
+
+def _aliased_episode(agent, rng, learn=True):
+    """A hand-made POMDP with a known answer. Hidden state H (A or B, even odds) is
+    aliased: the first observation is 0 either way. Action 0 grasps in A, action 1 in
+    B; the wrong one fails and reveals H (observation 1: it is B; 2: it is A); action 2
+    always fails and reveals nothing (observation 3). Reward -1 per step; the states
+    are the last observation. Optimal: 0 or 1 first, then the other: 1.5 steps."""
+    hidden = int(rng.integers(2))  # 0: A, 1: B
+    s, steps = 0, 0
+    agent.begin_episode()
+    a = agent.act(s, rng) if learn else agent.greedy(s, rng)
+    while True:
+        steps += 1
+        done = a == hidden
+        s2 = s if done else (3 if a == 2 else (1 if hidden == 1 else 2))
+        if done or steps >= 10:
+            if learn:
+                agent.update(s, a, -1.0, s2, None, done, rng)
+            return steps
+        a2 = agent.act(s2, rng) if learn else agent.greedy(s2, rng)
+        if learn:
+            agent.update(s, a, -1.0, s2, a2, False, rng)
+        s, a = s2, a2
+
+
+def test_model_vi_reaches_the_optimum_of_an_aliased_pomdp_and_is_deterministic():
+    def run(seed):
+        rng = np.random.default_rng(seed)
+        agent = make_agent("model-vi", 3)
+        lengths = [_aliased_episode(agent, rng) for _ in range(30)]
+        return agent, lengths
+
+    agent, lengths = run(0)
+    assert run(0)[1] == lengths and run(0)[0].greedy_table == agent.greedy_table
+    rng = np.random.default_rng(1)
+    assert agent.greedy(1, rng) == 1 and agent.greedy(2, rng) == 0 and agent.greedy(0, rng) in (0, 1)
+    greedy = [_aliased_episode(agent, rng, learn=False) for _ in range(2000)]
+    assert np.mean(greedy) == pytest.approx(1.5, abs=4 * 0.5 / np.sqrt(2000))
+    # the greedy value of the start is the expected return of the optimum: -1 - 0.9 * 0.5
+    assert max(agent.greedy_table[0]) == pytest.approx(-1.45, abs=0.15)
+
+
+def test_model_vi_greedy_never_bets_on_an_untried_action():
+    agent = make_agent("model-vi", 3)
+    rng = np.random.default_rng(0)
+    agent.update(0, 2, -1.0, 5, 0, False, rng)  # action 2 in state 0: failed once
+    assert agent.act(0, rng) in (0, 1)  # acting: the untried ones look better (q_act -1.5)
+    assert agent.greedy(0, rng) == 2  # greedy: only what was tried
+
+
+def test_model_vi_prior_from_a_family_and_its_errors():
+    from crmgrasp.agents.training import build_agent, encoder_for
+
+    task = make_task("paper-box")
+    enc = encoder_for(task, 1)
+    params = {"symmetric": True, "prior_task": "box-family", "prior_episodes": 50}
+    a, b = build_agent(task, enc, "model-vi", params), build_agent(task, enc, "model-vi", params)
+    assert a.inner.model and a.inner.model == b.inner.model  # the same prior, computed once
+    with pytest.raises(CrmgraspError, match="other CRMs"):
+        build_agent(task, enc, "model-vi", {"prior_task": "cup-family"})
+    with pytest.raises(CrmgraspError, match="needs the model-vi agent"):
+        build_agent(task, enc, "sarsa", {"prior_task": "box-family"})

@@ -32,7 +32,19 @@ def test_learner_seeds_smoke():
     spec = importlib.util.spec_from_file_location("learner_seeds", BENCH.parent / "learner_seeds.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    res = mod.main(episodes=20, seeds=2)
-    row = res["Dyna-Q k=1 (VI sweeps, mirror quotient)"]
-    assert len(row["episodes_to_5pct"]) == len(row["greedy_episodes_to_5pct"]) == 2
-    assert 1 <= row["median_greedy_episodes_to_5pct"] <= 21
+    res = mod.main(episodes=20, seeds=2, trials=2, checkpoint_episodes=30)
+    for task in ("paper-box", "box-family"):
+        row = res[task]["model-vi k=1 (mirror quotient)"]
+        assert len(row["greedy_episodes_to_5pct"]) == len(row["greedy_mean_steps_at_20"]) == 2
+        assert 1 <= row["median_greedy_episodes_to_5pct"] <= 21
+    assert "model-vi k=1 + box-family prior" in res["paper-box"]
+
+
+def test_bench_family_smoke(monkeypatch):
+    spec = importlib.util.spec_from_file_location("bench_family", BENCH.parent / "bench_family.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    calls = []
+    monkeypatch.setattr(mod, "learn", lambda task, *a, **k: calls.append((task.name, k["jobs"])))
+    res = mod.main(jobs=2)
+    assert [c[0] for c in calls] == ["paper-box", "paper-box", "box-family"] and res["family_over_paper_box"] > 0

@@ -227,3 +227,21 @@ def test_every_option_shows_its_default_or_choices():
             if action.default is not None and action.choices is None:
                 assert "default" in text, f"{name} {action.option_strings}: {text!r}"
         assert "usage:" in sub.format_help()
+
+
+def test_learn_preset_fastest_and_a_family_prior(tmp_path, capsys):
+    out = tmp_path / "fast"
+    base = ["learn", "--trials", "2", "--episodes", "40", "--eval-episodes", "200", "--quiet"]
+    assert main([*base, "--preset", "fastest", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["agent"] == "model-vi" and summary["k"] == 1 and summary["params"]["symmetric"] is True
+    assert summary["greedy_mean_steps"] < 1.05 * 1.66 + 0.05  # 40 episodes: near the optimum (1,000 checks)
+    assert main([*base, "--preset", "fastest", "--agent", "sarsa", "--out", str(tmp_path / "s")]) == 0
+    assert json.loads((tmp_path / "s" / "summary.json").read_text())["agent"] == "sarsa"
+    prior = tmp_path / "prior"
+    extra = ["--prior-task", "box-family", "--prior-episodes", "100", "--out", str(prior)]
+    assert main([*base, "--preset", "fastest", *extra]) == 0
+    assert json.loads((prior / "summary.json").read_text())["params"]["prior_task"] == "box-family"
+    capsys.readouterr()
+    assert main([*base, "--agent", "sarsa", "--prior-task", "box-family", "--out", str(tmp_path / "x")]) == 2
+    assert "--prior-task does not apply to --agent sarsa" in capsys.readouterr().err

@@ -155,7 +155,7 @@ def step(task: Task, state: SimState, action: int | CRM, rng: np.random.Generato
         obs,
         out.error,
         task.discretizer.index(obs, out.error),
-        step_reward(task, terminated),
+        step_reward(task, terminated, out.error),
         terminated,
         truncated,
         mu,
@@ -200,13 +200,17 @@ STEP_REWARD = -1.0
 """The reward of every CRM that does not end in a grasp."""
 
 
-def step_reward(task: Task, terminated: Any) -> Any:
+def step_reward(task: Task, terminated: Any, error: Any = 0) -> Any:
     """The reward of a CRM: ``task.grasp_reward`` for the one that reaches a grasp
     (``-1`` in the paper's reading, ``0`` in the "-1 in every non-goal state" reading),
-    :data:`STEP_REWARD` for every other; elementwise on an array of ``terminated``."""
+    :data:`STEP_REWARD` for every other, less ``task.error_cost`` for one that ends in an
+    error (aperture or palm; the cost of a failed attempt, 0 in the paper); elementwise
+    on arrays of ``terminated`` and ``error`` codes."""
     if isinstance(terminated, np.ndarray):
-        return np.where(terminated, task.grasp_reward, STEP_REWARD)
-    return task.grasp_reward if terminated else STEP_REWARD
+        base = np.where(terminated, task.grasp_reward, STEP_REWARD)
+        return base - task.error_cost * (np.asarray(error) != 0) if task.error_cost else base
+    reward = task.grasp_reward if terminated else STEP_REWARD
+    return reward - task.error_cost if error and task.error_cost else reward
 
 
 class Policy(Protocol):

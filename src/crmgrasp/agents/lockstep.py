@@ -139,7 +139,7 @@ def train_trials_lockstep(
                 Error(errors[i]),
                 int(index[i]),
                 config_from_row(srow),
-                step_reward(task, terminated),
+                step_reward(task, terminated, errors[i]),
                 terminated,
                 truncated,
             )

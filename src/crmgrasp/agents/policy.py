@@ -225,7 +225,7 @@ class GreedyPolicy:
         """The greedy policy of a tabular agent over the states it has visited: in
         each, the best of the actions it has tried (all ties kept)."""
         table = {}
-        for s, row in agent.q.items():
+        for s, row in agent.greedy_table.items():
             acts = sorted(agent.tried.get(s) or range(len(row)))
             best = max(row[a] for a in acts)
             table[s] = tuple(a for a in acts if row[a] == best)

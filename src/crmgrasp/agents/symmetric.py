@@ -97,8 +97,16 @@ class SymmetricAgent:
     @property
     def q(self) -> dict[int, list[float]]:
         """The full table: every representative's row and its mirror image's."""
+        return self._mirrored(self.inner.q)
+
+    @property
+    def greedy_table(self) -> dict[int, list[float]]:
+        """The inner learner's greedy values, mirrored like :attr:`q`."""
+        return self._mirrored(self.inner.greedy_table)
+
+    def _mirrored(self, table: dict[int, list[float]]) -> dict[int, list[float]]:
         out = {}
-        for s, row in self.inner.q.items():
+        for s, row in table.items():
             out[s] = list(row)
             m = self.mirror(s)
             if m != s:

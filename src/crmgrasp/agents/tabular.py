@@ -63,6 +63,11 @@ class TabularAgent:
             r = self.q[s] = [self.q0] * self.n_actions
         return r
 
+    @property
+    def greedy_table(self) -> dict[int, list[float]]:
+        """The values the greedy policy ranks tried actions by (the table itself)."""
+        return self.q
+
     def value(self, s: int) -> list[float]:
         """Q values of ``s`` without creating a row."""
         return self.q.get(s) or [self.q0] * self.n_actions

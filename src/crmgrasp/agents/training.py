@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -19,6 +19,7 @@ from crmgrasp._progress import Progress
 from crmgrasp._validation import CrmgraspError, integer
 from crmgrasp.agents.base import Agent, LearnerPolicy
 from crmgrasp.agents.baselines import FixedSequence, RandomAgent
+from crmgrasp.agents.model_based import ModelVI
 from crmgrasp.agents.tabular import DynaQ, QLearning, Sarsa, SarsaLambda
 from crmgrasp.kernels import kernel_for
 from crmgrasp.model.contacts import Config
@@ -52,6 +53,7 @@ AGENTS: dict[str, Callable[..., Agent]] = {
     "q": QLearning,
     "sarsa-lambda": SarsaLambda,
     "dyna-q": DynaQ,
+    "model-vi": ModelVI,
     "random": RandomAgent,
     "fixed": FixedSequence,
 }
@@ -92,17 +94,68 @@ def agent_parameters(name: str) -> tuple[str, ...]:
 
 def build_agent(task: Task, encoder: KOrderEncoder, name: str, params: dict[str, object] | None = None) -> Agent:
     """:func:`make_agent`, wrapped in a :class:`~crmgrasp.agents.symmetric.SymmetricAgent`
-    when ``params`` has ``symmetric=True`` (the task must declare a symmetry)."""
+    when ``params`` has ``symmetric=True`` (the task must declare a symmetry).
+
+    ``prior_task`` (a task name, file or factory with the same CRMs and bins, e.g. an
+    object family) gives a ``model-vi`` agent a prior: the model one agent with the
+    same settings learns there in ``prior_episodes`` episodes (500; seed
+    ``prior_seed``, 0), added as ``prior_weight`` (1.0) pseudo-counts per pair
+    (:meth:`~crmgrasp.agents.model_based.ModelVI.set_prior`). The prior is computed once
+    per setting and reused by every trial."""
     p = dict(params or {})
     symmetric = p.pop("symmetric", False)
     if not isinstance(symmetric, bool):
         raise CrmgraspError(f"symmetric must be true or false, got {symmetric!r}")
+    prior = {key: p.pop(key) for key in PRIOR_KEYS if key in p}
     agent = make_agent(name, len(task.actions), **p)
+    if prior:
+        if not isinstance(agent, ModelVI):
+            raise CrmgraspError(f"prior_task needs the model-vi agent, not {name!r}")
+        model, weight = _prior(task, encoder.k, name, p, symmetric, prior)
+        agent.set_prior(model, weight)
     if not symmetric:
         return agent
     from crmgrasp.agents.symmetric import SymmetricAgent
 
     return SymmetricAgent(agent, task, encoder)  # type: ignore[arg-type]
+
+
+PRIOR_KEYS = ("prior_task", "prior_episodes", "prior_weight", "prior_seed")
+"""The parameters of :func:`build_agent` that give a ``model-vi`` agent a prior."""
+
+_PRIORS: dict[tuple, Any] = {}
+
+
+def _prior(
+    task: Task, k: int, name: str, params: dict[str, object], symmetric: bool, prior: dict[str, Any]
+) -> tuple[Any, float]:
+    """The prior model (cached) and its weight."""
+    from crmgrasp.agents.model_based import check_same_space
+    from crmgrasp.tasks import resolve_task
+
+    spec = prior.get("prior_task")
+    if not isinstance(spec, str):
+        raise CrmgraspError(f"prior_task must be a task name, file or factory, got {spec!r}")
+    episodes = integer(prior.get("prior_episodes", 500), "prior_episodes", 1, 1_000_000)
+    seed = integer(prior.get("prior_seed", 0), "prior_seed", 0, 2**63 - 1)
+    weight = float(prior.get("prior_weight", 1.0))  # checked by set_prior
+    key = (spec, k, name, tuple(sorted(params.items())), symmetric, episodes, seed)
+    if key not in _PRIORS:
+        source = resolve_task(spec)
+        check_same_space(task, source)
+        res = train_trials(
+            source,
+            name,
+            trials=1,
+            episodes=episodes,
+            seed=seed,
+            k=k,
+            eval_episodes=0,
+            params={**params, "symmetric": symmetric},
+        )
+        agent: Any = res.agents[0]
+        _PRIORS[key] = getattr(agent, "inner", agent).model
+    return _PRIORS[key], weight
 
 
 def encoder_for(task: Task, k: int) -> KOrderEncoder:

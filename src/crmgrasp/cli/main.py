@@ -172,14 +172,15 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
 
 
 def _learner_params(args: argparse.Namespace) -> dict[str, Any]:
-    from crmgrasp.agents.training import agent_parameters
+    from crmgrasp.agents.training import PRIOR_KEYS, agent_parameters
 
     params = {}
+    accepted = agent_parameters(args.agent) + (PRIOR_KEYS[:2] if args.agent == "model-vi" else ())
     for flag, _, _ in _AGENT_FLAGS:
         key = flag.lstrip("-").replace("-", "_")
         if getattr(args, key) is not None:
-            if key not in agent_parameters(args.agent):
-                takes = ", ".join("--" + k.replace("_", "-") for k in agent_parameters(args.agent)) or "none"
+            if key not in accepted:
+                takes = ", ".join("--" + k.replace("_", "-") for k in accepted) or "none"
                 raise CrmgraspError(f"{flag} does not apply to --agent {args.agent} (its options: {takes})")
             params[key] = getattr(args, key)
     if args.symmetric:
@@ -187,11 +188,23 @@ def _learner_params(args: argparse.Namespace) -> dict[str, Any]:
     return params
 
 
+def _apply_preset(args: argparse.Namespace, task: Any) -> None:
+    """Fill ``--agent``, ``--k`` and ``--symmetric`` from ``--preset`` where not given."""
+    from crmgrasp.cli.parser import LEARN_PRESETS
+
+    agent, k, symmetric = LEARN_PRESETS[args.preset]
+    args.agent = args.agent or agent
+    args.k = k if args.k is None else args.k
+    tabular = args.agent in ("sarsa", "q", "sarsa-lambda", "dyna-q", "model-vi")
+    args.symmetric = args.symmetric or (symmetric and tabular and task.symmetry is not None)
+
+
 def _cmd_learn(args: argparse.Namespace) -> int:
     from crmgrasp.agents.training import build_agent, check_budget, encoder_for
     from crmgrasp.experiments.learning import LearnerSpec, learn, write_learn_outputs
 
     task = _task(args)
+    _apply_preset(args, task)
     spec = LearnerSpec(args.agent, args.k, _learner_params(args))
     check_budget(args.trials, args.episodes, args.eval_episodes)
     build_agent(task, encoder_for(task, spec.k), spec.agent, spec.params)  # bad settings fail before any folder

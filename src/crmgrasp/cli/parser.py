@@ -107,7 +107,7 @@ def _resolve_crm(task: Task, text: str) -> CRM:
 START_PRESET_NAMES = ("corners", "near-corner", "long-side", "mixture")
 """The start presets (a test keeps this equal to :data:`crmgrasp.tasks.presets.START_PRESETS`)."""
 
-AGENT_NAMES = ("sarsa", "q", "sarsa-lambda", "dyna-q", "random", "fixed")
+AGENT_NAMES = ("sarsa", "q", "sarsa-lambda", "dyna-q", "model-vi", "random", "fixed")
 """The registered agents (a test keeps this equal to :data:`crmgrasp.agents.training.AGENTS`)."""
 
 EXPERIMENT_NAMES = (
@@ -117,6 +117,9 @@ EXPERIMENT_NAMES = (
     "figure9",
     "compare",
     "figure7-sensitivity",
+    "cost-of-failure",
+    "generalization",
+    "non-convex",
     "figure4-mujoco",
     "figure9-mujoco",
 )
@@ -272,8 +275,20 @@ def build_parser() -> argparse.ArgumentParser:
         "and learning_curve.png to a run folder (with run.json: settings, versions, status).",
     )
     _add_task(p)
-    p.add_argument("--agent", default="sarsa", choices=AGENT_NAMES, help="learner or baseline")
-    p.add_argument("--k", type=_int(0, MAX_K), default=2, help=f"history order of the state (default 2; 0 to {MAX_K})")
+    p.add_argument(
+        "--preset",
+        default="paper",
+        choices=tuple(LEARN_PRESETS),
+        help="learner settings: paper (SARSA, k = 2) or fastest (model-vi, k = 1, on the mirror quotient where the "
+        "task declares one); --agent and --k override them",
+    )
+    p.add_argument("--agent", default=None, choices=AGENT_NAMES, help="learner or baseline (default: the preset's)")
+    p.add_argument(
+        "--k",
+        type=_int(0, MAX_K),
+        default=None,
+        help=f"history order (default: the preset's; 0 to {MAX_K})",
+    )
     p.add_argument("--trials", type=_TRIALS, default=20, help="independent trials (default 20; 1 to 100,000)")
     p.add_argument(
         "--episodes", type=_EPISODES, default=2000, help="training episodes per trial (default 2000; 1 to 10,000,000)"
@@ -463,6 +478,10 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+LEARN_PRESETS = {"paper": ("sarsa", 2, False), "fastest": ("model-vi", 1, True)}
+"""``--preset`` of ``crmgrasp learn``: agent, k, and whether to learn on the mirror quotient
+(where the task declares a symmetry)."""
+
 _AGENT_FLAGS = (
     ("--alpha", _number, "learning rate (default 0.3)"),
     ("--gamma", _number, "discount factor (default 0.9)"),
@@ -476,4 +495,7 @@ _AGENT_FLAGS = (
         "dyna-q: planning updates (sample) or max sweeps (sweep) per step (default 20)",
     ),
     ("--planning", ("sample", "sweep"), "dyna-q: sampled updates or value-iteration sweeps (default sample)"),
+    ("--q-act", _number, "model-vi: acting value of an untried CRM (default -1.5)"),
+    ("--prior-task", str, "model-vi: a task with the same CRMs and bins (e.g. box-family) to learn a prior on"),
+    ("--prior-episodes", _int(1, 1_000_000), "model-vi: episodes of the prior (default 500)"),
 )

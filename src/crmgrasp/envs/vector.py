@@ -132,7 +132,7 @@ class CRMGraspVectorEnv(VectorEnv):
         steps[done] = 0
         terminated, truncated = episode_end(self.task, res.min_friction, steps)
         terminated = terminated & ~done  # a reset row neither terminates nor truncates (its steps are 0)
-        reward = np.where(done, 0.0, step_reward(self.task, terminated))  # 0 on a reset row
+        reward = np.where(done, 0.0, step_reward(self.task, terminated, res.obs["error"]))  # 0 on a reset row
         self._prev_done = terminated | truncated
         return res.obs, reward, terminated, truncated, self._info(res.obs_index, res.min_friction)
 

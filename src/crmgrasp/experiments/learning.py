@@ -36,6 +36,7 @@ from crmgrasp.agents import GreedyPolicy, TabularAgent, episodes_to_within, trai
 from crmgrasp.agents.symmetric import SymmetricAgent
 from crmgrasp.agents.training import (
     DEFAULT_CHECKPOINTS,
+    PRIOR_KEYS,
     TrialResult,
     build_agent,
     check_budget,
@@ -262,6 +263,7 @@ def _summary(
     per_trial = res.greedy_steps.mean(axis=1) if eval_episodes else np.full(trials, np.nan)
     agent = build_agent(task, encoder_for(task, spec.k), spec.agent, spec.params)
     params: dict[str, Any] = getattr(agent, "params", dict)()
+    params.update({key: spec.params[key] for key in PRIOR_KEYS if key in spec.params})  # not the agent's own
     return {
         "agent": spec.agent,
         "label": spec.name,

@@ -123,6 +123,58 @@ def _sensitivity(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tupl
     return s, rows
 
 
+def _cost_of_failure(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    from crmgrasp.experiments.cost_of_failure import CostConfig, cost_of_failure
+
+    cfg = CostConfig.quick(seed) if quick else CostConfig(seed=seed)
+    s = cost_of_failure(out, cfg, progress=ctx.get("progress"))
+    rows: list[Row] = []
+    for opt, lrn in zip(s["optimal_rows"], s["rows"], strict=True):
+        rows.append(
+            (
+                f"error cost {opt['cost']:g}: errors per episode / sense-first / prepare-first (optimum; learned)",
+                f"{opt['errors_per_episode']:.3f} / {opt['sense_first_fraction']:.0%} / {opt['other_fraction']:.0%}; "
+                f"{lrn['errors_per_episode']:.3f} / {lrn['sense_first_fraction']:.0%} / {lrn['other_fraction']:.0%}",
+                "costly failures: sense first (Discussion, no experiment)",
+            )
+        )
+    return s, rows
+
+
+def _generalization(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    from crmgrasp.experiments.generalization import GeneralizationConfig, generalization
+
+    cfg = GeneralizationConfig.quick(seed) if quick else GeneralizationConfig(seed=seed)
+    s = generalization(out, cfg, progress=ctx.get("progress"))
+    rows: list[Row] = []
+    for name, f in s["families"].items():
+        rows.append(
+            (
+                f"{name}: held-out / training objects / optimum / out of range, CRMs",
+                f"{f['heldout_mean_crms']:.3f} / {f['learner_mean_crms']:.3f} / {f['belief_optimum']:.3f} / "
+                f"{fmt(f.get('out_of_range_mean_crms'))}",
+                "works throughout the space of object variation (Discussion, no experiment)",
+            )
+        )
+    return s, rows
+
+
+def _non_convex(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    from crmgrasp.experiments.non_convex import NonConvexConfig, non_convex
+
+    s = non_convex(
+        out, NonConvexConfig.quick(seed) if quick else NonConvexConfig(seed=seed), progress=ctx.get("progress")
+    )
+    return s, [
+        (
+            "U handle: learned / optimum / clairvoyant, CRMs",
+            f"{s['learner_mean_crms']:.3f} / {s['belief_optimum']:.3f} / {s['clairvoyant_bound']:.3f}",
+            "arbitrary classes of objects, not just convex (Introduction, no experiment)",
+        ),
+        ("U handle: grasps with a contact inside the handle", f"{s['inside_share']:.0%}", "-"),
+    ]
+
+
 def _sensing_row(s: dict[str, Any]) -> Row:
     cs = s["contact_sensing"]
     return (
@@ -174,6 +226,15 @@ EXPERIMENTS: dict[str, tuple[str, Runner]] = {
         "Fig. 7 under each paper-consistent reading (starts, grasp reward, Q0, k): plateau, optimum, episodes",
         _sensitivity,
     ),
+    "cost-of-failure": (
+        "Discussion: an extra cost for errored CRMs (0-30) on box-family; errors, sense-first and prepare-first shares",
+        _cost_of_failure,
+    ),
+    "generalization": (
+        "Discussion: one policy per object family, on held-out objects and sizes out of range",
+        _generalization,
+    ),
+    "non-convex": ("Introduction: a U handle (non-convex), the learned strategy drawn like Fig. 8", _non_convex),
     "figure4-mujoco": ("Fig. 4 on the MuJoCo stand-in hand, and intrinsic contact sensing accuracy", _figure4_mujoco),
     "figure9-mujoco": ("Fig. 9 on the MuJoCo stand-in: the kinematic policy transferred, 11 trials", _figure9_mujoco),
 }
@@ -183,6 +244,9 @@ QUICK_BUDGETS = {
     "figure7": ("5 trials x 300 episodes", ("paper SARSA", "best learner", "SARSA k=0")),
     "compare": ("5 trials x 300 episodes", ("best learner",)),
     "figure7-sensitivity": ("20 trials x 300 episodes, 1 seed", ("",)),
+    "cost-of-failure": ("3 trials x 150 episodes, 120 worlds", ("error cost",)),
+    "generalization": ("2 trials x 100 episodes, 2 families", ("box", "cup")),
+    "non-convex": ("2 trials x 150 episodes", ("U handle",)),
 }
 """Experiments whose learned numbers ``--quick`` computes on a smaller budget: that
 budget, and the first words of the quantities that depend on it."""
@@ -190,6 +254,8 @@ budget, and the first words of the quantities that depend on it."""
 GROUPS = (
     ("compare",),
     ("figure7-sensitivity",),
+    ("cost-of-failure", "non-convex"),
+    ("generalization",),
     ("figure7", "figure8", "figure9", "figure9-mujoco"),
     ("figure4", "figure4-mujoco"),
 )
@@ -206,6 +272,9 @@ IMAGES = {
     "figure9": ["figure9.png"],
     "compare": ["compare.png"],
     "figure7-sensitivity": ["figure7_sensitivity.png", "figure7_mechanism.png"],
+    "cost-of-failure": ["cost_of_failure.png"],
+    "generalization": ["generalization.png"],
+    "non-convex": ["non_convex.png", "non_convex.gif"],
     "figure4-mujoco": ["figure4_mujoco.png"],
     "figure9-mujoco": ["figure9_mujoco.png", "figure9_mujoco.gif"],
 }

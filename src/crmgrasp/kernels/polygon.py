@@ -146,7 +146,7 @@ class FusedPolygonKernel(PolygonKernel):
         steps = state.steps + 1
         terminated, truncated = episode_end(self.task, o[11], steps)
         state = SimState(config, config, steps)
-        reward = step_reward(self.task, terminated)
+        reward = step_reward(self.task, terminated, code)
         return OneStep(state, o[8], o[9], o[10], _ERRORS[code], index, o[11], reward, terminated, truncated)
 
     def step_batch(

@@ -59,6 +59,7 @@ class _Model:
         self.tasks: list[Task] = [task]
         self._ids: dict[int, int] = {}
         self._step: dict[tuple[State, int], Step] = {}
+        self.errored: dict[tuple[State, int], bool] = {}
         self._clair: dict[tuple[State, int], int | None] = {}
 
     def state(self, start: Start) -> State:
@@ -82,6 +83,7 @@ class _Model:
             out = execute_crm(t.obj, t.hand, config, t.actions[action], config)
             index = t.discretizer.index(observe(out.config), out.error)
             hit = self._step[key] = ((i, out.config), index, t.is_success(out.config))
+            self.errored[key] = out.error is not Error.NONE
         return hit
 
     def clairvoyant(self, state: State, horizon: int) -> int:
@@ -172,7 +174,8 @@ def _first_groups(model: _Model, starts: Sequence[Start]) -> dict[int, tuple[Sta
 
 
 def belief_optimum(task: Task, starts: Sequence[Start], horizon: int | None = None) -> float:
-    """Exact optimal expected CRMs per episode over ``starts`` from observations only."""
+    """Exact optimal expected CRMs per episode over ``starts`` from observations only
+    (with ``task.error_cost`` c > 0: the expected cost, CRMs plus c per errored CRM)."""
     if not starts:
         raise CrmgraspError("belief_optimum needs at least one start")
     model = _Model(task)
@@ -183,30 +186,35 @@ def belief_optimum(task: Task, starts: Sequence[Start], horizon: int | None = No
 
 
 def _value(model: _Model, belief: tuple[State, ...], h: int, memo: dict, acts: dict | None = None) -> float:
-    """``V(B, h)``: expected further CRMs, mean over the starts in ``belief``; the
-    minimising action goes to ``acts[(belief, h)]`` when ``acts`` is given."""
+    """``V(B, h)``: expected further cost (CRMs, plus ``task.error_cost`` per errored
+    CRM), mean over the starts in ``belief``; the minimising action goes to
+    ``acts[(belief, h)]`` when ``acts`` is given."""
     if h == 0 or not belief:
         return 0.0
     key = (belief, h)
     if key in memo and (acts is None or key in acts):
         return memo[key]
     n = len(belief)
-    best = float(h)  # doing anything for h steps costs at most h
+    c_err = model.task.error_cost
+    best = float(h) * (1.0 + c_err)  # doing anything for h steps costs at most this
     best_action = 0
     options = []
     for a in range(len(model.task.actions)):
         children: dict[int, list[State]] = {}
+        errors = 0
         for c in belief:
             nxt, index, grasped = model.step(c, a)
+            errors += model.errored[(c, a)]
             if not grasped:
                 children.setdefault(index, []).append(nxt)
         kids = [tuple(v) for v in children.values()]
-        bound = 1.0 + sum(len(k) * _lower(model, k, h - 1) for k in kids) / n
-        options.append((bound, a, kids))
-    for bound, a, kids in sorted(options, key=lambda o: o[0]):
+        now = 1.0 + c_err * errors / n
+        bound = now + sum(len(k) * _lower(model, k, h - 1) for k in kids) / n
+        options.append((bound, now, a, kids))
+    for bound, now, a, kids in sorted(options, key=lambda o: o[0]):
         if bound >= best:
             break
-        cost = 1.0
+        cost = now
         for kid in sorted(kids, key=len, reverse=True):
             cost += len(kid) * _value(model, kid, h - 1, memo) / n
             if cost >= best:

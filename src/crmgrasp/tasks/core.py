@@ -293,6 +293,10 @@ class Task:
         Reward of the CRM that reaches a grasp (every other CRM: -1). The paper's "-1
         in all states" read literally gives -1 (the default); read as "in all non-goal
         states" it gives 0.
+    error_cost
+        Extra cost (>= 0, reward units) of a CRM that ends in an error: its reward is
+        ``-1 - error_cost`` (0 in the paper). Makes failed attempts expensive, the
+        Discussion's "infrequent failures [that] come with a high cost".
     family
         An object family (:mod:`crmgrasp.model.families`), or None. With a family, each
         episode draws its object (:meth:`instance`) and ``obj`` is only the shape
@@ -314,6 +318,7 @@ class Task:
     symmetry: Symmetry | None = None
     grasp_reward: float = -1.0
     family: ShapeFamily | None = None
+    error_cost: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.obj, Shape):
@@ -339,6 +344,7 @@ class Task:
                     f"{exc} (a task made from a symmetric one with other CRMs or bins needs symmetry=None)"
                 ) from None
         object.__setattr__(self, "grasp_reward", finite(self.grasp_reward, "grasp_reward"))
+        object.__setattr__(self, "error_cost", non_negative(self.error_cost, "error_cost"))
         if self.family is not None:
             if not isinstance(self.family, ShapeFamily):
                 raise CrmgraspError(f"task family must be a ShapeFamily, got {self.family!r}")

@@ -237,6 +237,7 @@ def _box_family() -> Task:
         BoxFamily(),
         actions=(CRM("a", "b", 0.0), CRM("b", "a", 0.0), CRM("a", "a", 0.08), CRM("b", "b", -0.08)),
         starts=CornerStarts(),
+        reference_mean_steps=1.75,  # belief-space optimum over 500 sampled worlds (docs/families.md)
         description="boxes 0.20-0.40 x 0.06-0.14 m in any pose; the paper's hand, CRMs and corner starts",
     )
 
@@ -248,7 +249,10 @@ def _polygons() -> MixedFamily:
 FAMILY_TASKS = {
     "box-family": _box_family,
     "cup-family": lambda: family_task(
-        "cup-family", DiscFamily(), description="discs of radius 0.03-0.07 m (the planar cup)"
+        "cup-family",
+        DiscFamily(),
+        reference_mean_steps=1.0,  # one opposition grasps every disc
+        description="discs of radius 0.03-0.07 m (the planar cup)",
     ),
     "polygon-family": lambda: family_task(
         "polygon-family",

@@ -48,6 +48,7 @@ description = "a U-shaped handle"  # optional
 mu_goal = 0.05                     # optional: success when min friction <= mu_goal
 max_steps = 10                     # optional: CRMs before an episode is cut off
 grasp_reward = -1.0                # optional: reward of the grasping CRM (every other CRM: -1)
+error_cost = 0.0                   # optional: extra cost of a CRM that ends in an error
 # reference_mean_steps = 1.66      # optional: the best mean CRMs per episode, if known
 
 [object]   # exactly one of: polygon = [[x, y], ...] (simple, counter-clockwise or not);
@@ -113,6 +114,7 @@ kind = "uniform"                   # "uniform" on the whole boundary; for polygo
 _TOP = {
     "name",
     "grasp_reward",
+    "error_cost",
     "description",
     "mu_goal",
     "max_steps",
@@ -350,6 +352,8 @@ def task_from_dict(doc: Any) -> Task:
         kw["mu_goal"] = _num(d["mu_goal"], "mu_goal")
     if "grasp_reward" in d:
         kw["grasp_reward"] = _num(d["grasp_reward"], "grasp_reward")
+    if "error_cost" in d:
+        kw["error_cost"] = _num(d["error_cost"], "error_cost")
     if "max_steps" in d:
         m = d["max_steps"]
         if isinstance(m, bool) or not isinstance(m, int) or not 1 <= m <= 1000:
@@ -397,6 +401,7 @@ def task_to_dict(task: Task) -> dict[str, Any]:
         "bins": task.discretizer.to_dict(),
         "starts": _starts_dict(task.starts),
         "grasp_reward": task.grasp_reward,
+        "error_cost": task.error_cost,
         "noise": {"sigma_n": task.noise.sigma_n, "sigma_p": task.noise.sigma_p},
     }
     if task.family is None:

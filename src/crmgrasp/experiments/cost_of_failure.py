@@ -1,0 +1,246 @@
+"""Cost of failure: the paper's Discussion prediction, tested.
+
+The paper predicts: if one CRM sequence grasps most instances and failure is cheap,
+the agent tries it first everywhere and falls back when it fails; if failures are
+expensive, it first takes steps to tell the situations apart. Here an errored CRM
+(aperture or palm) costs ``1 + c`` instead of 1 (:attr:`crmgrasp.tasks.Task.error_cost`),
+for ``c`` in :data:`COSTS`, and for each ``c`` two policies are measured on the same
+held-out worlds: the exact belief-space optimum of the cost (over sampled worlds,
+:class:`~crmgrasp.planners.references.BeliefPolicy`) and a learner's greedy policy.
+
+**Classification of an episode** by its first CRM (:func:`classify`):
+
+* ``try-first``: the first CRM grasps or ends in an error: an attempt, which
+  either works or fails and is fallen back from;
+* ``sense-first``: the first CRM neither grasps nor errors, *and* it is a sensing
+  move: among the episodes with the same first observation and first CRM, the
+  policy's second CRM differs between outcomes (the most common second CRM after
+  one outcome is not the one after another), so the CRM was taken to tell situations
+  apart;
+* ``other``: the first CRM neither grasps nor errors and what follows does not depend
+  on its outcome (a fixed preparatory move).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections import Counter, defaultdict
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from crmgrasp._io import write_csv, write_json
+from crmgrasp._progress import Progress
+from crmgrasp.agents.base import LearnerPolicy
+from crmgrasp.agents.training import encoder_for, train_trials
+from crmgrasp.kernels import kernel_for
+from crmgrasp.planners.references import BeliefPolicy, sample_starts
+from crmgrasp.sim import Policy, run_episode
+from crmgrasp.tasks import Task, make_task
+
+__all__ = ["COSTS", "EpisodeRecord", "episode_records", "classify", "CostConfig", "cost_of_failure", "policy_rows"]
+
+COSTS = (0.0, 1.0, 3.0, 10.0, 30.0)
+"""The extra costs of an errored CRM that the experiment sweeps (reward units)."""
+
+KINDS = ("try-first", "sense-first", "other")
+
+
+@dataclass(frozen=True)
+class EpisodeRecord:
+    """What :func:`classify` needs of one episode: the first observation (bin index),
+    the CRMs taken, the observation (bin index) and error after each, and success."""
+
+    first_obs: int
+    actions: tuple[int, ...]
+    observations: tuple[int, ...]
+    errors: tuple[bool, ...]
+    success: bool
+
+
+def _sensing_moves(records: Sequence[EpisodeRecord]) -> set[tuple[int, int]]:
+    """``(first observation, first CRM)`` pairs whose clean outcomes (no grasp, no
+    error) lead to different most-common second CRMs."""
+    seconds: dict[tuple[int, int], dict[int, Counter[int]]] = defaultdict(lambda: defaultdict(Counter))
+    for r in records:
+        if len(r.actions) >= 2 and not r.errors[0]:
+            seconds[(r.first_obs, r.actions[0])][r.observations[0]][r.actions[1]] += 1
+    out = set()
+    for key, by_outcome in seconds.items():
+        modal = {counts.most_common(1)[0][0] for counts in by_outcome.values()}
+        if len(modal) >= 2:
+            out.add(key)
+    return out
+
+
+def classify(records: Sequence[EpisodeRecord]) -> list[str]:
+    """The kind of each episode (module docstring): ``try-first``, ``sense-first`` or
+    ``other``. Sensing is judged over all of ``records`` (one policy's episodes)."""
+    sensing = _sensing_moves(records)
+    kinds = []
+    for r in records:
+        grasped_at_once = r.success and len(r.actions) == 1
+        if grasped_at_once or r.errors[0]:
+            kinds.append("try-first")
+        elif (r.first_obs, r.actions[0]) in sensing:
+            kinds.append("sense-first")
+        else:
+            kinds.append("other")
+    return kinds
+
+
+def episode_records(task: Task, make_policy: Any, worlds: Sequence[Any], seed: int) -> list[EpisodeRecord]:
+    """Run ``make_policy()`` from each world (noise-free: nothing is drawn) with traces."""
+    kernel = kernel_for(task)
+    rng = np.random.default_rng(seed)
+    out = []
+    for w in worlds:
+        policy: Policy = make_policy()
+        ep = run_episode(task, policy, rng, start=w, trace=True, kernel=kernel)
+        tr = ep.trace
+        out.append(
+            EpisodeRecord(
+                tr[0].before.obs_index,
+                tuple(int(t.action) for t in tr),  # type: ignore[arg-type]
+                tuple(t.after.obs_index for t in tr),
+                tuple(int(t.after.error) != 0 for t in tr),
+                ep.success,
+            )
+        )
+    return out
+
+
+def policy_rows(records: Sequence[EpisodeRecord], cost: float) -> dict[str, float]:
+    """Mean CRMs, errors per episode, mean cost, success rate and the share of each kind."""
+    kinds = Counter(classify(records))
+    n = len(records)
+    crms = np.array([len(r.actions) for r in records], dtype=float)
+    errors = np.array([sum(r.errors) for r in records], dtype=float)
+    return {
+        "cost": cost,
+        "mean_crms": float(crms.mean()),
+        "errors_per_episode": float(errors.mean()),
+        "mean_cost": float((crms + cost * errors).mean()),
+        "success_rate": float(np.mean([r.success for r in records])),
+        "sense_first_fraction": kinds["sense-first"] / n,
+        "try_first_fraction": kinds["try-first"] / n,
+        "other_fraction": kinds["other"] / n,
+    }
+
+
+@dataclass(frozen=True)
+class CostConfig:
+    """Settings: the task, the costs, the sampled worlds of the belief-space optimum,
+    the held-out worlds both policies run on, and the learner's budget (model-vi, k = 1,
+    mirror quotient where the task declares one)."""
+
+    task: str = "box-family"
+    costs: tuple[float, ...] = COSTS
+    worlds: int = 400
+    test_worlds: int = 1000
+    trials: int = 10
+    episodes: int = 400
+    seed: int = 0
+
+    @classmethod
+    def quick(cls, seed: int = 0) -> CostConfig:
+        """A small budget for smoke runs (about 10 s)."""
+        return cls(worlds=120, test_worlds=200, trials=3, episodes=150, seed=seed)
+
+
+def cost_of_failure(
+    out_dir: str | Path, cfg: CostConfig = CostConfig(), progress: Progress | None = None
+) -> dict[str, Any]:
+    """Run the experiment; write ``cost_of_failure.csv``, ``cost_of_failure.png`` and
+    ``summary.json`` to ``out_dir``; return the summary (``rows``: the learner's rows,
+    ``optimal_rows``: the belief-space optimum's; ``switch``: whether the optimum's
+    errors per episode fall and its sense-first share rises from the lowest to the
+    highest cost; ``errors_fall`` and ``prepare_first_rises`` (the share of ``other``
+    episodes) on their own)."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    base = make_task(cfg.task)
+    stage = progress.stage(f"cost of failure on {base.name}", len(cfg.costs), "costs") if progress else None
+    optimal, learned = [], []
+    for c in cfg.costs:
+        task = dataclasses.replace(base, error_cost=float(c))
+        worlds, test = sample_starts(task, cfg.worlds, cfg.seed), sample_starts(task, cfg.test_worlds, cfg.seed + 1)
+        optimal.append(
+            policy_rows(episode_records(task, lambda t=task, w=worlds: BeliefPolicy(t, w), test, cfg.seed), c)
+        )
+        learned.append(policy_rows(_learned_records(task, test, cfg), c))
+        if stage is not None:
+            stage.advance(1)
+    if stage is not None:
+        stage.end()
+    first, last = optimal[0], optimal[-1]
+    errors_fall = last["errors_per_episode"] < first["errors_per_episode"]
+    summary = {
+        "task": base.name,
+        "learner": "model-vi k=1" + (" (mirror quotient)" if base.symmetry is not None else ""),
+        "budget": f"{cfg.trials} trials x {cfg.episodes} episodes; optimum over {cfg.worlds} worlds; "
+        f"{cfg.test_worlds} held-out worlds; seed {cfg.seed}",
+        "rows": learned,
+        "optimal_rows": optimal,
+        "errors_fall": bool(errors_fall),
+        "switch": bool(errors_fall and last["sense_first_fraction"] > first["sense_first_fraction"]),
+        "prepare_first_rises": bool(last["other_fraction"] > first["other_fraction"]),
+    }
+    fields = ["policy", *learned[0]]
+    table = [{"policy": "learned", **r} for r in learned] + [{"policy": "belief-optimal", **r} for r in optimal]
+    write_csv(out / "cost_of_failure.csv", fields, [[row[f] for f in fields] for row in table])
+    write_json(out / "summary.json", summary)
+    _figure(out / "cost_of_failure.png", summary)
+    return summary
+
+
+def _learned_records(task: Task, test: Sequence[Any], cfg: CostConfig) -> list[EpisodeRecord]:
+    params: dict[str, object] = {"symmetric": task.symmetry is not None}
+    res = train_trials(
+        task, "model-vi", trials=cfg.trials, episodes=cfg.episodes, seed=cfg.seed, k=1, eval_episodes=0, params=params
+    )
+    encoder = encoder_for(task, 1)
+    records: list[EpisodeRecord] = []
+    for t, agent in enumerate(res.agents):
+        make = lambda a=agent, t=t: LearnerPolicy(a, encoder, np.random.default_rng(t), learn=False)  # noqa: E731
+        records += episode_records(task, make, test, cfg.seed + t)
+    return records
+
+
+def _figure(path: Path, s: dict[str, Any]) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from crmgrasp._io import save_figure
+
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3.6))
+    costs = [r["cost"] for r in s["rows"]]
+    x = np.arange(len(costs))
+    for rows, style, who in ((s["optimal_rows"], "-", "optimum"), (s["rows"], "--", "learned")):
+        axes[0].plot(x, [r["errors_per_episode"] for r in rows], "o" + style, color="black", label=who)
+        axes[2].plot(x, [r["mean_crms"] for r in rows], "o" + style, color="black", label=who)
+        for key, color, kind in (
+            ("try_first_fraction", "tab:red", "try first"),
+            ("sense_first_fraction", "tab:green", "sense first"),
+            ("other_fraction", "tab:blue", "prepare first"),
+        ):
+            axes[1].plot(x, [r[key] for r in rows], "o" + style, color=color, label=f"{kind} ({who})")
+    for ax, label in zip(axes, ("errored CRMs per episode", "share of episodes by first CRM", "CRMs per episode")):
+        ax.set_xticks(x, [f"{c:g}" for c in costs])
+        ax.set_xlabel("extra cost c of an errored CRM")
+        ax.set_title(label)
+        ax.grid(alpha=0.3)
+    axes[1].set_ylim(-0.05, 1.05)
+    lo = min(r["mean_crms"] for r in s["rows"] + s["optimal_rows"])
+    axes[2].set_ylim(lo - 0.2, lo + 0.4)
+    axes[1].legend(fontsize=7, ncols=2)
+    axes[0].legend(fontsize=8)
+    fig.suptitle(f"Cost of failure on {s['task']} ({s['budget']})", fontsize=9)
+    fig.tight_layout()
+    save_figure(fig, path)
+    plt.close(fig)

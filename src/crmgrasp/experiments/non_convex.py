@@ -1,0 +1,150 @@
+"""A non-convex object: the learned strategy on U handles, drawn like Figure 8.
+
+``u-handle`` draws U-shaped handles (outer width, height and bar thickness from
+ranges, any pose). A learner (``model-vi``, k = 1, mirror quotient) trains on the
+family; its greedy policy runs on held-out handles beside the belief-space optimum of
+those worlds. A grasp is *inside the handle* when a contact lies on one of the three
+edges that face the opening (edges 3, 4 and 5 of the U: the inner sides of the bars
+and the bottom of the slot); ``inside_share`` is the share of the policy's grasps with
+a contact there. Writes ``non_convex.png`` (three rollouts of the policy, one per row,
+each CRM a panel), ``non_convex.gif`` (the first rollout animated), ``rollouts.csv``
+and ``summary.json``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from crmgrasp._io import atomic_path, save_figure, write_csv, write_json
+from crmgrasp._progress import Progress
+from crmgrasp.agents.base import Agent, LearnerPolicy
+from crmgrasp.agents.training import encoder_for, rollout, train_trials
+from crmgrasp.experiments.cost_of_failure import episode_records
+from crmgrasp.model.contacts import Config
+from crmgrasp.model.geometry import Polygon
+from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts
+from crmgrasp.plotting import rollout_animation, rollout_panels
+from crmgrasp.sim import run_episode
+from crmgrasp.tasks import World, make_task
+
+__all__ = ["NonConvexConfig", "non_convex", "INNER_EDGES", "inside"]
+
+INNER_EDGES = (3, 4, 5)
+"""The U's edges that face its opening (vertex order of
+:class:`~crmgrasp.model.families.UHandleFamily`, kept by the pose)."""
+
+
+def inside(obj: Polygon, config: Config) -> bool:
+    """Whether a contact of ``config`` lies on an inner edge of the U ``obj``."""
+    return any(obj.edge_index((c.x, c.y)) in INNER_EDGES for c in config)
+
+
+@dataclass(frozen=True)
+class NonConvexConfig:
+    """Task, learner budget, held-out worlds, seed."""
+
+    task: str = "u-handle"
+    trials: int = 3
+    episodes: int = 600
+    heldout: int = 400
+    seed: int = 0
+
+    @classmethod
+    def quick(cls, seed: int = 0) -> NonConvexConfig:
+        """A small budget for smoke runs."""
+        return cls(trials=2, episodes=150, heldout=100, seed=seed)
+
+
+def _final_configs(task: Any, agent: Agent, worlds: Sequence[World], seed: int) -> list[tuple[World, Config, bool]]:
+    encoder = encoder_for(task, 1)
+    rng = np.random.default_rng(seed)
+    out = []
+    for w in worlds:
+        ep = run_episode(task, LearnerPolicy(agent, encoder, rng, learn=False), rng, start=w, trace=True)
+        out.append((w, ep.trace[-1].after.state.config, ep.success))
+    return out
+
+
+def non_convex(
+    out_dir: str | Path, cfg: NonConvexConfig = NonConvexConfig(), progress: Progress | None = None
+) -> dict[str, Any]:
+    """Train, evaluate, draw; return the summary (``learner_mean_crms``,
+    ``belief_optimum``, ``clairvoyant_bound``, ``success_rate``, ``inside_share``,
+    ``gap_to_optimum``)."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    task = make_task(cfg.task)
+    stage = progress.stage(f"non-convex: {task.name}", 3, "stages") if progress else None
+    params: dict[str, object] = {"symmetric": task.symmetry is not None}
+    res = train_trials(
+        task, "model-vi", trials=cfg.trials, episodes=cfg.episodes, seed=cfg.seed, k=1, eval_episodes=0, params=params
+    )
+    if stage is not None:
+        stage.advance(1)
+    worlds: list[World] = sample_starts(task, cfg.heldout, cfg.seed + 1)  # type: ignore[assignment]
+    encoder = encoder_for(task, 1)
+    records = []
+    for t, agent in enumerate(res.agents):
+        make = lambda a=agent, t=t: LearnerPolicy(a, encoder, np.random.default_rng([cfg.seed, t]), learn=False)  # noqa: E731
+        records += episode_records(task, make, worlds, cfg.seed + t)
+    best = min(
+        range(len(res.agents)),
+        key=lambda t: np.mean([len(r.actions) for r in records[t * len(worlds) : (t + 1) * len(worlds)]]),
+    )
+    finals = _final_configs(task, res.agents[best], worlds, cfg.seed)
+    grasps = [(w, c) for w, c, ok in finals if ok]
+    summary: dict[str, Any] = {
+        "task": task.name,
+        "learner": "model-vi k=1 (mirror quotient)",
+        "budget": f"{cfg.trials} trials x {cfg.episodes} episodes; {cfg.heldout} held-out worlds; seed {cfg.seed}",
+        "learner_mean_crms": float(np.mean([len(r.actions) for r in records])),
+        "success_rate": float(np.mean([r.success for r in records])),
+        "belief_optimum": belief_optimum(task, worlds),
+        "clairvoyant_bound": clairvoyant_bound(task, worlds),
+        "inside_share": float(np.mean([inside(w.task.obj, c) for w, c in grasps])) if grasps else 0.0,  # type: ignore[arg-type]
+    }
+    summary["gap_to_optimum"] = summary["learner_mean_crms"] / summary["belief_optimum"] - 1.0
+    if stage is not None:
+        stage.advance(1)
+    _draw(out, task, res.agents[best], worlds, cfg.seed)
+    write_json(out / "summary.json", summary)
+    if stage is not None:
+        stage.advance(1)
+        stage.end()
+    return summary
+
+
+def _draw(out: Path, task: Any, agent: Agent, worlds: Sequence[World], seed: int) -> None:
+    """Three rollouts of ``agent`` on one held-out handle (the first world's): starts on
+    it whose policy grasps in one, two and three or four CRMs (fewer rows if 300 starts
+    give none), as panels and, the longest, as a GIF."""
+    encoder = encoder_for(task, 1)
+    handle = worlds[0].task
+    rng = np.random.default_rng(seed)
+    chosen: dict[int, list[Any]] = {}
+    for _ in range(300):
+        steps, ok = rollout(handle, agent, encoder, handle.sample_start(rng), np.random.default_rng(seed))
+        n = min(len(steps), 3)
+        if ok and len(steps) <= 4 and n not in chosen:
+            chosen[n] = steps
+        if len(chosen) == 3:
+            break
+    names = task.action_names()
+    rows_csv = [
+        [n, i + 1, names[st.action], st.outcome.error.name.lower(), round(st.min_friction, 6)]
+        for n, steps in sorted(chosen.items())
+        for i, st in enumerate(steps)
+    ]
+    write_csv(out / "rollouts.csv", ["row", "crm", "action", "error", "min_friction_after"], rows_csv)
+    if not chosen:
+        return
+    rows = [(f"grasped in {len(st)} CRM{'s' if len(st) > 1 else ''}", st) for _, st in sorted(chosen.items())]
+    save_figure(rollout_panels(handle.obj, task.hand, rows, names), out / "non_convex.png")
+    longest = rows[-1][1]
+    with atomic_path(out / "non_convex.gif") as tmp:
+        rollout_animation(handle.obj, task.hand, longest, names, tmp, label=f"{task.name}, a held-out handle")
