@@ -18,7 +18,7 @@ A study file is TOML::
 Cell keys: ``task`` (a name, a .toml file or ``package.module:factory``),
 ``start_preset``, ``grasp_reward``, ``agent``, ``k``, ``symmetric`` and the agents'
 parameters (``alpha``, ``gamma``, ``epsilon``, ``q0``, ``lam``, ``trace``,
-``n_planning``, ``planning``). Each (cell, seed) is one
+``n_planning``, ``planning``, ``q_act``, ``unknown``). Each (cell, seed) is one
 :func:`~crmgrasp.experiments.learning.learn` run; its results depend only on the cell and
 the seed, so any number of worker processes gives the same table. A cell that fails
 (a parameter its agent does not take, say) is recorded with its error; the others go
@@ -56,7 +56,7 @@ from crmgrasp.experiments.stats import bootstrap_ci, fmt, iqm
 
 __all__ = ["Study", "load_study", "run_study", "report", "CELL_KEYS"]
 
-AGENT_PARAMS = ("alpha", "gamma", "epsilon", "q0", "lam", "trace", "n_planning", "planning")
+AGENT_PARAMS = ("alpha", "gamma", "epsilon", "q0", "lam", "trace", "n_planning", "planning", "q_act", "unknown")
 CELL_KEYS = ("task", "start_preset", "grasp_reward", "agent", "k", "symmetric", *AGENT_PARAMS)
 """The keys a cell may set."""
 
