@@ -38,6 +38,7 @@ __all__ = [
     "tan_term",
     "is_force_closure",
     "force_closure",
+    "positively_spans",
     "LP_TOL",
     "ANTIPODAL_TOL",
 ]
@@ -107,8 +108,6 @@ def force_closure(points: ArrayLike, normals: ArrayLike, mu: float) -> bool:
     >>> force_closure([(0, 0.05), (0, -0.05)], [(0, -1), (0, 1)], 0.0)
     False
     """
-    from scipy.optimize import linprog  # heavy: imported where used
-
     p = np.asarray(points, dtype=np.float64)
     n = np.asarray(normals, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != 2 or n.shape != p.shape or len(p) == 0:
@@ -122,17 +121,28 @@ def force_closure(points: ArrayLike, normals: ArrayLike, mu: float) -> bool:
     arms = np.concatenate([p, p]) - p.mean(axis=0)
     scale = max(float(np.max(np.linalg.norm(arms, axis=1))), 1e-12)
     torques = (arms[:, 0] * forces[:, 1] - arms[:, 1] * forces[:, 0]) / scale
-    wrenches = np.column_stack([forces, torques]).T  # (3, m)
-    if np.linalg.matrix_rank(wrenches, tol=1e-10) < 3:
+    return positively_spans(np.column_stack([forces, torques]).T)  # (3, m)
+
+
+def positively_spans(wrenches: np.ndarray) -> bool:
+    """Whether the columns of ``wrenches`` (``(k, m)``) positively span R^k: the origin is
+    strictly inside their convex hull. Linear program
+    ``max d  s.t.  W lambda = 0, sum lambda = 1, lambda_j >= d``; true iff
+    ``rank W = k`` and ``d* > LP_TOL``. The one force-closure test of the planar
+    (:func:`force_closure`) and the spatial (:mod:`crmgrasp.model.quality3d`) models."""
+    from scipy.optimize import linprog  # heavy: imported where used
+
+    k, m = wrenches.shape
+    if np.linalg.matrix_rank(wrenches, tol=1e-10) < k:
         return False
-    m = wrenches.shape[1]
     # variables: lambda_1..m, d ; maximise d
     c = np.zeros(m + 1)
     c[-1] = -1.0
-    a_eq = np.zeros((4, m + 1))
-    a_eq[:3, :m] = wrenches
-    a_eq[3, :m] = 1.0
-    b_eq = np.array([0.0, 0.0, 0.0, 1.0])
+    a_eq = np.zeros((k + 1, m + 1))
+    a_eq[:k, :m] = wrenches
+    a_eq[k, :m] = 1.0
+    b_eq = np.zeros(k + 1)
+    b_eq[k] = 1.0
     a_ub = np.hstack([-np.eye(m), np.ones((m, 1))])  # d - lambda_j <= 0
     res = linprog(
         c, A_ub=a_ub, b_ub=np.zeros(m), A_eq=a_eq, b_eq=b_eq, bounds=[(0, None)] * m + [(None, 1)], method="highs"

@@ -1,0 +1,142 @@
+"""Grasp quality for spatial point contacts with Coulomb friction (docs/model-3d.md section 5).
+
+Conventions: points in metres, shape ``(n, 3)``; inward unit normals, shape ``(n, 3)``
+(unit within 1e-6; a normal points from the contact into the object).
+
+* :func:`min_friction_3d`, two contacts: ``max_i tan(theta_i)``, ``theta_i`` the angle
+  between ``n_i`` and the unit vector from ``x_i`` to the other contact; the friction
+  the squeeze between them needs (0 for an antipodal pair; ``inf`` when an angle
+  reaches 90 degrees). Two point contacts never make a spatial grasp force closure:
+  no contact force has a moment about the line through both contacts, so a rotation
+  about it is unresisted (a soft finger's torsional friction would be needed). The
+  two-contact success rule of the spatial model is therefore ``min_friction_3d <=
+  mu_goal``, as in the plane.
+* :func:`primitive_wrenches`: each contact's friction cone ``{f : |f_t| <= mu f_n}``
+  is replaced by the inscribed polyhedral cone of ``edges`` edges
+  ``f_ij = n_i + mu (cos phi_j t1_i + sin phi_j t2_i)``, ``phi_j = 2 pi j / edges``,
+  scaled to unit length; the wrench of edge ``j`` of contact ``i`` is
+  ``(f_ij, (x_i - c) x f_ij / rho)`` with ``c`` the contacts' centroid and ``rho`` the
+  largest ``|x_i - c|`` (so that torques are in force units).
+* :func:`force_closure_3d`: the primitive wrenches positively span R^6
+  (:func:`crmgrasp.model.quality.positively_spans`, the same linear program as the
+  planar test). The polyhedral cone is inside the circular one, so a grasp closed
+  here is closed with the true cones; ``edges`` (8 by default) sets the resolution.
+* :func:`ferrari_canny`: the L1 epsilon metric, the radius of the largest ball about
+  the origin inside the convex hull of the primitive wrenches (0 when the origin is
+  not strictly inside: not force closure). Computed from the hull's facets (Qhull).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from crmgrasp._validation import CrmgraspError, non_negative
+from crmgrasp.model.quality import ANTIPODAL_TOL, positively_spans
+
+__all__ = ["min_friction_3d", "primitive_wrenches", "force_closure_3d", "ferrari_canny", "tangent_basis"]
+
+F64 = NDArray[np.float64]
+
+
+def _contacts(points: ArrayLike, normals: ArrayLike, count: int | None = None) -> tuple[F64, F64]:
+    """Checked ``(n, 3)`` points and unit normals (one-line errors)."""
+    p = np.asarray(points, dtype=np.float64)
+    n = np.asarray(normals, dtype=np.float64)
+    if p.ndim != 2 or p.shape[1] != 3 or n.shape != p.shape or len(p) == 0:
+        raise CrmgraspError(f"points and normals must both have shape (n, 3), got {p.shape} and {n.shape}")
+    if count is not None and len(p) != count:
+        raise CrmgraspError(f"this metric takes {count} contacts, got {len(p)}")
+    if not (np.all(np.isfinite(p)) and np.all(np.isfinite(n))):
+        raise CrmgraspError("contact points and normals must be finite")
+    lengths = np.linalg.norm(n, axis=1)
+    if np.any(np.abs(lengths - 1.0) > 1e-6):
+        raise CrmgraspError(f"contact normals must be unit vectors, got lengths {np.round(lengths, 6).tolist()}")
+    return p, n
+
+
+def tangent_basis(normal: F64) -> tuple[F64, F64]:
+    """``(t1, t2)``: unit tangents with ``(t1, t2, n)`` right-handed; ``t1`` is
+    ``n x e`` normalised, ``e`` the coordinate axis least aligned with ``n``."""
+    e = np.zeros(3)
+    e[int(np.argmin(np.abs(normal)))] = 1.0
+    t1 = np.cross(normal, e)
+    t1 /= np.linalg.norm(t1)
+    return t1, np.cross(normal, t1)
+
+
+def min_friction_3d(points: ArrayLike, normals: ArrayLike) -> float:
+    """The friction two contacts' squeeze needs, ``max_i tan(theta_i)`` (see the module
+    docstring).
+
+    Examples
+    --------
+    >>> min_friction_3d([(0.05, 0, 0), (-0.05, 0, 0)], [(-1, 0, 0), (1, 0, 0)])
+    0.0
+    >>> t = np.radians(30.0)
+    >>> round(min_friction_3d([(0.05, 0, 0), (-0.05, 0, 0)], [(-np.cos(t), 0, np.sin(t)), (1, 0, 0)]), 6)
+    0.57735
+    """
+    p, n = _contacts(points, normals, 2)
+    worst = 0.0
+    for i, j in ((0, 1), (1, 0)):
+        d = p[j] - p[i]
+        length = float(np.linalg.norm(d))
+        if length == 0.0:
+            return math.inf
+        cos = float(np.dot(n[i], d)) / length
+        if cos <= 0.0:
+            return math.inf
+        sin = float(np.linalg.norm(np.cross(n[i], d))) / length
+        tan = sin / cos
+        worst = max(worst, 0.0 if tan < ANTIPODAL_TOL else tan)
+    return worst
+
+
+def primitive_wrenches(points: ArrayLike, normals: ArrayLike, mu: float, edges: int = 8) -> F64:
+    """The ``(6, n edges)`` primitive wrenches of the module docstring."""
+    p, n = _contacts(points, normals)
+    mu = non_negative(mu, "friction coefficient mu")
+    if isinstance(edges, bool) or not isinstance(edges, int) or not 3 <= edges <= 64:
+        raise CrmgraspError(f"edges must be an integer in [3, 64], got {edges!r}")
+    phi = 2.0 * math.pi * np.arange(edges) / edges
+    arms = p - p.mean(axis=0)
+    rho = max(float(np.max(np.linalg.norm(arms, axis=1))), 1e-12)
+    cols = []
+    for x, normal in zip(arms, n, strict=True):
+        t1, t2 = tangent_basis(normal)
+        f = normal[None, :] + mu * (np.cos(phi)[:, None] * t1 + np.sin(phi)[:, None] * t2)
+        f /= math.sqrt(1.0 + mu * mu)
+        cols.append(np.hstack([f, np.cross(x, f) / rho]))
+    return np.vstack(cols).T
+
+
+def force_closure_3d(points: ArrayLike, normals: ArrayLike, mu: float, edges: int = 8) -> bool:
+    """Spatial force closure of ``n`` frictional point contacts (polyhedral cones of
+    ``edges`` edges), by the linear program of :func:`~crmgrasp.model.quality.positively_spans`.
+
+    Examples
+    --------
+    >>> pts = [(np.cos(a), np.sin(a), 0.0) for a in (0.0, 2.1, 4.2)]
+    >>> nrm = [(-x, -y, 0.0) for x, y, _ in pts]
+    >>> force_closure_3d(pts, nrm, 0.5), force_closure_3d(pts, nrm, 0.0)
+    (True, False)
+    """
+    return positively_spans(primitive_wrenches(points, normals, mu, edges))
+
+
+def ferrari_canny(points: ArrayLike, normals: ArrayLike, mu: float, edges: int = 8) -> float:
+    """The L1 epsilon metric (module docstring): 0 when not force closure."""
+    from scipy.spatial import ConvexHull, QhullError  # heavy: imported where used
+
+    w = primitive_wrenches(points, normals, mu, edges).T
+    if np.linalg.matrix_rank(w, tol=1e-10) < 6 or len(w) < 7:
+        return 0.0
+    try:
+        hull = ConvexHull(w)
+    except QhullError:
+        return 0.0
+    offsets = hull.equations[:, -1]  # facet: normal . x + offset = 0, normal outward, unit length
+    return float(-offsets.max()) if offsets.max() < 0.0 else 0.0
