@@ -1,0 +1,136 @@
+"""The spatial CRM model: docs/model-3d.md's worked cases, the planar special case, properties."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from crmgrasp import CrmgraspError, paper_box
+from crmgrasp.model.hand import Error, execute_crm
+from crmgrasp.model.spatial import (
+    CRM3D,
+    Config3D,
+    Contact3D,
+    ConvexPolyhedron,
+    Hand3D,
+    box3d,
+    execute_crm3d,
+    feasible3d,
+    observe3d,
+    tangent_frame,
+)
+
+BOX = box3d((-0.15, -0.05, 0.0), (0.15, 0.05, 0.10))
+HAND = Hand3D(aperture=0.16, palm_depth=0.12, backoff=0.01)
+START = Config3D(Contact3D((-0.15, -0.02, 0.05), (1.0, 0.0, 0.0)), Contact3D((-0.10, -0.05, 0.05), (0.0, 1.0, 0.0)))
+
+
+def test_worked_case_opposition_grasps() -> None:
+    out = execute_crm3d(BOX, HAND, START, CRM3D("a", "b"))
+    assert out.error is Error.NONE
+    assert np.allclose(out.config.a.x, (-0.10, 0.05, 0.05)) and np.allclose(out.config.a.n, (0.0, -1.0, 0.0))
+    assert out.config.b == START.b
+
+
+def test_worked_case_start_inside_is_an_aperture_error() -> None:
+    out = execute_crm3d(BOX, HAND, START, CRM3D("b", "a"))
+    assert out.error is Error.APERTURE and out.config == START
+
+
+def test_worked_case_vertical_slide_and_its_observation() -> None:
+    t1, t2 = tangent_frame(START.a.n, HAND)
+    assert np.allclose(t1, (0, -1, 0)) and np.allclose(t2, (0, 0, 1))
+    out = execute_crm3d(BOX, HAND, START, CRM3D("a", "a", (0.0, 0.03)))
+    assert out.error is Error.NONE
+    assert np.allclose(out.config.a.x, (-0.15, -0.02, 0.08)) and np.allclose(out.config.a.n, (1, 0, 0))
+    rho, ma, mb = observe3d(out.config)
+    assert (
+        rho == pytest.approx(2.0) and ma == pytest.approx(0.05831, abs=1e-5) and mb == pytest.approx(0.04243, abs=1e-5)
+    )
+
+
+def _lift(cfg, z: float = 0.05) -> Config3D:  # type: ignore[no-untyped-def]
+    return Config3D(*(Contact3D((c.x, c.y, z), (c.nx, c.ny, 0.0)) for c in cfg))
+
+
+def test_the_planar_model_is_the_special_case() -> None:
+    """A prism (the paper box, 0.10 m tall), contacts at mid-height with horizontal normals,
+    offsets in the plane: every CRM gives the planar model's error and configuration."""
+    task = paper_box()
+    rng = np.random.default_rng(0)
+    seen = set()
+    for _ in range(300):
+        cfg = task.sample_start(rng)
+        for crm in task.actions:
+            flat = execute_crm(task.obj, task.hand, cfg, crm)
+            solid = execute_crm3d(BOX, HAND, _lift(cfg), CRM3D(crm.c, crm.f, (crm.r, 0.0)))
+            assert solid.error is flat.error
+            assert np.allclose(
+                [v for c in solid.config for v in c.x], [v for c in _lift(flat.config) for v in c.x], atol=1e-9
+            )
+            seen.add(flat.error)
+    assert seen == {Error.NONE, Error.APERTURE, Error.PALM}
+
+
+def _rotation(rng: np.random.Generator) -> np.ndarray:
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    return q * np.sign(np.linalg.det(q))
+
+
+def _on_surface(obj: ConvexPolyhedron, c: Contact3D) -> bool:
+    rows = np.array(obj.planes)
+    gaps = rows[:, :3] @ np.array(c.x) - rows[:, 3]
+    k = int(np.argmax(gaps))
+    return bool(np.all(gaps <= 1e-9) and abs(gaps[k]) <= 1e-9 and np.allclose(c.n, -rows[k, :3]))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.floats(-0.1, 0.1), st.floats(-0.1, 0.1), st.sampled_from(["aa", "ab", "ba", "bb"]))
+def test_properties_of_the_spatial_crm(seed: int, r1: float, r2: float, labels: str) -> None:
+    rng = np.random.default_rng(seed)
+    cfg = _lift(paper_box().sample_start(rng), z=float(rng.uniform(0.01, 0.09)))
+    crm = CRM3D(labels[0], labels[1], (r1, r2))
+    out = execute_crm3d(BOX, HAND, cfg, crm)
+    if out.error is Error.NONE:  # the moved contact is on a face with that face's inward normal
+        moved = out.config.a if crm.c == "a" else out.config.b
+        assert _on_surface(BOX, moved) and feasible3d(BOX, HAND, out.config) is Error.NONE
+    else:  # an errored CRM changes nothing
+        assert out.config == cfg
+    # rotating and moving the whole world (object, contacts, the hand's axes) changes nothing else
+    q, shift = _rotation(rng), rng.normal(size=3) * 0.1
+    rows = np.array(BOX.planes)
+    turned = ConvexPolyhedron(
+        tuple(map(tuple, np.column_stack([rows[:, :3] @ q.T, rows[:, 3] + rows[:, :3] @ q.T @ shift])))
+    )
+    hand = Hand3D(0.16, 0.12, 0.01, h=tuple(q @ np.array(HAND.h)), g=tuple(q @ np.array(HAND.g)))
+
+    def move(c: Contact3D) -> Contact3D:
+        return Contact3D(tuple(q @ np.array(c.x) + shift), tuple(q @ np.array(c.n)))
+
+    other = execute_crm3d(turned, hand, Config3D(move(cfg.a), move(cfg.b)), crm)
+    assert other.error is out.error
+    want = [v for c in out.config for v in move(c).x]
+    assert np.allclose([v for c in other.config for v in c.x], want, atol=1e-9)
+    assert np.allclose(observe3d(out.config), observe3d(other.config), atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda: box3d((0, 0, 0), (1, 0, 1)), "lo < hi"),
+        (lambda: ConvexPolyhedron(((1.0, 0.0, 0.0, 1.0),)), "4 or more finite planes"),
+        (lambda: Hand3D(0.16, 0.12, h=(0, 0, 1), g=(0, 1, 1)), "perpendicular"),
+        (lambda: Hand3D(0.16, 0.12, h=(0, 0, 0)), "non-zero 3-vector"),
+        (lambda: execute_crm3d(BOX, HAND, START, CRM3D("a", "c")), "'a' or 'b'"),
+        (lambda: execute_crm3d(BOX, HAND, START, CRM3D("a", "a", (0.2, 0.0))), "r_max"),
+        (lambda: execute_crm3d(BOX, HAND, START, CRM3D("a", "a", (math.nan, 0.0))), "finite"),
+    ],
+)
+def test_bad_input_is_one_line(call, message: str) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(CrmgraspError, match=message) as info:
+        call()
+    assert "\n" not in str(info.value)
