@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from crmgrasp import CrmgraspError, paper_box
-from crmgrasp.model.hand import Error, execute_crm
+from crmgrasp.model.hand import CRM, Error, execute_crm
 from crmgrasp.model.spatial import (
     CRM3D,
     Config3D,
@@ -134,3 +134,44 @@ def test_bad_input_is_one_line(call, message: str) -> None:  # type: ignore[no-u
     with pytest.raises(CrmgraspError, match=message) as info:
         call()
     assert "\n" not in str(info.value)
+
+
+def test_an_upright_cylinder_is_the_planar_disc() -> None:
+    """A cylinder standing on the table, contacts at mid-height: the planar disc model."""
+    from crmgrasp.model.geometry import Disc
+    from crmgrasp.model.hand import Hand
+    from crmgrasp.model.spatial import Cylinder
+    from crmgrasp.tasks import UniformStarts
+
+    disc, hand2 = Disc(0.06, (0.01, -0.02)), Hand(aperture=0.16, palm_depth=0.12, backoff=0.01)
+    cup = Cylinder((0.01, -0.02, 0.0), (0.0, 0.0, 1.0), 0.06, 0.12)
+    crms = [CRM("a", "b", 0.0), CRM("b", "a", 0.0), CRM("a", "a", 0.05), CRM("b", "b", -0.05), CRM("a", "b", 0.03)]
+    rng = np.random.default_rng(1)
+    seen = set()
+    for _ in range(200):
+        cfg = UniformStarts()(disc, hand2, 0.05, rng)
+        for crm in crms:
+            flat = execute_crm(disc, hand2, cfg, crm)
+            solid = execute_crm3d(cup, HAND, _lift(cfg, 0.06), CRM3D(crm.c, crm.f, (crm.r, 0.0)))
+            assert solid.error is flat.error
+            got = [v for c in solid.config for v in (*c.x, *c.n)]
+            want = [v for c in _lift(flat.config, 0.06) for v in (*c.x, *c.n)]
+            assert np.allclose(got, want, atol=1e-9)
+            seen.add(flat.error)
+    assert Error.NONE in seen and len(seen) >= 2
+
+
+def test_cylinder_caps_and_bad_cylinders() -> None:
+    from crmgrasp.model.spatial import Cylinder
+
+    cup = Cylinder((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), 0.05, 0.10)
+    point, normal = cup.ray_entry((0.01, 0.0, 0.3), (0.0, 0.0, -1.0), 1.0)  # straight down onto the top
+    assert np.allclose(point, (0.01, 0.0, 0.10)) and np.allclose(normal, (0, 0, -1))
+    point, normal = cup.ray_entry((0.01, 0.0, -0.3), (0.0, 0.0, 1.0), 1.0)  # up into the bottom
+    assert np.allclose(point, (0.01, 0.0, 0.0)) and np.allclose(normal, (0, 0, 1))
+    assert cup.ray_entry((0.2, 0.0, 0.3), (0.0, 0.0, -1.0), 1.0) is None  # beside it
+    assert cup.contains((0.0, 0.0, 0.05)) and not cup.contains((0.05, 0.0, 0.05))
+    for kwargs, message in (({"radius": 0.0}, "radius"), ({"height": -1.0}, "height"), ({"axis": (0, 0, 0)}, "axis")):
+        args = {"origin": (0, 0, 0), "axis": (0, 0, 1), "radius": 0.05, "height": 0.1, **kwargs}
+        with pytest.raises(CrmgraspError, match=message):
+            Cylinder(**args)  # type: ignore[arg-type]

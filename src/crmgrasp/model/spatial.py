@@ -1,12 +1,13 @@
 """The spatial model's objects, hand and CRM transition (docs/model-3d.md sections 1-4).
 
-Implemented so far: convex polyhedra (:class:`ConvexPolyhedron`, :func:`box3d`), the
+Implemented so far: convex polyhedra (:class:`ConvexPolyhedron`, :func:`box3d`), closed
+cylinders (:class:`Cylinder`: the cup without its opening), the
 two-contact hand (:class:`Hand3D`: aperture, palm depth, back-off, the vertical and
 forward axes ``h`` and ``g``), feasibility (:func:`feasible3d`), the CRM transition
 (:func:`execute_crm3d`, offsets ``r = (r_1, r_2)`` in the tangent frame of
 :func:`tangent_frame`) and the observation (:func:`observe3d`: ``rho``, ``|m_a|``,
 ``|m_b|``). Written on plain floats and small numpy vectors, readably; it is the
-definition any faster path will be tested against. Cylinders, meshes, tasks and
+definition any faster path will be tested against. Open cups, meshes, tasks and
 learning in 3-D are not built yet.
 """
 
@@ -27,6 +28,8 @@ __all__ = [
     "Config3D",
     "ConvexPolyhedron",
     "box3d",
+    "Cylinder",
+    "Solid",
     "Hand3D",
     "CRM3D",
     "Outcome3D",
@@ -129,6 +132,82 @@ def box3d(lo: ArrayLike, hi: ArrayLike) -> ConvexPolyhedron:
     )
 
 
+@dataclass(frozen=True, eq=False)
+class Cylinder:
+    """A closed solid cylinder: base centre ``origin``, unit ``axis``, ``radius`` and
+    ``height`` (metres). It is convex: the intersection of an infinite cylinder and the
+    slab between its two caps, so a line enters it where it has entered both."""
+
+    origin: tuple[float, float, float]
+    axis: tuple[float, float, float]
+    radius: float
+    height: float
+
+    def __post_init__(self) -> None:
+        o = np.asarray(self.origin, dtype=np.float64)
+        if o.shape != (3,) or not np.all(np.isfinite(o)):
+            raise CrmgraspError(f"cylinder origin must be a finite 3-vector, got {self.origin!r}")
+        object.__setattr__(self, "origin", tuple(o.tolist()))
+        object.__setattr__(self, "axis", tuple(_unit(self.axis, "cylinder axis").tolist()))
+        object.__setattr__(self, "radius", positive(self.radius, "cylinder radius"))
+        object.__setattr__(self, "height", positive(self.height, "cylinder height"))
+
+    def _local(self, p: F64) -> tuple[float, F64]:
+        """``(axial coordinate, radial vector)`` of ``p``."""
+        e = np.array(self.axis)
+        rel = p - np.array(self.origin)
+        s = float(rel @ e)
+        return s, rel - s * e
+
+    def contains(self, p: ArrayLike) -> bool:
+        """Strictly inside: more than :data:`SURFACE` inside the side and both caps."""
+        s, radial = self._local(np.asarray(p, dtype=np.float64))
+        return SURFACE < s < self.height - SURFACE and float(np.linalg.norm(radial)) < self.radius - SURFACE
+
+    def ray_entry(self, origin: ArrayLike, direction: ArrayLike, u_max: float) -> tuple[F64, F64] | None:
+        """First entry of ``origin + u direction``, ``0 <= u <= u_max``, with the inward
+        normal: a cap's (``+-axis``) or the side's (toward the axis); where both are entered
+        at the same ``u`` (within 1e-12), the side."""
+        o, d = np.asarray(origin, dtype=np.float64), np.asarray(direction, dtype=np.float64)
+        e = np.array(self.axis)
+        s0, r0 = self._local(o)
+        sd = float(d @ e)
+        rd = d - sd * e
+        # the slab 0 <= s <= H
+        if sd == 0.0:
+            if not 0.0 <= s0 <= self.height:
+                return None
+            slab_in, slab_out, cap = -math.inf, math.inf, None
+        else:
+            t_a, t_b = (0.0 - s0) / sd, (self.height - s0) / sd
+            slab_in, slab_out = min(t_a, t_b), max(t_a, t_b)
+            cap = e if sd > 0 else -e  # the cap entered first: the bottom (inward +e) going up
+        # the infinite cylinder |r0 + t rd| <= R
+        qa, qb, qc = float(rd @ rd), float(r0 @ rd), float(r0 @ r0) - self.radius**2
+        if qa == 0.0:
+            if qc > 0.0:
+                return None
+            side_in, side_out = -math.inf, math.inf
+        else:
+            disc = qb * qb - qa * qc
+            if disc < 0.0:
+                return None
+            root = math.sqrt(disc)
+            side_in, side_out = (-qb - root) / qa, (-qb + root) / qa
+        t_in = max(side_in, slab_in)
+        if t_in > min(side_out, slab_out) + SURFACE or t_in < -SURFACE or t_in > u_max + SURFACE:
+            return None
+        point = o + t_in * d
+        if side_in >= slab_in - 1e-12 or cap is None:
+            _, radial = self._local(point)
+            return point, -radial / np.linalg.norm(radial)
+        return point, cap
+
+
+Solid = ConvexPolyhedron | Cylinder
+"""The objects the spatial model takes (both convex)."""
+
+
 @dataclass(frozen=True)
 class Hand3D:
     """Aperture ``A``, palm depth, back-off, vertical axis ``h`` and forward axis ``g``
@@ -199,7 +278,7 @@ def _palm_axis(cfg: Config3D, hand: Hand3D) -> tuple[float, F64]:
     return dist, u / np.linalg.norm(u)
 
 
-def feasible3d(obj: ConvexPolyhedron, hand: Hand3D, cfg: Config3D) -> Error:
+def feasible3d(obj: Solid, hand: Hand3D, cfg: Config3D) -> Error:
     """Section 2: APERTURE beyond the aperture; PALM for colliding contacts, a surface
     facing the palm, or the palm point inside the object."""
     dist, u = _palm_axis(cfg, hand)
@@ -213,9 +292,7 @@ def feasible3d(obj: ConvexPolyhedron, hand: Hand3D, cfg: Config3D) -> Error:
     return Error.PALM if obj.contains(palm) else Error.NONE
 
 
-def execute_crm3d(
-    obj: ConvexPolyhedron, hand: Hand3D, cfg: Config3D, crm: CRM3D, sensed: Config3D | None = None
-) -> Outcome3D:
+def execute_crm3d(obj: Solid, hand: Hand3D, cfg: Config3D, crm: CRM3D, sensed: Config3D | None = None) -> Outcome3D:
     """The CRM transition of section 3 (the goal line from ``sensed``, default ``cfg``)."""
     if crm.c not in ("a", "b") or crm.f not in ("a", "b"):
         raise CrmgraspError(f"contact labels must be 'a' or 'b', got {crm.c!r} and {crm.f!r}")
