@@ -315,3 +315,16 @@ def test_default_crms_and_their_mirror() -> None:
     assert len(acts) == 6
     t = family_task("x", fam.DiscFamily(), actions=acts)
     assert t.symmetry is not None and t.symmetry.actions == (1, 0, 3, 2, 5, 4)
+
+
+def test_compare_and_lockstep_on_a_family(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    import dataclasses
+
+    from crmgrasp.agents import train_trials_lockstep
+    from crmgrasp.experiments.compare import CompareConfig, compare
+
+    cfg = dataclasses.replace(CompareConfig.quick("cup-family"), deep=None, reference_starts=60, eval_episodes=20)
+    s = compare(tmp_path, cfg)
+    assert s["belief_optimum"] == 1.0 and s["pomdp_counts"].startswith("skipped")
+    with pytest.raises(CrmgraspError, match="draws an object per episode: train without lockstep"):
+        train_trials_lockstep(make_task("box-family"), "sarsa", trials=2, episodes=5, seed=0)

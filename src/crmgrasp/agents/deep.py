@@ -39,7 +39,7 @@ from crmgrasp.model.contacts import Config
 from crmgrasp.model.hand import Error
 from crmgrasp.model.sensing import observe
 from crmgrasp.sim import SimState, step
-from crmgrasp.tasks import Task
+from crmgrasp.tasks import Task, World
 
 __all__ = [
     "ContinuousObservation",
@@ -251,14 +251,17 @@ def deep_available() -> bool:
 
 
 def evaluate_recurrent(
-    model: Any, task: Task, starts: list[Config], rng: np.random.Generator
+    model: Any, task: Task, starts: Sequence[Config | World], rng: np.random.Generator
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Run the deterministic LSTM policy from every start, all episodes batched.
+    """Run the deterministic LSTM policy from every start (a configuration, or a world of
+    a family task: its object and configuration), all episodes batched.
 
     Returns CRMs per episode and success flags. ``rng`` drives sensing noise (if the task has any).
     """
     n = len(starts)
-    states = [SimState(c, task.noise.sense(c, rng), 0) for c in starts]
+    tasks = [s.task if isinstance(s, World) else task for s in starts]
+    configs = [s.config if isinstance(s, World) else s for s in starts]
+    states = [SimState(c, task.noise.sense(c, rng), 0) for c in configs]
     obs = np.stack([features(*observe(s.sensed), 0, task.hand.aperture) for s in states])
     steps, success = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=bool)
     active = np.ones(n, dtype=bool)
@@ -267,7 +270,7 @@ def evaluate_recurrent(
         actions, lstm = model.predict(obs, state=lstm, episode_start=first, deterministic=True)
         first[:] = False
         for i in np.flatnonzero(active):
-            res = step(task, states[i], int(actions[i]), rng)
+            res = step(tasks[i], states[i], int(actions[i]), rng)
             states[i], steps[i] = res.state, steps[i] + 1
             obs[i] = features(*res.observation, int(res.error), task.hand.aperture)
             if res.terminated or res.truncated:
@@ -285,7 +288,7 @@ def train_recurrent_ppo(
 
     c = config
     starts_rng, _ = checkpoint_generators(seed)
-    ckpt_starts = [task.sample_start(starts_rng) for _ in range(c.checkpoint_episodes)]
+    ckpt_starts = [task.sample_world(starts_rng) for _ in range(c.checkpoint_episodes)]  # the starts' stream
     lengths: list[int] = []
     ckpts: list[tuple[int, float]] = []
 

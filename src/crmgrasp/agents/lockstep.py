@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from crmgrasp._progress import Progress
+from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents.base import Agent, LearnerPolicy
 from crmgrasp.agents.training import (
     PROGRESS_EVERY,
@@ -68,7 +69,13 @@ def train_trials_lockstep(
     progress: Progress | None = None,
 ) -> TrialResult:
     """Lockstep version of :func:`~crmgrasp.agents.training.train_trials` (same
-    arguments, same results); faster when ``trials`` is large (hundreds or more)."""
+    arguments, same results); faster when ``trials`` is large (hundreds or more). Not for a
+    family task: its trials' objects differ, and lockstep shares one batched kernel."""
+    if task.family is not None:
+        raise CrmgraspError(
+            f"lockstep steps every trial through one batched kernel, but task {task.name!r} draws an object "
+            "per episode: train without lockstep"
+        )
     check_budget(trials, episodes, eval_episodes)
     encoder = encoder_for(task, k)
     kernel = kernel_for(task, backend)

@@ -268,7 +268,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
         else:
             from crmgrasp.agents.deep import evaluate_recurrent
 
-            starts = [task.sample_start(rng) for _ in range(args.episodes)]
+            starts = [task.sample_world(rng) for _ in range(args.episodes)]  # sample_start's stream
             steps, success = evaluate_recurrent(policy.model, task, starts, rng)
     from crmgrasp.experiments.stats import normal_ci
 
