@@ -175,3 +175,27 @@ def test_cylinder_caps_and_bad_cylinders() -> None:
         args = {"origin": (0, 0, 0), "axis": (0, 0, 1), "radius": 0.05, "height": 0.1, **kwargs}
         with pytest.raises(CrmgraspError, match=message):
             Cylinder(**args)  # type: ignore[arg-type]
+
+
+def test_sensing_noise_in_3d() -> None:
+    from crmgrasp.model.spatial import sense3d
+
+    rng = np.random.default_rng(0)
+    assert sense3d(START, 0.0, 0.0, rng, HAND) is START
+    assert rng.random() == np.random.default_rng(0).random()  # no draw without noise
+    sigma = math.radians(10.0)
+    angles, moves = [], []
+    for _ in range(4000):
+        got = sense3d(START, sigma, 0.002, rng, HAND)
+        for before, after in zip(START, got):
+            assert np.linalg.norm(after.n) == pytest.approx(1.0)
+            angles.append(math.acos(min(1.0, float(np.dot(before.n, after.n)))))
+            moves.append(np.array(after.x) - np.array(before.x))
+    # the angle between true and sensed normals is |N(0, sigma)|: mean sigma sqrt(2/pi)
+    want, se = sigma * math.sqrt(2 / math.pi), sigma * math.sqrt(1 - 2 / math.pi) / math.sqrt(len(angles))
+    assert abs(np.mean(angles) - want) < 4 * se
+    assert np.allclose(np.std(np.array(moves), axis=0), 0.002, rtol=0.05)
+    a = sense3d(START, sigma, 0.01, np.random.default_rng(5), HAND)
+    assert a == sense3d(START, sigma, 0.01, np.random.default_rng(5), HAND)  # the same seed, the same reading
+    with pytest.raises(CrmgraspError, match="sigma_n"):
+        sense3d(START, 1.0, 0.0, rng, HAND)

@@ -5,8 +5,8 @@ cylinders (:class:`Cylinder`: the cup without its opening), the
 two-contact hand (:class:`Hand3D`: aperture, palm depth, back-off, the vertical and
 forward axes ``h`` and ``g``), feasibility (:func:`feasible3d`), the CRM transition
 (:func:`execute_crm3d`, offsets ``r = (r_1, r_2)`` in the tangent frame of
-:func:`tangent_frame`) and the observation (:func:`observe3d`: ``rho``, ``|m_a|``,
-``|m_b|``). Written on plain floats and small numpy vectors, readably; it is the
+:func:`tangent_frame`), the observation (:func:`observe3d`: ``rho``, ``|m_a|``,
+``|m_b|``) and sensing noise (:func:`sense3d`). Written on plain floats and small numpy vectors, readably; it is the
 definition any faster path will be tested against. Open cups, meshes, tasks and
 learning in 3-D are not built yet.
 """
@@ -37,6 +37,7 @@ __all__ = [
     "feasible3d",
     "execute_crm3d",
     "observe3d",
+    "sense3d",
 ]
 
 F64 = NDArray[np.float64]
@@ -332,3 +333,30 @@ def observe3d(cfg: Config3D) -> tuple[float, float, float]:
     xa, xb, na, nb = (np.array(v) for v in (cfg.a.x, cfg.b.x, cfg.a.n, cfg.b.n))
     s = na + nb
     return float(s @ s), float(np.linalg.norm(np.cross(xb - xa, nb))), float(np.linalg.norm(np.cross(xa - xb, na)))
+
+
+def sense3d(cfg: Config3D, sigma_n: float, sigma_p: float, rng: np.random.Generator, hand: Hand3D) -> Config3D:
+    """One noisy reading of ``cfg`` (docs/model-3d.md section 4): each contact's normal is
+    rotated by an angle ``N(0, sigma_n)`` (radians) about the tangent axis
+    ``cos(phi) t_1 + sin(phi) t_2`` with ``phi`` uniform in ``[0, 2 pi)``, and its position
+    moved by ``N(0, sigma_p^2 I_3)`` (metres). Draws, per contact a then b: ``phi`` (one
+    uniform), then four standard normals (angle, x, y, z). No draw when both sigmas are 0.
+    ``sigma_n <= pi/4`` and ``sigma_p <= 0.1`` as in the plane."""
+    if not (0.0 <= sigma_n <= math.pi / 4) or not (0.0 <= sigma_p <= 0.1):
+        raise CrmgraspError(
+            f"sensing noise must have 0 <= sigma_n <= pi/4 and 0 <= sigma_p <= 0.1, got {sigma_n}, {sigma_p}"
+        )
+    if sigma_n == 0.0 and sigma_p == 0.0:
+        return cfg
+    out = []
+    for c in cfg:
+        phi = 2.0 * math.pi * float(rng.random())
+        angle, dx, dy, dz = (float(v) for v in rng.standard_normal(4))
+        n = np.array(c.n)
+        t1, t2 = tangent_frame(n, hand)
+        k = math.cos(phi) * t1 + math.sin(phi) * t2
+        theta = sigma_n * angle
+        n2 = n * math.cos(theta) + np.cross(k, n) * math.sin(theta)
+        x2 = np.array(c.x) + sigma_p * np.array([dx, dy, dz])
+        out.append(Contact3D(tuple(x2.tolist()), tuple((n2 / np.linalg.norm(n2)).tolist())))  # type: ignore[arg-type]
+    return Config3D(out[0], out[1])
