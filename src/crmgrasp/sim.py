@@ -267,8 +267,9 @@ class FamilyStepper:
 
     def __init__(self, task: Task, make: Callable[[Task], Stepper] = TaskSteps) -> None:
         self.task, self._make = task, make
-        self.current: Stepper = make(task.with_object(task.obj))
-        self.instance: Task = task.with_object(task.obj)
+        self.instance: Task
+        self.current: Stepper
+        self.use(task.with_object(task.obj))
 
     def use(self, instance: Task) -> None:
         """Step ``instance`` (a task on one object) from now on."""

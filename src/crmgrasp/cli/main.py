@@ -195,7 +195,11 @@ def _apply_preset(args: argparse.Namespace, task: Any) -> None:
     agent, k, symmetric = LEARN_PRESETS[args.preset]
     args.agent = args.agent or agent
     args.k = k if args.k is None else args.k
-    tabular = args.agent in ("sarsa", "q", "sarsa-lambda", "dyna-q", "model-vi")
+    from crmgrasp.agents.tabular import TabularAgent
+    from crmgrasp.agents.training import AGENTS
+
+    made = AGENTS[args.agent]
+    tabular = isinstance(made, type) and issubclass(made, TabularAgent)
     args.symmetric = args.symmetric or (symmetric and tabular and task.symmetry is not None)
 
 

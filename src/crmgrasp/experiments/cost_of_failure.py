@@ -27,6 +27,7 @@ import dataclasses
 from collections import Counter, defaultdict
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -34,11 +35,14 @@ import numpy as np
 
 from crmgrasp._io import write_csv, write_json
 from crmgrasp._progress import Progress
-from crmgrasp.agents.base import LearnerPolicy
-from crmgrasp.agents.training import encoder_for, train_trials
-from crmgrasp.kernels import kernel_for
+from crmgrasp.experiments._episodes import (
+    FASTEST_LABEL,
+    EpisodeRecord,
+    episode_records,
+    greedy_records,
+    train_fastest,
+)
 from crmgrasp.planners.references import BeliefPolicy, sample_starts
-from crmgrasp.sim import Policy, run_episode
 from crmgrasp.tasks import Task, make_task
 
 __all__ = ["COSTS", "EpisodeRecord", "episode_records", "classify", "CostConfig", "cost_of_failure", "policy_rows"]
@@ -47,18 +51,6 @@ COSTS = (0.0, 1.0, 3.0, 10.0, 30.0)
 """The extra costs of an errored CRM that the experiment sweeps (reward units)."""
 
 KINDS = ("try-first", "sense-first", "other")
-
-
-@dataclass(frozen=True)
-class EpisodeRecord:
-    """What :func:`classify` needs of one episode: the first observation (bin index),
-    the CRMs taken, the observation (bin index) and error after each, and success."""
-
-    first_obs: int
-    actions: tuple[int, ...]
-    observations: tuple[int, ...]
-    errors: tuple[bool, ...]
-    success: bool
 
 
 def _sensing_moves(records: Sequence[EpisodeRecord]) -> set[tuple[int, int]]:
@@ -90,27 +82,6 @@ def classify(records: Sequence[EpisodeRecord]) -> list[str]:
         else:
             kinds.append("other")
     return kinds
-
-
-def episode_records(task: Task, make_policy: Any, worlds: Sequence[Any], seed: int) -> list[EpisodeRecord]:
-    """Run ``make_policy()`` from each world (noise-free: nothing is drawn) with traces."""
-    kernel = kernel_for(task)
-    rng = np.random.default_rng(seed)
-    out = []
-    for w in worlds:
-        policy: Policy = make_policy()
-        ep = run_episode(task, policy, rng, start=w, trace=True, kernel=kernel)
-        tr = ep.trace
-        out.append(
-            EpisodeRecord(
-                tr[0].before.obs_index,
-                tuple(int(t.action) for t in tr),  # type: ignore[arg-type]
-                tuple(t.after.obs_index for t in tr),
-                tuple(int(t.after.error) != 0 for t in tr),
-                ep.success,
-            )
-        )
-    return out
 
 
 def policy_rows(records: Sequence[EpisodeRecord], cost: float) -> dict[str, float]:
@@ -168,9 +139,7 @@ def cost_of_failure(
     for c in cfg.costs:
         task = dataclasses.replace(base, error_cost=float(c))
         worlds, test = sample_starts(task, cfg.worlds, cfg.seed), sample_starts(task, cfg.test_worlds, cfg.seed + 1)
-        optimal.append(
-            policy_rows(episode_records(task, lambda t=task, w=worlds: BeliefPolicy(t, w), test, cfg.seed), c)
-        )
+        optimal.append(policy_rows(episode_records(task, partial(BeliefPolicy, task, worlds), test, cfg.seed), c))
         learned.append(policy_rows(_learned_records(task, test, cfg), c))
         if stage is not None:
             stage.advance(1)
@@ -180,7 +149,7 @@ def cost_of_failure(
     errors_fall = last["errors_per_episode"] < first["errors_per_episode"]
     summary = {
         "task": base.name,
-        "learner": "model-vi k=1" + (" (mirror quotient)" if base.symmetry is not None else ""),
+        "learner": FASTEST_LABEL if base.symmetry is not None else "model-vi k=1",
         "budget": f"{cfg.trials} trials x {cfg.episodes} episodes; optimum over {cfg.worlds} worlds; "
         f"{cfg.test_worlds} held-out worlds; seed {cfg.seed}",
         "rows": learned,
@@ -198,16 +167,9 @@ def cost_of_failure(
 
 
 def _learned_records(task: Task, test: Sequence[Any], cfg: CostConfig) -> list[EpisodeRecord]:
-    params: dict[str, object] = {"symmetric": task.symmetry is not None}
-    res = train_trials(
-        task, "model-vi", trials=cfg.trials, episodes=cfg.episodes, seed=cfg.seed, k=1, eval_episodes=0, params=params
-    )
-    encoder = encoder_for(task, 1)
-    records: list[EpisodeRecord] = []
-    for t, agent in enumerate(res.agents):
-        make = lambda a=agent, t=t: LearnerPolicy(a, encoder, np.random.default_rng(t), learn=False)  # noqa: E731
-        records += episode_records(task, make, test, cfg.seed + t)
-    return records
+    agents = train_fastest(task, cfg.trials, cfg.episodes, cfg.seed)
+    per_agent = greedy_records(task, agents, test, cfg.seed, ties=np.random.default_rng)
+    return [r for records in per_agent for r in records]
 
 
 def _figure(path: Path, s: dict[str, Any]) -> None:

@@ -32,9 +32,8 @@ import numpy as np
 
 from crmgrasp._io import write_csv, write_json
 from crmgrasp._progress import Progress
-from crmgrasp.agents.base import Agent, LearnerPolicy
-from crmgrasp.agents.training import encoder_for, train_trials
-from crmgrasp.experiments.cost_of_failure import EpisodeRecord, episode_records
+from crmgrasp.agents.base import Agent
+from crmgrasp.experiments._episodes import FASTEST_LABEL, EpisodeRecord, greedy_records, train_fastest
 from crmgrasp.model import families as fam
 from crmgrasp.model.families import Pose, SamplerFamily
 from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts
@@ -87,20 +86,11 @@ def _finite(task: Task, n: int, seed: int) -> Task:
 
 
 def _train(task: Task, cfg: GeneralizationConfig) -> list[Agent]:
-    params: dict[str, object] = {"symmetric": task.symmetry is not None}
-    res = train_trials(
-        task, "model-vi", trials=cfg.trials, episodes=cfg.episodes, seed=cfg.seed, k=1, eval_episodes=0, params=params
-    )
-    return res.agents
+    return train_fastest(task, cfg.trials, cfg.episodes, cfg.seed)
 
 
 def _run(task: Task, agents: Sequence[Agent], worlds: Sequence[Any], seed: int) -> list[EpisodeRecord]:
-    encoder = encoder_for(task, 1)
-    records: list[EpisodeRecord] = []
-    for t, agent in enumerate(agents):
-        make = lambda a=agent, t=t: LearnerPolicy(a, encoder, np.random.default_rng([seed, t]), learn=False)  # noqa: E731
-        records += episode_records(task, make, worlds, seed + t)
-    return records
+    return [r for records in greedy_records(task, agents, worlds, seed) for r in records]
 
 
 def _mean(records: Sequence[EpisodeRecord]) -> float:
@@ -192,7 +182,7 @@ def generalization(
     if stage is not None:
         stage.end()
     summary = {
-        "learner": "model-vi k=1 (mirror quotient)",
+        "learner": FASTEST_LABEL,
         "budget": f"{cfg.trials} trials x {cfg.episodes} episodes on {cfg.train_objects} training objects; "
         f"{cfg.heldout} worlds per evaluation; seed {cfg.seed}",
         "families": families,

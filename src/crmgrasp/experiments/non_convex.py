@@ -22,14 +22,13 @@ import numpy as np
 
 from crmgrasp._io import atomic_path, save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
-from crmgrasp.agents.base import Agent, LearnerPolicy
-from crmgrasp.agents.training import encoder_for, rollout, train_trials
-from crmgrasp.experiments.cost_of_failure import episode_records
+from crmgrasp.agents.base import Agent
+from crmgrasp.agents.training import encoder_for, rollout
+from crmgrasp.experiments._episodes import FASTEST_LABEL, greedy_records, train_fastest
 from crmgrasp.model.contacts import Config
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts
 from crmgrasp.plotting import rollout_animation, rollout_panels
-from crmgrasp.sim import run_episode
 from crmgrasp.tasks import World, make_task
 
 __all__ = ["NonConvexConfig", "non_convex", "INNER_EDGES", "inside"]
@@ -60,16 +59,6 @@ class NonConvexConfig:
         return cls(trials=2, episodes=150, heldout=100, seed=seed)
 
 
-def _final_configs(task: Any, agent: Agent, worlds: Sequence[World], seed: int) -> list[tuple[World, Config, bool]]:
-    encoder = encoder_for(task, 1)
-    rng = np.random.default_rng(seed)
-    out = []
-    for w in worlds:
-        ep = run_episode(task, LearnerPolicy(agent, encoder, rng, learn=False), rng, start=w, trace=True)
-        out.append((w, ep.trace[-1].after.state.config, ep.success))
-    return out
-
-
 def non_convex(
     out_dir: str | Path, cfg: NonConvexConfig = NonConvexConfig(), progress: Progress | None = None
 ) -> dict[str, Any]:
@@ -80,27 +69,17 @@ def non_convex(
     out.mkdir(parents=True, exist_ok=True)
     task = make_task(cfg.task)
     stage = progress.stage(f"non-convex: {task.name}", 3, "stages") if progress else None
-    params: dict[str, object] = {"symmetric": task.symmetry is not None}
-    res = train_trials(
-        task, "model-vi", trials=cfg.trials, episodes=cfg.episodes, seed=cfg.seed, k=1, eval_episodes=0, params=params
-    )
+    agents = train_fastest(task, cfg.trials, cfg.episodes, cfg.seed)
     if stage is not None:
         stage.advance(1)
     worlds: list[World] = sample_starts(task, cfg.heldout, cfg.seed + 1)  # type: ignore[assignment]
-    encoder = encoder_for(task, 1)
-    records = []
-    for t, agent in enumerate(res.agents):
-        make = lambda a=agent, t=t: LearnerPolicy(a, encoder, np.random.default_rng([cfg.seed, t]), learn=False)  # noqa: E731
-        records += episode_records(task, make, worlds, cfg.seed + t)
-    best = min(
-        range(len(res.agents)),
-        key=lambda t: np.mean([len(r.actions) for r in records[t * len(worlds) : (t + 1) * len(worlds)]]),
-    )
-    finals = _final_configs(task, res.agents[best], worlds, cfg.seed)
-    grasps = [(w, c) for w, c, ok in finals if ok]
+    per_agent = greedy_records(task, agents, worlds, cfg.seed)
+    records = [r for rs in per_agent for r in rs]
+    best = min(range(len(agents)), key=lambda t: np.mean([len(r.actions) for r in per_agent[t]]))
+    grasps = [(w, r.final) for w, r in zip(worlds, per_agent[best], strict=True) if r.success]
     summary: dict[str, Any] = {
         "task": task.name,
-        "learner": "model-vi k=1 (mirror quotient)",
+        "learner": FASTEST_LABEL,
         "budget": f"{cfg.trials} trials x {cfg.episodes} episodes; {cfg.heldout} held-out worlds; seed {cfg.seed}",
         "learner_mean_crms": float(np.mean([len(r.actions) for r in records])),
         "success_rate": float(np.mean([r.success for r in records])),
@@ -111,7 +90,7 @@ def non_convex(
     summary["gap_to_optimum"] = summary["learner_mean_crms"] / summary["belief_optimum"] - 1.0
     if stage is not None:
         stage.advance(1)
-    _draw(out, task, res.agents[best], worlds, cfg.seed)
+    _draw(out, task, agents[best], worlds, cfg.seed)
     write_json(out / "summary.json", summary)
     if stage is not None:
         stage.advance(1)

@@ -22,6 +22,7 @@ naming the parameter. Rejection loops are bounded by :data:`MAX_TRIES`.
 from __future__ import annotations
 
 import math
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
@@ -30,6 +31,7 @@ import numpy as np
 
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.disc import Disc
+from crmgrasp.model.geometry import Rectangle, regular_polygon
 from crmgrasp.model.polygon import Polygon
 from crmgrasp.model.shape import Shape
 
@@ -156,14 +158,15 @@ class ShapeFamily(Protocol):
     def describe(self) -> dict[str, Any]: ...
 
 
-class _Family:
+class _Family(ABC):
     """Shared ``sample``: the unposed shape of ``_shape(rng)``, then the pose."""
 
     pose: Pose
     kind: str = "family"
 
-    def _shape(self, rng: np.random.Generator) -> Shape:  # pragma: no cover - every family overrides it
-        raise NotImplementedError
+    @abstractmethod
+    def _shape(self, rng: np.random.Generator) -> Shape:
+        """The unposed shape: this family's own draws."""
 
     def sample(self, rng: np.random.Generator) -> Shape:
         """One object: the shape's draws, then the pose's three."""
@@ -202,15 +205,12 @@ class BoxFamily(_Family):
         object.__setattr__(self, "length", _range(self.length, "box length"))
         object.__setattr__(self, "width", _range(self.width, "box width"))
 
-    def _box(self, length: float, w: float) -> Polygon:
-        return _poly([(0.0, 0.0), (length, 0.0), (length, w), (0.0, w)])
-
     def _shape(self, rng: np.random.Generator) -> Shape:
-        return self._box(_uniform(rng, self.length), _uniform(rng, self.width))
+        return Rectangle(_uniform(rng, self.length), _uniform(rng, self.width))
 
     def nominal(self) -> Shape:
         """The box at the middle of both ranges."""
-        return self._box(_mid(self.length), _mid(self.width))
+        return Rectangle(_mid(self.length), _mid(self.width))
 
     def min_width(self) -> float:
         return min(self.length[0], self.width[0])
@@ -237,10 +237,6 @@ class DiscFamily(_Family):
         return 2.0 * self.radius[0]
 
 
-def _regular(n: int, r: float) -> Polygon:
-    return Polygon([(r * math.cos(2 * math.pi * k / n), r * math.sin(2 * math.pi * k / n)) for k in range(n)])
-
-
 @dataclass(frozen=True)
 class RegularPolygonFamily(_Family):
     """Regular ``n``-gons, ``n`` uniform among the integers of ``sides``, circumradius
@@ -257,14 +253,14 @@ class RegularPolygonFamily(_Family):
 
     def _shape(self, rng: np.random.Generator) -> Shape:
         n = self.sides[0] + int(rng.random() * (self.sides[1] - self.sides[0] + 1))
-        return _regular(n, _uniform(rng, self.radius))
+        return regular_polygon(n, _uniform(rng, self.radius))
 
     def nominal(self) -> Shape:
-        return _regular((self.sides[0] + self.sides[1]) // 2, _mid(self.radius))
+        return regular_polygon((self.sides[0] + self.sides[1]) // 2, _mid(self.radius))
 
     def min_width(self) -> float:
         # the width of a regular n-gon grows with n at a fixed circumradius: 3 sides are the narrowest
-        return width(_regular(self.sides[0], self.radius[0]))
+        return width(regular_polygon(self.sides[0], self.radius[0]))
 
 
 @dataclass(frozen=True)
@@ -301,7 +297,7 @@ class ConvexPolygonFamily(_Family):
         )
 
     def nominal(self) -> Shape:
-        return _regular((self.vertices[0] + self.vertices[1]) // 2, _mid(self.radius))
+        return regular_polygon((self.vertices[0] + self.vertices[1]) // 2, _mid(self.radius))
 
     def min_width(self) -> float:
         # an inscribed polygon containing the centre with margin: a triangle with gaps of at most

@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from crmgrasp._validation import CrmgraspError, non_negative, positive
 from crmgrasp.model.hand import Error
+from crmgrasp.model.shape import EPS
 
 __all__ = [
     "Contact3D",
@@ -41,8 +42,9 @@ __all__ = [
 ]
 
 F64 = NDArray[np.float64]
-SURFACE = 1e-9
-"""Metres: a point within this of the surface is on it, not inside."""
+SURFACE = EPS
+"""Metres: a point within this of the surface is on it, not inside (the planar model's
+:data:`~crmgrasp.model.shape.EPS`)."""
 
 
 class Contact3D(NamedTuple):

@@ -372,6 +372,13 @@ class Task:
         object.__setattr__(out, "family", None)
         return out
 
+    def _one_object(self) -> None:
+        """Refuse, with the reason, to draw starts without an object on a family task."""
+        if self.family is not None:
+            raise CrmgraspError(
+                f"task {self.name!r} draws an object per episode: use sample_world (the object and a start on it)"
+            )
+
     def sample_world(self, rng: np.random.Generator, accept: StartFilter | None = None) -> World:
         """An episode's hidden world: :meth:`instance`, then a start on it."""
         inst = self.instance(rng)
@@ -381,10 +388,7 @@ class Task:
         """A start configuration drawn from ``rng``. ``accept``: a compiled start filter,
         used by samplers built on corner candidates (:class:`CornerStarts` and the presets
         of :mod:`crmgrasp.tasks.presets`; the same start either way), ignored by others."""
-        if self.family is not None:
-            raise CrmgraspError(
-                f"task {self.name!r} draws an object per episode: use sample_world (the object and a start on it)"
-            )
+        self._one_object()
         if accept is not None and getattr(self.starts, "takes_corner_filter", False):
             return self.starts(self.obj, self.hand, self.mu_goal, rng, accept)  # type: ignore[call-arg]
         return self.starts(self.obj, self.hand, self.mu_goal, rng)
@@ -393,8 +397,7 @@ class Task:
         """``n`` starts as ``(n, 8)`` rows: :meth:`CornerStarts.batch` (another stream than
         :meth:`sample_start`'s, the same distribution; ``accept`` as there), or ``n``
         scalar draws for other samplers."""
-        if self.family is not None:
-            self.sample_start(rng)  # refuses with the reason
+        self._one_object()
         if isinstance(self.starts, CornerStarts):
             return self.starts.batch(self.obj, self.hand, self.mu_goal, rng, n, accept or accept_corner_candidates)
         return np.array([(*c.a, *c.b) for c in (self.sample_start(rng) for _ in range(n))]).reshape(n, 8)
@@ -426,6 +429,16 @@ class World(NamedTuple):
     config: Config
 
 
+PAPER_HAND = Hand(aperture=0.16, palm_depth=0.12, backoff=0.01)
+"""The paper's hand (docs/model.md section 7): aperture 0.16 m, palm depth 0.12 m."""
+
+PAPER_CRMS = (CRM("a", "b", 0.0), CRM("b", "a", 0.0), CRM("a", "a", 0.08), CRM("b", "b", -0.08))
+"""The paper's four CRMs: oppose a, oppose b, slide a, slide b (mirror pairs C1-C2, C3-C4)."""
+
+PAPER_BINS = Discretizer(rho=(1.0,), m_a=(0.10,), m_b=(0.10,))
+"""The paper's observation bins: rho at 1, moment magnitudes at 0.10 m (24 observations)."""
+
+
 def paper_box() -> Task:
     """The paper's box task (docs/model.md section 7).
 
@@ -440,9 +453,9 @@ def paper_box() -> Task:
     return Task(
         name="paper-box",
         obj=Rectangle(0.30, 0.10),
-        hand=Hand(aperture=0.16, palm_depth=0.12, backoff=0.01),
-        actions=(CRM("a", "b", 0.0), CRM("b", "a", 0.0), CRM("a", "a", 0.08), CRM("b", "b", -0.08)),
-        discretizer=Discretizer(rho=(1.0,), m_a=(0.10,), m_b=(0.10,)),
+        hand=PAPER_HAND,
+        actions=PAPER_CRMS,
+        discretizer=PAPER_BINS,
         starts=CornerStarts(),
         mu_goal=0.05,
         max_steps=10,

@@ -45,7 +45,17 @@ from crmgrasp.model.families import (
 from crmgrasp.model.geometry import Disc, Polygon, Shape
 from crmgrasp.model.hand import CRM, Hand
 from crmgrasp.model.sensing import Discretizer
-from crmgrasp.tasks.core import CornerStarts, StartSampler, Symmetry, Task, acceptable, register_task
+from crmgrasp.tasks.core import (
+    PAPER_BINS,
+    PAPER_CRMS,
+    PAPER_HAND,
+    CornerStarts,
+    StartSampler,
+    Symmetry,
+    Task,
+    acceptable,
+    register_task,
+)
 
 __all__ = [
     "BoundaryStarts",
@@ -198,9 +208,6 @@ RUBBER = 0.6
 """``mu_goal`` of the families with polygons that have no parallel sides (a triangle's
 best two-contact grasp needs friction tan 30 deg = 0.577): a rubber fingertip."""
 
-PAPER_HAND = Hand(aperture=0.16, palm_depth=0.12, backoff=0.01)
-PAPER_BINS = Discretizer(rho=(1.0,), m_a=(0.10,), m_b=(0.10,))
-
 
 def family_task(
     name: str,
@@ -235,7 +242,7 @@ def _box_family() -> Task:
     return family_task(
         "box-family",
         BoxFamily(),
-        actions=(CRM("a", "b", 0.0), CRM("b", "a", 0.0), CRM("a", "a", 0.08), CRM("b", "b", -0.08)),
+        actions=PAPER_CRMS,
         starts=CornerStarts(),
         reference_mean_steps=1.75,  # belief-space optimum over 500 sampled worlds (docs/families.md)
         description="boxes 0.20-0.40 x 0.06-0.14 m in any pose; the paper's hand, CRMs and corner starts",

@@ -1,0 +1,85 @@
+"""What the family experiments share: traced episodes as records, and the learner they
+train (``model-vi``, k = 1, on the mirror quotient where the task declares one) with
+its greedy policy run on fixed worlds."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from crmgrasp.agents.base import Agent, LearnerPolicy
+from crmgrasp.agents.training import encoder_for, train_trials
+from crmgrasp.kernels import kernel_for
+from crmgrasp.model.contacts import Config
+from crmgrasp.sim import Policy, run_episode
+from crmgrasp.tasks import Task
+
+__all__ = ["EpisodeRecord", "episode_records", "train_fastest", "greedy_records", "FASTEST_LABEL"]
+
+FASTEST_LABEL = "model-vi k=1 (mirror quotient)"
+"""How the experiments name the learner of :func:`train_fastest`."""
+
+
+@dataclass(frozen=True)
+class EpisodeRecord:
+    """One traced episode: the first observation (bin index), the CRMs taken, the
+    observation (bin index) and error after each, success, and the final configuration."""
+
+    first_obs: int
+    actions: tuple[int, ...]
+    observations: tuple[int, ...]
+    errors: tuple[bool, ...]
+    success: bool
+    final: Config | None = None
+
+
+def episode_records(
+    task: Task, make_policy: Callable[[], Policy], worlds: Sequence[Any], seed: int
+) -> list[EpisodeRecord]:
+    """Run ``make_policy()`` from each world (noise-free: nothing is drawn) with traces."""
+    kernel = kernel_for(task)
+    rng = np.random.default_rng(seed)
+    out = []
+    for w in worlds:
+        ep = run_episode(task, make_policy(), rng, start=w, trace=True, kernel=kernel)
+        tr = ep.trace
+        out.append(
+            EpisodeRecord(
+                tr[0].before.obs_index,
+                tuple(int(t.action) for t in tr),  # type: ignore[arg-type]
+                tuple(t.after.obs_index for t in tr),
+                tuple(int(t.after.error) != 0 for t in tr),
+                ep.success,
+                tr[-1].after.state.config,
+            )
+        )
+    return out
+
+
+def train_fastest(task: Task, trials: int, episodes: int, seed: int) -> list[Agent]:
+    """``trials`` model-vi agents (k = 1, mirror quotient where declared), trained on ``task``."""
+    params: dict[str, object] = {"symmetric": task.symmetry is not None}
+    res = train_trials(
+        task, "model-vi", trials=trials, episodes=episodes, seed=seed, k=1, eval_episodes=0, params=params
+    )
+    return res.agents
+
+
+def greedy_records(
+    task: Task, agents: Sequence[Agent], worlds: Sequence[Any], seed: int, ties: Callable[[int], Any] | None = None
+) -> list[list[EpisodeRecord]]:
+    """Per agent, its greedy policy's records on ``worlds``; in every episode agent ``t``
+    breaks ties with a fresh ``ties(t)`` (default ``default_rng([seed, t])``)."""
+    encoder = encoder_for(task, 1)
+    draw = ties if ties is not None else (lambda t: np.random.default_rng([seed, t]))
+    out = []
+    for t, agent in enumerate(agents):
+
+        def greedy(a: Agent = agent, i: int = t) -> Policy:
+            return LearnerPolicy(a, encoder, draw(i), learn=False)
+
+        out.append(episode_records(task, greedy, worlds, seed + t))
+    return out
