@@ -104,4 +104,4 @@ def test_root_holds_only_the_core():
     """Layers live in folders; the package root keeps the entry points, the task layer
     and the small shared helpers."""
     root = sorted(p.name for p in PKG.glob("*.py"))
-    assert root == ["__init__.py", "__main__.py", "_io.py", "_progress.py", "_validation.py", "plotting.py", "sim.py"]
+    assert root == ["__init__.py", "__main__.py", "_io.py", "_progress.py", "_validation.py", "sim.py"]

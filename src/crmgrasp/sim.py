@@ -25,9 +25,8 @@ from numpy.typing import NDArray
 
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.contacts import Config
-from crmgrasp.model.hand import CRM, Error, Outcome, execute_crm
-from crmgrasp.model.quality import min_friction
-from crmgrasp.model.sensing import Observation, observe
+from crmgrasp.model.hand import CRM, Error, Outcome
+from crmgrasp.model.sensing import Observation
 from crmgrasp.tasks import Task, World
 
 __all__ = [
@@ -126,8 +125,8 @@ class OneStep(NamedTuple):
 def begin(task: Task, config: Config, rng: np.random.Generator) -> tuple[SimState, Observation, int]:
     """Start an episode at ``config``: one reading; the state, its observation and
     discretized index (error none)."""
-    sensed = task.noise.sense(config, rng)
-    obs = observe(sensed)
+    sensed = task.read(config, rng)
+    obs = task.observe(sensed)
     return SimState(config, sensed, 0), obs, task.discretizer.index(obs, Error.NONE)
 
 
@@ -143,11 +142,10 @@ def step(task: Task, state: SimState, action: int | CRM, rng: np.random.Generato
     ``terminated`` when the true configuration is a grasp (``min_friction <=
     mu_goal``); ``truncated`` when ``max_steps`` CRMs have been executed without.
     """
-    crm = task.hand.check_crm(action) if isinstance(action, CRM) else task.actions[action]
-    out = execute_crm(task.obj, task.hand, state.config, crm, state.sensed)
-    sensed = task.noise.sense(out.config, rng)
-    obs = observe(sensed)
-    mu = min_friction(out.config)
+    out = task.execute(state.config, task.crm(action), state.sensed)
+    sensed = task.read(out.config, rng)
+    obs = task.observe(sensed)
+    mu = task.quality(out.config)
     steps = state.steps + 1
     terminated, truncated = episode_end(task, mu, steps)
     return StepResult(
@@ -166,7 +164,7 @@ def step(task: Task, state: SimState, action: int | CRM, rng: np.random.Generato
 def begin_one(task: Task, config: Config, rng: np.random.Generator) -> OneStep:
     """:func:`begin` as a :class:`OneStep` (error none, reward 0)."""
     state, obs, index = begin(task, config, rng)
-    return OneStep(state, obs.rho, obs.m_a, obs.m_b, Error.NONE, index, min_friction(config))
+    return OneStep(state, obs.rho, obs.m_a, obs.m_b, Error.NONE, index, task.quality(config))
 
 
 def step_one(task: Task, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:

@@ -207,6 +207,11 @@ def load_policy(path: str | os.PathLike[str], task: Task | None = None) -> Any:
     return GreedyPolicy.load(path, task)
 
 
+def crm_rows(task: Task) -> list[list[Any]]:
+    """The task's CRM set as JSON data: ``[c, f, r]`` per action (``r`` a list in 3-D)."""
+    return [[c.c, c.f, list(c.r) if isinstance(c.r, tuple) else c.r] for c in task.actions]
+
+
 class GreedyPolicy:
     """A fixed state -> action table, usable wherever an agent's ``greedy`` is."""
 
@@ -272,7 +277,7 @@ class GreedyPolicy:
             "task": self.task.name,
             "task_spec": task_to_dict(self.task),
             "k": self.k,
-            "actions": [[c.c, c.f, c.r] for c in self.task.actions],
+            "actions": crm_rows(self.task),
             "bins": self.task.discretizer.to_dict(),
             "agent": self.agent,
             "greedy": {str(s): list(a) for s, a in sorted(self.table.items())},
@@ -318,7 +323,7 @@ class GreedyPolicy:
         k = doc["k"]
         if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k <= MAX_K:
             raise bad(f"k must be an integer in [0, {MAX_K}], got {shown(k)}")
-        expected = [[c.c, c.f, c.r] for c in task.actions]
+        expected = crm_rows(task)
         if doc["actions"] != expected:
             raise bad(f"policy's CRM set {doc['actions']} differs from the task's {expected}")
         if doc["bins"] != task.discretizer.to_dict():

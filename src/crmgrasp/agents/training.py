@@ -23,7 +23,7 @@ from crmgrasp.agents.model_based import ModelVI
 from crmgrasp.agents.tabular import DynaQ, QLearning, Sarsa, SarsaLambda
 from crmgrasp.kernels import kernel_for
 from crmgrasp.model.contacts import Config
-from crmgrasp.model.hand import Outcome, execute_crm
+from crmgrasp.model.hand import Outcome
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.model.sensing import Observation
 from crmgrasp.sim import Stepper
@@ -388,7 +388,7 @@ def rollout(
     for tr in ep.trace:
         a, before, after = tr.action, tr.before, tr.after
         assert isinstance(a, int)  # a learner acts by index
-        path = execute_crm(task.obj, task.hand, before.state.config, task.actions[a], before.state.sensed)
+        path = task.execute(before.state.config, task.actions[a], before.state.sensed)
         steps.append(
             RolloutStep(
                 before.state.config, before.observation, a, path, after.observation, after.obs_index, after.min_friction

@@ -20,11 +20,11 @@ import numpy as np
 from crmgrasp._io import check_output, dumps_json, save_figure
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.cli.parser import _AGENT_FLAGS, _resolve_crm, build_parser
-from crmgrasp.model.contacts import Config
-from crmgrasp.model.hand import CRM, Error
+from crmgrasp.model.hand import Error
 from crmgrasp.model.quality import min_friction
 from crmgrasp.model.sensing import SensorNoise, observe
-from crmgrasp.tasks import TEMPLATE, Task, make_task, task_names, task_to_dict
+from crmgrasp.model.spatial import sense3d
+from crmgrasp.tasks import TEMPLATE, SpatialTask, Task, make_task, task_names, task_to_dict
 
 __all__ = ["main", "build_parser"]
 
@@ -40,9 +40,16 @@ def _task(args: argparse.Namespace, spec: str | None = None) -> Task:
     )
 
 
-def _scene(args: argparse.Namespace) -> tuple[Task, Config, CRM | None, SensorNoise, np.random.Generator]:
+def _scene(args: argparse.Namespace) -> tuple[Task, Any, Any, SensorNoise, np.random.Generator]:
+    """The task, the configuration of --a and --b (planar or spatial), the CRM, the noise, the generator."""
     task = _task(args)
-    config = task.hand.contact(task.obj, args.a, args.b)
+    config: Any
+    if isinstance(task, SpatialTask):
+        config = task.contacts_toward(args.a, args.b)
+    elif len(args.a) != 2 or len(args.b) != 2:
+        raise CrmgraspError(f"--a and --b take X,Y on the planar task {task.name!r}")
+    else:
+        config = task.hand.contact(task.obj, args.a, args.b)
     crm = _resolve_crm(task, args.crm) if args.crm is not None else None
     noise = SensorNoise(math.radians(args.sigma_n), args.sigma_p)
     return task, config, crm, noise, np.random.default_rng(args.seed)
@@ -95,7 +102,11 @@ def _cmd_show(args: argparse.Namespace) -> int:
         raise CrmgraspError(f"--out must end in .png, .pdf or .svg, got {args.out.name!r}")
     check_output(args.out, "--out")
     task, config, crm, noise, rng = _scene(args)
-    outcome = task.hand.execute(task.obj, config, crm, noise=noise, rng=rng) if crm else None
+    if isinstance(task, SpatialTask):
+        sensed = sense3d(config, noise.sigma_n, noise.sigma_p, rng, task.hand3d)
+        outcome = task.execute(config, crm, sensed) if crm else None
+    else:
+        outcome = task.hand.execute(task.obj, config, crm, noise=noise, rng=rng) if crm else None
     title = f"{task.name}" + (f": CRM {crm} -> {outcome.error.name.lower()}" if outcome else "")
     save_figure(scene_figure(task.obj, task.hand, config, outcome, title), args.out, dpi=120)
     print(f"wrote {args.out.resolve()}")

@@ -6,13 +6,14 @@ import argparse
 import re
 from collections.abc import Callable
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
 
 from crmgrasp import __version__
 from crmgrasp._validation import SEED_MAX, CrmgraspError, as_point, finite, integer, shown
 from crmgrasp.model.hand import CRM
 from crmgrasp.model.history import MAX_K
-from crmgrasp.tasks import Task
+from crmgrasp.model.spatial import CRM3D
+from crmgrasp.tasks import SpatialTask, Task
 
 __all__ = ["build_parser"]
 
@@ -49,12 +50,14 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
 
 
-def _point(text: str) -> tuple[float, float]:
+def _point(text: str) -> tuple[float, ...]:
+    """X,Y (a planar task) or X,Y,Z (a spatial one; the task checks which it needs)."""
     parts = str(text).split(",")
-    if len(parts) != 2:
-        raise argparse.ArgumentTypeError(f"expected X,Y (two numbers), got {text!r}")
+    if len(parts) not in (2, 3):
+        raise argparse.ArgumentTypeError(f"expected X,Y or X,Y,Z (numbers), got {text!r}")
     try:
-        return as_point(parts, "point")
+        xy = as_point(parts[:2], "point")
+        return xy if len(parts) == 2 else (*xy, finite(parts[2], "point z"))
     except CrmgraspError as exc:
         raise argparse.ArgumentTypeError(f"{exc} in {text!r}") from None
 
@@ -93,7 +96,7 @@ def _number(text: str) -> float:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
-def _resolve_crm(task: Task, text: str) -> CRM:
+def _resolve_crm(task: Task, text: str) -> Any:
     """``C1``..``Cn`` names the task's actions; anything else is parsed as ``c,f,r``."""
     m = re.fullmatch(r"[Cc]([0-9]+)", text.strip())
     if m:
@@ -101,6 +104,12 @@ def _resolve_crm(task: Task, text: str) -> CRM:
         if not 1 <= i <= len(task.actions):
             raise CrmgraspError(f"task {task.name} has actions C1..C{len(task.actions)}, got {shown(text)}")
         return task.actions[i - 1]
+    if isinstance(task, SpatialTask):
+        parts = [p.strip() for p in text.split(",")]
+        if len(parts) != 4:
+            n = len(task.actions)
+            raise CrmgraspError(f"a spatial CRM is c,f,r1,r2 (e.g. a,a,0.05,0) or C1..C{n}, got {shown(text)}")
+        return task.crm(CRM3D(parts[0], parts[1], (finite(parts[2], "r1"), finite(parts[3], "r2"))))
     return task.hand.check_crm(CRM.parse(text))
 
 
@@ -120,6 +129,7 @@ EXPERIMENT_NAMES = (
     "cost-of-failure",
     "generalization",
     "non-convex",
+    "spatial",
     "figure4-mujoco",
     "figure9-mujoco",
 )

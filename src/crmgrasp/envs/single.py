@@ -15,13 +15,13 @@ from gymnasium import spaces
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.kernels import Kernel, kernel_for
 from crmgrasp.kernels.family import FamilyKernel
-from crmgrasp.model.contacts import Config, config_from_row
-from crmgrasp.model.hand import Error, check_config, execute_crm
+from crmgrasp.model.contacts import Config
+from crmgrasp.model.hand import Error
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.sim import OneStep, SimState
 from crmgrasp.tasks import Task, World, make_task
 
-__all__ = ["CRMGraspEnv", "KOrderHistory", "ENV_ID", "FAMILY_ENVS", "observation_space"]
+__all__ = ["CRMGraspEnv", "KOrderHistory", "ENV_ID", "FAMILY_ENVS", "SPATIAL_ENVS", "observation_space"]
 
 ENV_ID = "crmgrasp/PaperBox-v0"
 _empty = np.empty
@@ -140,7 +140,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         if options and "world" in options:
             cfg = self._use_world(options["world"])
         elif options and "config" in options:
-            cfg = check_config(self.scene_task.obj, options["config"], "options['config']")
+            cfg = self.scene_task.check_config(options["config"], "options['config']")
         elif self.task.family is not None:
             cfg = self.kernel.sample_start(self.np_random)
         else:
@@ -175,7 +175,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             raise CrmgraspError("options['world'] needs a family task; use options['config']")
         if not isinstance(world, World) or not isinstance(world.task, Task) or world.task.family is not None:
             raise CrmgraspError(f"options['world'] must be a World(task on one object, config), got {world!r}")
-        cfg = check_config(world.task.obj, world.config, "options['world'].config")
+        cfg = world.task.check_config(world.config, "options['world'].config")
         self.kernel.use(world.task)
         return cfg
 
@@ -188,7 +188,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             self._block = min(2 * self._block, _MAX_BLOCK)
         row = self._starts[self._next]
         self._next += 1
-        return config_from_row(row)
+        return self.kernel.config_of(row)
 
     def render(self) -> np.ndarray | None:  # type: ignore[override]
         """An RGB image of the scene (``render_mode="rgb_array"``), else ``None``."""
@@ -204,7 +204,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             fig = scene_figure(t.obj, t.hand, self._state.config, None, title)
         else:
             prev, action = self._last
-            outcome = execute_crm(t.obj, t.hand, prev.config, t.actions[action], prev.sensed)
+            outcome = t.execute(prev.config, t.actions[action], prev.sensed)
             fig = scene_figure(t.obj, t.hand, prev.config, outcome, f"{title} ({outcome.error.name.lower()})")
         canvas = FigureCanvasAgg(fig)
         canvas.draw()
@@ -240,6 +240,9 @@ class KOrderHistory(gym.Wrapper[int, np.int64, dict[str, Any], np.int64]):
         return self.encoder.encode(self._history), float(reward), terminated, truncated, info
 
 
+SPATIAL_ENVS = {"crmgrasp/Box3D-v0": "box-3d", "crmgrasp/Cup3D-v0": "cup-3d"}
+"""Registered spatial environments (docs/model-3d.md): id -> task name (each episode draws its solid)."""
+
 FAMILY_ENVS = {
     "crmgrasp/BoxFamily-v0": "box-family",
     "crmgrasp/CupFamily-v0": "cup-family",
@@ -252,7 +255,7 @@ FAMILY_ENVS = {
 
 
 def register() -> None:
-    """Register ``crmgrasp/PaperBox-v0`` and the :data:`FAMILY_ENVS` (idempotent)."""
+    """Register ``crmgrasp/PaperBox-v0``, the :data:`FAMILY_ENVS` and the :data:`SPATIAL_ENVS` (idempotent)."""
     if ENV_ID not in gym.registry:
         gym.register(
             id=ENV_ID,
@@ -261,7 +264,7 @@ def register() -> None:
             kwargs={"task": "paper-box"},
             max_episode_steps=10,  # paper-box's max_steps: the env cuts episodes there itself
         )
-    for env_id, task in FAMILY_ENVS.items():
+    for env_id, task in {**FAMILY_ENVS, **SPATIAL_ENVS}.items():
         if env_id not in gym.registry:
             gym.register(
                 id=env_id,

@@ -3,15 +3,16 @@
 :func:`kernel_for` is the only place that chooses a path, from the backend asked
 for, the shape of the task's object and its sensing noise:
 
-========================  ===========================  ==============================
-backend                   object                       kernel
-========================  ===========================  ==============================
-``"reference"``           any                          :class:`ReferenceKernel`
-``"auto"``                a shape without a kernel     :class:`ReferenceKernel`
-``"auto"``, ``"numba"``   polygon, sensing noise       ``PolygonKernel``
-``"auto"``, ``"numba"``   polygon, noise-free          ``FusedPolygonKernel``
-any                       a family (one per episode)   ``FamilyKernel`` over the above
-========================  ===========================  ==============================
+===========================  ==========================  ===============================
+backend                      object                      kernel
+===========================  ==========================  ===============================
+``"reference"``              a planar shape              ``ReferenceKernel``
+``"auto"``                   a shape without a kernel    ``ReferenceKernel``
+``"auto"``, ``"numba"``      polygon, sensing noise      ``PolygonKernel``
+``"auto"``, ``"numba"``      polygon, noise-free         ``FusedPolygonKernel``
+``"auto"``, ``"reference"``  a solid (spatial task)      ``SpatialKernel``
+any                          a family (one per episode)  ``FamilyKernel`` over the above
+===========================  ==========================  ===============================
 
 A family task (:attr:`crmgrasp.tasks.Task.family`) gets a
 :class:`~crmgrasp.kernels.family.FamilyKernel`, which builds the kernel of each
@@ -37,7 +38,7 @@ from crmgrasp.model.contacts import configs_to_array
 from crmgrasp.model.geometry import Polygon, Shape
 from crmgrasp.model.hand import CRM, Hand
 from crmgrasp.sim import OneStep
-from crmgrasp.tasks import Task
+from crmgrasp.tasks import SpatialTask, Task
 
 __all__ = ["BACKENDS", "Backend", "kernel_for", "execute_batch", "Kernel", "OneStep", "BatchStep", "ReferenceKernel"]
 
@@ -56,6 +57,12 @@ def kernel_for(task: Task, backend: str = "auto") -> Kernel:
         from crmgrasp.kernels.family import FamilyKernel
 
         return FamilyKernel(task, lambda instance: kernel_for(instance, backend))
+    if isinstance(task, SpatialTask):
+        if backend == "numba":
+            raise CrmgraspError("no compiled kernel for spatial tasks yet; use backend 'auto' or 'reference'")
+        from crmgrasp.kernels.spatial import SpatialKernel
+
+        return SpatialKernel(task)
     compiled = isinstance(task.obj, Polygon)
     if backend == "reference" or (backend == "auto" and not compiled):
         return ReferenceKernel(task)

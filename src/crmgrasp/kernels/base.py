@@ -17,6 +17,7 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from crmgrasp.model.contacts import config_from_row
 from crmgrasp.model.hand import CRM
 from crmgrasp.sim import OneStep, SimState, begin_one, step_one
 from crmgrasp.tasks import StartFilter, Task
@@ -49,12 +50,26 @@ class Kernel(ABC):
 
     def __init__(self, task: Task) -> None:
         self.task = task
-        self.acts = np.array([(a.ci, a.fi, a.r) for a in task.actions], dtype=np.float64)
+        self.acts = self.action_table(task)
         self.bound = 2.0 * task.hand.aperture  # the observation space's moment bound, m
         self.start_filter: StartFilter | None = None  # a compiled one, where the kernel has it
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.task.name!r})"
+
+    @staticmethod
+    def action_table(task: Task) -> F64:
+        """One row per action: ``(c is b, f is b, r)`` (``r_1, r_2`` for a spatial CRM)."""
+        return np.array([(a.c == "b", a.f == "b", *np.atleast_1d(a.r)) for a in task.actions], dtype=np.float64)
+
+    @staticmethod
+    def config_of(row: Any) -> Any:
+        """The configuration of one row (:func:`~crmgrasp.model.contacts.config_from_row`)."""
+        return config_from_row(row)
+
+    def read_rows(self, rows: F64, rng: np.random.Generator) -> F64:
+        """One sensed reading per row (:meth:`~crmgrasp.model.sensing.SensorNoise.sense_batch`)."""
+        return self.task.noise.sense_batch(rows, rng)
 
     # ------------------------------------------------------------ the rules
     @abstractmethod
@@ -105,7 +120,7 @@ class Kernel(ABC):
         if len(rows):
             new[rows] = starts
             err[rows] = 0
-        sensed = self.task.noise.sense_batch(new, rng)
+        sensed = self.read_rows(new, rng)
         rho, m_a, m_b, index, mu = self.observe(new, sensed, err)
         return BatchStep(new, sensed, self.clip(rho, m_a, m_b, err), index, mu)
 

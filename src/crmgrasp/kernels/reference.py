@@ -7,46 +7,58 @@ compiled kernel.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
 from crmgrasp.kernels.base import F64, I64, Kernel
-from crmgrasp.model.contacts import config_from_row
-from crmgrasp.model.hand import CRM, execute_crm
-from crmgrasp.model.quality import min_friction
-from crmgrasp.model.sensing import observe
+from crmgrasp.model.hand import CRM
 
 __all__ = ["ReferenceKernel"]
 
 
 class ReferenceKernel(Kernel):
-    """:func:`crmgrasp.model.hand.execute_crm`, :func:`crmgrasp.model.sensing.observe`,
-    :meth:`crmgrasp.model.sensing.Discretizer.index_of` and
-    :func:`crmgrasp.model.quality.min_friction` per row."""
+    """The task's own rules (:meth:`~crmgrasp.tasks.Task.execute`, ``observe``, ``quality``:
+    :func:`crmgrasp.model.hand.execute_crm`, :func:`crmgrasp.model.sensing.observe`,
+    :func:`crmgrasp.model.quality.min_friction` on a planar task) and
+    :meth:`crmgrasp.model.sensing.Discretizer.index_of`, row by row."""
 
     name = "reference"
+    width = 8  # columns of a row
+
+    @staticmethod
+    def crm_of(c_is_b: bool, f_is_b: bool, r: Any) -> Any:
+        """The CRM of one row's ``(c is b, f is b, r)``."""
+        return CRM("ab"[c_is_b], "ab"[f_is_b], r)
+
+    @staticmethod
+    def row_of(config: Any) -> list[float]:
+        """The row of a configuration."""
+        return [*config.a, *config.b]
 
     def execute_crms(
         self, cfg: F64, sen: F64, c_is_b: NDArray[np.bool_], f_is_b: NDArray[np.bool_], r: F64
     ) -> tuple[F64, NDArray[np.int8]]:
-        obj, hand = self.task.obj, self.task.hand
-        new = np.array(cfg, dtype=np.float64, copy=True).reshape(-1, 8)
-        err = np.zeros(len(new), dtype=np.int8)
-        crms: dict[tuple[bool, bool, float], CRM] = {}
+        new = np.array(cfg, dtype=np.float64, copy=True).reshape(-1, self.width)
+        n = len(new)
+        err = np.zeros(n, dtype=np.int8)
+        crms: dict[tuple[bool, bool, Any], Any] = {}
+        rr = np.broadcast_to(r, (n, *np.shape(r)[1:])).tolist()
         rows = zip(
             new.tolist(),
             np.asarray(sen).tolist(),
-            np.broadcast_to(c_is_b, len(new)).tolist(),
-            np.broadcast_to(f_is_b, len(new)).tolist(),
-            np.broadcast_to(r, len(new)).tolist(),
+            np.broadcast_to(c_is_b, n).tolist(),
+            np.broadcast_to(f_is_b, n).tolist(),
+            rr,
         )
         for j, (row, srow, cb, fb, rj) in enumerate(rows):
-            key = (cb, fb, rj)
+            key = (cb, fb, tuple(rj) if isinstance(rj, list) else rj)
             crm = crms.get(key)
             if crm is None:
-                crm = crms[key] = CRM("ab"[cb], "ab"[fb], rj)
-            out = execute_crm(obj, hand, config_from_row(row), crm, config_from_row(srow))
-            new[j] = (*out.config.a, *out.config.b)
+                crm = crms[key] = self.crm_of(cb, fb, key[2])
+            out = self.task.execute(self.config_of(row), crm, self.config_of(srow))
+            new[j] = self.row_of(out.config)
             err[j] = out.error
         return new, err
 
@@ -54,10 +66,10 @@ class ReferenceKernel(Kernel):
         n = len(cfg)
         rho, m_a, m_b, mu = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
         index = np.empty(n, dtype=np.int64)
-        index_of = self.task.discretizer.index_of
+        index_of, config_of = self.task.discretizer.index_of, self.config_of
         for j, (row, srow, e) in enumerate(zip(np.asarray(cfg).tolist(), np.asarray(sen).tolist(), err.tolist())):
-            o = observe(config_from_row(srow))
+            o = self.task.observe(config_of(srow))
             rho[j], m_a[j], m_b[j] = o
             index[j] = index_of(o.rho, o.m_a, o.m_b, e)
-            mu[j] = min_friction(config_from_row(row))
+            mu[j] = self.task.quality(config_of(row))
         return rho, m_a, m_b, index, mu

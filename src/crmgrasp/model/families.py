@@ -51,6 +51,7 @@ __all__ = [
     "MixedFamily",
     "SamplerFamily",
     "width",
+    "family_dict",
 ]
 
 MAX_TRIES = 1000
@@ -174,15 +175,20 @@ class _Family(ABC):
 
     def describe(self) -> dict[str, Any]:
         """The family's kind and parameters as plain data (ranges as lists)."""
-        out: dict[str, Any] = {"kind": self.kind}
-        for k, v in vars(self).items():
-            if k == "pose":
-                out["pose"] = {"angle": list(v.angle), "offset": list(v.offset)}
-            elif isinstance(v, tuple):
-                out[k] = list(v)
-            else:
-                out[k] = v
-        return out
+        return family_dict(self.kind, self)
+
+
+def family_dict(kind: str, family: object) -> dict[str, Any]:
+    """A dataclass family's ``kind`` and fields as plain data (ranges and poses as lists)."""
+    out: dict[str, Any] = {"kind": kind}
+    for k, v in vars(family).items():
+        if k == "pose":
+            out["pose"] = {"angle": list(v.angle), "offset": list(v.offset)}
+        elif isinstance(v, tuple):
+            out[k] = list(v)
+        else:
+            out[k] = v
+    return out
 
 
 def _poly(vertices: list[tuple[float, float]]) -> Polygon:

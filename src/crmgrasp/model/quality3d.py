@@ -35,6 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from crmgrasp._validation import CrmgraspError, non_negative
 from crmgrasp.model.quality import ANTIPODAL_TOL, positively_spans
+from crmgrasp.model.solids import cross
 
 __all__ = ["min_friction_3d", "primitive_wrenches", "force_closure_3d", "ferrari_canny", "tangent_basis"]
 
@@ -89,7 +90,7 @@ def min_friction_3d(points: ArrayLike, normals: ArrayLike) -> float:
         cos = float(np.dot(n[i], d)) / length
         if cos <= 0.0:
             return math.inf
-        sin = float(np.linalg.norm(np.cross(n[i], d))) / length
+        sin = float(np.linalg.norm(cross(n[i], d))) / length
         tan = sin / cos
         worst = max(worst, 0.0 if tan < ANTIPODAL_TOL else tan)
     return worst

@@ -30,8 +30,7 @@ import numpy as np
 
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.contacts import Config
-from crmgrasp.model.hand import Error, execute_crm
-from crmgrasp.model.sensing import observe
+from crmgrasp.model.hand import Error
 from crmgrasp.sim import Percept, run_episode
 from crmgrasp.tasks import Task, World
 
@@ -60,7 +59,7 @@ class _Model:
         self._ids: dict[int, int] = {}
         self._step: dict[tuple[State, int], Step] = {}
         self.errored: dict[tuple[State, int], bool] = {}
-        self._clair: dict[tuple[State, int], int | None] = {}
+        self._clair: dict[State, tuple[int | None, int]] = {}  # state -> (depth found, horizon searched)
 
     def state(self, start: Start) -> State:
         """The hidden state of a start (a configuration of the task, or a world)."""
@@ -80,8 +79,8 @@ class _Model:
         if hit is None:
             i, config = state
             t = self.tasks[i]
-            out = execute_crm(t.obj, t.hand, config, t.actions[action], config)
-            index = t.discretizer.index(observe(out.config), out.error)
+            out = t.execute(config, t.actions[action], config)
+            index = t.discretizer.index(t.observe(out.config), out.error)
             hit = self._step[key] = ((i, out.config), index, t.is_success(out.config))
             self.errored[key] = out.error is not Error.NONE
         return hit
@@ -92,11 +91,20 @@ class _Model:
         return horizon if depth is None else depth
 
     def depth(self, state: State, horizon: int) -> int | None:
-        """Fewest CRMs to a grasp within ``horizon``; ``None`` if no sequence grasps."""
-        key = (state, horizon)
-        if key not in self._clair:
-            self._clair[key] = self._bfs(state, horizon)
-        return self._clair[key]
+        """Fewest CRMs to a grasp within ``horizon``; ``None`` if no sequence grasps.
+        One search answers every horizon up to its own: a depth ``d`` found holds for
+        every horizon from ``d`` on (none below it); none found within ``H`` holds for
+        every horizon up to ``H``."""
+        known = self._clair.get(state)
+        if known is not None:
+            found, searched = known
+            if found is not None:
+                return found if found <= horizon else None
+            if horizon <= searched:
+                return None
+        found = self._bfs(state, horizon)
+        self._clair[state] = (found, horizon)
+        return found
 
     def _bfs(self, start: State, horizon: int) -> int | None:
         """Breadth-first search over CRM sequences. Configurations are visited once up
@@ -126,7 +134,10 @@ place in the clairvoyant search."""
 
 def _key(state: State) -> tuple[int, tuple[int, ...]]:
     i, c = state
-    return i, tuple(round(v / SAME) for v in (*c.a, *c.b))
+    flat = (*c.a, *c.b)
+    if isinstance(flat[0], tuple):  # a spatial configuration: (x, n) triples per contact
+        flat = tuple(v for part in flat for v in part)
+    return i, tuple(round(v / SAME) for v in flat)
 
 
 def sample_starts(task: Task, n: int, seed: int) -> list[Config] | list[World]:
@@ -168,7 +179,7 @@ def _first_groups(model: _Model, starts: Sequence[Start]) -> dict[int, tuple[Sta
     groups: dict[int, tuple[State, ...]] = {}
     for c in starts:
         st = model.state(c)
-        k = model.task.discretizer.index(observe(st[1]), Error.NONE)
+        k = model.task.discretizer.index(model.tasks[st[0]].observe(st[1]), Error.NONE)
         groups[k] = (*groups.get(k, ()), st)
     return groups
 

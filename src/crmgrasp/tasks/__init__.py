@@ -26,6 +26,7 @@ from crmgrasp.tasks.core import (
 )
 from crmgrasp.tasks.families import FAMILY_TASKS, BoundaryStarts, default_crms, family_task, mirror_symmetry
 from crmgrasp.tasks.files import TEMPLATE, load_task_file, resolve_task, task_from_dict, task_to_dict
+from crmgrasp.tasks.spatial import SPATIAL_TASKS, SpatialTask, SurfaceStarts, spatial_crms
 
 __all__ = [
     "StartSampler",
@@ -39,6 +40,10 @@ __all__ = [
     "family_task",
     "mirror_symmetry",
     "FAMILY_TASKS",
+    "SPATIAL_TASKS",
+    "SpatialTask",
+    "SurfaceStarts",
+    "spatial_crms",
     "Symmetry",
     "paper_box",
     "make_task",

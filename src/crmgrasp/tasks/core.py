@@ -12,7 +12,7 @@ import copy
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import NamedTuple, Protocol, overload, runtime_checkable
+from typing import Any, NamedTuple, Protocol, overload, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -21,9 +21,9 @@ from crmgrasp._validation import CrmgraspError, finite, non_negative
 from crmgrasp.model.contacts import Config, Contact, config_from_row
 from crmgrasp.model.families import ShapeFamily
 from crmgrasp.model.geometry import Polygon, Rectangle, Shape
-from crmgrasp.model.hand import CRM, Error, Hand, feasible
+from crmgrasp.model.hand import CRM, Error, Hand, check_config, execute_crm, feasible
 from crmgrasp.model.quality import min_friction
-from crmgrasp.model.sensing import Discretizer, SensorNoise
+from crmgrasp.model.sensing import Discretizer, Observation, SensorNoise, observe
 
 __all__ = [
     "StartSampler",
@@ -325,6 +325,23 @@ class Task:
             raise CrmgraspError(f"task object must be a Shape (Polygon, Disc, ...), got {self.obj!r}")
         if not isinstance(self.hand, Hand):
             raise CrmgraspError(f"task hand must be a Hand, got {self.hand!r}")
+        self._check_common()
+        if self.family is not None:
+            if not isinstance(self.family, ShapeFamily):
+                raise CrmgraspError(f"task family must be a ShapeFamily, got {self.family!r}")
+            self._check_family_width()
+
+    def _check_family_width(self) -> None:
+        w = self.family.min_width()  # type: ignore[union-attr]
+        if w > self.hand.aperture:
+            raise CrmgraspError(
+                f"family {self.family.describe()['kind']!r}: its smallest object is {w:.4g} m wide, "  # type: ignore[union-attr]
+                f"beyond the hand's aperture {self.hand.aperture:g} m; no object it draws can be grasped"
+            )
+
+    def _check_common(self) -> None:
+        """The checks every task takes, planar or spatial: actions (through the hand's
+        ``check_crm``), goal, length, symmetry, rewards, reference."""
         actions = tuple(self.actions)
         if not actions:
             raise CrmgraspError("a task needs at least one CRM action")
@@ -345,19 +362,37 @@ class Task:
                 ) from None
         object.__setattr__(self, "grasp_reward", finite(self.grasp_reward, "grasp_reward"))
         object.__setattr__(self, "error_cost", non_negative(self.error_cost, "error_cost"))
-        if self.family is not None:
-            if not isinstance(self.family, ShapeFamily):
-                raise CrmgraspError(f"task family must be a ShapeFamily, got {self.family!r}")
-            w = self.family.min_width()
-            if w > self.hand.aperture:
-                raise CrmgraspError(
-                    f"family {self.family.describe()['kind']!r}: its smallest object is {w:.4g} m wide, "
-                    f"beyond the hand's aperture {self.hand.aperture:g} m; no object it draws can be grasped"
-                )
         if self.reference_mean_steps is not None and not (
             math.isfinite(self.reference_mean_steps) and self.reference_mean_steps > 0
         ):
             raise CrmgraspError(f"reference_mean_steps must be > 0, got {self.reference_mean_steps!r}")
+
+    # -- the model's rules in this task's world (each written once in crmgrasp.model;
+    # a spatial task, crmgrasp.tasks.spatial, overrides them with the spatial model's,
+    # so configurations and CRMs are typed Any here: planar Config / CRM, or Config3D / CRM3D)
+    def crm(self, action: Any) -> Any:
+        """The CRM of action index ``action``, or ``action`` itself checked against the hand."""
+        return self.hand.check_crm(action) if isinstance(action, CRM) else self.actions[action]
+
+    def execute(self, config: Any, crm: Any, sensed: Any) -> Any:
+        """The CRM transition (:func:`~crmgrasp.model.hand.execute_crm`), goal line from ``sensed``."""
+        return execute_crm(self.obj, self.hand, config, crm, sensed)
+
+    def read(self, config: Any, rng: np.random.Generator) -> Any:
+        """One sensed reading of ``config`` (:meth:`~crmgrasp.model.sensing.SensorNoise.sense`)."""
+        return self.noise.sense(config, rng)
+
+    def observe(self, sensed: Any) -> Observation:
+        """The observation of a reading (:func:`~crmgrasp.model.sensing.observe`)."""
+        return observe(sensed)
+
+    def quality(self, config: Any) -> float:
+        """The min friction of a configuration (:func:`~crmgrasp.model.quality.min_friction`)."""
+        return min_friction(config)
+
+    def check_config(self, config: object, name: str = "configuration") -> Any:
+        """``config`` if it is a valid configuration on the object, else a one-line error."""
+        return check_config(self.obj, config, name)
 
     def instance(self, rng: np.random.Generator) -> Task:
         """This task with an object drawn from its family (one episode's world; the
@@ -413,9 +448,9 @@ class Task:
         ``mu <= mu_goal`` (elementwise on an array)."""
         return mu <= self.mu_goal
 
-    def is_success(self, config: Config) -> bool:
-        """docs/model.md section 5: :meth:`grasped` of ``min_friction(config)``."""
-        return self.grasped(min_friction(config))
+    def is_success(self, config: Any) -> bool:
+        """docs/model.md section 5: :meth:`grasped` of :meth:`quality`."""
+        return self.grasped(self.quality(config))
 
     def action_names(self) -> tuple[str, ...]:
         """``('C1 (a,b,0)', ...)``: readable action names in index order."""

@@ -387,17 +387,19 @@ def task_to_dict(task: Task) -> dict[str, Any]:
     A start sampler other than the built-in kinds is written as ``{"kind": "custom"}``
     (Python code does not travel); :func:`task_from_dict` refuses it."""
     h = task.hand
-    hand = {"aperture": h.aperture, "palm_depth": h.palm_depth, "backoff": h.backoff}
+    hand: dict[str, Any] = {"aperture": h.aperture, "palm_depth": h.palm_depth, "backoff": h.backoff}
     hand.update({k: getattr(h, k) for k in ("palm_normal_tol", "min_separation")})
     if h.r_max is not None:
         hand["r_max"] = h.r_max
+    if hasattr(h, "g"):  # a spatial hand: its vertical and forward axes, and the table
+        hand.update(h=list(h.h), g=list(h.g))  # type: ignore[attr-defined]
     doc: dict[str, Any] = {
         "name": task.name,
         "description": task.description,
         "mu_goal": task.mu_goal,
         "max_steps": task.max_steps,
         "hand": hand,
-        "crm": [{"c": a.c, "f": a.f, "r": a.r} for a in task.actions],
+        "crm": [{"c": a.c, "f": a.f, "r": list(a.r) if isinstance(a.r, tuple) else a.r} for a in task.actions],
         "bins": task.discretizer.to_dict(),
         "starts": _starts_dict(task.starts),
         "grasp_reward": task.grasp_reward,
@@ -408,6 +410,8 @@ def task_to_dict(task: Task) -> dict[str, Any]:
         doc["object"] = _object_dict(task.obj)
     else:
         doc["family"] = task.family.describe()  # a sampler family (Python code) is written, not read back
+    if hasattr(task, "table"):
+        doc["table"] = task.table
     if task.reference_mean_steps is not None:
         doc["reference_mean_steps"] = task.reference_mean_steps
     if task.symmetry is not None:

@@ -118,7 +118,13 @@ def _draw_config(ax: Axes, hand: Hand, config: Config, scale: float, *, alpha: f
 def scene_figure(
     obj: Shape, hand: Hand, config: Config, outcome: Outcome | None = None, title: str | None = None
 ) -> Figure:
-    """A one-panel figure of :func:`draw_scene`."""
+    """A one-panel figure of :func:`draw_scene` (of :func:`crmgrasp.plotting.spatial.scene_figure3d`
+    for a solid: ``outcome`` then gives the configuration after the CRM)."""
+    if not isinstance(obj, (Polygon, Disc)) and not hasattr(obj, "perimeter"):
+        from crmgrasp.plotting.spatial import scene_figure3d
+
+        after = outcome.config if outcome is not None and outcome.error == 0 else None
+        return scene_figure3d(obj, hand, config, after, title)  # type: ignore[arg-type]
     fig = Figure(figsize=(6, 5.2), layout="constrained")
     ax = fig.add_subplot()
     draw_scene(ax, obj, hand, config, outcome, title=title)

@@ -1,0 +1,124 @@
+"""Families of spatial objects on a table: one solid per episode (docs/model-3d.md section 6).
+
+The table is the plane ``z = 0``; every object rests on it. A family draws the object's
+dimensions from ranges, then a pose from a :class:`~crmgrasp.model.families.Pose`: a
+rotation about the vertical axis by the pose's angle (a yaw) and a horizontal
+translation. Ranges are checked as for the planar families (one line naming the
+parameter).
+
+* :class:`BoxOnTable`: a box of random length, width and height resting on a face with
+  a random yaw (drawing all three dimensions covers which face is down): ``Box3D``.
+* :class:`CylinderOnTable`: a closed cylinder of random radius and height, upright
+  (axis vertical) with probability ``upright``, else lying on its side: ``Cup3D``.
+
+Each has ``sample(rng)``, ``nominal()`` (the middle of every range, unposed),
+``min_width()`` (the smallest distance across any object it draws: the narrowest span
+a pinch must reach, compared with the hand's aperture) and ``describe()``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.model.families import Pose, Range, _mid, _range, _uniform, family_dict
+from crmgrasp.model.solids import Cylinder, Solid, box3d, rotation_z
+
+__all__ = ["SolidFamily", "BoxOnTable", "CylinderOnTable"]
+
+
+@runtime_checkable
+class SolidFamily(Protocol):
+    """A distribution over spatial objects on the table."""
+
+    def sample(self, rng: np.random.Generator) -> Solid: ...
+
+    def nominal(self) -> Solid: ...
+
+    def min_width(self) -> float: ...
+
+    def describe(self) -> dict[str, Any]: ...
+
+
+def _placed(solid: Solid, rng: np.random.Generator, pose: Pose) -> Solid:
+    angle, dx, dy = pose.draw(rng)
+    return solid.moved(rotation_z(angle), (dx, dy, 0.0))
+
+
+def _table_pose() -> Pose:
+    return Pose(angle=(0.0, 2.0 * math.pi), offset=(-0.02, 0.02))
+
+
+@dataclass(frozen=True)
+class BoxOnTable:
+    """Boxes ``length x width x height`` (metres) on the table, centred on the pose's
+    offset, turned by its yaw. Draws: length, width, height, then the pose (3)."""
+
+    length: Range = (0.15, 0.30)
+    width: Range = (0.06, 0.12)
+    height: Range = (0.06, 0.20)
+    pose: Pose = field(default_factory=_table_pose)
+
+    def __post_init__(self) -> None:
+        for name in ("length", "width", "height"):
+            object.__setattr__(self, name, _range(getattr(self, name), f"box {name}"))
+
+    @staticmethod
+    def _box(length: float, width: float, height: float) -> Solid:
+        return box3d((-length / 2, -width / 2, 0.0), (length / 2, width / 2, height))
+
+    def sample(self, rng: np.random.Generator) -> Solid:
+        dims = (_uniform(rng, self.length), _uniform(rng, self.width), _uniform(rng, self.height))
+        return _placed(self._box(*dims), rng, self.pose)
+
+    def nominal(self) -> Solid:
+        return self._box(_mid(self.length), _mid(self.width), _mid(self.height))
+
+    def min_width(self) -> float:
+        return min(self.length[0], self.width[0], self.height[0])
+
+    def describe(self) -> dict[str, Any]:
+        return family_dict("box3d", self)
+
+
+@dataclass(frozen=True)
+class CylinderOnTable:
+    """Closed cylinders (the cup without its opening) of radius ``radius`` and height
+    ``height`` (metres): upright with probability ``upright``, else lying on the table
+    along the pose's yaw. Draws: radius, height, the upright coin, then the pose (3)."""
+
+    radius: Range = (0.03, 0.07)
+    height: Range = (0.06, 0.20)
+    upright: float = 0.5
+    pose: Pose = field(default_factory=_table_pose)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "radius", _range(self.radius, "cylinder radius"))
+        object.__setattr__(self, "height", _range(self.height, "cylinder height"))
+        u = self.upright
+        if isinstance(u, bool) or not isinstance(u, (int, float)) or not 0.0 <= u <= 1.0:
+            raise CrmgraspError(f"upright must be a probability in [0, 1], got {u!r}")
+
+    @staticmethod
+    def _cylinder(radius: float, height: float, upright: bool) -> Solid:
+        if upright:
+            return Cylinder((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), radius, height)
+        return Cylinder((-height / 2, 0.0, radius), (1.0, 0.0, 0.0), radius, height)
+
+    def sample(self, rng: np.random.Generator) -> Solid:
+        radius, height = _uniform(rng, self.radius), _uniform(rng, self.height)
+        upright = float(rng.random()) < self.upright
+        return _placed(self._cylinder(radius, height, upright), rng, self.pose)
+
+    def nominal(self) -> Solid:
+        return self._cylinder(_mid(self.radius), _mid(self.height), self.upright >= 0.5)
+
+    def min_width(self) -> float:
+        return min(2.0 * self.radius[0], self.height[0])
+
+    def describe(self) -> dict[str, Any]:
+        return family_dict("cylinder", self)

@@ -1,0 +1,225 @@
+"""Spatial tasks: the hand grasping a solid on a table by 3-D CRMs (docs/model-3d.md).
+
+A :class:`SpatialTask` is a :class:`~crmgrasp.tasks.Task` whose world is the spatial
+model's: a solid (:mod:`crmgrasp.model.solids`) or a family of solids on the table
+(:mod:`crmgrasp.model.solid_families`), the :class:`~crmgrasp.model.spatial.Hand3D`,
+:class:`~crmgrasp.model.spatial.CRM3D` actions and :class:`~crmgrasp.model.spatial.Config3D`
+configurations. It overrides the task's rule methods (``crm``, ``execute``, ``read``,
+``observe``, ``quality``, ``check_config``) with the spatial model's, so the one
+episode loop (:mod:`crmgrasp.sim`), the learners, the references and the environments
+step it unchanged. What the agent sees is the planar model's: ``rho``, ``|m_a|``,
+``|m_b|`` in the same bins (24 discretized observations) and the error flag.
+
+Registered tasks: ``box-3d`` (``crmgrasp/Box3D-v0``) and ``cup-3d`` (``crmgrasp/Cup3D-v0``).
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.model.hand import Error, Outcome
+from crmgrasp.model.quality3d import min_friction_3d
+from crmgrasp.model.sensing import Observation
+from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable, SolidFamily
+from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, Solid, surface_point
+from crmgrasp.model.spatial import (
+    CRM3D,
+    Config3D,
+    Contact3D,
+    Hand3D,
+    execute_crm3d,
+    feasible3d,
+    observe3d,
+    sense3d,
+)
+from crmgrasp.tasks.core import PAPER_BINS, Task, register_task
+
+__all__ = ["SpatialTask", "SurfaceStarts", "spatial_crms", "SPATIAL_HAND", "box_3d", "cup_3d", "SPATIAL_TASKS"]
+
+SPATIAL_HAND = Hand3D(aperture=0.16, palm_depth=0.12, backoff=0.01)
+"""The paper's hand in space: aperture 0.16 m, palm depth 0.12 m, vertical axis z."""
+
+
+def spatial_crms(step: float = 0.05) -> tuple[CRM3D, ...]:
+    """The default 3-D CRM set (10): oppose ``a`` onto ``b``'s line, oppose ``b`` onto
+    ``a``'s; slide each contact by ``step`` metres along ``+-t_1`` (horizontal) and
+    ``+-t_2`` (up or down the face) of its own tangent frame."""
+    slides = ((step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step))
+    return (
+        CRM3D("a", "b", (0.0, 0.0)),
+        CRM3D("b", "a", (0.0, 0.0)),
+        *(CRM3D("a", "a", r) for r in slides),
+        *(CRM3D("b", "b", r) for r in slides),
+    )
+
+
+def _contact(point: np.ndarray, normal: np.ndarray) -> Contact3D:
+    return Contact3D(tuple(point.tolist()), tuple(normal.tolist()))  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
+class SurfaceStarts:
+    """Spatial starts: each contact is the radial projection (:func:`~crmgrasp.model.solids.surface_point`)
+    of a direction drawn uniformly on the sphere (three standard normals, normalised),
+    contact ``a`` first; the pair is resampled until feasible (within the aperture, palm
+    clear, neither contact on the table), not already a grasp, and not both on surfaces
+    facing up (inward normals ``n . h <= -up``, default within 60 degrees of straight
+    down): from there no CRM leaves the top, since every goal line of either contact
+    is vertical and an opposition would have to come from under the table. Draws per
+    try: six standard normals."""
+
+    max_tries: int = 10_000
+    up: float = 0.5
+
+    def __call__(self, task: SpatialTask, rng: np.random.Generator) -> Config3D:
+        for _ in range(self.max_tries):
+            d = rng.standard_normal((2, 3))
+            if np.any(np.linalg.norm(d, axis=1) == 0.0):
+                continue
+            cfg = Config3D(_contact(*surface_point(task.solid, d[0])), _contact(*surface_point(task.solid, d[1])))
+            h = task.hand3d.h
+            on_top = [float(np.dot(c.n, h)) <= -self.up for c in cfg]
+            if not all(on_top) and task.acceptable(cfg):
+                return cfg
+        raise CrmgraspError(f"no feasible surface start found in {self.max_tries} tries")
+
+
+@dataclass(frozen=True)
+class SpatialTask(Task):
+    """A task in the spatial model. Fields as :class:`~crmgrasp.tasks.Task`, with ``obj`` a
+    solid (:data:`~crmgrasp.model.solids.Solid`), ``hand`` a :class:`Hand3D`, ``actions``
+    :class:`CRM3D`, ``starts`` a :class:`SurfaceStarts`, ``family`` a
+    :class:`~crmgrasp.model.solid_families.SolidFamily`, and ``table`` the height of the
+    table plane (metres; ``None``: no table). Success: ``min_friction_3d <= mu_goal``
+    (two point contacts never close a spatial grasp; the squeeze is what they hold)."""
+
+    starts: Any = field(default_factory=SurfaceStarts)
+    table: float | None = 0.0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.obj, (ConvexPolyhedron, Cylinder)):
+            raise CrmgraspError(f"a spatial task's object must be a ConvexPolyhedron or Cylinder, got {self.obj!r}")
+        if not isinstance(self.hand, Hand3D):
+            raise CrmgraspError(f"a spatial task's hand must be a Hand3D, got {self.hand!r}")
+        if self.symmetry is not None:
+            raise CrmgraspError("spatial tasks declare no mirror symmetry (symmetry=None)")
+        self._check_common()
+        if self.family is not None:
+            if not isinstance(self.family, SolidFamily):
+                raise CrmgraspError(f"a spatial task's family must be a SolidFamily, got {self.family!r}")
+            self._check_family_width()
+
+    @property
+    def solid(self) -> Solid:
+        """The object (typed as a solid)."""
+        return self.obj  # type: ignore[return-value]
+
+    @property
+    def hand3d(self) -> Hand3D:
+        """The hand (typed as a :class:`Hand3D`)."""
+        return self.hand  # type: ignore[return-value]
+
+    # -- the spatial model's rules (crmgrasp.model.spatial, crmgrasp.model.quality3d)
+    def crm(self, action: Any) -> Any:
+        return self.hand3d.check_crm(action) if isinstance(action, CRM3D) else self.actions[action]
+
+    def execute(self, config: Any, crm: Any, sensed: Any) -> Outcome:
+        return execute_crm3d(self.solid, self.hand3d, config, crm, sensed, self.table)  # type: ignore[return-value]
+
+    def read(self, config: Any, rng: np.random.Generator) -> Any:
+        return sense3d(config, self.noise.sigma_n, self.noise.sigma_p, rng, self.hand3d)
+
+    def observe(self, sensed: Any) -> Observation:
+        return Observation(*observe3d(sensed))
+
+    def quality(self, config: Any) -> float:
+        return min_friction_3d([config.a.x, config.b.x], [config.a.n, config.b.n])
+
+    def acceptable(self, config: Config3D) -> bool:
+        """The start rule: feasible (with the table) and not already a grasp."""
+        return feasible3d(self.solid, self.hand3d, config, self.table) is Error.NONE and not self.is_success(config)
+
+    def check_config(self, config: object, name: str = "configuration") -> Any:
+        """``config`` if it is a :class:`Config3D` of finite contacts with unit normals on
+        the object's surface (within 1e-6 m), else a one-line error."""
+        if not isinstance(config, Config3D) or not all(isinstance(c, Contact3D) for c in config):
+            raise CrmgraspError(f"{name} must be a Config3D of two Contact3D, got {config!r}")
+        for label, c in zip("ab", config):
+            x, n = np.asarray(c.x, dtype=float), np.asarray(c.n, dtype=float)
+            if x.shape != (3,) or n.shape != (3,) or not (np.all(np.isfinite(x)) and np.all(np.isfinite(n))):
+                raise CrmgraspError(f"{name}: contact {label} must be finite 3-vectors, got {tuple(c)}")
+            if abs(float(np.linalg.norm(n)) - 1.0) > 1e-6:
+                raise CrmgraspError(f"{name}: contact {label}'s normal must be a unit vector, got {c.n}")
+            off = abs(self.solid.gap(x))
+            if off > 1e-6:
+                raise CrmgraspError(f"{name}: contact {label} at {c.x} is {off:.3g} m off the object")
+        return config
+
+    def contacts_toward(self, a: Any, b: Any) -> Config3D:
+        """The configuration with each contact where the ray from the object's centre
+        toward the point ``a`` (``b``) leaves it (points: finite ``(x, y, z)``, metres)."""
+        out = []
+        for label, p in (("a", a), ("b", b)):
+            v = np.asarray(p, dtype=np.float64)
+            if v.shape != (3,) or not np.all(np.isfinite(v)):
+                raise CrmgraspError(f"contact {label} on a spatial task takes a finite X,Y,Z, got {p!r}")
+            if np.allclose(v, self.solid.centre, atol=1e-12):
+                raise CrmgraspError(f"contact {label}'s point is the object's centre: it gives no direction")
+            out.append(_contact(*surface_point(self.solid, v - self.solid.centre)))
+        return Config3D(out[0], out[1])
+
+    def sample_start(self, rng: np.random.Generator, accept: Any = None) -> Any:
+        """A start on the object (:class:`SurfaceStarts`); ``accept`` is ignored."""
+        self._one_object()
+        return self.starts(self, rng)
+
+    def sample_starts(self, rng: np.random.Generator, n: int, accept: Any = None) -> np.ndarray:
+        """``n`` starts as ``(n, 12)`` rows ``[x_a, n_a, x_b, n_b]``."""
+        self._one_object()
+        return np.array([[*c.a.x, *c.a.n, *c.b.x, *c.b.n] for c in (self.sample_start(rng) for _ in range(n))])
+
+    def with_object(self, obj: Any) -> SpatialTask:
+        out = copy.copy(self)
+        object.__setattr__(out, "obj", obj)
+        object.__setattr__(out, "family", None)
+        return out
+
+
+def _spatial_task(name: str, family: SolidFamily, description: str, reference: float | None) -> SpatialTask:
+    return SpatialTask(
+        name=name,
+        obj=family.nominal(),  # type: ignore[arg-type]
+        hand=SPATIAL_HAND,  # type: ignore[arg-type]
+        actions=spatial_crms(),  # type: ignore[arg-type]
+        discretizer=PAPER_BINS,
+        mu_goal=0.05,
+        max_steps=10,
+        reference_mean_steps=reference,
+        description=description,
+        family=family,  # type: ignore[arg-type]
+    )
+
+
+def box_3d() -> SpatialTask:
+    """``box-3d``: boxes 0.15-0.30 x 0.06-0.12 x 0.06-0.20 m on the table, any yaw."""
+    return _spatial_task("box-3d", BoxOnTable(), "boxes 0.15-0.30 x 0.06-0.12 x 0.06-0.20 m on a table, any yaw", None)
+
+
+def cup_3d() -> SpatialTask:
+    """``cup-3d``: closed cylinders of radius 0.03-0.07 m and height 0.06-0.20 m, upright
+    or lying (even odds), any yaw."""
+    return _spatial_task(
+        "cup-3d", CylinderOnTable(), "cylinders r 0.03-0.07 m, h 0.06-0.20 m, upright or lying, any yaw", None
+    )
+
+
+SPATIAL_TASKS = {"box-3d": box_3d, "cup-3d": cup_3d}
+"""The registered spatial tasks."""
+
+for _name, _factory in SPATIAL_TASKS.items():
+    register_task(_name, _factory, overwrite=True)

@@ -1,0 +1,235 @@
+"""Spatial tasks: solids on a table, their families, starts, the table rule, the
+environments ``Box3D-v0`` and ``Cup3D-v0``, references and learning in 3-D."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+from crmgrasp import CrmgraspError
+from crmgrasp.agents.training import train_trials
+from crmgrasp.envs.single import SPATIAL_ENVS
+from crmgrasp.kernels import kernel_for
+from crmgrasp.model.families import Pose
+from crmgrasp.model.hand import Error
+from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable
+from crmgrasp.model.solids import Cylinder, box3d, rotation_z, surface_point
+from crmgrasp.model.spatial import CRM3D, Config3D, Contact3D, Hand3D, execute_crm3d, feasible3d
+from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts, ungraspable_fraction
+from crmgrasp.sim import TaskSteps, run_episode
+from crmgrasp.tasks import SpatialTask, make_task, spatial_crms
+
+BOX = box3d((-0.15, -0.05, 0.0), (0.15, 0.05, 0.10))
+HAND = Hand3D(aperture=0.16, palm_depth=0.12, backoff=0.01)
+
+
+def test_box_corners_centre_support_and_gap() -> None:
+    v = BOX.vertices
+    assert len(v) == 8 and np.allclose(np.sort(np.abs(v[:, 0])), 0.15)
+    assert np.allclose(BOX.centre, (0.0, 0.0, 0.05))
+    assert BOX.support((0, 0, 1)) == pytest.approx(0.0) and BOX.support((-1, 0, 0)) == pytest.approx(-0.15)
+    assert BOX.gap((0.15, 0.0, 0.05)) == pytest.approx(0.0) and BOX.gap((0, 0, 0.05)) < 0 < BOX.gap((0.2, 0, 0.05))
+
+
+def test_moving_a_solid_moves_its_surface() -> None:
+    r = rotation_z(0.7)
+    moved = BOX.moved(r, (0.1, -0.2, 0.0))
+    for p in BOX.vertices:
+        assert moved.gap(r @ p + (0.1, -0.2, 0.0)) == pytest.approx(0.0, abs=1e-12)
+    cyl = Cylinder((0, 0, 0), (1, 0, 0), 0.05, 0.2).moved(r, (0.0, 0.0, 0.05))
+    assert cyl.support((0, 0, 1)) == pytest.approx(0.0, abs=1e-12)
+    assert cyl.gap(cyl.centre + 0.05 * np.array((0, 0, 1.0))) == pytest.approx(0.0, abs=1e-12)
+    with pytest.raises(CrmgraspError, match="determinant"):
+        BOX.moved(np.diag([1.0, 1.0, -1.0]), (0, 0, 0))
+
+
+@pytest.mark.parametrize("solid", [BOX, Cylinder((0, 0, 0), (0, 0, 1), 0.05, 0.12)])
+def test_surface_points_lie_on_the_surface_with_inward_normals(solid) -> None:  # type: ignore[no-untyped-def]
+    rng = np.random.default_rng(0)
+    for d in rng.standard_normal((200, 3)):
+        x, n = surface_point(solid, d)
+        assert abs(solid.gap(x)) < 1e-9 and np.linalg.norm(n) == pytest.approx(1.0)
+        assert solid.contains(x + 1e-4 * n) and not solid.contains(x - 1e-4 * n)
+
+
+def test_solid_families_sample_within_their_ranges_and_rest_on_the_table() -> None:
+    rng = np.random.default_rng(1)
+    fam = BoxOnTable()
+    yaws, dims = [], []
+    for _ in range(300):
+        s = fam.sample(rng)
+        assert s.support((0, 0, 1)) == pytest.approx(0.0, abs=1e-12)
+        edges = np.ptp(s.vertices @ rotation_z(0.0), axis=0)
+        dims.append(s.support((0, 0, -1)) * -1)
+        yaws.append(edges[0])
+    h = np.array(dims)
+    assert 0.06 <= h.min() and h.max() <= 0.20 and h.max() - h.min() > 0.1  # spread over the height range
+    cups = CylinderOnTable()
+    draws = [cups.sample(rng) for _ in range(400)]
+    upright = np.mean([abs(c.axis[2]) > 0.99 for c in draws])
+    assert abs(upright - 0.5) < 4 * math.sqrt(0.25 / 400)
+    assert all(c.support((0, 0, 1)) == pytest.approx(0.0, abs=1e-12) for c in draws)
+    assert all(0.03 <= c.radius <= 0.07 and 0.06 <= c.height <= 0.20 for c in draws)
+    assert cups.min_width() == pytest.approx(0.06) and fam.min_width() == pytest.approx(0.06)
+
+
+@pytest.mark.parametrize(
+    ("build", "message"),
+    [
+        (lambda: BoxOnTable(length=(0.3, 0.1)), "box length range .* inverted"),
+        (lambda: CylinderOnTable(radius=(0.0, 0.05)), "cylinder radius range .* must be above 0"),
+        (lambda: CylinderOnTable(upright=1.5), "upright must be a probability"),
+        (lambda: BoxOnTable(pose=Pose(offset=(0.1, 0.0))), "pose offset range .* inverted"),
+    ],
+)
+def test_bad_solid_families_get_one_line_errors(build, message: str) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(CrmgraspError, match=message) as err:
+        build()
+    assert "\n" not in str(err.value)
+
+
+def test_a_family_too_wide_for_the_hand_is_refused() -> None:
+    with pytest.raises(CrmgraspError, match="beyond the hand's aperture"):
+        SpatialTask(
+            name="wide",
+            obj=BOX,
+            hand=HAND,
+            actions=spatial_crms(),
+            family=BoxOnTable(length=(0.2, 0.3), width=(0.2, 0.3), height=(0.2, 0.3)),  # type: ignore[arg-type]
+        )
+
+
+def test_the_table_rule() -> None:
+    top = Contact3D((-0.12, 0.0, 0.10), (0.0, 0.0, -1.0))
+    side = Contact3D((-0.12, -0.05, 0.05), (0.0, 1.0, 0.0))
+    bottom = Contact3D((0.0, 0.0, 0.0), (0.0, 0.0, 1.0))
+    assert feasible3d(BOX, HAND, Config3D(side, bottom), table=0.0) is Error.PALM
+    assert feasible3d(BOX, HAND, Config3D(Contact3D((-0.15, 0.0, 0.05), (1.0, 0.0, 0.0)), bottom)) is Error.NONE
+    cfg = Config3D(top, side)
+    # b onto a's vertical line: it would come from under the table
+    out = execute_crm3d(BOX, HAND, cfg, CRM3D("b", "a"), table=0.0)
+    assert out.error is Error.PALM and out.config == cfg
+    # a onto b's horizontal line: the far side of the 0.10 m wide box, a grasp (palm at x = -0.24)
+    out = execute_crm3d(BOX, HAND, cfg, CRM3D("a", "b"), table=0.0)
+    assert out.error is Error.NONE and np.allclose(out.config.a.x, (-0.12, 0.05, 0.05))
+
+
+@pytest.mark.parametrize("name", ["box-3d", "cup-3d"])
+def test_spatial_starts_are_feasible_off_the_top_and_not_grasps(name: str) -> None:
+    task = make_task(name)
+    rng = np.random.default_rng(2)
+    for _ in range(60):
+        w = task.sample_world(rng)
+        t = w.task
+        assert isinstance(t, SpatialTask) and t.acceptable(w.config)
+        assert not all(c.n[2] <= -0.5 for c in w.config)
+        for c in w.config:
+            assert abs(t.solid.gap(c.x)) < 1e-9 and c.x[2] > 0.0
+    a = [task.sample_world(np.random.default_rng(5)).config for _ in range(2)]
+    assert a[0] == a[1]
+
+
+def test_spatial_task_bad_input() -> None:
+    task = make_task("box-3d")
+    inst = task.instance(np.random.default_rng(0))
+    with pytest.raises(CrmgraspError, match="off the object"):
+        inst.check_config(
+            Config3D(Contact3D((1.0, 1.0, 1.0), (1.0, 0.0, 0.0)), Contact3D((1.0, 1.0, 1.0), (1.0, 0.0, 0.0)))
+        )
+    with pytest.raises(CrmgraspError, match="Config3D"):
+        inst.check_config((1, 2))
+    with pytest.raises(CrmgraspError, match=r"\|r\| <= r_max"):
+        inst.crm(CRM3D("a", "a", (0.2, 0.2)))
+    with pytest.raises(CrmgraspError, match="contact labels"):
+        inst.crm(CRM3D("a", "c", (0.0, 0.0)))
+    with pytest.raises(CrmgraspError, match="ConvexPolyhedron or Cylinder"):
+        SpatialTask(name="x", obj=make_task("paper-box").obj, hand=HAND, actions=spatial_crms())  # type: ignore[arg-type]
+
+
+def test_episodes_step_through_the_one_loop_and_the_row_kernel_agrees() -> None:
+    task = make_task("cup-3d")
+    rng = np.random.default_rng(3)
+    w = task.sample_world(rng)
+    inst = w.task
+    kernel = kernel_for(inst, "reference")
+    ref = TaskSteps(inst)
+    now = ref.begin(w.config, rng)
+    rows = np.array([[*w.config.a.x, *w.config.a.n, *w.config.b.x, *w.config.b.n]])
+    for a in range(len(inst.actions)):
+        one = ref.step_one(now.state, a, rng)
+        new, err = kernel.execute(rows, rows, np.array([a]))
+        assert int(err[0]) == int(one.error)
+        assert np.array_equal(
+            new[0], [*one.state.config.a.x, *one.state.config.a.n, *one.state.config.b.x, *one.state.config.b.n]
+        )
+        rho, m_a, m_b, index, mu = kernel.observe(new, new, err)
+        assert (rho[0], m_a[0], m_b[0], index[0], mu[0]) == (one.rho, one.m_a, one.m_b, one.obs_index, one.min_friction)
+
+
+def test_upright_cylinders_need_one_crm_with_full_information() -> None:
+    fam = CylinderOnTable(upright=1.0)
+    task = SpatialTask(name="upright", obj=fam.nominal(), hand=HAND, actions=spatial_crms(), family=fam)  # type: ignore[arg-type]
+    worlds = sample_starts(task, 60, 0)
+    assert clairvoyant_bound(task, worlds) == 1.0 and ungraspable_fraction(task, worlds) == 0.0
+    assert 1.0 <= belief_optimum(task, worlds) < 1.5
+
+
+@pytest.mark.parametrize("env_id", sorted(SPATIAL_ENVS))
+def test_spatial_envs_pass_check_env_vectorise_and_render(env_id: str) -> None:
+    env = gym.make(env_id, render_mode="rgb_array")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_env(env.unwrapped)
+    env.reset(seed=0)
+    env.step(0)
+    img = env.render()
+    assert img is not None and img.ndim == 3 and img.shape[2] == 3
+    vec = gym.make_vec(env_id, num_envs=3, vectorization_mode="vector_entry_point")
+    obs, _ = vec.reset(seed=0)
+    assert obs["rho"].shape == (3, 1)
+    ended = 0
+    for _ in range(25):
+        obs, _, term, trunc, _ = vec.step(vec.action_space.sample())
+        ended += int(np.sum(term | trunc))
+    assert ended > 0
+
+
+def test_spatial_env_resets_from_a_world_and_refuses_a_planar_config() -> None:
+    task = make_task("box-3d")
+    env = gym.make("crmgrasp/Box3D-v0").unwrapped
+    w = task.sample_world(np.random.default_rng(0))
+    _, info = env.reset(seed=0, options={"world": w})
+    assert info["config"] == w.config
+    with pytest.raises(CrmgraspError, match="Config3D"):
+        env.reset(options={"config": make_task("paper-box").sample_start(np.random.default_rng(0))})
+
+
+def test_learning_on_cup3d_beats_random_and_is_deterministic() -> None:
+    task = make_task("cup-3d")
+    kw = {"trials": 2, "episodes": 150, "seed": 4, "k": 1, "eval_episodes": 100}
+    a, b = train_trials(task, "model-vi", **kw), train_trials(task, "model-vi", **kw)
+    assert np.array_equal(a.steps, b.steps) and np.array_equal(a.greedy_steps, b.greedy_steps)
+    rand = train_trials(task, "random", **kw)
+    assert a.greedy_steps.mean() < 0.6 * rand.greedy_steps.mean()
+
+
+def test_run_episode_on_a_spatial_world() -> None:
+    task = make_task("box-3d")
+
+    class Oppose:
+        def begin(self, first) -> None:  # type: ignore[no-untyped-def]
+            pass
+
+        def act(self) -> int:
+            return 0
+
+        def tell(self, percept) -> None:  # type: ignore[no-untyped-def]
+            pass
+
+    ep = run_episode(task, Oppose(), np.random.default_rng(0), trace=True)
+    assert 1 <= ep.steps <= task.max_steps and len(ep.trace) == ep.steps
