@@ -48,3 +48,11 @@ def test_bench_family_smoke(monkeypatch):
     monkeypatch.setattr(mod, "learn", lambda task, *a, **k: calls.append((task.name, k["jobs"])))
     res = mod.main(jobs=2)
     assert [c[0] for c in calls] == ["paper-box", "paper-box", "box-family"] and res["family_over_paper_box"] > 0
+
+
+def test_bench_spatial_smoke():
+    spec = importlib.util.spec_from_file_location("bench_spatial", BENCH.parent / "bench_spatial.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    res = mod.main(steps=200, rounds=1, reference=True)
+    assert res["box3d_step_over_cartpole"] > 0 and res["cup3d_reference_step_us"] > res["cup3d_step_us"]

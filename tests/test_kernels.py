@@ -91,18 +91,26 @@ def test_each_builtin_task_takes_a_stated_path():
         kernel_for(box, "gpu")
 
 
-def test_compiled_code_holds_no_constant_of_the_model():
-    """The compiled module imports only numpy and numba and defines no float constant:
-    every tolerance arrives as an argument, so numba's on-disk cache cannot hold a
-    stale copy of one."""
-    import crmgrasp.kernels._polygon_jit as jit
+@pytest.mark.parametrize(
+    ("module", "allowed"),
+    [
+        ("_polygon_jit", {"__future__", "numpy", "numba"}),
+        ("_spatial_jit", {"__future__", "math", "numba", "crmgrasp.kernels._polygon_jit"}),
+    ],
+)
+def test_compiled_code_holds_no_constant_of_the_model(module, allowed):
+    """The compiled modules import only numpy, math, numba (and the shared bin index)
+    and define no float constant: every tolerance arrives as an argument, so numba's
+    on-disk cache cannot hold a stale copy of one."""
+    import importlib
 
+    jit = importlib.import_module(f"crmgrasp.kernels.{module}")
     tree = ast.parse(Path(jit.__file__).read_text())
     imports = {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
     imports |= {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
-    assert imports == {"__future__", "numpy", "numba"}
+    assert imports == allowed
     floats = [n.value for n in ast.walk(tree) if isinstance(n, ast.Constant) and isinstance(n.value, float)]
-    assert set(floats) <= {0.0, 0.5, 1.0, 4.0, -1.0}, floats  # arithmetic of the rules, no tolerance
+    assert set(floats) <= {0.0, 0.5, 1.0, 2.0, 4.0, -1.0}, floats  # arithmetic of the rules, no tolerance
 
 
 def test_a_changed_tolerance_reaches_the_compiled_kernel(monkeypatch):

@@ -3,6 +3,7 @@ environments ``Box3D-v0`` and ``Cup3D-v0``, references and learning in 3-D."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 
@@ -218,18 +219,63 @@ def test_learning_on_cup3d_beats_random_and_is_deterministic() -> None:
     assert a.greedy_steps.mean() < 0.6 * rand.greedy_steps.mean()
 
 
+class _Oppose:
+    def begin(self, first) -> None:  # type: ignore[no-untyped-def]
+        pass
+
+    def act(self) -> int:
+        return 0
+
+    def tell(self, percept) -> None:  # type: ignore[no-untyped-def]
+        pass
+
+
 def test_run_episode_on_a_spatial_world() -> None:
     task = make_task("box-3d")
-
-    class Oppose:
-        def begin(self, first) -> None:  # type: ignore[no-untyped-def]
-            pass
-
-        def act(self) -> int:
-            return 0
-
-        def tell(self, percept) -> None:  # type: ignore[no-untyped-def]
-            pass
-
-    ep = run_episode(task, Oppose(), np.random.default_rng(0), trace=True)
+    ep = run_episode(task, _Oppose(), np.random.default_rng(0), trace=True)
     assert 1 <= ep.steps <= task.max_steps and len(ep.trace) == ep.steps
+
+
+@pytest.mark.parametrize("name", ["box-3d", "cup-3d"])
+def test_the_compiled_spatial_kernel_equals_the_reference_bit_for_bit(name: str) -> None:
+    from crmgrasp.kernels.spatial import FusedSpatialKernel
+
+    task = make_task(name)
+    rng = np.random.default_rng(11)
+    steps = 0
+    for w in range(40):
+        inst = task.instance(rng)
+        fast, ref = FusedSpatialKernel(inst), TaskSteps(inst)
+        r1, r2 = np.random.default_rng(w), np.random.default_rng(w)
+        start = inst.sample_start(r1)
+        assert inst.sample_start(r2, fast.start_filter) == start  # same decisions, same stream
+        a, b = ref.begin(start, r1), fast.begin(start, r2)
+        assert a == b
+        acts = np.random.default_rng(w + 100)
+        for _ in range(10):
+            act = int(acts.integers(len(inst.actions)))
+            a, b = ref.step_one(a.state, act, r1), fast.step_one(b.state, act, r2)
+            assert a == b
+            steps += 1
+            if a.terminated:
+                break
+    assert steps > 100
+
+
+def test_spatial_training_is_the_same_on_every_backend_and_noise_takes_the_reference() -> None:
+    from crmgrasp.kernels.spatial import FusedSpatialKernel, SpatialKernel
+    from crmgrasp.model.sensing import SensorNoise
+
+    task = make_task("box-3d")
+    kw = {"trials": 2, "episodes": 40, "seed": 3, "eval_episodes": 20, "k": 1}
+    fast = train_trials(task, "sarsa", backend="auto", **kw)
+    ref = train_trials(task, "sarsa", backend="reference", **kw)
+    assert np.array_equal(fast.steps, ref.steps) and np.array_equal(fast.greedy_steps, ref.greedy_steps)
+    inst = task.instance(np.random.default_rng(0))
+    assert type(kernel_for(inst)) is FusedSpatialKernel and type(kernel_for(inst, "reference")) is SpatialKernel
+    noisy = dataclasses.replace(inst, noise=SensorNoise(0.05, 0.001))
+    assert type(kernel_for(noisy)) is SpatialKernel
+    with pytest.raises(CrmgraspError, match="noise-free"):
+        kernel_for(noisy, "numba")
+    ep = run_episode(noisy, _Oppose(), np.random.default_rng(0))
+    assert 1 <= ep.steps <= noisy.max_steps

@@ -268,7 +268,7 @@ QUICK_BUDGETS = {
     "cost-of-failure": ("3 trials x 150 episodes, 120 worlds", ("error cost",)),
     "generalization": ("2 trials x 100 episodes, 2 families", ("box", "cup")),
     "non-convex": ("2 trials x 150 episodes", ("U handle",)),
-    "spatial": ("2 trials x 300 episodes, 80 / 40 worlds", ("box-3d", "cup-3d")),
+    "spatial": ("2 trials x 300 / 150 episodes, 80 / 40 worlds", ("box-3d", "cup-3d")),
 }
 """Experiments whose learned numbers ``--quick`` computes on a smaller budget: that
 budget, and the first words of the quantities that depend on it."""

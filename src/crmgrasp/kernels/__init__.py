@@ -10,7 +10,9 @@ backend                      object                      kernel
 ``"auto"``                   a shape without a kernel    ``ReferenceKernel``
 ``"auto"``, ``"numba"``      polygon, sensing noise      ``PolygonKernel``
 ``"auto"``, ``"numba"``      polygon, noise-free         ``FusedPolygonKernel``
-``"auto"``, ``"reference"``  a solid (spatial task)      ``SpatialKernel``
+``"reference"``              a solid (spatial task)      ``SpatialKernel``
+``"auto"``, ``"numba"``      a solid, noise-free         ``FusedSpatialKernel``
+``"auto"``                   a solid, sensing noise      ``SpatialKernel``
 any                          a family (one per episode)  ``FamilyKernel`` over the above
 ===========================  ==========================  ===============================
 
@@ -58,11 +60,11 @@ def kernel_for(task: Task, backend: str = "auto") -> Kernel:
 
         return FamilyKernel(task, lambda instance: kernel_for(instance, backend))
     if isinstance(task, SpatialTask):
-        if backend == "numba":
-            raise CrmgraspError("no compiled kernel for spatial tasks yet; use backend 'auto' or 'reference'")
-        from crmgrasp.kernels.spatial import SpatialKernel
+        from crmgrasp.kernels.spatial import FusedSpatialKernel, SpatialKernel
 
-        return SpatialKernel(task)
+        if backend == "numba" and task.noise.active:
+            raise CrmgraspError("the compiled spatial kernel is noise-free; use backend 'auto' or 'reference'")
+        return SpatialKernel(task) if backend == "reference" or task.noise.active else FusedSpatialKernel(task)
     compiled = isinstance(task.obj, Polygon)
     if backend == "reference" or (backend == "auto" and not compiled):
         return ReferenceKernel(task)

@@ -218,11 +218,18 @@ def _bin(v, t):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def _index(rho, m_a, m_b, code, th, q):  # type: ignore[no-untyped-def]
-    """:meth:`crmgrasp.model.sensing.Discretizer.index_of`."""
-    if q[ABS_M]:
+def bin_index(rho, m_a, m_b, code, th, na, nb, abs_m):  # type: ignore[no-untyped-def]
+    """:meth:`crmgrasp.model.sensing.Discretizer.index_of` (``na``, ``nb``: the moment bin
+    counts; ``abs_m``: moments binned by magnitude)."""
+    if abs_m:
         m_a, m_b = abs(m_a), abs(m_b)
-    return ((_bin(rho, th[0]) * q[NA] + _bin(m_a, th[1])) * q[NB] + _bin(m_b, th[2])) * 3 + code
+    return ((_bin(rho, th[0]) * na + _bin(m_a, th[1])) * nb + _bin(m_b, th[2])) * 3 + code
+
+
+@njit(cache=True)
+def _index(rho, m_a, m_b, code, th, q):  # type: ignore[no-untyped-def]
+    """:func:`bin_index` with the bin counts of ``q``."""
+    return bin_index(rho, m_a, m_b, code, th, q[NA], q[NB], q[ABS_M])
 
 
 @njit(cache=True)

@@ -11,6 +11,7 @@ bit for bit.
 
 from __future__ import annotations
 
+import functools
 from abc import ABC, abstractmethod
 from typing import Any, ClassVar, NamedTuple
 
@@ -40,6 +41,15 @@ class BatchStep(NamedTuple):
     min_friction: F64
 
 
+@functools.lru_cache(maxsize=64)
+def _action_table(key: tuple[Any, ...], actions: Any) -> F64:
+    """The table of ``actions``, cached; ``key`` (labels and the offsets' reprs) tells
+    -0.0 from 0.0, which equality of the CRMs alone does not."""
+    table = np.array([(a.c == "b", a.f == "b", *np.atleast_1d(a.r)) for a in actions], dtype=np.float64)
+    table.flags.writeable = False
+    return table
+
+
 class Kernel(ABC):
     """A task's rules over rows. Subclasses implement :meth:`execute_crms` and
     :meth:`observe`, and may set :attr:`start_filter` (a compiled
@@ -59,8 +69,9 @@ class Kernel(ABC):
 
     @staticmethod
     def action_table(task: Task) -> F64:
-        """One row per action: ``(c is b, f is b, r)`` (``r_1, r_2`` for a spatial CRM)."""
-        return np.array([(a.c == "b", a.f == "b", *np.atleast_1d(a.r)) for a in task.actions], dtype=np.float64)
+        """One row per action: ``(c is b, f is b, r)`` (``r_1, r_2`` for a spatial CRM); one
+        array per CRM set (a family task builds a kernel per episode), not to be written to."""
+        return _action_table(tuple((a.c, a.f, repr(a.r)) for a in task.actions), task.actions)
 
     @staticmethod
     def config_of(row: Any) -> Any:

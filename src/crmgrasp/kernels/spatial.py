@@ -2,9 +2,9 @@
 
 Rows are ``(N, 12)``: ``[x_a, n_a, x_b, n_b]`` (metres; inward unit normals). Each rule
 is the task's (:class:`crmgrasp.tasks.spatial.SpatialTask`, which calls
-:mod:`crmgrasp.model.spatial`): there is no compiled spatial kernel yet, so this is both
-the definition and the only path (``backend="numba"`` is refused by
-:func:`crmgrasp.kernels.kernel_for`).
+:mod:`crmgrasp.model.spatial`): :class:`SpatialKernel` is the definition (any sensing noise);
+:class:`FusedSpatialKernel` steps a noise-free task in compiled code
+(:mod:`crmgrasp.kernels._spatial_jit`) with the same results bit for bit.
 """
 
 from __future__ import annotations
@@ -14,11 +14,18 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from crmgrasp._validation import CrmgraspError
 from crmgrasp.kernels.base import F64, I64
 from crmgrasp.kernels.reference import ReferenceKernel
+from crmgrasp.model.hand import Error
+from crmgrasp.model.solids import Cylinder
 from crmgrasp.model.spatial import CRM3D, Config3D, Contact3D
+from crmgrasp.sim import OneStep, SimState, episode_end, step_reward
+from crmgrasp.tasks.spatial import SurfaceStarts
 
-__all__ = ["SpatialKernel", "config3d_from_row"]
+__all__ = ["SpatialKernel", "FusedSpatialKernel", "spatial_params", "config3d_from_row"]
+
+_ERRORS = tuple(Error)
 
 
 def config3d_from_row(row: Any) -> Config3D:
@@ -57,3 +64,100 @@ class SpatialKernel(ReferenceKernel):
         """:meth:`execute_crms` of the task's actions (offsets ``r_1, r_2``: ``(N, 2)``)."""
         a = self.acts[actions]
         return self.execute_crms(cfg, sen, a[:, 0] != 0.0, a[:, 1] != 0.0, a[:, 2:4])
+
+
+def spatial_params(task: Any) -> tuple[F64, NDArray[np.int64], F64, F64, F64]:
+    """``(p, q, th, planes, cyl)`` for :mod:`crmgrasp.kernels._spatial_jit`: every
+    parameter and tolerance read from the model's modules and the task now."""
+    from crmgrasp.kernels import _spatial_jit as jit
+    from crmgrasp.model import quality, solids, spatial
+
+    hand, solid, d, starts = task.hand3d, task.solid, task.discretizer, task.starts
+    p = np.empty(jit.N_P)
+    p[jit.APERTURE], p[jit.DEPTH], p[jit.PALM_TOL] = hand.aperture, hand.palm_depth, hand.palm_normal_tol
+    p[jit.SURF], p[jit.ANTIPODAL_TOL], p[jit.MU_GOAL] = solids.SURFACE, quality.ANTIPODAL_TOL, task.mu_goal
+    p[jit.MIN_SEP], p[jit.TABLE] = hand.min_separation, 0.0 if task.table is None else task.table
+    p[jit.UP] = starts.up if isinstance(starts, SurfaceStarts) else np.inf
+    p[jit.HX : jit.HZ + 1], p[jit.GX : jit.GZ + 1] = hand._h, hand._g
+    centre = solid.centre
+    p[jit.CX : jit.CZ + 1] = centre
+    p[jit.FAR] = 1.0 + float(np.max(np.abs(centre)))
+    p[jit.TIE], p[jit.PARALLEL] = solids.TIE, spatial.PARALLEL
+    q = np.zeros(jit.N_Q, dtype=np.int64)
+    q[jit.KIND], q[jit.HAS_TABLE] = isinstance(solid, Cylinder), task.table is not None
+    q[jit.NA], q[jit.NB], q[jit.ABS_M] = len(d.m_a) + 1, len(d.m_b) + 1, d.abs_moments
+    width = max(len(d.rho), len(d.m_a), len(d.m_b), 1)
+    th = np.full((3, width), np.inf)
+    for row, thresholds in zip(th, (d.rho, d.m_a, d.m_b), strict=True):
+        row[: len(thresholds)] = thresholds
+    if isinstance(solid, Cylinder):
+        planes, cyl = np.zeros((1, 4)), np.array([*solid.origin, *solid.axis, solid.radius, solid.height])
+    else:
+        planes, cyl = np.ascontiguousarray(solid.planes, dtype=np.float64), np.zeros(8)
+    return p, q, th, planes, cyl
+
+
+class FusedSpatialKernel(SpatialKernel):
+    """The noise-free spatial step, begin and start decision, each one compiled call
+    (:mod:`crmgrasp.kernels._spatial_jit`); batched rows go through :class:`SpatialKernel`."""
+
+    name = "numba-spatial-fused"
+
+    def __init__(self, task: Any) -> None:
+        super().__init__(task)
+        from crmgrasp.kernels import _spatial_jit
+
+        self._jit = _spatial_jit
+        self.p, self.q, self.th, self.planes, self.cyl = spatial_params(task)
+        self.acts4 = np.ascontiguousarray(self.acts)
+        self._v, self._out = np.empty(16), np.empty(16)
+        self._v_of: Config3D | None = None
+        self.start_filter = self._accept  # type: ignore[assignment]
+
+    def _load(self, config: Config3D) -> None:
+        if config is not self._v_of:
+            self._v[:12] = _row(config)
+            self._v_of = config
+
+    def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
+        self._load(config)
+        index = self._jit.begin_one(self._v, self.th, self.p, self.q, self._v)
+        rho, m_a, m_b, mu = self._v[12:16].tolist()
+        return OneStep(SimState(config, config, 0), rho, m_a, m_b, Error.NONE, index, mu)
+
+    def step_one(self, state: SimState, action: Any, rng: np.random.Generator) -> OneStep:
+        if isinstance(action, CRM3D):  # a CRM outside the task's set: the reference step
+            return super().step_one(state, action, rng)  # type: ignore[arg-type]
+        if not 0 <= action < len(self.acts):  # compiled code does not check indices
+            raise CrmgraspError(f"action must be an integer in [0, {len(self.acts)}), got {action!r}")
+        config = state.config
+        self._load(config)  # type: ignore[arg-type]
+        code, index = self._jit.step_one(
+            self._v, action, self.acts4, self.planes, self.cyl, self.th, self.p, self.q, self._out
+        )
+        o = self._out.tolist()
+        if not code:
+            config = config3d_from_row(o)  # type: ignore[assignment]
+            self._v, self._out = self._out, self._v  # the output is the next step's input
+            self._v_of = config  # type: ignore[assignment]
+        steps = state.steps + 1
+        terminated, truncated = episode_end(self.task, o[15], steps)
+        reward = step_reward(self.task, terminated, code)
+        return OneStep(
+            SimState(config, config, steps),
+            o[12],
+            o[13],
+            o[14],
+            _ERRORS[code],
+            index,
+            o[15],
+            reward,
+            terminated,
+            truncated,
+        )
+
+    def _accept(self, d: F64) -> Config3D | None:
+        """:class:`~crmgrasp.tasks.spatial.SurfaceStarts`' decision on one try, compiled."""
+        out = np.empty(12)
+        ok = self._jit.accept_start(np.ascontiguousarray(d), self.planes, self.cyl, self.p, self.q, out)
+        return config3d_from_row(out.tolist()) if ok else None

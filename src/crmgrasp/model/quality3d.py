@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from crmgrasp._validation import CrmgraspError, non_negative
 from crmgrasp.model.quality import ANTIPODAL_TOL, positively_spans
-from crmgrasp.model.solids import cross
+from crmgrasp.model.solids import cross, dot, norm
 
 __all__ = ["min_friction_3d", "primitive_wrenches", "force_closure_3d", "ferrari_canny", "tangent_basis"]
 
@@ -84,13 +84,13 @@ def min_friction_3d(points: ArrayLike, normals: ArrayLike) -> float:
     worst = 0.0
     for i, j in ((0, 1), (1, 0)):
         d = p[j] - p[i]
-        length = float(np.linalg.norm(d))
+        length = norm(d)
         if length == 0.0:
             return math.inf
-        cos = float(np.dot(n[i], d)) / length
+        cos = dot(n[i], d) / length
         if cos <= 0.0:
             return math.inf
-        sin = float(np.linalg.norm(cross(n[i], d))) / length
+        sin = norm(cross(n[i], d)) / length
         tan = sin / cos
         worst = max(worst, 0.0 if tan < ANTIPODAL_TOL else tan)
     return worst

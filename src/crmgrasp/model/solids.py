@@ -22,21 +22,49 @@ from numpy.typing import ArrayLike, NDArray
 from crmgrasp._validation import CrmgraspError, positive
 from crmgrasp.model.shape import EPS
 
-__all__ = ["SURFACE", "ConvexPolyhedron", "box3d", "Cylinder", "Solid", "rotation_z", "surface_point", "cross"]
+__all__ = [
+    "TIE",
+    "SURFACE",
+    "ConvexPolyhedron",
+    "box3d",
+    "Cylinder",
+    "Solid",
+    "rotation_z",
+    "surface_point",
+    "cross",
+    "dot",
+    "norm",
+]
 
 F64 = NDArray[np.float64]
 SURFACE = EPS
 """Metres: a point within this of the surface is on it, not inside (the planar model's
 :data:`~crmgrasp.model.shape.EPS`)."""
 
+TIE = 1e-12
+"""Metres along a ray: surfaces it enters within this of each other are entered together
+(an edge or a vertex); :meth:`ConvexPolyhedron.ray_entry` and :meth:`Cylinder.ray_entry`
+then choose by a stated rule."""
+
 
 def _rotation(rotation: ArrayLike) -> F64:
     r = np.asarray(rotation, dtype=np.float64)
-    if r.shape != (3, 3) or not np.all(np.isfinite(r)) or not np.allclose(r @ r.T, np.eye(3), atol=1e-9):
+    if r.shape != (3, 3) or not np.isfinite(r).all() or np.abs(r @ r.T - np.eye(3)).max() > 1e-9:
         raise CrmgraspError("a rotation must be a finite orthonormal 3 x 3 matrix")
-    if np.linalg.det(r) < 0.0:
+    if dot(r[0], cross(r[1], r[2])) < 0.0:  # the determinant
         raise CrmgraspError("a rotation must have determinant +1 (a reflection turns faces inside out)")
     return r
+
+
+def dot(u: Any, v: Any) -> float:
+    """``u . v`` of two 3-vectors, written out in this order (the compiled kernel repeats it,
+    so the two agree bit for bit)."""
+    return float(u[0] * v[0] + u[1] * v[1] + u[2] * v[2])
+
+
+def norm(u: Any) -> float:
+    """``|u| = sqrt(u . u)``."""
+    return math.sqrt(dot(u, u))
 
 
 def cross(u: Any, v: Any) -> F64:
@@ -73,11 +101,10 @@ class ConvexPolyhedron:
             raise CrmgraspError(
                 f"a convex polyhedron needs 4 or more finite planes (a_x, a_y, a_z, b), got {rows.shape}"
             )
-        norms = np.linalg.norm(rows[:, :3], axis=1)
-        if np.any(norms == 0.0):
+        norms = np.sqrt((rows[:, :3] * rows[:, :3]).sum(axis=1))
+        if (norms == 0.0).any():
             raise CrmgraspError("a face normal of the polyhedron is zero")
-        rows = rows / norms[:, None]
-        object.__setattr__(self, "planes", tuple(tuple(float(v) for v in r) for r in rows))
+        object.__setattr__(self, "planes", tuple(map(tuple, (rows / norms[:, None]).tolist())))
 
     def contains(self, p: ArrayLike) -> bool:
         """Strictly inside: more than :data:`SURFACE` inside every face."""
@@ -99,7 +126,7 @@ class ConvexPolyhedron:
                 continue
             t = gap / ad
             if ad < 0.0:
-                if t > t_in + 1e-12:
+                if t > t_in + TIE:
                     t_in, face = t, k
             else:
                 t_out = min(t_out, t)
@@ -145,7 +172,10 @@ class ConvexPolyhedron:
         r, t = _rotation(rotation), np.asarray(translation, dtype=np.float64)
         rows = np.array(self.planes)
         normals = rows[:, :3] @ r.T
-        return ConvexPolyhedron(tuple((*n, b + float(n @ t)) for n, b in zip(normals.tolist(), rows[:, 3].tolist())))
+        out = ConvexPolyhedron(tuple((*n, b + float(n @ t)) for n, b in zip(normals.tolist(), rows[:, 3].tolist())))
+        if "vertices" in self.__dict__:  # corners already known: move them too (cheaper than solving again)
+            out.__dict__["vertices"] = self.vertices @ r.T + t
+        return out
 
 
 def box3d(lo: ArrayLike, hi: ArrayLike) -> ConvexPolyhedron:
@@ -153,7 +183,7 @@ def box3d(lo: ArrayLike, hi: ArrayLike) -> ConvexPolyhedron:
     lo_, hi_ = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
     if lo_.shape != (3,) or hi_.shape != (3,) or not np.all(hi_ > lo_):
         raise CrmgraspError(f"a box needs lo < hi in every coordinate, got {lo!r} and {hi!r}")
-    return ConvexPolyhedron(
+    box = ConvexPolyhedron(
         (
             (-1.0, 0.0, 0.0, -lo_[0]),
             (1.0, 0.0, 0.0, hi_[0]),
@@ -163,6 +193,10 @@ def box3d(lo: ArrayLike, hi: ArrayLike) -> ConvexPolyhedron:
             (0.0, 0.0, 1.0, hi_[2]),
         )
     )
+    box.__dict__["vertices"] = np.array(
+        [[x, y, z] for x in (lo_[0], hi_[0]) for y in (lo_[1], hi_[1]) for z in (lo_[2], hi_[2])]
+    )
+    return box
 
 
 @dataclass(frozen=True, eq=False)
@@ -189,13 +223,13 @@ class Cylinder:
         """``(axial coordinate, radial vector)`` of ``p``."""
         e = np.array(self.axis)
         rel = p - np.array(self.origin)
-        s = float(rel @ e)
+        s = dot(rel, e)
         return s, rel - s * e
 
     def contains(self, p: ArrayLike) -> bool:
         """Strictly inside: more than :data:`SURFACE` inside the side and both caps."""
         s, radial = self._local(np.asarray(p, dtype=np.float64))
-        return SURFACE < s < self.height - SURFACE and float(np.linalg.norm(radial)) < self.radius - SURFACE
+        return SURFACE < s < self.height - SURFACE and norm(radial) < self.radius - SURFACE
 
     def ray_entry(self, origin: ArrayLike, direction: ArrayLike, u_max: float) -> tuple[F64, F64] | None:
         """First entry of ``origin + u direction``, ``0 <= u <= u_max``, with the inward
@@ -204,7 +238,7 @@ class Cylinder:
         o, d = np.asarray(origin, dtype=np.float64), np.asarray(direction, dtype=np.float64)
         e = np.array(self.axis)
         s0, r0 = self._local(o)
-        sd = float(d @ e)
+        sd = dot(d, e)
         rd = d - sd * e
         # the slab 0 <= s <= H
         if sd == 0.0:
@@ -216,7 +250,7 @@ class Cylinder:
             slab_in, slab_out = min(t_a, t_b), max(t_a, t_b)
             cap = e if sd > 0 else -e  # the cap entered first: the bottom (inward +e) going up
         # the infinite cylinder |r0 + t rd| <= R
-        qa, qb, qc = float(rd @ rd), float(r0 @ rd), float(r0 @ r0) - self.radius**2
+        qa, qb, qc = dot(rd, rd), dot(r0, rd), dot(r0, r0) - self.radius * self.radius
         if qa == 0.0:
             if qc > 0.0:
                 return None
@@ -231,16 +265,16 @@ class Cylinder:
         if t_in > min(side_out, slab_out) + SURFACE or t_in < -SURFACE or t_in > u_max + SURFACE:
             return None
         point = o + t_in * d
-        if side_in >= slab_in - 1e-12 or cap is None:
+        if side_in >= slab_in - TIE or cap is None:
             _, radial = self._local(point)
-            return point, -radial / np.linalg.norm(radial)
+            return point, -radial / norm(radial)
         return point, cap
 
     def gap(self, p: ArrayLike) -> float:
         """``max(-s, s - H, |radial| - R)``: 0 on the surface, negative inside, positive
         outside (metres; the distance to the surface on and near it)."""
         s, radial = self._local(np.asarray(p, dtype=np.float64))
-        return max(-s, s - self.height, float(np.linalg.norm(radial)) - self.radius)
+        return max(-s, s - self.height, norm(radial) - self.radius)
 
     @property
     def centre(self) -> F64:
@@ -271,7 +305,7 @@ def surface_point(solid: Solid, direction: ArrayLike) -> tuple[F64, F64]:
     the entry of the reverse ray from outside; a convex solid contains its centre, so it
     always exists)."""
     d = np.asarray(direction, dtype=np.float64)
-    d = d / np.linalg.norm(d)
+    d = d / norm(d)
     c = solid.centre
     far = 1.0 + float(np.max(np.abs(c)))  # beyond the solid: every solid here is < 1 m from its centre
     out = solid.ray_entry(c + far * d, -d, 2.0 * far)

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from crmgrasp._validation import CrmgraspError, non_negative, positive
 from crmgrasp.model.hand import Error
-from crmgrasp.model.solids import SURFACE, ConvexPolyhedron, Cylinder, Solid, _unit, box3d, cross
+from crmgrasp.model.solids import SURFACE, ConvexPolyhedron, Cylinder, Solid, _unit, box3d, cross, dot, norm
 
 __all__ = [
     "Contact3D",
@@ -42,6 +42,10 @@ __all__ = [
 ]
 
 F64 = NDArray[np.float64]
+
+PARALLEL = 1e-9
+"""A cross product shorter than this means parallel vectors: the tangent frame and the palm
+side then use the hand's forward axis ``g`` instead of ``h``."""
 
 
 class Contact3D(NamedTuple):
@@ -125,22 +129,22 @@ def tangent_frame(n: ArrayLike, hand: Hand3D) -> tuple[F64, F64]:
     """``t_1 = n x h / |n x h|`` (``n x g`` if ``n`` is parallel to ``h``), ``t_2 = t_1 x n``."""
     nv = np.asarray(n, dtype=np.float64)
     t1 = cross(nv, hand._h)
-    if np.linalg.norm(t1) < 1e-9:
+    if norm(t1) < PARALLEL:
         t1 = cross(nv, hand._g)
-    t1 /= np.linalg.norm(t1)
+    t1 = t1 / norm(t1)
     return t1, cross(t1, nv)
 
 
 def _palm_axis(cfg: Config3D, hand: Hand3D) -> tuple[float, F64]:
     xa, xb = np.array(cfg.a.x), np.array(cfg.b.x)
-    dist = float(np.linalg.norm(xb - xa))
+    dist = norm(xb - xa)
     if dist == 0.0:
         return 0.0, np.full(3, np.nan)
     d = (xb - xa) / dist
     u = cross(d, hand._h)
-    if np.linalg.norm(u) < 1e-9:
+    if norm(u) < PARALLEL:
         u = cross(d, hand._g)
-    return dist, u / np.linalg.norm(u)
+    return dist, u / norm(u)
 
 
 def on_table(z: float, table: float | None) -> bool:
@@ -158,7 +162,7 @@ def feasible3d(obj: Solid, hand: Hand3D, cfg: Config3D, table: float | None = No
         return Error.APERTURE
     if dist <= hand.min_separation or on_table(cfg.a.x[2], table) or on_table(cfg.b.x[2], table):
         return Error.PALM
-    if float(np.dot(cfg.a.n, u)) > hand.palm_normal_tol or float(np.dot(cfg.b.n, u)) > hand.palm_normal_tol:
+    if dot(cfg.a.n, u) > hand.palm_normal_tol or dot(cfg.b.n, u) > hand.palm_normal_tol:
         return Error.PALM
     palm = 0.5 * (np.array(cfg.a.x) + np.array(cfg.b.x)) + hand.palm_depth * u
     return Error.PALM if obj.contains(palm) or on_table(float(palm[2]), table) else Error.NONE
@@ -186,7 +190,7 @@ def execute_crm3d(
     t1, t2 = tangent_frame(n_f, hand)
     base = np.array(frame.x) + r1 * t1 + r2 * t2
     w = base - np.array(still.x)  # |w + t n_f|^2 = A^2, |n_f| = 1
-    qb, qc = float(w @ n_f), float(w @ w) - hand.aperture**2
+    qb, qc = dot(w, n_f), dot(w, w) - hand.aperture * hand.aperture
     disc = qb * qb - qc
     if disc < 0.0:
         return Outcome3D(cfg, Error.APERTURE)
@@ -217,7 +221,7 @@ def observe3d(cfg: Config3D) -> tuple[float, float, float]:
     ``m_b = (x_a - x_b) x n_a`` (section 4)."""
     xa, xb, na, nb = (np.array(v) for v in (cfg.a.x, cfg.b.x, cfg.a.n, cfg.b.n))
     s = na + nb
-    return float(s @ s), float(np.linalg.norm(cross(xb - xa, nb))), float(np.linalg.norm(cross(xa - xb, na)))
+    return dot(s, s), norm(cross(xb - xa, nb)), norm(cross(xa - xb, na))
 
 
 def sense3d(cfg: Config3D, sigma_n: float, sigma_p: float, rng: np.random.Generator, hand: Hand3D) -> Config3D:

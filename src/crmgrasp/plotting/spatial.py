@@ -54,9 +54,13 @@ def _cylinder_faces(cyl: Cylinder, n: int = 32) -> list[np.ndarray]:
 
 
 def draw_solid(ax: Any, solid: Solid) -> None:
-    """The solid's faces, shaded grey."""
+    """The solid's faces, shaded grey: one collection per face size (matplotlib pads
+    ragged face lists with uninitialised values, which its projection then multiplies)."""
     faces = _faces(solid) if isinstance(solid, ConvexPolyhedron) else _cylinder_faces(solid)
-    ax.add_collection3d(Poly3DCollection(faces, facecolor="0.8", edgecolor="0.35", linewidths=0.4, alpha=0.35))
+    for size in sorted({len(f) for f in faces}):
+        same = [f for f in faces if len(f) == size]
+        style = dict(facecolor="0.8", edgecolor="0.35", linewidths=0.4, alpha=0.35)
+        ax.add_collection3d(Poly3DCollection(same, **style), autolim=False)
 
 
 def _draw_config(ax: Any, hand: Hand3D, cfg: Config3D, scale: float, alpha: float, primed: bool) -> None:
@@ -84,8 +88,9 @@ def draw_scene3d(
     title: str | None = None,
     table: float | None = 0.0,
 ) -> None:
-    """The solid, the table, the contacts (faded when ``after`` is given) and ``after``."""
-    draw_solid(ax, solid)
+    """The solid, the table, the contacts (faded when ``after`` is given) and ``after``.
+    The view (a cube around the solid) is fixed before anything is drawn and never
+    autoscaled: matplotlib's 3-D autoscaling from an empty axes can overflow."""
     c = solid.centre
     size = (
         float(np.ptp(solid.vertices, axis=0).max())
@@ -93,16 +98,20 @@ def draw_scene3d(
         else max(2.0 * solid.radius, solid.height)
     )
     half = 0.5 * size + 0.06
+    ax.set_autoscale_on(False)
+    ax.set_xlim(c[0] - half, c[0] + half)
+    ax.set_ylim(c[1] - half, c[1] + half)
+    ax.set_zlim(max(0.0, c[2] - half) if table is not None else c[2] - half, c[2] + half)
+    draw_solid(ax, solid)
     if table is not None:
         sq = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * half + c[:2]
-        ax.add_collection3d(Poly3DCollection([np.c_[sq, np.full(4, table)]], facecolor="tan", alpha=0.15))
+        ax.add_collection3d(
+            Poly3DCollection([np.c_[sq, np.full(4, table)]], facecolor="tan", alpha=0.15), autolim=False
+        )
     scale = 0.05
     _draw_config(ax, hand, config, scale, 0.35 if after is not None else 1.0, False)
     if after is not None:
         _draw_config(ax, hand, after, scale, 1.0, True)
-    ax.set_xlim(c[0] - half, c[0] + half)
-    ax.set_ylim(c[1] - half, c[1] + half)
-    ax.set_zlim(max(0.0, c[2] - half) if table is not None else c[2] - half, c[2] + half)
     ax.set_box_aspect((1, 1, 1))
     ax.set_xlabel("x (m)", fontsize=7)
     ax.set_ylabel("y (m)", fontsize=7)

@@ -26,7 +26,7 @@ from crmgrasp.model.hand import Error, Outcome
 from crmgrasp.model.quality3d import min_friction_3d
 from crmgrasp.model.sensing import Observation
 from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable, SolidFamily
-from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, Solid, surface_point
+from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, Solid, dot, surface_point
 from crmgrasp.model.spatial import (
     CRM3D,
     Config3D,
@@ -76,14 +76,21 @@ class SurfaceStarts:
     max_tries: int = 10_000
     up: float = 0.5
 
-    def __call__(self, task: SpatialTask, rng: np.random.Generator) -> Config3D:
+    def __call__(self, task: SpatialTask, rng: np.random.Generator, accept: Any = None) -> Config3D:
+        """A start on ``task``'s object; ``accept`` (a compiled decision of one try's
+        directions, given by a kernel) makes the same decisions, so the stream is the same."""
         for _ in range(self.max_tries):
             d = rng.standard_normal((2, 3))
+            if accept is not None:
+                got = accept(d)
+                if got is not None:
+                    return got  # type: ignore[no-any-return]
+                continue
             if np.any(np.linalg.norm(d, axis=1) == 0.0):
                 continue
             cfg = Config3D(_contact(*surface_point(task.solid, d[0])), _contact(*surface_point(task.solid, d[1])))
-            h = task.hand3d.h
-            on_top = [float(np.dot(c.n, h)) <= -self.up for c in cfg]
+            h = task.hand3d._h
+            on_top = [dot(c.n, h) <= -self.up for c in cfg]
             if not all(on_top) and task.acceptable(cfg):
                 return cfg
         raise CrmgraspError(f"no feasible surface start found in {self.max_tries} tries")
@@ -174,9 +181,10 @@ class SpatialTask(Task):
         return Config3D(out[0], out[1])
 
     def sample_start(self, rng: np.random.Generator, accept: Any = None) -> Any:
-        """A start on the object (:class:`SurfaceStarts`); ``accept`` is ignored."""
+        """A start on the object (:class:`SurfaceStarts`; ``accept``: a kernel's compiled
+        decision, the same start either way)."""
         self._one_object()
-        return self.starts(self, rng)
+        return self.starts(self, rng, accept)
 
     def sample_starts(self, rng: np.random.Generator, n: int, accept: Any = None) -> np.ndarray:
         """``n`` starts as ``(n, 12)`` rows ``[x_a, n_a, x_b, n_b]``."""

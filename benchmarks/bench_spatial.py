@@ -1,0 +1,66 @@
+"""The spatial environments' step time against CartPole, measured in one process.
+
+For ``CartPole-v1`` and each of ``crmgrasp/Box3D-v0`` and ``crmgrasp/Cup3D-v0`` (the
+compiled spatial kernel; ``--reference`` adds the readable reference rules): random
+actions through ``gymnasium.make``, ``steps`` of them in each of ``rounds`` rounds, the
+minimum over rounds kept. Two times per environment: one ``env.step`` alone, and
+``env.step`` plus the resets it triggers, per step (a spatial reset draws a new solid,
+builds its kernel and draws a start, so it weighs more than CartPole's).
+
+Prints one JSON object with microseconds and the ratios to CartPole (the issue's target:
+a 3-D step at most 2x a CartPole step).
+
+Usage: ``python benchmarks/bench_spatial.py [STEPS] [ROUNDS] [--reference]``.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import crmgrasp  # noqa: F401  (registers the environments)
+
+
+def _time(env_id: str, steps: int, rounds: int, **kwargs: Any) -> tuple[float, float]:
+    """Microseconds per ``env.step`` alone, and per step with the resets it triggers."""
+    env = gym.make(env_id, **kwargs)
+    env.reset(seed=0)
+    actions = np.random.default_rng(0).integers(env.action_space.n, size=steps).tolist()
+    clock, best = time.perf_counter, (float("inf"), float("inf"))
+    for _ in range(rounds):
+        in_step = in_reset = 0.0
+        for a in actions:
+            t0 = clock()
+            _, _, term, trunc, _ = env.step(a)
+            t1 = clock()
+            in_step += t1 - t0
+            if term or trunc:
+                env.reset()
+                in_reset += clock() - t1
+        if (in_step + in_reset) / steps * 1e6 < best[1]:
+            best = (in_step / steps * 1e6, (in_step + in_reset) / steps * 1e6)
+    return best
+
+
+def main(steps: int = 20_000, rounds: int = 5, reference: bool = False) -> dict[str, Any]:
+    cart = _time("CartPole-v1", steps, rounds)
+    out: dict[str, Any] = {"steps": steps, "rounds": rounds, "cartpole_us": [round(v, 2) for v in cart]}
+    runs = [("", {})] + ([("_reference", {"backend": "reference"})] if reference else [])
+    for env_id in ("crmgrasp/Box3D-v0", "crmgrasp/Cup3D-v0"):
+        for suffix, kw in runs:
+            step, with_resets = _time(env_id, steps, rounds, **kw)
+            name = env_id.split("/")[1].split("-")[0].lower() + suffix
+            out[f"{name}_step_us"] = round(step, 2)
+            out[f"{name}_step_over_cartpole"] = round(step / cart[0], 2)
+            out[f"{name}_with_resets_over_cartpole"] = round(with_resets / cart[1], 2)
+    return out
+
+
+if __name__ == "__main__":
+    args = [a for a in sys.argv[1:] if a != "--reference"]
+    print(json.dumps(main(*(int(a) for a in args[:2]), reference="--reference" in sys.argv), indent=2))
