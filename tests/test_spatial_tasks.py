@@ -148,7 +148,7 @@ def test_spatial_task_bad_input() -> None:
         inst.crm(CRM3D("a", "a", (0.2, 0.2)))
     with pytest.raises(CrmgraspError, match="contact labels"):
         inst.crm(CRM3D("a", "c", (0.0, 0.0)))
-    with pytest.raises(CrmgraspError, match="ConvexPolyhedron or Cylinder"):
+    with pytest.raises(CrmgraspError, match="ConvexPolyhedron, Cylinder or TriangleMesh"):
         SpatialTask(name="x", obj=make_task("paper-box").obj, hand=HAND, actions=spatial_crms())  # type: ignore[arg-type]
 
 
@@ -279,3 +279,47 @@ def test_spatial_training_is_the_same_on_every_backend_and_noise_takes_the_refer
         kernel_for(noisy, "numba")
     ep = run_episode(noisy, _Oppose(), np.random.default_rng(0))
     assert 1 <= ep.steps <= noisy.max_steps
+
+
+def test_the_command_line_on_spatial_tasks(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    import json
+
+    from crmgrasp.cli.main import main
+
+    pts = ["--task", "box-3d", "--a=-0.2,0,0.05", "--b=0,-0.2,0.05"]
+    assert main(["crm", *pts, "--crm", "C1", "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["error"] == "none" and res["success"] and len(res["config"]["a"]["x"]) == 3
+    assert main(["show", *pts, "--crm", "a,a,0,0.05", "--out", str(tmp_path / "s.png")]) == 0
+    assert (tmp_path / "s.png").stat().st_size > 1000
+    bad = [
+        (["show", "--task", "box-3d", "--a=-0.2,0", "--b=0,-0.2,0.05", "--out", str(tmp_path / "x.png")], "X,Y,Z"),
+        (["crm", *pts, "--crm", "a,b,0"], "c,f,r1,r2"),
+        (["crm", "--task", "paper-box", "--a=-0.2,0,1", "--b=0,-0.2", "--crm", "C1"], "take X,Y"),
+        (["compare", "--task", "cup-3d", "--quick", "--out", str(tmp_path / "c")], "planar"),
+    ]
+    for argv, message in bad:
+        capsys.readouterr()
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1, err
+    run = tmp_path / "run"
+    learn = ["learn", "--task", "cup-3d", "--agent", "model-vi", "--k", "1", "--trials", "1", "--episodes", "30"]
+    assert main([*learn, "--eval-episodes", "20", "--out", str(run), "--quiet"]) == 0
+    assert main(["evaluate", "--policy", str(run / "policy.json"), "--episodes", "20", "--json"]) == 0
+    capsys.readouterr()
+    assert (
+        main(
+            [
+                "run",
+                "--policy",
+                str(run / "policy.json"),
+                "--a=0,0,0.1",
+                "--b=0.1,0,0.05",
+                "--log",
+                str(tmp_path / "l.csv"),
+            ]
+        )
+        == 2
+    )
+    assert "planar hand" in capsys.readouterr().err

@@ -23,7 +23,7 @@ from crmgrasp.cli.parser import _AGENT_FLAGS, _resolve_crm, build_parser
 from crmgrasp.model.hand import Error
 from crmgrasp.model.quality import min_friction
 from crmgrasp.model.sensing import SensorNoise, observe
-from crmgrasp.model.spatial import sense3d
+from crmgrasp.model.spatial import feasible3d, sense3d
 from crmgrasp.tasks import TEMPLATE, SpatialTask, Task, make_task, task_names, task_to_dict
 
 __all__ = ["main", "build_parser"]
@@ -58,6 +58,8 @@ def _scene(args: argparse.Namespace) -> tuple[Task, Any, Any, SensorNoise, np.ra
 def _cmd_crm(args: argparse.Namespace) -> int:
     task, config, crm, noise, rng = _scene(args)
     assert crm is not None
+    if isinstance(task, SpatialTask):
+        return _crm_spatial(args, task, config, crm, noise, rng)
     start_err = task.hand.feasible(task.obj, config)
     if start_err is not Error.NONE:
         raise CrmgraspError(f"the start configuration is infeasible ({start_err.name.lower()} error)")
@@ -89,6 +91,39 @@ def _cmd_crm(args: argparse.Namespace) -> int:
         print(f"  {lab}: x=({c.x + 0.0:.6g}, {c.y + 0.0:.6g})  n=({c.nx + 0.0:.6g}, {c.ny + 0.0:.6g})")
     label = task.discretizer.label(index)
     print(f"  observation: rho={obs.rho:.6g} m_a={obs.m_a:.6g} m_b={obs.m_b:.6g}  [{index}: {label}]")
+    print(f"  min_friction={result['min_friction']:.6g}  success={result['success']}")
+    return 0
+
+
+def _crm_spatial(
+    args: argparse.Namespace, task: SpatialTask, config: Any, crm: Any, noise: SensorNoise, rng: np.random.Generator
+) -> int:
+    """``crmgrasp crm`` on a spatial task: the same report with 3-D contacts."""
+    start_err = feasible3d(task.solid, task.hand3d, config, task.table)
+    if start_err is not Error.NONE:
+        raise CrmgraspError(f"the start configuration is infeasible ({start_err.name.lower()} error)")
+    out: Any = task.execute(config, crm, sense3d(config, noise.sigma_n, noise.sigma_p, rng, task.hand3d))
+    obs = task.observe(sense3d(out.config, noise.sigma_n, noise.sigma_p, rng, task.hand3d))
+    index = task.discretizer.index(obs, out.error)
+    contacts = {lab: {"x": list(c.x), "n": list(c.n)} for lab, c in zip("ab", out.config, strict=True)}
+    result = {
+        "task": task.name,
+        "crm": {"c": crm.c, "f": crm.f, "r": list(crm.r)},
+        "error": out.error.name.lower(),
+        "config": contacts,
+        "observation": {"rho": obs.rho, "m_a": obs.m_a, "m_b": obs.m_b, "index": index},
+        "min_friction": task.quality(out.config),
+        "success": task.is_success(out.config),
+    }
+    if args.json:
+        print(dumps_json(result))
+        return 0
+    print(f"CRM {crm} on {task.name}: error={result['error']}")
+    for lab, c in contacts.items():
+        x, n = (", ".join(f"{v + 0.0:.6g}" for v in c[key]) for key in ("x", "n"))
+        print(f"  {lab}: x=({x})  n=({n})")
+    label = task.discretizer.label(index)
+    print(f"  observation: rho={obs.rho:.6g} |m_a|={obs.m_a:.6g} |m_b|={obs.m_b:.6g}  [{index}: {label}]")
     print(f"  min_friction={result['min_friction']:.6g}  success={result['success']}")
     return 0
 
@@ -345,6 +380,11 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     from crmgrasp.experiments.stats import fmt
 
     task = _task(args)
+    if isinstance(task, SpatialTask):
+        raise CrmgraspError(
+            f"compare's grasp controller, sampled POMDP and deep peer are planar; on the spatial task {task.name!r} "
+            "use learn, evaluate and references (or reproduce spatial)"
+        )
     cfg = CompareConfig.quick(task.name, args.seed) if args.quick else CompareConfig(task=task.name, seed=args.seed)
     if args.deep_steps is not None:
         if args.deep_steps < 0:
@@ -400,6 +440,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     check_output(args.log, "--log")
     policy = load_policy(args.policy)
     task = policy.task
+    if isinstance(task, SpatialTask):
+        raise CrmgraspError(f"the hand runner drives a planar hand; {task.name!r} is spatial (use evaluate)")
     start = task.hand.contact(task.obj, args.a, args.b)
     if task.hand.feasible(task.obj, start) is not Error.NONE:
         raise CrmgraspError("the start configuration is infeasible")

@@ -45,9 +45,9 @@ class SpatialConfig:
 
     tasks: tuple[str, ...] = ("cup-3d", "box-3d")
     trials: int = 5
-    episodes: tuple[int, ...] = (3000, 600)
+    episodes: tuple[int, ...] = (6000, 600)
     heldout: tuple[int, ...] = (300, 150)
-    checkpoints: tuple[int, ...] = (10, 20, 50, 100, 200, 500, 1000, 2000, 3000)
+    checkpoints: tuple[int, ...] = (10, 20, 50, 100, 200, 500, 1000, 2000, 4000, 6000)
     checkpoint_episodes: int = 100
     seed: int = 0
 

@@ -13,6 +13,7 @@ backend                      object                      kernel
 ``"reference"``              a solid (spatial task)      ``SpatialKernel``
 ``"auto"``, ``"numba"``      a solid, noise-free         ``FusedSpatialKernel``
 ``"auto"``                   a solid, sensing noise      ``SpatialKernel``
+``"auto"``, ``"reference"``  a triangle mesh             ``SpatialKernel``
 any                          a family (one per episode)  ``FamilyKernel`` over the above
 ===========================  ==========================  ===============================
 
@@ -39,6 +40,7 @@ from crmgrasp.kernels.reference import ReferenceKernel
 from crmgrasp.model.contacts import configs_to_array
 from crmgrasp.model.geometry import Polygon, Shape
 from crmgrasp.model.hand import CRM, Hand
+from crmgrasp.model.mesh import TriangleMesh
 from crmgrasp.sim import OneStep
 from crmgrasp.tasks import SpatialTask, Task
 
@@ -64,7 +66,11 @@ def kernel_for(task: Task, backend: str = "auto") -> Kernel:
 
         if backend == "numba" and task.noise.active:
             raise CrmgraspError("the compiled spatial kernel is noise-free; use backend 'auto' or 'reference'")
-        return SpatialKernel(task) if backend == "reference" or task.noise.active else FusedSpatialKernel(task)
+        mesh = isinstance(task.obj, TriangleMesh)
+        if backend == "numba" and mesh:
+            raise CrmgraspError("the compiled spatial kernel takes polyhedra and cylinders; a mesh runs on 'reference'")
+        slow = backend == "reference" or task.noise.active or mesh
+        return SpatialKernel(task) if slow else FusedSpatialKernel(task)
     compiled = isinstance(task.obj, Polygon)
     if backend == "reference" or (backend == "auto" and not compiled):
         return ReferenceKernel(task)

@@ -299,16 +299,14 @@ Solid = ConvexPolyhedron | Cylinder
 """The objects the spatial model takes (both convex)."""
 
 
-def surface_point(solid: Solid, direction: ArrayLike) -> tuple[F64, F64]:
-    """Where the ray from the solid's centre along ``direction`` leaves it, with the
-    inward normal there: the radial projection of a direction onto the surface (found as
-    the entry of the reverse ray from outside; a convex solid contains its centre, so it
-    always exists)."""
+def surface_point(solid: Any, direction: ArrayLike) -> tuple[F64, F64] | None:
+    """Where the line from the solid's centre along ``direction`` last leaves it, with the
+    inward normal there: the radial projection of a direction onto the surface, found as
+    the first entry of the reverse ray from outside. A convex solid contains its centre, so
+    it always exists; on a non-convex mesh whose centre is outside, the ray may miss
+    (``None``: the starts then draw again)."""
     d = np.asarray(direction, dtype=np.float64)
     d = d / norm(d)
     c = solid.centre
     far = 1.0 + float(np.max(np.abs(c)))  # beyond the solid: every solid here is < 1 m from its centre
-    out = solid.ray_entry(c + far * d, -d, 2.0 * far)
-    if out is None:  # pragma: no cover - a convex solid contains its centre
-        raise CrmgraspError("the solid does not contain its centre")
-    return out
+    return solid.ray_entry(c + far * d, -d, 2.0 * far)  # type: ignore[no-any-return]

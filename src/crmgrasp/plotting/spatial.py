@@ -56,7 +56,12 @@ def _cylinder_faces(cyl: Cylinder, n: int = 32) -> list[np.ndarray]:
 def draw_solid(ax: Any, solid: Solid) -> None:
     """The solid's faces, shaded grey: one collection per face size (matplotlib pads
     ragged face lists with uninitialised values, which its projection then multiplies)."""
-    faces = _faces(solid) if isinstance(solid, ConvexPolyhedron) else _cylinder_faces(solid)
+    if isinstance(solid, ConvexPolyhedron):
+        faces = _faces(solid)
+    elif isinstance(solid, Cylinder):
+        faces = _cylinder_faces(solid)
+    else:  # a triangle mesh
+        faces = [np.array([solid.vertices[i] for i in tri]) for tri in solid.faces]
     for size in sorted({len(f) for f in faces}):
         same = [f for f in faces if len(f) == size]
         style = dict(facecolor="0.8", edgecolor="0.35", linewidths=0.4, alpha=0.35)
@@ -93,9 +98,9 @@ def draw_scene3d(
     autoscaled: matplotlib's 3-D autoscaling from an empty axes can overflow."""
     c = solid.centre
     size = (
-        float(np.ptp(solid.vertices, axis=0).max())
-        if isinstance(solid, ConvexPolyhedron)
-        else max(2.0 * solid.radius, solid.height)
+        max(2.0 * solid.radius, solid.height)
+        if isinstance(solid, Cylinder)
+        else float(np.ptp(np.asarray(solid.vertices), axis=0).max())
     )
     half = 0.5 * size + 0.06
     ax.set_autoscale_on(False)

@@ -23,6 +23,7 @@ import numpy as np
 
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.hand import Error, Outcome
+from crmgrasp.model.mesh import TriangleMesh
 from crmgrasp.model.quality3d import min_friction_3d
 from crmgrasp.model.sensing import Observation
 from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable, SolidFamily
@@ -88,7 +89,10 @@ class SurfaceStarts:
                 continue
             if np.any(np.linalg.norm(d, axis=1) == 0.0):
                 continue
-            cfg = Config3D(_contact(*surface_point(task.solid, d[0])), _contact(*surface_point(task.solid, d[1])))
+            pa, pb = surface_point(task.solid, d[0]), surface_point(task.solid, d[1])
+            if pa is None or pb is None:
+                continue
+            cfg = Config3D(_contact(*pa), _contact(*pb))
             h = task.hand3d._h
             on_top = [dot(c.n, h) <= -self.up for c in cfg]
             if not all(on_top) and task.acceptable(cfg):
@@ -109,8 +113,10 @@ class SpatialTask(Task):
     table: float | None = 0.0
 
     def __post_init__(self) -> None:
-        if not isinstance(self.obj, (ConvexPolyhedron, Cylinder)):
-            raise CrmgraspError(f"a spatial task's object must be a ConvexPolyhedron or Cylinder, got {self.obj!r}")
+        if not isinstance(self.obj, (ConvexPolyhedron, Cylinder, TriangleMesh)):
+            raise CrmgraspError(
+                f"a spatial task's object must be a ConvexPolyhedron, Cylinder or TriangleMesh, got {self.obj!r}"
+            )
         if not isinstance(self.hand, Hand3D):
             raise CrmgraspError(f"a spatial task's hand must be a Hand3D, got {self.hand!r}")
         if self.symmetry is not None:
@@ -177,7 +183,10 @@ class SpatialTask(Task):
                 raise CrmgraspError(f"contact {label} on a spatial task takes a finite X,Y,Z, got {p!r}")
             if np.allclose(v, self.solid.centre, atol=1e-12):
                 raise CrmgraspError(f"contact {label}'s point is the object's centre: it gives no direction")
-            out.append(_contact(*surface_point(self.solid, v - self.solid.centre)))
+            hit = surface_point(self.solid, v - self.solid.centre)
+            if hit is None:
+                raise CrmgraspError(f"the ray from the object's centre toward contact {label}'s point misses it")
+            out.append(_contact(*hit))
         return Config3D(out[0], out[1])
 
     def sample_start(self, rng: np.random.Generator, accept: Any = None) -> Any:

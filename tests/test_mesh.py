@@ -1,0 +1,113 @@
+"""Closed triangle meshes in the spatial model: checks on construction, agreement with the
+convex polyhedron they outline, a non-convex prism, and a task on a mesh."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from crmgrasp import CrmgraspError
+from crmgrasp.kernels import kernel_for
+from crmgrasp.kernels.spatial import SpatialKernel
+from crmgrasp.model.hand import Error
+from crmgrasp.model.mesh import TriangleMesh
+from crmgrasp.model.solids import box3d, surface_point
+from crmgrasp.model.spatial import Config3D, Contact3D, Hand3D, execute_crm3d
+from crmgrasp.tasks import SpatialTask, spatial_crms
+
+HAND = Hand3D(aperture=0.16, palm_depth=0.12, backoff=0.01)
+
+
+def _prism(outline: list[tuple[float, float]], height: float) -> TriangleMesh:
+    """A prism over a simple counter-clockwise polygon (fan-triangulated caps: the outline
+    must be star-shaped about its first corner)."""
+    n = len(outline)
+    v = [(x, y, 0.0) for x, y in outline] + [(x, y, height) for x, y in outline]
+    faces = []
+    for i in range(1, n - 1):
+        faces.append((0, i + 1, i))  # bottom, seen from below: clockwise from above
+        faces.append((n, n + i, n + i + 1))  # top
+    for i in range(n):
+        j = (i + 1) % n
+        faces += [(i, j, n + j), (i, n + j, n + i)]
+    return TriangleMesh(tuple(v), tuple(faces))
+
+
+CUBE = _prism([(-0.15, -0.05), (0.15, -0.05), (0.15, 0.05), (-0.15, 0.05)], 0.10)
+BOX = box3d((-0.15, -0.05, 0.0), (0.15, 0.05, 0.10))
+L_SHAPE = _prism([(0.0, 0.0), (0.12, 0.0), (0.12, 0.04), (0.04, 0.04), (0.04, 0.12), (0.0, 0.12)], 0.05)
+
+
+def test_a_box_mesh_gives_the_polyhedrons_outcomes() -> None:
+    rng = np.random.default_rng(0)
+    crms = spatial_crms()
+    checked = 0
+    for _ in range(150):
+        cfg = Config3D(
+            *(Contact3D(*(tuple(v.tolist()) for v in surface_point(BOX, rng.standard_normal(3)))) for _ in range(2))
+        )
+        for crm in crms:
+            a = execute_crm3d(BOX, HAND, cfg, crm, table=0.0)
+            b = execute_crm3d(CUBE, HAND, cfg, crm, table=0.0)
+            assert a.error is b.error
+            assert np.allclose(np.array(a.config.a.x + a.config.b.x), np.array(b.config.a.x + b.config.b.x), atol=1e-12)
+            checked += a.error is Error.NONE
+    assert checked > 100
+    assert np.allclose(CUBE.centre, BOX.centre) and CUBE.support((0, 0, 1)) == 0.0
+
+
+def test_the_inside_test_and_first_entry_on_a_non_convex_prism() -> None:
+    assert L_SHAPE.contains((0.02, 0.1, 0.02)) and L_SHAPE.contains((0.1, 0.02, 0.02))
+    assert not L_SHAPE.contains((0.08, 0.08, 0.02))  # in the notch
+    assert not L_SHAPE.contains((0.0, 0.05, 0.02))  # on the surface
+    hit = L_SHAPE.ray_entry((0.08, 0.2, 0.02), (0.0, -1.0, 0.0), 1.0)  # down through the notch onto the inner side
+    assert hit is not None and np.allclose(hit[0], (0.08, 0.04, 0.02)) and np.allclose(hit[1], (0, -1, 0))
+    assert L_SHAPE.ray_entry((0.2, 0.08, 0.02), (1.0, 0.0, 0.0), 1.0) is None
+    assert L_SHAPE.gap((0.08, 0.04, 0.02)) == pytest.approx(0.0, abs=1e-12) and L_SHAPE.gap((0.02, 0.1, 0.02)) < 0
+
+
+@pytest.mark.parametrize(
+    ("build", "message"),
+    [
+        (lambda: TriangleMesh(CUBE.vertices, CUBE.faces[:-1]), "open"),
+        (lambda: TriangleMesh(CUBE.vertices, (*CUBE.faces, CUBE.faces[0])), "used twice"),
+        (lambda: TriangleMesh(CUBE.vertices, tuple((a, c, b) for a, b, c in CUBE.faces)), "point inward"),
+        (lambda: TriangleMesh(CUBE.vertices, ((0, 0, 1), *CUBE.faces[1:])), "degenerate"),
+        (lambda: TriangleMesh(CUBE.vertices, ((0, 1, 99), *CUBE.faces[1:])), "outside 0..7"),
+        (lambda: TriangleMesh(((0.0, 0.0, float("nan")),) * 4, CUBE.faces), "finite"),
+    ],
+)
+def test_bad_meshes_get_one_line_errors(build, message: str) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(CrmgraspError, match=message) as err:
+        build()
+    assert "\n" not in str(err.value)
+
+
+def test_a_task_on_a_mesh_runs_on_the_reference_rules() -> None:
+    from crmgrasp.agents.training import train_trials
+
+    task = SpatialTask(name="l-prism", obj=L_SHAPE, hand=HAND, actions=spatial_crms())  # type: ignore[arg-type]
+    assert type(kernel_for(task)) is SpatialKernel
+    with pytest.raises(CrmgraspError, match="mesh runs on 'reference'"):
+        kernel_for(task, "numba")
+    res = train_trials(task, "sarsa", trials=1, episodes=20, seed=0, k=1, eval_episodes=10)
+    assert res.steps.shape == (1, 20) and (res.steps >= 1).all()
+
+
+def test_an_open_cup_has_an_opening_and_an_inner_wall() -> None:
+    from crmgrasp.model.mesh import open_cup
+
+    cup = open_cup(0.04, 0.10, wall=0.005, segments=24)
+    assert not cup.contains((0.0, 0.0, 0.05)) and cup.contains((0.0375, 0.0, 0.05))  # the cavity; the wall
+    d = np.array([0.035, 0.0, -0.25]) / np.linalg.norm([0.035, 0.0, -0.25])
+    point, normal = cup.ray_entry((0.0, 0.0, 0.30), d, 1.0)  # in through the opening: the inner wall
+    assert point[2] == pytest.approx(0.05, abs=1e-3) and normal[0] > 0.99
+    point, normal = cup.ray_entry((0.0, 0.0, 0.30), (0.0, 0.0, -1.0), 1.0)  # straight down: the inner bottom
+    assert np.allclose(point, (0, 0, 0.005)) and np.allclose(normal, (0, 0, -1))
+    for bad, message in (
+        ((0.04, 0.1, 0.05), "thinner"),
+        ((0.04, -0.1, 0.005), "height"),
+        ((0.04, 0.1, 0.005, 3), "segments"),
+    ):
+        with pytest.raises(CrmgraspError, match=message):
+            open_cup(*bad)
