@@ -16,7 +16,9 @@ value iteration, twice:
 
 Both are ``Q(s,a) = sum_o p(o|s,a) (r + gamma V(s'))`` with ``V(s') = 0`` at a
 terminal outcome, iterated in place from the previous solution until the largest
-change is below ``1e-6`` or ``sweeps`` sweeps. Optimism drives exploration, pessimism
+change is below ``1e-6`` or ``sweeps`` sweeps (compiled by default,
+:func:`crmgrasp.kernels.planning.value_iteration`; ``compiled=False`` runs the readable
+sweeps, the same values bit for bit). Optimism drives exploration, pessimism
 makes the reported policy safe: separating the two is what lets the greedy policy be
 near-optimal long before the acting policy stops exploring.
 
@@ -37,6 +39,9 @@ from crmgrasp.agents.base import greedy_choice
 from crmgrasp.agents.tabular import TabularAgent
 
 __all__ = ["ModelVI", "Model"]
+
+TOL = 1e-6
+"""Value iteration stops when no value changed by this much in a sweep (reward units)."""
 
 Outcome = tuple[float, int, bool]
 Model = dict[tuple[int, int], dict[Outcome, float]]
@@ -65,12 +70,21 @@ class ModelVI(TabularAgent):
     name = "model-vi"
 
     def __init__(
-        self, n_actions: int, q_act: float = -1.5, unknown: float = -10.0, sweeps: int = 100, **kwargs: float
+        self,
+        n_actions: int,
+        q_act: float = -1.5,
+        unknown: float = -10.0,
+        sweeps: int = 100,
+        compiled: bool = True,
+        **kwargs: float,
     ) -> None:
         super().__init__(n_actions, **kwargs)
         self.q_act = finite(q_act, "q_act")
         self.unknown = finite(unknown, "unknown")
         self.sweeps = integer(sweeps, "sweeps", 1, 10_000)
+        if not isinstance(compiled, bool):
+            raise CrmgraspError(f"compiled must be true or false, got {compiled!r}")
+        self.compiled = compiled
         self.model: Model = {}
         self.q_greedy: dict[int, list[float]] = {}
 
@@ -123,12 +137,27 @@ class ModelVI(TabularAgent):
 
     # ----------------------------------------------------------------- planning
     def _plan(self) -> None:
-        """Value iteration of both value functions on the current model, in place."""
-        n, gamma = self.n_actions, self.gamma
+        """Value iteration of both value functions on the current model, in place: the
+        compiled sweeps (:mod:`crmgrasp.kernels._vi_jit`) or, with ``compiled=False``, the
+        readable ones below; the same values bit for bit."""
+        n = self.n_actions
         for s, _ in self.model:
             if s not in self.q:
                 self.q[s] = [self.q_act] * n
                 self.q_greedy[s] = [self.unknown] * n
+        if self.compiled:
+            self._sweeps_compiled()
+        else:
+            self._sweeps_reference()
+
+    def _sweeps_compiled(self) -> None:
+        from crmgrasp.kernels.planning import value_iteration
+
+        value_iteration(self, TOL)
+
+    def _sweeps_reference(self) -> None:
+        """Gauss-Seidel sweeps over the pairs in the model's order (the definition)."""
+        gamma = self.gamma
         pairs = [
             (self.q[s], self.q_greedy[s], a, [(c / sum(cs.values()), r, s2, t) for (r, s2, t), c in cs.items()])
             for (s, a), cs in self.model.items()
@@ -142,7 +171,7 @@ class ModelVI(TabularAgent):
                     new_g += p * (r if t else r + gamma * self._v_greedy(s2))
                 change = max(change, abs(new_a - qa[a]), abs(new_g - qg[a]))
                 qa[a], qg[a] = new_a, new_g
-            if change < 1e-6:
+            if change < TOL:
                 break
 
     def _v_act(self, s: int) -> float:

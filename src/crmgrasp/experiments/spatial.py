@@ -39,13 +39,11 @@ LEARNERS = {"paper SARSA k=2": ("sarsa", 2), "model-vi k=1": ("model-vi", 1)}
 @dataclass(frozen=True)
 class SpatialConfig:
     """Tasks, and per task the training episodes and the held-out worlds (the optimum's
-    cost grows fast with them on boxes; model-vi plans over every pair it has seen after
-    each step, which on boxes takes about 2 minutes per 1,000 episodes), trials,
-    checkpoints, seed."""
+    cost grows fast with them on boxes), trials, checkpoints, seed."""
 
     tasks: tuple[str, ...] = ("cup-3d", "box-3d")
     trials: int = 5
-    episodes: tuple[int, ...] = (6000, 600)
+    episodes: tuple[int, ...] = (6000, 3000)
     heldout: tuple[int, ...] = (300, 150)
     checkpoints: tuple[int, ...] = (10, 20, 50, 100, 200, 500, 1000, 2000, 4000, 6000)
     checkpoint_episodes: int = 100

@@ -1,0 +1,66 @@
+"""The fast path of model-based planning: :func:`value_iteration` runs
+:class:`~crmgrasp.agents.model_based.ModelVI`'s sweeps in compiled code
+(:mod:`crmgrasp.kernels._vi_jit`) on arrays built from the agent's model and values,
+then writes the values back; the agent's readable sweeps are the definition."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+__all__ = ["value_iteration"]
+
+
+def value_iteration(agent: Any, tol: float) -> int:
+    """Solve ``agent``'s model in place (its ``q`` and ``q_greedy`` rows); returns the sweeps."""
+    from crmgrasp.kernels import _vi_jit
+
+    n = agent.n_actions
+    states = list(agent.q)
+    row = {s: i for i, s in enumerate(states)}
+    qa = np.array([agent.q[s] for s in states], dtype=np.float64).reshape(-1, n)
+    blank = [agent.unknown] * n  # a row outside the model (never a pair's source) has no greedy values
+    qg = np.array([agent.q_greedy.get(s, blank) for s in states], dtype=np.float64).reshape(-1, n)
+    tried = np.zeros(qa.shape, dtype=np.bool_)
+    for s, acts in agent.tried.items():
+        i = row.get(s)
+        if i is not None:
+            tried[i, list(acts)] = True
+    pair_row, pair_a, first = [], [], [0]
+    out_p: list[float] = []
+    out_r: list[float] = []
+    out_row: list[int] = []
+    out_t: list[bool] = []
+    for (s, a), cs in agent.model.items():
+        total = sum(cs.values())
+        pair_row.append(row[s])
+        pair_a.append(a)
+        for (r, s2, t), c in cs.items():
+            out_p.append(c / total)
+            out_r.append(r)
+            out_row.append(row.get(s2, -1))
+            out_t.append(t)
+        first.append(len(out_p))
+    done = _vi_jit.sweeps(
+        qa,
+        qg,
+        tried,
+        np.array(pair_row, dtype=np.int64),
+        np.array(pair_a, dtype=np.int64),
+        np.array(first, dtype=np.int64),
+        np.array(out_p, dtype=np.float64),
+        np.array(out_r, dtype=np.float64),
+        np.array(out_row, dtype=np.int64),
+        np.array(out_t, dtype=np.bool_),
+        float(agent.q_act),
+        float(agent.unknown),
+        float(agent.gamma),
+        int(agent.sweeps),
+        float(tol),
+    )
+    for s, va, vg in zip(states, qa.tolist(), qg.tolist(), strict=True):
+        agent.q[s][:] = va
+        if s in agent.q_greedy:
+            agent.q_greedy[s][:] = vg
+    return int(done)
