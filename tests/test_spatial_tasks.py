@@ -323,3 +323,65 @@ def test_the_command_line_on_spatial_tasks(tmp_path, capsys) -> None:  # type: i
         == 2
     )
     assert "planar hand" in capsys.readouterr().err
+
+
+SPATIAL_FILE = """
+name = "my-cup"
+model = "spatial"
+table = 0.0
+mu_goal = 0.05
+[hand]
+aperture = 0.16
+palm_depth = 0.12
+[[crm]]
+c = "a"
+f = "b"
+[[crm]]
+c = "b"
+f = "a"
+[[crm]]
+c = "a"
+f = "a"
+r = [0.0, 0.05]
+[solid]
+cylinder = { radius = 0.04, height = 0.12 }
+"""
+
+
+def test_spatial_task_files_round_trip(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from crmgrasp.tasks import load_task_file, task_from_dict, task_to_dict
+
+    path = tmp_path / "cup.toml"
+    path.write_text(SPATIAL_FILE)
+    task = load_task_file(path)
+    assert isinstance(task, SpatialTask) and isinstance(task.obj, Cylinder) and task.actions[2].r == (0.0, 0.05)
+    for t in (task, make_task("box-3d"), make_task("cup-3d")):
+        again = task_from_dict(task_to_dict(t))
+        assert task_to_dict(again) == task_to_dict(t) and type(again.obj) is type(t.obj)
+    rng = np.random.default_rng(0)
+    assert task.sample_start(rng) == task_from_dict(task_to_dict(task)).sample_start(np.random.default_rng(0))
+    from crmgrasp.model.mesh import open_cup
+
+    cup = SpatialTask(name="open", obj=open_cup(0.04, 0.1), hand=HAND, actions=spatial_crms())  # type: ignore[arg-type]
+    assert task_to_dict(task_from_dict(task_to_dict(cup))) == task_to_dict(cup)
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (('model = "spatial"', 'model = "solid"'), 'model must be "planar" or "spatial"'),
+        (("cylinder = { radius = 0.04, height = 0.12 }", "sphere = { radius = 0.04 }"), "unknown key 'sphere'"),
+        (("r = [0.0, 0.05]", "r = 0.05"), "r must be a list of numbers"),
+        (("aperture = 0.16", "aperture = 0.16\nh = [0, 0]"), "hand.h must have 3 numbers"),
+        (("radius = 0.04, height", "radius = -0.04, height"), "cylinder radius"),
+        (("table = 0.0", "table = 0.0\nobject = 1"), "unknown key 'object'"),
+    ],
+)
+def test_bad_spatial_task_files_get_one_line_errors(tmp_path, edit, message) -> None:  # type: ignore[no-untyped-def]
+    from crmgrasp.tasks import load_task_file
+
+    path = tmp_path / "bad.toml"
+    path.write_text(SPATIAL_FILE.replace(*edit))
+    with pytest.raises(CrmgraspError, match=message) as err:
+        load_task_file(path)
+    assert "\n" not in str(err.value)

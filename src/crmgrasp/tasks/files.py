@@ -109,6 +109,9 @@ kind = "uniform"                   # "uniform" on the whole boundary; for polygo
 # sigma_p = 0.0                    # position, metres (<= 0.1)
 
 # symmetry = [1, 0, 3, 2]          # optional declared mirror symmetry: the action each action maps to
+
+# A spatial task (3-D: boxes, cylinders, meshes on a table) sets model = "spatial" and states
+# [solid] or a 3-D [family]: see docs/model-3d.md, section 6.
 """
 
 _TOP = {
@@ -204,7 +207,9 @@ def _hand(table: Any) -> Hand:
     return Hand(**values)
 
 
-def _crms(value: Any) -> tuple[CRM, ...]:
+def _crms(value: Any, make: Callable[[str, str, Any, str], Any] | None = None) -> tuple[Any, ...]:
+    """The ``[[crm]]`` tables; ``make(c, f, r, where)`` builds each (default: a planar CRM,
+    ``r`` a number, 0 when absent)."""
     if not isinstance(value, list) or not value:
         raise CrmgraspError("the task needs at least one [[crm]] table")
     out = []
@@ -213,7 +218,10 @@ def _crms(value: Any) -> tuple[CRM, ...]:
         t = _keys(t, where, {"c", "f", "r"}, {"c", "f"})
         if t["c"] not in ("a", "b") or t["f"] not in ("a", "b"):
             raise CrmgraspError(f'{where}: c and f must be "a" or "b", got {shown(t["c"])}, {shown(t["f"])}')
-        out.append(CRM(t["c"], t["f"], _num(t.get("r", 0.0), f"{where} r")))
+        if make is None:
+            out.append(CRM(t["c"], t["f"], _num(t.get("r", 0.0), f"{where} r")))
+        else:
+            out.append(make(t["c"], t["f"], t.get("r"), where))
     return tuple(out)
 
 
@@ -321,14 +329,29 @@ def _section(key: str, build: Callable[[Any], Any], value: Any) -> Any:
         raise CrmgraspError(f"{key}: {exc}") from None
 
 
-def task_from_dict(doc: Any) -> Task:
-    """The :class:`Task` a task document (parsed TOML, or :func:`task_to_dict`) states."""
-    d = _keys(doc, "the task file", _TOP, {"name", "hand", "crm"})
-    name = d["name"]
+def checked_name(name: Any) -> str:
+    """``name`` if it is a valid task name (one-line error otherwise)."""
     if not isinstance(name, str) or not _NAME.fullmatch(name):
         raise CrmgraspError(
             f"name must be 1-64 letters, digits, '.', '_' or '-' (first a letter or digit), got {shown(name)}"
         )
+    return name
+
+
+def task_from_dict(doc: Any) -> Task:
+    """The :class:`Task` a task document (parsed TOML, or :func:`task_to_dict`) states;
+    ``model = "spatial"`` states a spatial task (:mod:`crmgrasp.tasks.spatial_files`)."""
+    model = doc.get("model", "planar") if isinstance(doc, dict) else "planar"
+    if model not in ("planar", "spatial"):
+        raise CrmgraspError(f'model must be "planar" or "spatial", got {shown(model)}')
+    if model == "spatial":
+        from crmgrasp.tasks.spatial_files import spatial_from_dict
+
+        return spatial_from_dict(doc)
+    if isinstance(doc, dict):
+        doc = {k: v for k, v in doc.items() if k != "model"}
+    d = _keys(doc, "the task file", _TOP, {"name", "hand", "crm"})
+    name = checked_name(d["name"])
     kw: dict[str, Any] = {
         "hand": _section("hand", _hand, d["hand"]),
         "actions": _section("crm", _crms, d["crm"]),
@@ -340,11 +363,23 @@ def task_from_dict(doc: Any) -> Task:
         kw["obj"] = kw["family"].nominal()
     else:
         kw["obj"] = _section("object", _object, d["object"])
-    if "bins" in d:
-        kw["discretizer"] = _section("bins", _bins, d["bins"])
     kw["starts"] = _section("starts", _starts, d.get("starts", {"kind": "boundary" if "family" in d else "uniform"}))
     if getattr(kw["starts"], "takes_corner_filter", False) and not isinstance(kw["obj"], Polygon):
         raise CrmgraspError('starts kinds "corners", "near-corner", "long-side" need a polygon object; use "uniform"')
+    common_keys(d, kw)
+    if d.get("symmetry") is not None:
+        sym = d["symmetry"]
+        if not isinstance(sym, list) or any(isinstance(i, bool) or not isinstance(i, int) for i in sym):
+            raise CrmgraspError(f"symmetry must be a list of action indices, got {shown(sym)}")
+        kw["symmetry"] = Symmetry(tuple(sym))
+    return _section("task", lambda kw: Task(name=name, **kw), kw)
+
+
+def common_keys(d: dict[str, Any], kw: dict[str, Any]) -> None:
+    """The keys planar and spatial task files share (bins, noise, goal, rewards, length,
+    reference, description), checked into the task's keyword arguments ``kw``."""
+    if "bins" in d:
+        kw["discretizer"] = _section("bins", _bins, d["bins"])
     if "noise" in d:
         t = _section("noise", lambda v: _keys(v, "[noise]", {"sigma_n", "sigma_p"}), d["noise"])
         kw["noise"] = _section("noise", lambda t: SensorNoise(**{k: _num(v, f"noise.{k}") for k, v in t.items()}), t)
@@ -365,12 +400,6 @@ def task_from_dict(doc: Any) -> Task:
         if not isinstance(d["description"], str):
             raise CrmgraspError(f"description must be a string, got {shown(d['description'])}")
         kw["description"] = d["description"]
-    if d.get("symmetry") is not None:
-        sym = d["symmetry"]
-        if not isinstance(sym, list) or any(isinstance(i, bool) or not isinstance(i, int) for i in sym):
-            raise CrmgraspError(f"symmetry must be a list of action indices, got {shown(sym)}")
-        kw["symmetry"] = Symmetry(tuple(sym))
-    return _section("task", lambda kw: Task(name=name, **kw), kw)
 
 
 def _object_dict(obj: Any) -> dict[str, Any]:
@@ -386,20 +415,24 @@ def task_to_dict(task: Task) -> dict[str, Any]:
 
     A start sampler other than the built-in kinds is written as ``{"kind": "custom"}``
     (Python code does not travel); :func:`task_from_dict` refuses it."""
+    from crmgrasp.tasks.spatial import SpatialTask
+
+    if isinstance(task, SpatialTask):
+        from crmgrasp.tasks.spatial_files import spatial_to_dict
+
+        return spatial_to_dict(task)
     h = task.hand
     hand: dict[str, Any] = {"aperture": h.aperture, "palm_depth": h.palm_depth, "backoff": h.backoff}
     hand.update({k: getattr(h, k) for k in ("palm_normal_tol", "min_separation")})
     if h.r_max is not None:
         hand["r_max"] = h.r_max
-    if hasattr(h, "g"):  # a spatial hand: its vertical and forward axes, and the table
-        hand.update(h=list(h.h), g=list(h.g))  # type: ignore[attr-defined]
     doc: dict[str, Any] = {
         "name": task.name,
         "description": task.description,
         "mu_goal": task.mu_goal,
         "max_steps": task.max_steps,
         "hand": hand,
-        "crm": [{"c": a.c, "f": a.f, "r": list(a.r) if isinstance(a.r, tuple) else a.r} for a in task.actions],
+        "crm": [{"c": a.c, "f": a.f, "r": a.r} for a in task.actions],
         "bins": task.discretizer.to_dict(),
         "starts": _starts_dict(task.starts),
         "grasp_reward": task.grasp_reward,
@@ -410,8 +443,6 @@ def task_to_dict(task: Task) -> dict[str, Any]:
         doc["object"] = _object_dict(task.obj)
     else:
         doc["family"] = task.family.describe()  # a sampler family (Python code) is written, not read back
-    if hasattr(task, "table"):
-        doc["table"] = task.table
     if task.reference_mean_steps is not None:
         doc["reference_mean_steps"] = task.reference_mean_steps
     if task.symmetry is not None:

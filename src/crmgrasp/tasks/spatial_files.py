@@ -1,0 +1,237 @@
+"""Spatial tasks in task files: ``model = "spatial"`` (docs/model-3d.md section 6).
+
+The schema follows the planar one (:mod:`crmgrasp.tasks.files`) with spatial parts::
+
+    name = "my-cup"
+    model = "spatial"
+    table = 0.0                      # the table's height, m (omit the key for no table)
+    [hand]                           # aperture, palm_depth, backoff, r_max, min_separation,
+    aperture = 0.16                  # palm_normal_tol, h = [0, 0, 1], g = [1, 0, 0]
+    palm_depth = 0.12
+    [[crm]]                          # r = [r1, r2] in the reference contact's tangent frame
+    c = "a"
+    f = "b"
+    r = [0.0, 0.0]
+    [solid]                          # exactly one of [solid] and [family]:
+    cylinder = { origin = [0, 0, 0], axis = [0, 0, 1], radius = 0.04, height = 0.1 }
+    # box = { lo = [..], hi = [..] }, polyhedron = { planes = [[ax, ay, az, b], ..] },
+    # mesh = { vertices = [[x, y, z], ..], faces = [[i, j, k], ..] },
+    # open_cup = { radius = .., height = .., wall = .., segments = .. }
+    # [family]  kind = "box3d" (length, width, height) or "cylinder" (radius, height,
+    #           upright), ranges [low, high], pose = { angle = [..], offset = [..] }
+    [starts]
+    kind = "surface"                 # up = 0.5, max_tries = 10000
+
+``bins``, ``noise``, ``mu_goal``, ``max_steps``, ``grasp_reward``, ``error_cost``,
+``description`` and ``reference_mean_steps`` are as in planar files.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+from crmgrasp._validation import CrmgraspError, shown
+from crmgrasp.model.families import Pose
+from crmgrasp.model.mesh import TriangleMesh, open_cup
+from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable
+from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, box3d
+from crmgrasp.model.spatial import CRM3D, Hand3D
+from crmgrasp.tasks.spatial import SpatialTask, SurfaceStarts
+
+__all__ = ["spatial_from_dict", "spatial_to_dict", "SPATIAL_KEYS"]
+
+SPATIAL_KEYS = {
+    "name",
+    "model",
+    "description",
+    "mu_goal",
+    "max_steps",
+    "reference_mean_steps",
+    "grasp_reward",
+    "error_cost",
+    "hand",
+    "crm",
+    "bins",
+    "noise",
+    "solid",
+    "family",
+    "table",
+    "starts",
+}
+_HAND3D = {"aperture", "palm_depth", "backoff", "r_max", "min_separation", "palm_normal_tol", "h", "g"}
+_FAMILIES3D: dict[str, type] = {"box3d": BoxOnTable, "cylinder": CylinderOnTable}
+
+
+def _helpers() -> Any:
+    from crmgrasp.tasks import files  # the planar schema's checkers (imported here: files dispatches to this module)
+
+    return files
+
+
+def _vector(value: Any, key: str, n: int) -> tuple[float, ...]:
+    out = _helpers()._numbers(value, key)
+    if len(out) != n:
+        raise CrmgraspError(f"{key} must have {n} numbers, got {len(out)}")
+    return out
+
+
+def _hand(table: Any) -> Hand3D:
+    f = _helpers()
+    t = f._keys(table, "[hand]", _HAND3D, {"aperture", "palm_depth"})
+    kw: dict[str, Any] = {
+        k: _vector(v, f"hand.{k}", 3) if k in ("h", "g") else f._num(v, f"hand.{k}") for k, v in t.items()
+    }
+    return Hand3D(**kw)
+
+
+def _crm(c: str, f: str, r: Any, where: str) -> CRM3D:
+    r1, r2 = _vector([0.0, 0.0] if r is None else r, f"{where} r", 2)
+    return CRM3D(c, f, (r1, r2))
+
+
+def _solid(table: Any) -> Any:
+    f = _helpers()
+    kinds = {"box", "polyhedron", "cylinder", "mesh", "open_cup"}
+    t = f._keys(table, "[solid]", kinds)
+    if len(t) != 1:
+        raise CrmgraspError(f"[solid] needs exactly one of {', '.join(sorted(kinds))}")
+    ((kind, value),) = t.items()
+    where = f"solid.{kind}"
+    if kind == "box":
+        v = f._keys(value, where, {"lo", "hi"}, {"lo", "hi"})
+        return box3d(_vector(v["lo"], f"{where}.lo", 3), _vector(v["hi"], f"{where}.hi", 3))
+    if kind == "polyhedron":
+        v = f._keys(value, where, {"planes"}, {"planes"})
+        if not isinstance(v["planes"], list):
+            raise CrmgraspError(f"{where}.planes must be a list of [ax, ay, az, b]")
+        return ConvexPolyhedron(tuple(_vector(p, f"{where}.planes[{i}]", 4) for i, p in enumerate(v["planes"])))  # type: ignore[arg-type,misc]
+    if kind == "cylinder":
+        v = f._keys(value, where, {"origin", "axis", "radius", "height"}, {"radius", "height"})
+        origin = _vector(v.get("origin", [0.0, 0.0, 0.0]), f"{where}.origin", 3)
+        axis = _vector(v.get("axis", [0.0, 0.0, 1.0]), f"{where}.axis", 3)
+        return Cylinder(origin, axis, f._num(v["radius"], f"{where}.radius"), f._num(v["height"], f"{where}.height"))  # type: ignore[arg-type]
+    if kind == "mesh":
+        v = f._keys(value, where, {"vertices", "faces"}, {"vertices", "faces"})
+        if not isinstance(v["vertices"], list) or not isinstance(v["faces"], list):
+            raise CrmgraspError(f"{where} needs vertices = [[x, y, z], ..] and faces = [[i, j, k], ..]")
+        verts = tuple(_vector(p, f"{where}.vertices[{i}]", 3) for i, p in enumerate(v["vertices"]))
+        for i, tri in enumerate(v["faces"]):
+            if (
+                not isinstance(tri, list)
+                or len(tri) != 3
+                or not all(isinstance(k, int) and not isinstance(k, bool) for k in tri)
+            ):
+                raise CrmgraspError(f"{where}.faces[{i}] must be three corner indices, got {shown(tri)}")
+        return TriangleMesh(verts, tuple(tuple(tri) for tri in v["faces"]))  # type: ignore[arg-type]
+    v = f._keys(value, where, {"radius", "height", "wall", "segments"}, {"radius", "height"})
+    kw = {k: f._num(x, f"{where}.{k}") for k, x in v.items() if k != "segments"}
+    if "segments" in v:
+        kw["segments"] = v["segments"]
+    return open_cup(**kw)
+
+
+def _family(table: Any) -> Any:
+    f = _helpers()
+    fields = {fl.name for cls in _FAMILIES3D.values() for fl in dataclasses.fields(cls)}
+    t = f._keys(table, "[family]", {"kind"} | fields)
+    kind = t.get("kind")
+    if kind not in _FAMILIES3D:
+        raise CrmgraspError(
+            f"[family] kind must be one of {', '.join(_FAMILIES3D)} in a spatial task, got {shown(kind)}"
+        )
+    cls = _FAMILIES3D[kind]
+    own = {fl.name for fl in dataclasses.fields(cls)}
+    extra = set(t) - {"kind"} - own
+    if extra:
+        raise CrmgraspError(
+            f"[family]: kind {kind!r} takes no {', '.join(sorted(extra))}; it takes {', '.join(sorted(own))}"
+        )
+    kw: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in t.items() if k not in ("kind", "pose")}
+    if "pose" in t:
+        pose = f._keys(t["pose"], "[family] pose", {"angle", "offset"})
+        kw["pose"] = Pose(**{k: tuple(v) if isinstance(v, list) else v for k, v in pose.items()})
+    return cls(**kw)
+
+
+def _starts(table: Any) -> SurfaceStarts:
+    f = _helpers()
+    t = f._keys(table, "[starts]", {"kind", "up", "max_tries"}, {"kind"})
+    if t["kind"] != "surface":
+        raise CrmgraspError(f'a spatial task\'s starts kind is "surface", got {shown(t["kind"])}')
+    kw: dict[str, Any] = {}
+    if "up" in t:
+        kw["up"] = f._num(t["up"], "starts.up")
+    if "max_tries" in t:
+        m = t["max_tries"]
+        if isinstance(m, bool) or not isinstance(m, int) or not 1 <= m <= 1_000_000:
+            raise CrmgraspError(f"starts.max_tries must be an integer in [1, 1000000], got {shown(m)}")
+        kw["max_tries"] = m
+    return SurfaceStarts(**kw)
+
+
+def spatial_from_dict(doc: Any) -> SpatialTask:
+    """The :class:`SpatialTask` of a task document with ``model = "spatial"``."""
+    f = _helpers()
+    d = f._keys(doc, "the task file", SPATIAL_KEYS, {"name", "hand", "crm"})
+    name = f.checked_name(d["name"])
+    if ("solid" in d) == ("family" in d):
+        raise CrmgraspError("a spatial task file needs exactly one of [solid] and [family]")
+    kw: dict[str, Any] = {
+        "hand": f._section("hand", _hand, d["hand"]),
+        "actions": f._section("crm", lambda v: f._crms(v, _crm), d["crm"]),
+    }
+    if "family" in d:
+        kw["family"] = f._section("family", _family, d["family"])
+        kw["obj"] = kw["family"].nominal()
+    else:
+        kw["obj"] = f._section("solid", _solid, d["solid"])
+    kw["starts"] = f._section("starts", _starts, d.get("starts", {"kind": "surface"}))
+    kw["table"] = None if "table" not in d or d["table"] is None else f._num(d["table"], "table")
+    f.common_keys(d, kw)
+    return f._section("task", lambda kw: SpatialTask(name=name, **kw), kw)  # type: ignore[no-any-return]
+
+
+def _solid_dict(obj: Any) -> dict[str, Any]:
+    if isinstance(obj, Cylinder):
+        return {
+            "cylinder": {"origin": list(obj.origin), "axis": list(obj.axis), "radius": obj.radius, "height": obj.height}
+        }
+    if isinstance(obj, TriangleMesh):
+        return {"mesh": {"vertices": [list(v) for v in obj.vertices], "faces": [list(t) for t in obj.faces]}}
+    return {"polyhedron": {"planes": [list(p) for p in obj.planes]}}
+
+
+def spatial_to_dict(task: SpatialTask) -> dict[str, Any]:
+    """A spatial task as plain data in the schema above."""
+    h = task.hand3d
+    hand: dict[str, Any] = {"aperture": h.aperture, "palm_depth": h.palm_depth, "backoff": h.backoff}
+    hand.update(palm_normal_tol=h.palm_normal_tol, min_separation=h.min_separation, h=list(h.h), g=list(h.g))
+    if h.r_max is not None:
+        hand["r_max"] = h.r_max
+    starts = task.starts
+    doc: dict[str, Any] = {
+        "name": task.name,
+        "model": "spatial",
+        "description": task.description,
+        "mu_goal": task.mu_goal,
+        "max_steps": task.max_steps,
+        "hand": hand,
+        "crm": [{"c": a.c, "f": a.f, "r": [*a.r]} for a in task.actions],  # type: ignore[misc]
+        "bins": task.discretizer.to_dict(),
+        "starts": {"kind": "surface", "up": starts.up, "max_tries": starts.max_tries}
+        if isinstance(starts, SurfaceStarts)
+        else {"kind": "custom"},
+        "grasp_reward": task.grasp_reward,
+        "error_cost": task.error_cost,
+        "noise": {"sigma_n": task.noise.sigma_n, "sigma_p": task.noise.sigma_p},
+    }
+    if task.table is not None:
+        doc["table"] = task.table
+    if task.family is None:
+        doc["solid"] = _solid_dict(task.obj)
+    else:
+        doc["family"] = task.family.describe()
+    if task.reference_mean_steps is not None:
+        doc["reference_mean_steps"] = task.reference_mean_steps
+    return doc
