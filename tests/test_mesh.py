@@ -11,8 +11,8 @@ from crmgrasp.kernels import kernel_for
 from crmgrasp.kernels.spatial import SpatialKernel
 from crmgrasp.model.hand import Error
 from crmgrasp.model.mesh import TriangleMesh
-from crmgrasp.model.solids import box3d, surface_point
-from crmgrasp.model.spatial import Config3D, Contact3D, Hand3D, execute_crm3d
+from crmgrasp.model.solids import Cylinder, box3d, surface_point
+from crmgrasp.model.spatial import CRM3D, Config3D, Contact3D, Hand3D, execute_crm3d
 from crmgrasp.tasks import SpatialTask, spatial_crms
 
 HAND = Hand3D(aperture=0.16, palm_depth=0.12, backoff=0.01)
@@ -111,3 +111,20 @@ def test_an_open_cup_has_an_opening_and_an_inner_wall() -> None:
     ):
         with pytest.raises(CrmgraspError, match=message):
             open_cup(*bad)
+
+
+@pytest.mark.parametrize(
+    ("build", "message"),
+    [
+        (lambda: Cylinder((0, 0, 0), (0, 0, 0), 0.05, 0.1), "axis"),
+        (lambda: Cylinder((0, 0, 0), (0, 0, 1), 0.0, 0.1), "radius"),
+        (lambda: Cylinder((0, 0, 0), (0, 0, 1), 0.05, -1.0), "height"),
+        (lambda: box3d((0, 0, 0), (0.1, 0.0, 0.1)), "lo < hi"),
+        (lambda: HAND.check_crm(CRM3D("a", "a", (0.2, 0.0))), "r_max"),
+        (lambda: HAND.check_crm(CRM3D("a", "a", (float("nan"), 0.0))), "finite"),
+    ],
+)
+def test_degenerate_solids_and_far_offsets_get_one_line_errors(build, message: str) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(CrmgraspError, match=message) as err:
+        build()
+    assert "\n" not in str(err.value)
