@@ -244,18 +244,25 @@ class Symmetry:
     actions: tuple[int, ...]
 
 
-def _check_symmetry(sym: Symmetry, actions: tuple[CRM, ...], disc: Discretizer) -> None:
+SWAP = {"a": "b", "b": "a"}
+
+
+def mirror_crm(crm: CRM) -> CRM:
+    """The planar mirror of a CRM: labels swapped, ``r -> -r`` (:class:`Symmetry`)."""
+    return CRM(SWAP[crm.c], SWAP[crm.f], -crm.r)
+
+
+def _check_symmetry(
+    sym: Symmetry, actions: tuple[Any, ...], disc: Discretizer, mirror: Callable[[Any], Any] = mirror_crm
+) -> None:
     perm = tuple(sym.actions)
     n = len(actions)
     if sorted(perm) != list(range(n)) or any(perm[perm[i]] != i for i in range(n)):
         raise CrmgraspError(f"symmetry actions must be an involutive permutation of 0..{n - 1}, got {perm!r}")
-    swap = {"a": "b", "b": "a"}
     for i, crm in enumerate(actions):
-        m = actions[perm[i]]
-        if (m.c, m.f, m.r) != (swap[crm.c], swap[crm.f], -crm.r):
-            raise CrmgraspError(
-                f"symmetry maps {crm} to {m}, but its mirror is ({swap[crm.c]},{swap[crm.f]},{-crm.r:g})"
-            )
+        m, expected = actions[perm[i]], mirror(crm)
+        if m != expected:
+            raise CrmgraspError(f"symmetry maps {crm} to {m}, but its mirror is {expected}")
     if not disc.abs_moments or disc.m_a != disc.m_b:
         raise CrmgraspError("a symmetric task needs moments binned by magnitude with the same m_a and m_b thresholds")
 
@@ -355,7 +362,7 @@ class Task:
             if not isinstance(self.symmetry, Symmetry):
                 raise CrmgraspError(f"task symmetry must be a Symmetry, got {self.symmetry!r}")
             try:
-                _check_symmetry(self.symmetry, actions, self.discretizer)
+                _check_symmetry(self.symmetry, actions, self.discretizer, self.mirror_crm)
             except CrmgraspError as exc:
                 raise CrmgraspError(
                     f"{exc} (a task made from a symmetric one with other CRMs or bins needs symmetry=None)"
@@ -370,6 +377,11 @@ class Task:
     # -- the model's rules in this task's world (each written once in crmgrasp.model;
     # a spatial task, crmgrasp.tasks.spatial, overrides them with the spatial model's,
     # so configurations and CRMs are typed Any here: planar Config / CRM, or Config3D / CRM3D)
+    @staticmethod
+    def mirror_crm(crm: Any) -> Any:
+        """The CRM a declared mirror symmetry maps ``crm`` to (:func:`mirror_crm`)."""
+        return mirror_crm(crm)
+
     def crm(self, action: Any) -> Any:
         """The CRM of action index ``action``, or ``action`` itself checked against the hand."""
         return self.hand.check_crm(action) if isinstance(action, CRM) else self.actions[action]

@@ -367,17 +367,12 @@ def task_from_dict(doc: Any) -> Task:
     if getattr(kw["starts"], "takes_corner_filter", False) and not isinstance(kw["obj"], Polygon):
         raise CrmgraspError('starts kinds "corners", "near-corner", "long-side" need a polygon object; use "uniform"')
     common_keys(d, kw)
-    if d.get("symmetry") is not None:
-        sym = d["symmetry"]
-        if not isinstance(sym, list) or any(isinstance(i, bool) or not isinstance(i, int) for i in sym):
-            raise CrmgraspError(f"symmetry must be a list of action indices, got {shown(sym)}")
-        kw["symmetry"] = Symmetry(tuple(sym))
     return _section("task", lambda kw: Task(name=name, **kw), kw)
 
 
 def common_keys(d: dict[str, Any], kw: dict[str, Any]) -> None:
     """The keys planar and spatial task files share (bins, noise, goal, rewards, length,
-    reference, description), checked into the task's keyword arguments ``kw``."""
+    reference, description, symmetry), checked into the task's keyword arguments ``kw``."""
     if "bins" in d:
         kw["discretizer"] = _section("bins", _bins, d["bins"])
     if "noise" in d:
@@ -400,6 +395,11 @@ def common_keys(d: dict[str, Any], kw: dict[str, Any]) -> None:
         if not isinstance(d["description"], str):
             raise CrmgraspError(f"description must be a string, got {shown(d['description'])}")
         kw["description"] = d["description"]
+    if d.get("symmetry") is not None:
+        sym = d["symmetry"]
+        if not isinstance(sym, list) or any(isinstance(i, bool) or not isinstance(i, int) for i in sym):
+            raise CrmgraspError(f"symmetry must be a list of action indices, got {shown(sym)}")
+        kw["symmetry"] = Symmetry(tuple(sym))
 
 
 def _object_dict(obj: Any) -> dict[str, Any]:

@@ -38,9 +38,18 @@ from crmgrasp.model.spatial import (
     observe3d,
     sense3d,
 )
-from crmgrasp.tasks.core import PAPER_BINS, Task, register_task
+from crmgrasp.tasks.core import PAPER_BINS, SWAP, Symmetry, Task, register_task
 
-__all__ = ["SpatialTask", "SurfaceStarts", "spatial_crms", "SPATIAL_HAND", "box_3d", "cup_3d", "SPATIAL_TASKS"]
+__all__ = [
+    "SpatialTask",
+    "SurfaceStarts",
+    "spatial_crms",
+    "spatial_symmetry",
+    "SPATIAL_HAND",
+    "box_3d",
+    "cup_3d",
+    "SPATIAL_TASKS",
+]
 
 SPATIAL_HAND = Hand3D(aperture=0.16, palm_depth=0.12, backoff=0.01)
 """The paper's hand in space: aperture 0.16 m, palm depth 0.12 m, vertical axis z."""
@@ -119,8 +128,6 @@ class SpatialTask(Task):
             )
         if not isinstance(self.hand, Hand3D):
             raise CrmgraspError(f"a spatial task's hand must be a Hand3D, got {self.hand!r}")
-        if self.symmetry is not None:
-            raise CrmgraspError("spatial tasks declare no mirror symmetry (symmetry=None)")
         self._check_common()
         if self.family is not None:
             if not isinstance(self.family, SolidFamily):
@@ -136,6 +143,23 @@ class SpatialTask(Task):
     def hand3d(self) -> Hand3D:
         """The hand (typed as a :class:`Hand3D`)."""
         return self.hand  # type: ignore[return-value]
+
+    @staticmethod
+    def mirror_crm(crm: Any) -> Any:
+        """The spatial mirror of a CRM: labels swapped, ``(r_1, r_2) -> (-r_1, r_2)``.
+
+        A reflection ``M`` in a vertical plane that contains the hand's forward axis ``g``
+        (``y -> -y`` for the default axes) maps each tangent frame's ``t_1`` to ``-M t_1`` and
+        ``t_2`` to ``M t_2`` (a reflection reverses cross products), the palm side to its
+        mirror once the labels are swapped, and leaves ``rho`` and the pair
+        ``{|m_a|, |m_b|}`` unchanged. A task whose object and start distributions are
+        invariant under it (``box-3d``, ``cup-3d``: any yaw, offsets symmetric about 0)
+        may declare the symmetry (:func:`spatial_symmetry`); ``tests/test_spatial_tasks.py``
+        checks the equivariance on sampled worlds. The registered tasks do not declare it:
+        model-vi on the mirror quotient did worse on ``cup-3d`` (10.4% above the optimum
+        after 6,000 episodes against 4.8% without) and about the same on ``box-3d``
+        (40.8% against 42%), and a declared symmetry makes ``--preset fastest`` use it."""
+        return CRM3D(SWAP[crm.c], SWAP[crm.f], (-crm.r[0], crm.r[1]))
 
     # -- the spatial model's rules (crmgrasp.model.spatial, crmgrasp.model.quality3d)
     def crm(self, action: Any) -> Any:
@@ -205,6 +229,15 @@ class SpatialTask(Task):
         object.__setattr__(out, "obj", obj)
         object.__setattr__(out, "family", None)
         return out
+
+
+def spatial_symmetry(actions: tuple[CRM3D, ...]) -> Symmetry:
+    """The mirror symmetry of a spatial CRM set closed under :meth:`SpatialTask.mirror_crm`."""
+    index = {a: i for i, a in enumerate(actions)}
+    try:
+        return Symmetry(tuple(index[SpatialTask.mirror_crm(a)] for a in actions))
+    except KeyError as exc:
+        raise CrmgraspError(f"the CRM set has no mirror of {exc.args[0]}") from None
 
 
 def _spatial_task(name: str, family: SolidFamily, description: str, reference: float | None) -> SpatialTask:

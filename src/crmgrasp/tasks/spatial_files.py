@@ -58,6 +58,7 @@ SPATIAL_KEYS = {
     "family",
     "table",
     "starts",
+    "symmetry",
 }
 _HAND3D = {"aperture", "palm_depth", "backoff", "r_max", "min_separation", "palm_normal_tol", "h", "g"}
 _FAMILIES3D: dict[str, type] = {"box3d": BoxOnTable, "cylinder": CylinderOnTable}
@@ -234,4 +235,6 @@ def spatial_to_dict(task: SpatialTask) -> dict[str, Any]:
         doc["family"] = task.family.describe()
     if task.reference_mean_steps is not None:
         doc["reference_mean_steps"] = task.reference_mean_steps
+    if task.symmetry is not None:
+        doc["symmetry"] = list(task.symmetry.actions)
     return doc
