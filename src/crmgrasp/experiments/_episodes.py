@@ -69,11 +69,17 @@ def train_fastest(task: Task, trials: int, episodes: int, seed: int) -> list[Age
 
 
 def greedy_records(
-    task: Task, agents: Sequence[Agent], worlds: Sequence[Any], seed: int, ties: Callable[[int], Any] | None = None
+    task: Task,
+    agents: Sequence[Agent],
+    worlds: Sequence[Any],
+    seed: int,
+    ties: Callable[[int], Any] | None = None,
+    k: int = 1,
 ) -> list[list[EpisodeRecord]]:
-    """Per agent, its greedy policy's records on ``worlds``; in every episode agent ``t``
-    breaks ties with a fresh ``ties(t)`` (default ``default_rng([seed, t])``)."""
-    encoder = encoder_for(task, 1)
+    """Per agent, its greedy policy's records on ``worlds`` (k-order histories, ``k``); in
+    every episode agent ``t`` breaks ties with a fresh ``ties(t)`` (default
+    ``default_rng([seed, t])``)."""
+    encoder = encoder_for(task, k)
     draw = ties if ties is not None else (lambda t: np.random.default_rng([seed, t]))
     out = []
     for t, agent in enumerate(agents):

@@ -24,7 +24,7 @@ from crmgrasp._io import atomic_path, save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
 from crmgrasp.agents.base import Agent, LearnerPolicy
 from crmgrasp.agents.training import encoder_for, train_trials
-from crmgrasp.experiments._episodes import episode_records
+from crmgrasp.experiments._episodes import greedy_records
 from crmgrasp.experiments.stats import normal_ci
 from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts, ungraspable_fraction
 from crmgrasp.sim import run_episode
@@ -100,13 +100,15 @@ def spatial(
                 checkpoints=cfg.checkpoints,
                 checkpoint_episodes=cfg.checkpoint_episodes,
             )
-            per_trial = [_greedy_on(task, a, k, worlds, cfg.seed + t) for t, a in enumerate(res.agents)]
-            means = np.array([m for m, _ in per_trial])
+            records = greedy_records(
+                task, res.agents, worlds, cfg.seed, lambda t: np.random.default_rng(cfg.seed + t), k
+            )
+            means = np.array([np.mean([len(r.actions) for r in rs]) for rs in records])
             _, lo, hi = normal_ci(means)
             row["learners"][label] = {
                 "greedy_mean_crms": float(means.mean()),
                 "greedy_ci95": [lo, hi],
-                "success_rate": float(np.mean([s for _, s in per_trial])),
+                "success_rate": float(np.mean([np.mean([r.success for r in rs]) for rs in records])),
                 "gap_to_optimum": float(means.mean() / opt - 1.0),
             }
             ckpt = res.checkpoint_steps.mean(axis=0)
@@ -124,15 +126,6 @@ def spatial(
     if stage is not None:
         stage.end()
     return summary
-
-
-def _greedy_on(task: Task, agent: Agent, k: int, worlds: list[World], seed: int) -> tuple[float, float]:
-    """Mean CRMs and success of ``agent``'s greedy policy from each world."""
-    encoder = encoder_for(task, k)
-    recs = episode_records(
-        task, lambda: LearnerPolicy(agent, encoder, np.random.default_rng(seed), learn=False), worlds, seed
-    )
-    return float(np.mean([len(r.actions) for r in recs])), float(np.mean([r.success for r in recs]))
 
 
 def _figure(out: Path, summary: dict[str, Any], curves: list[list[Any]], cfg: SpatialConfig) -> None:

@@ -149,15 +149,18 @@ class TriangleMesh:
         """Strictly inside: an odd number of crossings of a ray from ``p``, and more than
         :data:`SURFACE` from the surface."""
         x = np.asarray(p, dtype=np.float64)
-        crossings = sum(
-            1 for k in range(len(self.faces)) if (t := self._hit(k, x, _PARITY_RAY)) is not None and t > 0.0
-        )
-        return crossings % 2 == 1 and self.distance(x) > SURFACE
+        return self._odd(x) and self.distance(x) > SURFACE
+
+    def _odd(self, x: F64) -> bool:
+        """An odd number of triangles crossed by the inside test's ray from ``x``."""
+        hits = (self._hit(k, x, _PARITY_RAY) for k in range(len(self.faces)))
+        return sum(1 for t in hits if t is not None and t > 0.0) % 2 == 1
 
     def gap(self, p: ArrayLike) -> float:
         """The distance to the surface, negative inside (metres)."""
-        d = self.distance(p)
-        return -d if self.contains(p) else d
+        x = np.asarray(p, dtype=np.float64)
+        d = self.distance(x)
+        return -d if self._odd(x) and d > SURFACE else d
 
     def ray_entry(self, origin: ArrayLike, direction: ArrayLike, u_max: float) -> tuple[F64, F64] | None:
         """Where ``origin + u direction`` (``0 <= u <= u_max``, within :data:`SURFACE`) first

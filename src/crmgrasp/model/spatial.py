@@ -1,14 +1,13 @@
 """The spatial model's objects, hand and CRM transition (docs/model-3d.md sections 1-4).
 
-Implemented so far: convex polyhedra (:class:`ConvexPolyhedron`, :func:`box3d`), closed
-cylinders (:class:`Cylinder`: the cup without its opening), the
-two-contact hand (:class:`Hand3D`: aperture, palm depth, back-off, the vertical and
-forward axes ``h`` and ``g``), feasibility (:func:`feasible3d`), the CRM transition
-(:func:`execute_crm3d`, offsets ``r = (r_1, r_2)`` in the tangent frame of
-:func:`tangent_frame`), the observation (:func:`observe3d`: ``rho``, ``|m_a|``,
-``|m_b|``) and sensing noise (:func:`sense3d`). Written on plain floats and small numpy vectors, readably; it is the
-definition any faster path will be tested against. Open cups, meshes, tasks and
-learning in 3-D are not built yet.
+The two-contact hand (:class:`Hand3D`: aperture, palm depth, back-off, the vertical and
+forward axes ``h`` and ``g``), the palm point (:func:`palm_point3d`), feasibility with
+an optional table (:func:`feasible3d`), the CRM transition (:func:`execute_crm3d`,
+offsets ``r = (r_1, r_2)`` in the tangent frame of :func:`tangent_frame`), the
+observation (:func:`observe3d`: ``rho``, ``|m_a|``, ``|m_b|``) and sensing noise
+(:func:`sense3d`), on any solid of :mod:`crmgrasp.model.solids` or
+:mod:`crmgrasp.model.mesh`. Written on plain floats and small numpy vectors, readably;
+it is the definition the compiled spatial kernel is tested against.
 """
 
 from __future__ import annotations
@@ -36,6 +35,7 @@ __all__ = [
     "Outcome3D",
     "tangent_frame",
     "feasible3d",
+    "palm_point3d",
     "execute_crm3d",
     "observe3d",
     "sense3d",
@@ -164,8 +164,19 @@ def feasible3d(obj: Solid, hand: Hand3D, cfg: Config3D, table: float | None = No
         return Error.PALM
     if dot(cfg.a.n, u) > hand.palm_normal_tol or dot(cfg.b.n, u) > hand.palm_normal_tol:
         return Error.PALM
-    palm = 0.5 * (np.array(cfg.a.x) + np.array(cfg.b.x)) + hand.palm_depth * u
+    palm = _palm_at(cfg, hand, u)
     return Error.PALM if obj.contains(palm) or on_table(float(palm[2]), table) else Error.NONE
+
+
+def _palm_at(cfg: Config3D, hand: Hand3D, u: F64) -> F64:
+    return 0.5 * (np.array(cfg.a.x) + np.array(cfg.b.x)) + hand.palm_depth * u
+
+
+def palm_point3d(cfg: Config3D, hand: Hand3D) -> F64 | None:
+    """Section 2: ``P = (x_a + x_b) / 2 + p u``, ``u`` the palm side; ``None`` when the
+    contacts coincide."""
+    dist, u = _palm_axis(cfg, hand)
+    return None if dist == 0.0 else _palm_at(cfg, hand, u)
 
 
 def execute_crm3d(

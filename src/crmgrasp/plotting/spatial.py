@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, Solid
-from crmgrasp.model.spatial import Config3D, Hand3D, _palm_axis
+from crmgrasp.model.spatial import Config3D, Hand3D, palm_point3d
 
 __all__ = ["draw_solid", "draw_scene3d", "scene_figure3d", "rollout_panels3d", "rollout_animation3d"]
 
@@ -74,11 +74,9 @@ def _draw_config(ax: Any, hand: Hand3D, cfg: Config3D, scale: float, alpha: floa
         ax.scatter(*x, color=COLORS[lab], s=40, alpha=alpha, depthshade=False)
         ax.quiver(*x, *(scale * n), color=COLORS[lab], alpha=alpha, arrow_length_ratio=0.3)
         ax.text(*(x - 0.4 * scale * n), lab + ("'" if primed else ""), color=COLORS[lab], alpha=alpha)
-    dist, u = _palm_axis(cfg, hand)
-    if dist > 0.0:
-        xa, xb = np.array(cfg.a.x), np.array(cfg.b.x)
-        palm = 0.5 * (xa + xb) + hand.palm_depth * u
-        pts = np.array([xa, palm, xb])
+    palm = palm_point3d(cfg, hand)
+    if palm is not None:
+        pts = np.array([cfg.a.x, palm, cfg.b.x])
         ax.plot(pts[:, 0], pts[:, 1], pts[:, 2], "-", color="0.4", lw=0.8, alpha=alpha)
         ax.scatter(*palm, marker="s", color="0.3", s=30, alpha=alpha, depthshade=False)
 

@@ -15,7 +15,6 @@ Registered tasks: ``box-3d`` (``crmgrasp/Box3D-v0``) and ``cup-3d`` (``crmgrasp/
 
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -89,6 +88,7 @@ class SurfaceStarts:
     def __call__(self, task: SpatialTask, rng: np.random.Generator, accept: Any = None) -> Config3D:
         """A start on ``task``'s object; ``accept`` (a compiled decision of one try's
         directions, given by a kernel) makes the same decisions, so the stream is the same."""
+        h = task.hand3d._h
         for _ in range(self.max_tries):
             d = rng.standard_normal((2, 3))
             if accept is not None:
@@ -102,9 +102,8 @@ class SurfaceStarts:
             if pa is None or pb is None:
                 continue
             cfg = Config3D(_contact(*pa), _contact(*pb))
-            h = task.hand3d._h
-            on_top = [dot(c.n, h) <= -self.up for c in cfg]
-            if not all(on_top) and task.acceptable(cfg):
+            both_on_top = all(dot(c.n, h) <= -self.up for c in cfg)
+            if not both_on_top and task.acceptable(cfg):
                 return cfg
         raise CrmgraspError(f"no feasible surface start found in {self.max_tries} tries")
 
@@ -223,12 +222,6 @@ class SpatialTask(Task):
         """``n`` starts as ``(n, 12)`` rows ``[x_a, n_a, x_b, n_b]``."""
         self._one_object()
         return np.array([[*c.a.x, *c.a.n, *c.b.x, *c.b.n] for c in (self.sample_start(rng) for _ in range(n))])
-
-    def with_object(self, obj: Any) -> SpatialTask:
-        out = copy.copy(self)
-        object.__setattr__(out, "obj", obj)
-        object.__setattr__(out, "family", None)
-        return out
 
 
 def spatial_symmetry(actions: tuple[CRM3D, ...]) -> Symmetry:
