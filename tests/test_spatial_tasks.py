@@ -308,21 +308,14 @@ def test_the_command_line_on_spatial_tasks(tmp_path, capsys) -> None:  # type: i
     assert main([*learn, "--eval-episodes", "20", "--out", str(run), "--quiet"]) == 0
     assert main(["evaluate", "--policy", str(run / "policy.json"), "--episodes", "20", "--json"]) == 0
     capsys.readouterr()
-    assert (
-        main(
-            [
-                "run",
-                "--policy",
-                str(run / "policy.json"),
-                "--a=0,0,0.1",
-                "--b=0.1,0,0.05",
-                "--log",
-                str(tmp_path / "l.csv"),
-            ]
-        )
-        == 2
-    )
-    assert "planar hand" in capsys.readouterr().err
+    hand_run = ["run", "--policy", str(run / "policy.json"), "--log", str(tmp_path / "l.csv")]
+    assert main([*hand_run, "--a=0.1,0,0.05", "--b=0,0.1,0.12"]) == 0  # the kinematic hand, in 3-D
+    out = capsys.readouterr().out
+    assert "after" in out and "true min_friction" in out
+    with open(tmp_path / "l.csv") as fh:
+        assert fh.readline().startswith("step,ax,ay,az,anx,any,anz,bx")
+    assert main([*hand_run, "--a=0.1,0", "--b=0,0.1,0.12"]) == 2
+    assert "finite X,Y,Z" in capsys.readouterr().err
 
 
 SPATIAL_FILE = """

@@ -440,24 +440,31 @@ def _cmd_run(args: argparse.Namespace) -> int:
     check_output(args.log, "--log")
     policy = load_policy(args.policy)
     task = policy.task
-    if isinstance(task, SpatialTask):
-        raise CrmgraspError(f"the hand runner drives a planar hand; {task.name!r} is spatial (use evaluate)")
-    start = task.hand.contact(task.obj, args.a, args.b)
-    if task.hand.feasible(task.obj, start) is not Error.NONE:
+    spatial = isinstance(task, SpatialTask)
+    if spatial:  # the family's nominal object
+        task = task.with_object(task.obj)
+        start = task.contacts_toward(args.a, args.b)
+        infeasible = feasible3d(task.obj, task.hand, start, task.table) is not Error.NONE
+    elif len(args.a) != 2 or len(args.b) != 2:
+        raise CrmgraspError(f"--a and --b take X,Y on the planar task {task.name!r}")
+    else:
+        start = task.hand.contact(task.obj, args.a, args.b)
+        infeasible = task.hand.feasible(task.obj, start) is not Error.NONE
+    if infeasible:
         raise CrmgraspError("the start configuration is infeasible")
     rng = np.random.default_rng(args.seed)
     if args.backend == "mujoco":
         from crmgrasp.hardware.mujoco import hardware_task
-        from crmgrasp.hardware.mujoco.hand import MujocoHand
+        from crmgrasp.hardware.mujoco.spatial import mujoco_hand
 
         task = hardware_task(task)
-        hand: Any = MujocoHand(task, start, rng)
+        hand: Any = mujoco_hand(task, start, rng)
     else:
         hand = KinematicHand(task, start, rng, SensorNoise(math.radians(args.sigma_n), args.sigma_p))
     res = PolicyRunner(policy, task).run(hand, rng, log=args.log)
     crms = " ".join(r[-3] for r in res.rows if r[-3])
     true = hand.config if args.backend == "kinematic" else hand.true_config()
-    mu = f"{min_friction(true):.4g}" if true is not None else "n/a (no contact)"
+    mu = f"{task.quality(true):.4g}" if true is not None else "n/a (no contact)"
     print(f"{res.stopped} after {res.crms} CRMs ({crms}); true min_friction {mu}")
     print(f"wrote {args.log.resolve()}")
     return 0

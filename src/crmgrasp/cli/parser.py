@@ -132,6 +132,7 @@ EXPERIMENT_NAMES = (
     "spatial",
     "figure4-mujoco",
     "figure9-mujoco",
+    "spatial-mujoco",
 )
 """The experiments of ``reproduce`` (a test keeps this equal to the registry)."""
 
@@ -424,14 +425,15 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser(
         "run",
         help="run a saved policy on the kinematic hand, logging every step",
-        description="Run a saved policy through the hand interface (here: the kinematic simulator) from the "
-        "configuration given by --a and --b; write the step log to --log.",
+        description="Run a saved policy through the hand interface (the kinematic simulator, or with "
+        "--backend mujoco the MuJoCo stand-in) from the configuration given by --a and --b (X,Y; on a spatial "
+        "task X,Y,Z, projected to the family's nominal object from its centre); write the step log to --log.",
     )
     p.add_argument(
         "--policy", type=_path, required=True, help="a saved policy: policy.json or recurrent_ppo.zip (deep)"
     )
-    p.add_argument("--a", type=_point, required=True, metavar="X,Y", help="start point for contact a (m)")
-    p.add_argument("--b", type=_point, required=True, metavar="X,Y", help="start point for contact b (m)")
+    p.add_argument("--a", type=_point, required=True, metavar="X,Y[,Z]", help="start point for contact a (m)")
+    p.add_argument("--b", type=_point, required=True, metavar="X,Y[,Z]", help="start point for contact b (m)")
     p.add_argument("--log", type=_path, required=True, help="CSV step log to write")
     p.add_argument(
         "--sigma-n", type=_number, default=0.0, metavar="DEG", help="normal sensing noise, degrees (default 0)"

@@ -1,4 +1,4 @@
-"""The learned policy that Figures 8 and 9 execute."""
+"""The learned policy that Figures 8 and 9 and the MuJoCo transfers execute."""
 
 from __future__ import annotations
 
@@ -9,6 +9,9 @@ from crmgrasp.agents import GreedyPolicy
 from crmgrasp.experiments.learning import LearnerSpec, best_policy, learn
 from crmgrasp.tasks import Task
 
+PAPER_SARSA = LearnerSpec("sarsa", 2)
+"""The paper's learner: SARSA on second-order histories."""
+
 
 def learned_policy(
     task: Task,
@@ -18,15 +21,16 @@ def learned_policy(
     episodes: int,
     backend: str = "auto",
     progress: Progress | None = None,
+    spec: LearnerSpec = PAPER_SARSA,
 ) -> GreedyPolicy:
-    """Load ``policy_path`` if given, else train the paper's SARSA (``trials`` trials of
-    ``episodes`` episodes from ``seed``, on the kernel ``backend``) and take the best
-    trial's greedy policy."""
+    """Load ``policy_path`` if given, else train ``spec`` (default: the paper's SARSA;
+    ``trials`` trials of ``episodes`` episodes from ``seed``, on the kernel ``backend``)
+    and take the best trial's greedy policy."""
     if policy_path is not None:
         return GreedyPolicy.load(policy_path, task)
     run = learn(
         task,
-        LearnerSpec("sarsa", 2),
+        spec,
         trials=trials,
         episodes=episodes,
         seed=seed,

@@ -38,6 +38,7 @@ from crmgrasp.hardware.runner import KinematicHand, PolicyRunner
 from crmgrasp.model.contacts import Config
 from crmgrasp.model.hand import CRM, Error, execute_crm
 from crmgrasp.model.quality import min_friction
+from crmgrasp.model.spatial import Config3D
 from crmgrasp.plotting import friction_histogram
 from crmgrasp.tasks import Task, make_task
 
@@ -75,13 +76,14 @@ class SensingErrors:
         self.position: list[float] = []
         self.normal: list[float] = []
 
-    def add(self, sensed: Config | NoContact, true: Config | None) -> None:
+    def add(self, sensed: Config | Config3D | NoContact, true: Config | Config3D | None) -> None:
         """Record both contacts of one reading (skipped if either side has no contact)."""
         if isinstance(sensed, NoContact) or true is None:
             return
         for s, t in zip(sensed, true):
-            self.position.append(math.dist(s.point, t.point))
-            dot = max(-1.0, min(1.0, s.nx * t.nx + s.ny * t.ny))
+            (sp, sn), (tp, tn) = _point_normal(s), _point_normal(t)
+            self.position.append(math.dist(sp, tp))
+            dot = max(-1.0, min(1.0, sum(u * v for u, v in zip(sn, tn))))
             self.normal.append(math.degrees(math.acos(dot)))
 
     def summary(self) -> dict[str, Any]:
@@ -98,17 +100,23 @@ class SensingErrors:
         }
 
 
+def _point_normal(c: Any) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A planar or spatial contact's position and normal."""
+    return (tuple(c.point), tuple(c.normal)) if hasattr(c, "point") else (tuple(c.x), tuple(c.n))
+
+
 def _points(rows: list[list[Any]], fingers: str) -> list[tuple[float, float]]:
     """(rho, |moment about the fingers|) of each logged reading."""
     col = 10 if fingers == "a" else 11  # m_a / m_b columns of the runner log
     return [(float(r[9]), abs(float(r[col]))) for r in rows]
 
 
-def _animate(task: Task, start: Config, policy: Any, rng: np.random.Generator, path: Path) -> str:
-    """Render one MuJoCo episode to a GIF; returns a note of what happened."""
+def animate(task: Task, start: Any, policy: Any, rng: np.random.Generator, path: Path) -> str:
+    """Render one MuJoCo episode (planar or spatial task) to a GIF; returns a note of what happened."""
     from crmgrasp.hardware.mujoco.render import Recorder, save_gif
+    from crmgrasp.hardware.mujoco.spatial import mujoco_hand
 
-    hand = MujocoHand(task, start, rng)
+    hand = mujoco_hand(task, start, rng)
     try:
         rec = Recorder(hand, every=8).attach()
     except CrmgraspError as exc:
@@ -178,9 +186,7 @@ def figure_9_mujoco(
     )
     extra = {}
     if c.animate:
-        extra["animation"] = _animate(
-            task, starts[0], policy, np.random.default_rng(c.seed), out / "figure9_mujoco.gif"
-        )
+        extra["animation"] = animate(task, starts[0], policy, np.random.default_rng(c.seed), out / "figure9_mujoco.gif")
     more = [r[3] - r[4] for r in rows]
     summary = {
         "trials": c.trials,

@@ -233,6 +233,34 @@ def _figure9_mujoco(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> t
     ]
 
 
+def _spatial_mujoco(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    from crmgrasp.experiments.mujoco_spatial import SpatialMujocoConfig, spatial_mujoco
+
+    cfg = SpatialMujocoConfig.quick(seed) if quick else SpatialMujocoConfig(seed=seed)
+    s = spatial_mujoco(out, cfg, backend=ctx["backend"], progress=ctx.get("progress"))
+    rows: list[Row] = []
+    for name, t in s["tasks"].items():
+        rows += [
+            (
+                f"{name}: MuJoCo grasps / kinematic grasps, same worlds",
+                f"{t['successes']} / {t['kinematic_successes']} of {t['trials']}",
+                "expected to extend to spatial objects (Discussion, no experiment)",
+            ),
+            (
+                f"{name}: CRMs per world, MuJoCo / kinematic",
+                f"{t['mean_crms_mujoco']} / {t['mean_crms_kinematic']}",
+                "-",
+            ),
+            (f"{name}: random CRMs with the kinematic error flag", t["random_crms_same_error_as_kinematic"], "-"),
+        ]
+    sec = s["crm_seconds"]
+    return s, [
+        *rows,
+        _sensing_row(s),
+        ("MuJoCo 3-D wall time per CRM, median / max", f"{sec['median']} / {sec['max']} s", "-"),
+    ]
+
+
 EXPERIMENTS: dict[str, tuple[str, Runner]] = {
     "figure4": ("Fig. 4: min-friction histogram of 30 opposition CRMs under sensing noise", _figure4),
     "figure7": ("Fig. 7: CRMs per episode vs episode, 20 trials, SARSA and the other learners", _figure7),
@@ -258,6 +286,10 @@ EXPERIMENTS: dict[str, tuple[str, Runner]] = {
     ),
     "figure4-mujoco": ("Fig. 4 on the MuJoCo stand-in hand, and intrinsic contact sensing accuracy", _figure4_mujoco),
     "figure9-mujoco": ("Fig. 9 on the MuJoCo stand-in: the kinematic policy transferred, 11 trials", _figure9_mujoco),
+    "spatial-mujoco": (
+        "Discussion in 3-D on the MuJoCo stand-in: the spatial policies on cups and boxes free on a table, 20 worlds",
+        _spatial_mujoco,
+    ),
 }
 """Experiment name -> (description, runner(out_dir, seed, quick, context))."""
 
@@ -269,6 +301,7 @@ QUICK_BUDGETS = {
     "generalization": ("2 trials x 100 episodes, 2 families", ("box", "cup")),
     "non-convex": ("2 trials x 150 episodes", ("U handle",)),
     "spatial": ("2 trials x 300 / 150 episodes, 80 / 40 worlds", ("box-3d", "cup-3d")),
+    "spatial-mujoco": ("1 trial x 300 episodes, 4 worlds per task", ("cup-3d", "box-3d")),
 }
 """Experiments whose learned numbers ``--quick`` computes on a smaller budget: that
 budget, and the first words of the quantities that depend on it."""
@@ -279,13 +312,14 @@ GROUPS = (
     ("cost-of-failure", "non-convex"),
     ("generalization",),
     ("spatial",),
+    ("spatial-mujoco",),
     ("figure7", "figure8", "figure9", "figure9-mujoco"),
     ("figure4", "figure4-mujoco"),
 )
 """Experiments that run in one process, in this order, when ``reproduce`` runs groups in
 parallel (Figures 8 and 9 execute Figure 7's policy); longest expected group first."""
 
-NEEDS_MUJOCO = ("figure4-mujoco", "figure9-mujoco")
+NEEDS_MUJOCO = ("figure4-mujoco", "figure9-mujoco", "spatial-mujoco")
 """The experiments that need the extra ``crmgrasp[mujoco]`` (skipped without it)."""
 
 IMAGES = {
@@ -301,4 +335,5 @@ IMAGES = {
     "spatial": ["spatial.png", "spatial_strategy.png", "spatial_strategy.gif"],
     "figure4-mujoco": ["figure4_mujoco.png"],
     "figure9-mujoco": ["figure9_mujoco.png", "figure9_mujoco.gif"],
+    "spatial-mujoco": ["spatial_mujoco.png", "spatial_mujoco.gif"],
 }

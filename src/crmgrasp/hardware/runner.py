@@ -3,7 +3,8 @@
 A hand implements :class:`HandInterface`: ``sense()`` returns the sensed contact
 configuration (or :class:`~crmgrasp.hardware.contact_sensing.NoContact`), ``execute(crm)``
 performs a CRM and returns its error flag. :class:`KinematicHand` is the
-simulator behind that interface. :class:`PolicyRunner` senses, discretizes,
+simulator behind that interface, in the plane or in space (it steps the task's own
+rules: ``task.execute``, ``task.read``). :class:`PolicyRunner` senses, discretizes,
 builds the k-order history, picks the policy's action, executes it, and logs every
 step (readings, observation, action, error) to a CSV file. It stops when the
 *sensed* configuration is a grasp (``min_friction(sensed) <= mu_goal``: all a real
@@ -12,6 +13,7 @@ robot can check), when contact is lost, or after ``task.max_steps`` CRMs.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
@@ -23,11 +25,13 @@ from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents.policy import GreedyPolicy
 from crmgrasp.hardware.contact_sensing import NoContact
 from crmgrasp.model.contacts import Config
-from crmgrasp.model.hand import CRM, Error, execute_crm
-from crmgrasp.model.sensing import SensorNoise, observe
+from crmgrasp.model.hand import CRM, Error
+from crmgrasp.model.sensing import SensorNoise
+from crmgrasp.model.spatial import CRM3D, Config3D
 from crmgrasp.tasks import Task
+from crmgrasp.tasks.spatial import SpatialTask
 
-__all__ = ["HandInterface", "KinematicHand", "PolicyRunner", "RunResult"]
+__all__ = ["HandInterface", "KinematicHand", "PolicyRunner", "RunResult", "log_columns"]
 
 LOG_COLUMNS = [
     "step",
@@ -49,34 +53,60 @@ LOG_COLUMNS = [
     "error",
     "raw",
 ]
+"""Columns of a planar run's step log."""
+
+LOG_COLUMNS_3D = [
+    "step",
+    *(f"{label}{q}" for label in "ab" for q in ("x", "y", "z", "nx", "ny", "nz")),
+    *LOG_COLUMNS[9:],
+]
+"""Columns of a spatial run's step log: each contact's position and inward normal in 3-D."""
+
+
+def log_columns(task: Task) -> list[str]:
+    """The step-log columns of a run on ``task`` (planar or spatial)."""
+    return LOG_COLUMNS_3D if isinstance(task, SpatialTask) else LOG_COLUMNS
+
+
+def _numbers(reading: Config | Config3D) -> list[float]:
+    """A reading's contacts as one flat list (planar ``x, y, nx, ny``; spatial ``x, n``)."""
+    if isinstance(reading, Config3D):
+        return [v for c in reading for part in c for v in part]
+    return [v for c in reading for v in c]
 
 
 @runtime_checkable
 class HandInterface(Protocol):
     """What a hand must offer to run CRM policies."""
 
-    def sense(self) -> Config | NoContact: ...
+    def sense(self) -> Config | Config3D | NoContact: ...
 
-    def execute(self, crm: CRM) -> Error: ...
+    def execute(self, crm: Any) -> Error:
+        """Perform ``crm`` (a :class:`~crmgrasp.model.hand.CRM`, or a
+        :class:`~crmgrasp.model.spatial.CRM3D` on a spatial hand); return its error flag."""
+        ...
 
 
 class KinematicHand:
-    """The kinematic simulator as a hand: true state hidden, readings through ``noise``."""
+    """The kinematic simulator as a hand (planar or spatial task): true state hidden,
+    readings through ``noise`` (default: the task's)."""
 
-    def __init__(self, task: Task, start: Config, rng: np.random.Generator, noise: SensorNoise | None = None):
-        self.task, self.config, self.rng = task, start, rng
-        self.noise = task.noise if noise is None else noise
-        self._reading: Config | None = None
+    def __init__(
+        self, task: Task, start: Config | Config3D, rng: np.random.Generator, noise: SensorNoise | None = None
+    ):
+        self.task = task if noise is None else dataclasses.replace(task, noise=noise)
+        self.config, self.rng = task.check_config(start, "start"), rng
+        self._reading: Config | Config3D | None = None
 
-    def sense(self) -> Config:
+    def sense(self) -> Config | Config3D:
         """One noisy reading of the current configuration."""
-        self._reading = self.noise.sense(self.config, self.rng)
+        self._reading = self.task.read(self.config, self.rng)
         return self._reading
 
-    def execute(self, crm: CRM) -> Error:
+    def execute(self, crm: CRM | CRM3D) -> Error:
         """Execute ``crm``; its goal line comes from the last reading."""
         t = self.task
-        out = execute_crm(t.obj, t.hand, self.config, t.hand.check_crm(crm), self._reading or self.config)
+        out = t.execute(self.config, t.crm(crm), self._reading or self.config)
         self.config = out.config
         return out.error
 
@@ -124,11 +154,11 @@ class PolicyRunner:
             if isinstance(reading, NoContact):
                 result = RunResult(step, False, f"no contact: {reading.reason}")
                 break
-            obs = observe(reading)
+            obs = t.observe(reading)
             index = t.discretizer.index(obs, error)
             seen.append((obs.rho, obs.m_a, obs.m_b, int(error)))
             raw: dict[str, Any] = getattr(hand, "raw_reading", dict)()
-            row = [step, *reading.a, *reading.b, *obs, index, t.discretizer.label(index)]
+            row = [step, *_numbers(reading), *obs, index, t.discretizer.label(index)]
             if t.is_success(reading):
                 rows.append([*row, "", "", "", dumps_json(raw, indent=None)])
                 result = RunResult(step, True, "grasp sensed")
@@ -145,5 +175,5 @@ class PolicyRunner:
         assert result is not None
         result.rows = rows
         if log is not None:
-            write_csv(log, LOG_COLUMNS, rows)
+            write_csv(log, log_columns(t), rows)
         return result

@@ -35,6 +35,10 @@ __all__ = [
     "Outcome3D",
     "tangent_frame",
     "feasible3d",
+    "faces_palm3d",
+    "Chord3D",
+    "goal_chord3d",
+    "table_lift",
     "palm_point3d",
     "execute_crm3d",
     "observe3d",
@@ -153,16 +157,28 @@ def on_table(z: float, table: float | None) -> bool:
     return table is not None and z <= table + SURFACE
 
 
+def faces_palm3d(cfg: Config3D, hand: Hand3D) -> bool:
+    """True if a contact's surface faces the palm side: ``n . u > palm_normal_tol`` for
+    ``n_a`` or ``n_b`` (the object would lie between palm and finger); False if the
+    contacts coincide."""
+    dist, u = _palm_axis(cfg, hand)
+    return dist > 0.0 and _faces(cfg, hand, u)
+
+
+def _faces(cfg: Config3D, hand: Hand3D, u: F64) -> bool:
+    return dot(cfg.a.n, u) > hand.palm_normal_tol or dot(cfg.b.n, u) > hand.palm_normal_tol
+
+
 def feasible3d(obj: Solid, hand: Hand3D, cfg: Config3D, table: float | None = None) -> Error:
     """Section 2: APERTURE beyond the aperture; PALM for colliding contacts, a surface
-    facing the palm, the palm point inside the object, or (with a table at height
-    ``table``) a contact or the palm point on or below the table."""
+    facing the palm (:func:`faces_palm3d`), the palm point inside the object, or (with a
+    table at height ``table``) a contact or the palm point on or below the table."""
     dist, u = _palm_axis(cfg, hand)
     if dist > hand.aperture:
         return Error.APERTURE
     if dist <= hand.min_separation or on_table(cfg.a.x[2], table) or on_table(cfg.b.x[2], table):
         return Error.PALM
-    if dot(cfg.a.n, u) > hand.palm_normal_tol or dot(cfg.b.n, u) > hand.palm_normal_tol:
+    if _faces(cfg, hand, u):
         return Error.PALM
     palm = _palm_at(cfg, hand, u)
     return Error.PALM if obj.contains(palm) or on_table(float(palm[2]), table) else Error.NONE
@@ -179,6 +195,45 @@ def palm_point3d(cfg: Config3D, hand: Hand3D) -> F64 | None:
     return None if dist == 0.0 else _palm_at(cfg, hand, u)
 
 
+class Chord3D(NamedTuple):
+    """Where a CRM's approach runs: from ``start`` along the unit vector ``ahead`` for
+    ``length`` metres (the goal line's chord within the aperture of the stationary
+    contact, walked toward it for an opposition, away for a slide)."""
+
+    start: F64
+    ahead: F64
+    length: float
+
+
+def goal_chord3d(hand: Hand3D, crm: CRM3D, frame: Contact3D, still: Contact3D) -> Chord3D | None:
+    """Section 3: the goal line ``x_f + r_1 t_1 + r_2 t_2 + t n_f`` (``frame`` is contact
+    ``f`` as sensed) and its chord ``|x(t) - x_still| <= A``; ``None`` (an aperture error)
+    if the line misses that sphere."""
+    r1, r2 = (float(v) for v in crm.r)
+    n_f = np.array(frame.n)
+    t1, t2 = tangent_frame(n_f, hand)
+    base = np.array(frame.x) + r1 * t1 + r2 * t2
+    w = base - np.array(still.x)  # |w + t n_f|^2 = A^2, |n_f| = 1
+    qb, qc = dot(w, n_f), dot(w, w) - hand.aperture * hand.aperture
+    disc = qb * qb - qc
+    if disc < 0.0:
+        return None
+    t_lo, t_hi = -qb - math.sqrt(disc), -qb + math.sqrt(disc)
+    same = crm.c == crm.f
+    t0, t1_ = (t_lo, t_hi) if same else (t_hi, t_lo)
+    return Chord3D(base + t0 * n_f, (n_f if same else -n_f), abs(t1_ - t0))
+
+
+def table_lift(chord: Chord3D, table: float | None) -> float:
+    """How far along the chord its start must move to be above the table: 0 if it already
+    is (or there is no table), else the distance to ``table + 2 SURFACE`` (``inf`` if
+    the chord does not rise)."""
+    if table is None or not on_table(float(chord.start[2]), table):
+        return 0.0
+    rise = float(chord.ahead[2])
+    return (table + 2.0 * SURFACE - float(chord.start[2])) / rise if rise > 0.0 else math.inf
+
+
 def execute_crm3d(
     obj: Solid,
     hand: Hand3D,
@@ -193,27 +248,17 @@ def execute_crm3d(
     line to where it crosses the table plane (the finger approaches from the table's
     surface); if the line never rises above the table before the chord ends, or that
     point is inside the object, the CRM is a palm error (the hand would meet the table)."""
-    r1, r2 = (float(v) for v in hand.check_crm(crm).r)
+    hand.check_crm(crm)
     sensed = cfg if sensed is None else sensed
     still = cfg.a if crm.c == "b" else cfg.b
-    frame = sensed.a if crm.f == "a" else sensed.b
-    n_f = np.array(frame.n)
-    t1, t2 = tangent_frame(n_f, hand)
-    base = np.array(frame.x) + r1 * t1 + r2 * t2
-    w = base - np.array(still.x)  # |w + t n_f|^2 = A^2, |n_f| = 1
-    qb, qc = dot(w, n_f), dot(w, w) - hand.aperture * hand.aperture
-    disc = qb * qb - qc
-    if disc < 0.0:
+    chord = goal_chord3d(hand, crm, sensed.a if crm.f == "a" else sensed.b, still)
+    if chord is None:
         return Outcome3D(cfg, Error.APERTURE)
-    t_lo, t_hi = -qb - math.sqrt(disc), -qb + math.sqrt(disc)
-    same = crm.c == crm.f
-    t0, t1_ = (t_lo, t_hi) if same else (t_hi, t_lo)
-    start, ahead, length = base + t0 * n_f, (n_f if same else -n_f), abs(t1_ - t0)
+    start, ahead, length = chord
     if obj.contains(start):
         return Outcome3D(cfg, Error.APERTURE)
-    if table is not None and on_table(float(start[2]), table):
-        rise = float(ahead[2])
-        up = (table + 2.0 * SURFACE - float(start[2])) / rise if rise > 0.0 else math.inf
+    up = table_lift(chord, table)
+    if up > 0.0:
         if up >= length or obj.contains(start + up * ahead):
             return Outcome3D(cfg, Error.PALM)
         start, length = start + up * ahead, length - up

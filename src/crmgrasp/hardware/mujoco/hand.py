@@ -67,13 +67,16 @@ class MujocoHand:
         Physical and controller parameters.
     """
 
+    camera = "top"
+    """The scene camera that renderings use."""
+
     def __init__(
         self, task: Task, start: Config, rng: np.random.Generator, params: PhysicsParams | None = None
     ) -> None:
         self.mj = require_mujoco()
         params = PhysicsParams() if params is None else params
         self.task, self.params, self.rng = task, params, rng
-        self.model = self.mj.MjModel.from_xml_string(mjcf(task, params))
+        self.model = self.mj.MjModel.from_xml_string(self._scene())
         self.data = self.mj.MjData(self.model)
         m = self.model
         self._tip_geom = [self.mj.mj_name2id(m, self.mj.mjtObj.mjOBJ_GEOM, f"tip_{x}") for x in LABELS]
@@ -100,14 +103,32 @@ class MujocoHand:
         """Called after every control tick (e.g. to record animation frames)."""
         self._place(start)
 
+    # -- the scene's geometry (overridden by the spatial hand) ----------------------
+    def _scene(self) -> str:
+        """The MJCF text of the scene."""
+        return mjcf(self.task, self.params)
+
+    def _origin(self) -> np.ndarray:
+        """World position of the carriages' origin (a servo target of 0)."""
+        return np.array([0.0, 0.0, self.params.height / 2])
+
+    def _palm_obstacles(self) -> list[int]:
+        """Geoms the palm must not overlap when it is switched on."""
+        return [self._object]
+
+    def _palm_target(self) -> np.ndarray | None:
+        """The palm point ``P`` of the fingertip centres (None if they coincide)."""
+        (ax, ay, _), (bx, by, _) = self._centre(0).tolist(), self._centre(1).tolist()
+        px, py = palm_point(Config(Contact(ax, ay, 0.0, 0.0), Contact(bx, by, 0.0, 0.0)), self.task.hand.palm_depth)
+        return np.array([px, py, self.params.height / 2]) if math.isfinite(px) else None
+
     # -- low level -------------------------------------------------------------
     def _tick(self) -> None:
         """Place the palm at ``P`` of the fingertip centres, step, read the sensors."""
         d, p = self.data, self.params
-        (ax, ay, _), (bx, by, _) = d.site_xpos[self._site[0]].tolist(), d.site_xpos[self._site[1]].tolist()
-        px, py = palm_point(Config(Contact(ax, ay, 0.0, 0.0), Contact(bx, by, 0.0, 0.0)), self.task.hand.palm_depth)
-        if math.isfinite(px):  # the 1 cm tips never coincide; if they did, the palm stays put
-            d.mocap_pos[0] = (px, py, p.height / 2)
+        palm = self._palm_target()
+        if palm is not None:  # the 1 cm tips never coincide; if they did, the palm stays put
+            d.mocap_pos[0] = palm
         d.ctrl[:] = self._cmd.ravel()
         self.mj.mj_step(self.model, d, nstep=p.control_steps)
         for i, (fa, ta_) in enumerate(self._sensors):
@@ -128,7 +149,7 @@ class MujocoHand:
         return np.array(self.data.site_xpos[self._site[i]])
 
     def _to_cmd(self, world: np.ndarray) -> np.ndarray:
-        return np.array([world[0], world[1], world[2] - self.params.height / 2])
+        return np.asarray(world, dtype=float) - self._origin()
 
     def _move(self, i: int, target: np.ndarray, speed: float, detect: bool = False, watch_palm: bool = False) -> str:
         """Drive fingertip ``i``'s servo target in a straight line to ``target`` (world).
@@ -153,9 +174,11 @@ class MujocoHand:
         return "end"
 
     def _hold(self, i: int, direction: np.ndarray) -> None:
-        """Press fingertip ``i`` along ``direction`` with about ``hold_force``."""
+        """Press fingertip ``i`` along ``direction`` (2-D: in the plane) with about ``hold_force``."""
         push = self.params.hold_force / self.params.kp
-        self._cmd[i] = self._to_cmd(self._centre(i)) + push * np.array([direction[0], direction[1], 0.0])
+        d = np.zeros(3)
+        d[: len(direction)] = direction
+        self._cmd[i] = self._to_cmd(self._centre(i)) + push * d
         for _ in range(self.params.settle_ticks):
             self._tick()
 
@@ -166,8 +189,9 @@ class MujocoHand:
         if not on:
             m.geom_contype[self._palm] = m.geom_conaffinity[self._palm] = 0
             return True
-        if self.mj.mj_geomDistance(m, self.data, self._palm, self._object, 0.01, None) <= 0.0:
-            return False
+        for g in self._palm_obstacles():
+            if self.mj.mj_geomDistance(m, self.data, self._palm, g, 0.01, None) <= 0.0:
+                return False
         m.geom_contype[self._palm] = m.geom_conaffinity[self._palm] = 2
         return True
 
@@ -216,14 +240,19 @@ class MujocoHand:
                 self._hold(i, n)
         self._set_palm(True)
 
-    def sense(self) -> Config | NoContact:
-        """Both contacts from the tared, averaged fingertip wrenches (world frame)."""
+    def _read_wrench(self) -> np.ndarray:
+        """Both fingertips' wrenches ``(f, m)``, averaged over ``sense_ticks`` and tared, ``(2, 6)``."""
         p = self.params
         acc = np.zeros((2, 6))
         for _ in range(p.sense_ticks):
             self._tick()
             acc += self._raw
-        wrench = acc / p.sense_ticks - self._tare
+        return acc / p.sense_ticks - self._tare
+
+    def sense(self) -> Config | NoContact:
+        """Both contacts from the tared, averaged fingertip wrenches (world frame)."""
+        p = self.params
+        wrench = self._read_wrench()
         contacts = []
         for i, x in enumerate(LABELS):
             got = contact_from_wrench(self.tip, wrench[i, :2], float(wrench[i, 5]), p.contact_threshold)
@@ -263,7 +292,7 @@ class MujocoHand:
         return float(q[0]), float(q[1]), 2.0 * math.atan2(float(q[6]), float(q[3]))
 
     # -- CRMs ------------------------------------------------------------------
-    def execute(self, crm: CRM) -> Error:
+    def execute(self, crm: Any) -> Error:
         """Execute ``crm`` as a real motion; return its error flag."""
         t0 = time.perf_counter()
         try:

@@ -34,6 +34,10 @@ class PhysicsParams:
     object_mass: float = 1.0
     """kg; with ``floor_friction`` it sets the push (about 4.9 N) that slides the object."""
     floor_friction: float = 0.5
+    rolling_friction: float = 0.01
+    """Rolling friction between object and table, m (a torque of this times the normal
+    force resists rolling; the spatial scene's lying cylinders: a cup on a cloth). The
+    planar scene's contacts have no rolling friction (MuJoCo's condim 3)."""
     tip_radius: float = 0.01
     """Spherical fingertip radius, m."""
     tip_friction: float = 1.0
@@ -115,14 +119,15 @@ def _object_geom(task: Task, p: PhysicsParams) -> tuple[str, str]:
     raise CrmgraspError(f"the MuJoCo stand-in supports polygons and discs, not {type(obj).__name__}")
 
 
-def _finger(label: str, p: PhysicsParams) -> str:
+def _finger(label: str, p: PhysicsParams, z: float) -> str:
+    """A fingertip carriage at height ``z`` (its servo origin) with x, y, z slides."""
     r = p.tip_radius
     joints = "".join(
         f'<joint name="{label}{ax}" type="slide" axis="{v}" damping="0"/>'
         for ax, v in (("x", "1 0 0"), ("y", "0 1 0"), ("z", "0 0 1"))
     )
     return f"""
-    <body name="carriage_{label}" pos="0 0 {p.height / 2!r}" gravcomp="1">
+    <body name="carriage_{label}" pos="0 0 {z!r}" gravcomp="1">
       {joints}
       <inertial pos="0 0 0" mass="0.05" diaginertia="1e-5 1e-5 1e-5"/>
       <body name="tip_{label}" gravcomp="1">
@@ -133,18 +138,9 @@ def _finger(label: str, p: PhysicsParams) -> str:
     </body>"""
 
 
-def mjcf(task: Task, params: PhysicsParams = PhysicsParams()) -> str:
-    """MJCF text of the stand-in scene for ``task``'s object and a two-fingertip hand."""
-    p = params
-    asset, geom = _object_geom(task, p)
-    kv = 2.0 * math.sqrt(p.kp * 0.06)  # critically damped servo for the 60 g finger
-    servos = "".join(
-        f'<position name="{lab}{ax}" joint="{lab}{ax}" kp="{p.kp!r}" kv="{kv!r}"/>' for lab in "ab" for ax in "xyz"
-    )
-    sensors = "".join(
-        f'<force name="force_{lab}" site="tip_{lab}"/><torque name="torque_{lab}" site="tip_{lab}"/>' for lab in "ab"
-    )
-    return f"""<mujoco model="crmgrasp-{task.name}">
+def preamble(name: str, p: PhysicsParams, asset: str) -> str:
+    """The opening of a stand-in scene's MJCF: options, lighting, assets, the world's light."""
+    return f"""<mujoco model="{name}">
   <option timestep="{p.timestep!r}" integrator="implicitfast" cone="elliptic" noslip_iterations="3"/>
   <visual>
     <global offwidth="800" offheight="800"/>
@@ -155,18 +151,39 @@ def mjcf(task: Task, params: PhysicsParams = PhysicsParams()) -> str:
     <material name="grid" texture="grid" texrepeat="20 20"/>
   </asset>
   <worldbody>
-    <light pos="0 0 2" dir="0 0 -1" directional="true" diffuse=".5 .5 .5"/>
+    <light pos="0 0 2" dir="0 0 -1" directional="true" diffuse=".5 .5 .5"/>"""
+
+
+def hand_mjcf(p: PhysicsParams, z: float) -> tuple[str, str]:
+    """(bodies, actuators and sensors) of the two-fingertip hand, carriages at height ``z``:
+    position servos (critically damped for the 60 g finger) and each tip's force and torque
+    sensors."""
+    kv = 2.0 * math.sqrt(p.kp * 0.06)
+    servos = "".join(
+        f'<position name="{lab}{ax}" joint="{lab}{ax}" kp="{p.kp!r}" kv="{kv!r}"/>' for lab in "ab" for ax in "xyz"
+    )
+    sensors = "".join(
+        f'<force name="force_{lab}" site="tip_{lab}"/><torque name="torque_{lab}" site="tip_{lab}"/>' for lab in "ab"
+    )
+    return _finger("a", p, z) + _finger("b", p, z), f"<actuator>{servos}</actuator>\n  <sensor>{sensors}</sensor>"
+
+
+def mjcf(task: Task, params: PhysicsParams = PhysicsParams()) -> str:
+    """MJCF text of the stand-in scene for ``task``'s object and a two-fingertip hand."""
+    p = params
+    asset, geom = _object_geom(task, p)
+    fingers, drives = hand_mjcf(p, p.height / 2)
+    return f"""{preamble(f"crmgrasp-{task.name}", p, asset)}
     <camera name="top" pos="0 0 0.6" xyaxes="1 0 0 0 1 0"/>
     <geom name="floor" type="plane" size="2 2 0.1" material="grid" friction="{p.floor_friction!r} 0.005 0.0001"/>
     <body name="object" pos="0 0 {p.height / 2!r}">
       <freejoint name="object"/>
       {geom.replace("/>", ' rgba=".2 .35 .7 1"/>')}
-    </body>{_finger("a", p)}{_finger("b", p)}
+    </body>{fingers}
     <body name="palm" mocap="true" pos="0 -1 {p.height / 2!r}">
       <geom name="palm" type="sphere" size="{p.palm_radius!r}" contype="0" conaffinity="0" rgba=".9 .5 .2 1"/>
     </body>
   </worldbody>
-  <actuator>{servos}</actuator>
-  <sensor>{sensors}</sensor>
+  {drives}
 </mujoco>
 """

@@ -17,8 +17,6 @@ import numpy as np
 from crmgrasp._io import atomic_path
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.hardware.mujoco.hand import MujocoHand
-from crmgrasp.model.contacts import Config
-from crmgrasp.model.hand import CRM
 from crmgrasp.tasks import Task
 
 __all__ = ["Recorder", "render", "save_png", "save_gif", "show"]
@@ -39,7 +37,7 @@ class _Camera:
         self.hand = hand
 
     def __call__(self) -> np.ndarray:
-        self.renderer.update_scene(self.hand.data, camera="top")
+        self.renderer.update_scene(self.hand.data, camera=self.hand.camera)
         return np.array(self.renderer.render())
 
 
@@ -98,13 +96,16 @@ def save_gif(frames: list[np.ndarray], path: str | os.PathLike[str], fps: float 
     return Path(path)
 
 
-def show(task: Task, start: Config, crm: CRM | None, out: str | os.PathLike[str], rng: np.random.Generator) -> str:
+def show(task: Task, start: Any, crm: Any, out: str | os.PathLike[str], rng: np.random.Generator) -> str:
     """Render the MuJoCo scene from ``start`` (and the motion of ``crm``) to ``out``:
-    a ``.png`` of the final scene or a ``.gif`` of the whole motion. Returns a summary line."""
+    a ``.png`` of the final scene or a ``.gif`` of the whole motion (a planar or a spatial
+    task: :func:`~crmgrasp.hardware.mujoco.spatial.mujoco_hand`). Returns a summary line."""
     path = Path(out)
     if path.suffix.lower() not in {".png", ".gif"}:
         raise CrmgraspError(f"--out must end in .png or .gif with the mujoco backend, got {path.name!r}")
-    hand = MujocoHand(task, start, rng)
+    from crmgrasp.hardware.mujoco.spatial import mujoco_hand
+
+    hand = mujoco_hand(task, start, rng)
     rec = Recorder(hand, every=6).attach() if path.suffix.lower() == ".gif" else None
     error = hand.execute(crm) if crm is not None else None
     if rec is not None:
