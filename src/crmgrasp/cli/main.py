@@ -374,6 +374,38 @@ def _cmd_references(args: argparse.Namespace) -> int:
     )
 
 
+def _cmd_plan(args: argparse.Namespace) -> int:
+    from crmgrasp.experiments.planning import plan_korder
+
+    task = _task(args)
+    config = {
+        "task": task_to_dict(task),
+        "worlds": args.worlds,
+        "heldout": args.heldout,
+        "k": args.k,
+        "seed": args.seed,
+    }
+    with _run_folder(args, task.name, config) as folder:
+        _, s = plan_korder(
+            task,
+            worlds=args.worlds,
+            k=args.k,
+            heldout=args.heldout,
+            seed=args.seed,
+            out_dir=folder.path,
+            progress=_progress(args),
+        )
+    print(
+        f"k = {s['k']} policy on {task.name}, planned on {s['worlds']} worlds ({s['seconds']:.1f} s): "
+        f"{s['planned_mean_cost']:.4f} CRMs there (optimum {s['planned_belief_optimum']:.4f}); "
+        f"on {s['heldout']} held-out worlds {s['heldout_mean_crms']:.4f} "
+        f"(success {s['heldout_success_rate']:.1%}) against a belief-space optimum of {s['belief_optimum']:.4f} "
+        f"({s['gap_to_optimum']:+.1%})"
+    )
+    print(f"  wrote {(folder.path / 'policy.json').resolve()}")
+    return 0
+
+
 def _cmd_compare(args: argparse.Namespace) -> int:
     from crmgrasp.agents.deep import RecurrentPPOConfig
     from crmgrasp.experiments.compare import CompareConfig, compare
@@ -554,6 +586,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "evaluate": _cmd_evaluate,
         "bench": _cmd_bench,
         "references": _cmd_references,
+        "plan": _cmd_plan,
         "compare": _cmd_compare,
         "pomdp": _cmd_pomdp,
         "run": _cmd_run,

@@ -13,7 +13,11 @@ beside the family's references on the held-out worlds (``belief_optimum``,
 ``clairvoyant_bound``), a policy trained on one object alone and run on that object
 (``per_instance_mean_crms``, against the family policy on the same object,
 ``family_policy_on_instance_mean_crms``) and, where the CRMs and bins agree, the
-paper-box policy applied unchanged (``paper_box_policy_mean_crms``).
+paper-box policy applied unchanged (``paper_box_policy_mean_crms``), and the
+belief-space planner's k = 1 policy (:func:`~crmgrasp.planners.korder.korder_search` on
+``planner_worlds`` worlds of the whole family) on the same held-out worlds
+(``planner_heldout_mean_crms``, ``planner_gap_to_optimum``; on the worlds it planned
+on: ``planner_planned_mean_crms`` against their optimum ``planner_planned_optimum``).
 ``strategy.csv`` lists, for the family policy on the held-out worlds, each first
 observation, the first CRM taken there, each outcome and the CRM that follows it: the
 observations the policy uses to tell the objects apart.
@@ -36,6 +40,7 @@ from crmgrasp.agents.base import Agent
 from crmgrasp.experiments._episodes import FASTEST_LABEL, EpisodeRecord, greedy_records, train_fastest
 from crmgrasp.model import families as fam
 from crmgrasp.model.families import Pose, SamplerFamily
+from crmgrasp.planners.korder import korder_search
 from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts
 from crmgrasp.tasks import Task, make_task
 
@@ -62,12 +67,20 @@ class GeneralizationConfig:
     episodes: int = 600
     heldout: int = 400
     seed: int = 0
+    planner_worlds: int = 1000
+    """Worlds of the whole family the k = 1 policy search plans on (0: no planner)."""
 
     @classmethod
     def quick(cls, seed: int = 0) -> GeneralizationConfig:
         """A small budget for smoke runs."""
         return cls(
-            families=("box-family", "cup-family"), train_objects=10, trials=2, episodes=100, heldout=100, seed=seed
+            families=("box-family", "cup-family"),
+            train_objects=10,
+            trials=2,
+            episodes=100,
+            heldout=100,
+            seed=seed,
+            planner_worlds=100,
         )
 
 
@@ -143,6 +156,12 @@ def _family_summary(name: str, cfg: GeneralizationConfig, out: Path) -> dict[str
     }
     s["heldout_gap"] = s["heldout_mean_crms"] / s["learner_mean_crms"] - 1.0
     s["gap_to_optimum"] = s["heldout_mean_crms"] / s["belief_optimum"] - 1.0
+    if cfg.planner_worlds:
+        planned = korder_search(task, sample_starts(task, cfg.planner_worlds, cfg.seed + 5), 1)
+        s["planner_planned_mean_crms"] = planned.mean_cost
+        s["planner_planned_optimum"] = planned.belief_optimum
+        s["planner_heldout_mean_crms"] = _mean(_run(task, [planned.policy], heldout, cfg.seed))
+        s["planner_gap_to_optimum"] = s["planner_heldout_mean_crms"] / s["belief_optimum"] - 1.0
     if name in OUT_OF_RANGE:
         wide = dataclasses.replace(task, family=OUT_OF_RANGE[name])
         s["out_of_range_mean_crms"] = _mean(
@@ -210,6 +229,7 @@ def _figure(path: Path, s: dict[str, Any]) -> None:
         ("learner_mean_crms", "training objects", "tab:blue"),
         ("heldout_mean_crms", "held-out objects", "tab:orange"),
         ("out_of_range_mean_crms", "sizes out of range", "tab:red"),
+        ("planner_heldout_mean_crms", "held-out: k = 1 policy planned on sampled worlds", "tab:green"),
     ]
     names = list(s["families"])
     fig, ax = plt.subplots(figsize=(2.2 + 1.8 * len(names), 3.8))

@@ -268,6 +268,13 @@ class BeliefPolicy:
         self._left, self._a = task.max_steps, 0
         self._groups = _first_groups(self._model, starts)
 
+    def optimum(self) -> float:
+        """The belief-space optimum over the policy's starts (:func:`belief_optimum`'s
+        value, from the policy's own memo)."""
+        h = self.task.max_steps
+        groups = self._groups.values()
+        return sum(len(g) * _value(self._model, g, h, self._memo) for g in groups) / sum(len(g) for g in groups)
+
     def _action(self, belief: tuple[State, ...], h: int) -> int:
         key = (belief, h)
         if key not in self._acts:
