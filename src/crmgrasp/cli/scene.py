@@ -1,0 +1,187 @@
+"""The ``crmgrasp`` commands that act on one scene: ``crm``, ``show`` and ``run`` (a
+configuration from ``--a`` and ``--b``, planar or spatial, on the kinematic or the MuJoCo
+hand)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import subprocess
+import sys
+from typing import Any
+
+import numpy as np
+
+from crmgrasp._io import check_output, dumps_json, save_figure
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.cli.common import _task
+from crmgrasp.cli.parser import _resolve_crm
+from crmgrasp.model.hand import Error
+from crmgrasp.model.quality import min_friction
+from crmgrasp.model.sensing import SensorNoise, observe
+from crmgrasp.model.spatial import feasible3d, sense3d
+from crmgrasp.tasks import SpatialTask, Task
+
+
+def _scene(args: argparse.Namespace) -> tuple[Task, Any, Any, SensorNoise, np.random.Generator]:
+    """The task, the configuration of --a and --b (planar or spatial), the CRM, the noise, the generator."""
+    task = _task(args)
+    config: Any
+    if isinstance(task, SpatialTask):
+        config = task.contacts_toward(args.a, args.b)
+    elif len(args.a) != 2 or len(args.b) != 2:
+        raise CrmgraspError(f"--a and --b take X,Y on the planar task {task.name!r}")
+    else:
+        config = task.hand.contact(task.obj, args.a, args.b)
+    crm = _resolve_crm(task, args.crm) if args.crm is not None else None
+    noise = SensorNoise(math.radians(args.sigma_n), args.sigma_p)
+    return task, config, crm, noise, np.random.default_rng(args.seed)
+
+
+def _cmd_crm(args: argparse.Namespace) -> int:
+    task, config, crm, noise, rng = _scene(args)
+    assert crm is not None
+    if isinstance(task, SpatialTask):
+        return _crm_spatial(args, task, config, crm, noise, rng)
+    start_err = task.hand.feasible(task.obj, config)
+    if start_err is not Error.NONE:
+        raise CrmgraspError(f"the start configuration is infeasible ({start_err.name.lower()} error)")
+    out = task.hand.execute(task.obj, config, crm, noise=noise, rng=rng)
+    obs = observe(noise.sense(out.config, rng))
+    index = task.discretizer.index(obs, out.error)
+    result = {
+        "task": task.name,
+        "crm": {"c": crm.c, "f": crm.f, "r": crm.r},
+        "error": out.error.name.lower(),
+        "config": out.config.to_dict(),
+        "observation": {
+            "rho": obs.rho,
+            "m_a": obs.m_a,
+            "m_b": obs.m_b,
+            "index": index,
+            "label": task.discretizer.label(index),
+        },
+        "min_friction": min_friction(out.config),
+        "success": task.is_success(out.config),
+        "path": [list(p) for p in out.path],
+    }
+    if args.json:
+        print(dumps_json(result))
+        return 0
+    print(f"CRM {crm} on {task.name}: error={result['error']}")
+    for lab in ("a", "b"):
+        c = out.config[lab]
+        print(f"  {lab}: x=({c.x + 0.0:.6g}, {c.y + 0.0:.6g})  n=({c.nx + 0.0:.6g}, {c.ny + 0.0:.6g})")
+    label = task.discretizer.label(index)
+    print(f"  observation: rho={obs.rho:.6g} m_a={obs.m_a:.6g} m_b={obs.m_b:.6g}  [{index}: {label}]")
+    print(f"  min_friction={result['min_friction']:.6g}  success={result['success']}")
+    return 0
+
+
+def _crm_spatial(
+    args: argparse.Namespace, task: SpatialTask, config: Any, crm: Any, noise: SensorNoise, rng: np.random.Generator
+) -> int:
+    """``crmgrasp crm`` on a spatial task: the same report with 3-D contacts."""
+    start_err = feasible3d(task.solid, task.hand3d, config, task.table)
+    if start_err is not Error.NONE:
+        raise CrmgraspError(f"the start configuration is infeasible ({start_err.name.lower()} error)")
+    out: Any = task.execute(config, crm, sense3d(config, noise.sigma_n, noise.sigma_p, rng, task.hand3d))
+    obs = task.observe(sense3d(out.config, noise.sigma_n, noise.sigma_p, rng, task.hand3d))
+    index = task.discretizer.index(obs, out.error)
+    contacts = {lab: {"x": list(c.x), "n": list(c.n)} for lab, c in zip("ab", out.config, strict=True)}
+    result = {
+        "task": task.name,
+        "crm": {"c": crm.c, "f": crm.f, "r": list(crm.r)},
+        "error": out.error.name.lower(),
+        "config": contacts,
+        "observation": {"rho": obs.rho, "m_a": obs.m_a, "m_b": obs.m_b, "index": index},
+        "min_friction": task.quality(out.config),
+        "success": task.is_success(out.config),
+    }
+    if args.json:
+        print(dumps_json(result))
+        return 0
+    print(f"CRM {crm} on {task.name}: error={result['error']}")
+    for lab, c in contacts.items():
+        x, n = (", ".join(f"{v + 0.0:.6g}" for v in c[key]) for key in ("x", "n"))
+        print(f"  {lab}: x=({x})  n=({n})")
+    label = task.discretizer.label(index)
+    print(f"  observation: rho={obs.rho:.6g} |m_a|={obs.m_a:.6g} |m_b|={obs.m_b:.6g}  [{index}: {label}]")
+    print(f"  min_friction={result['min_friction']:.6g}  success={result['success']}")
+    return 0
+
+
+def _cmd_show(args: argparse.Namespace) -> int:
+    from crmgrasp.plotting import scene_figure
+
+    if args.backend == "mujoco":
+        return _show_mujoco(args)
+    if args.out.suffix.lower() not in {".png", ".pdf", ".svg"}:
+        raise CrmgraspError(f"--out must end in .png, .pdf or .svg, got {args.out.name!r}")
+    check_output(args.out, "--out")
+    task, config, crm, noise, rng = _scene(args)
+    if isinstance(task, SpatialTask):
+        sensed = sense3d(config, noise.sigma_n, noise.sigma_p, rng, task.hand3d)
+        outcome = task.execute(config, crm, sensed) if crm else None
+    else:
+        outcome = task.hand.execute(task.obj, config, crm, noise=noise, rng=rng) if crm else None
+    title = f"{task.name}" + (f": CRM {crm} -> {outcome.error.name.lower()}" if outcome else "")
+    save_figure(scene_figure(task.obj, task.hand, config, outcome, title), args.out, dpi=120)
+    print(f"wrote {args.out.resolve()}")
+    return 0
+
+
+def _show_mujoco(args: argparse.Namespace) -> int:
+    from crmgrasp.hardware.mujoco import hardware_task
+    from crmgrasp.hardware.mujoco.render import show
+
+    user_gl = os.environ.get("MUJOCO_GL")
+    check_output(args.out, "--out")
+    task, config, crm, _, rng = _scene(args)
+    try:
+        print(show(hardware_task(task), config, crm, args.out, rng))
+    except CrmgraspError as exc:
+        if user_gl is not None or "rendering failed" not in str(exc):
+            raise
+        # EGL is missing: MuJoCo fixes its GL backend at import, so retry in a child with OSMesa
+        env = {**os.environ, "MUJOCO_GL": "osmesa"}
+        return subprocess.run([sys.executable, "-m", "crmgrasp", *args.argv], env=env, check=False).returncode
+    return 0
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from crmgrasp.agents.policy import load_policy
+    from crmgrasp.hardware.runner import KinematicHand, PolicyRunner
+
+    check_output(args.log, "--log")
+    policy = load_policy(args.policy)
+    task = policy.task
+    spatial = isinstance(task, SpatialTask)
+    if spatial:  # the family's nominal object
+        task = task.with_object(task.obj)
+        start = task.contacts_toward(args.a, args.b)
+        infeasible = feasible3d(task.obj, task.hand, start, task.table) is not Error.NONE
+    elif len(args.a) != 2 or len(args.b) != 2:
+        raise CrmgraspError(f"--a and --b take X,Y on the planar task {task.name!r}")
+    else:
+        start = task.hand.contact(task.obj, args.a, args.b)
+        infeasible = task.hand.feasible(task.obj, start) is not Error.NONE
+    if infeasible:
+        raise CrmgraspError("the start configuration is infeasible")
+    rng = np.random.default_rng(args.seed)
+    if args.backend == "mujoco":
+        from crmgrasp.hardware.mujoco import hardware_task
+        from crmgrasp.hardware.mujoco.spatial import mujoco_hand
+
+        task = hardware_task(task)
+        hand: Any = mujoco_hand(task, start, rng)
+    else:
+        hand = KinematicHand(task, start, rng, SensorNoise(math.radians(args.sigma_n), args.sigma_p))
+    res = PolicyRunner(policy, task).run(hand, rng, log=args.log)
+    crms = " ".join(r[-3] for r in res.rows if r[-3])
+    true = hand.config if args.backend == "kinematic" else hand.true_config()
+    mu = f"{task.quality(true):.4g}" if true is not None else "n/a (no contact)"
+    print(f"{res.stopped} after {res.crms} CRMs ({crms}); true min_friction {mu}")
+    print(f"wrote {args.log.resolve()}")
+    return 0
