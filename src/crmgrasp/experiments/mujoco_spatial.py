@@ -87,12 +87,13 @@ def _kind(task: Task) -> str:
 
 
 def _transfer(
-    name: str, policy: Any, c: SpatialMujocoConfig, out: Path, errors: SensingErrors
+    base: Task, policy: Any, c: SpatialMujocoConfig, out: Path, errors: SensingErrors
 ) -> tuple[list[list[Any]], list[float], Any]:
-    """Run ``c.trials`` worlds of task ``name`` on both hands; rows, CRM seconds, first world."""
-    base = make_task(name)
+    """Run ``c.trials`` worlds of task ``base`` on both hands; rows, CRM seconds, first world."""
+    name = base.name
     rng = np.random.default_rng(c.seed)
     action = log_columns(base).index("action")
+    names = [n.split()[0] for n in base.action_names()]
     rows, seconds, first = [], [], None
     for trial in range(c.trials):
         world = base.sample_world(rng)
@@ -106,7 +107,6 @@ def _transfer(
         mu = task.quality(true) if true is not None else math.inf
         kin = PolicyRunner(policy, task).run(KinematicHand(task, world.config, rng), rng)
         seconds += hand.crm_seconds
-        names = [n.split()[0] for n in task.action_names()]
         actions = " ".join(names[r[action]] for r in run.rows if r[action] != "")
         rows.append(
             [name, trial, _kind(task), actions, run.crms, kin.crms, run.stopped, kin.grasped, task.grasped(mu), mu]
@@ -114,10 +114,9 @@ def _transfer(
     return rows, seconds, first
 
 
-def _same_errors(name: str, c: SpatialMujocoConfig, errors: SensingErrors) -> tuple[dict[str, int], list[float]]:
+def _same_errors(base: Task, c: SpatialMujocoConfig, errors: SensingErrors) -> tuple[dict[str, int], list[float]]:
     """One random CRM from each of ``c.random_crms`` worlds on both hands: the counts of
     (kinematic error flag -> MuJoCo error flag); and the CRMs' wall times."""
-    base = make_task(name)
     rng = np.random.default_rng(c.seed + 1)
     flags: dict[str, int] = {}
     seconds: list[float] = []
@@ -187,12 +186,12 @@ def spatial_mujoco(
         )
         if stage is not None:
             stage.advance(1)
-        mine, seconds, first = _transfer(name, policy, c, out, errors)
+        mine, seconds, first = _transfer(task, policy, c, out, errors)
         if c.animate and k == 0 and first is not None:
             hw = hardware_task(first.task, c.palm_tolerance_deg)
             gif = out / "spatial_mujoco.gif"
             summary["animation"] = animate(hw, first.config, policy, np.random.default_rng(c.seed), gif)
-        flags, more = _same_errors(name, c, errors)
+        flags, more = _same_errors(task, c, errors)
         same = sum(n for k, n in flags.items() if k.split(" -> ")[0] == k.split(" -> ")[1])
         rows += mine
         all_seconds += seconds + more

@@ -22,7 +22,8 @@ learner's remaining gap is the learner's; when it cannot, memory is the likely l
 (evidence, not proof). During the search a history no start visits acts with CRM 0; the
 returned :class:`~crmgrasp.agents.policy.GreedyPolicy` gives every unvisited history the
 action of the most visited history with the same current observation (a back-off to
-k = 0), so it runs, saves and evaluates like a learned policy.
+k = 0; up to :data:`FILL_LIMIT` codes, beyond which unvisited histories draw uniformly),
+so it runs, saves and evaluates like a learned policy.
 """
 
 from __future__ import annotations
@@ -105,14 +106,20 @@ def _percept(obs: int) -> Percept:
     return Percept(Observation(0.0, 0.0, 0.0), Error.NONE, obs, None)  # type: ignore[arg-type]
 
 
+FILL_LIMIT = 100_000
+"""Most history codes an encoder may have for :func:`_policy` to list every one (k <= 2 on
+the registered tasks); beyond it only visited histories are listed."""
+
+
 def _policy(task: Task, enc: KOrderEncoder, table: dict[int, int], visits: Counter[int]) -> GreedyPolicy:
     """The table as a policy over every history code, unvisited ones backed off to the most
-    visited history with the same current observation."""
+    visited history with the same current observation (only visited ones when the encoder
+    has more than :data:`FILL_LIMIT` codes: the policy file would be too large)."""
     by_obs: dict[int, int] = {}
     for code, _ in sorted(visits.items(), key=lambda kv: (-kv[1], kv[0])):
         by_obs.setdefault(enc.decode(code)[0], table.get(code, 0))
     full: dict[int, tuple[int, ...]] = {}
-    for code in range(enc.size):
+    for code in range(enc.size) if enc.size <= FILL_LIMIT else sorted(visits):
         if code in visits:
             full[code] = (table.get(code, 0),)
         elif (o := enc.decode(code)[0]) in by_obs:
