@@ -20,6 +20,10 @@ KEYS = (
     "success_rate",
     "heldout_mean_crms",
     "out_of_range_mean_crms",
+    "search_heldout_mean_crms",
+    "search_gap_to_optimum",
+    "search_heldout_gap_normalized",
+    "heldout_gap_normalized",
 )
 
 
@@ -34,6 +38,10 @@ def test_generalization_summary_has_every_key(tmp_path) -> None:  # type: ignore
         assert (tmp_path / f"strategy_{name}.csv").exists()
     cup = s["families"]["cup-family"]  # one opposition grasps every disc: learned at once
     assert cup["heldout_mean_crms"] == cup["belief_optimum"] == 1.0
+    assert cup["search_heldout_mean_crms"] == 1.0 and cup["search_episodes"] >= cfg.search_worlds
+    box = s["families"]["box-family"]  # normalized: each mean over its own worlds' optimum
+    ratio = (box["heldout_mean_crms"] / box["belief_optimum"]) / (box["learner_mean_crms"] / box["seen_belief_optimum"])
+    assert box["heldout_gap_normalized"] == ratio - 1.0
     assert "paper_box_policy_mean_crms" in s["families"]["box-family"]
     assert (tmp_path / "generalization.png").exists() and (tmp_path / "generalization.csv").exists()
 

@@ -214,6 +214,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         "worlds": args.worlds,
         "heldout": args.heldout,
         "k": args.k,
+        "init": args.init,
         "seed": args.seed,
     }
     with _run_folder(args, task.name, config) as folder:
@@ -223,12 +224,15 @@ def _cmd_plan(args: argparse.Namespace) -> int:
             k=args.k,
             heldout=args.heldout,
             seed=args.seed,
+            init=args.init,
             out_dir=folder.path,
             progress=_progress(args),
         )
+    how = "planned" if args.init == "belief" else f"learned from {s['episodes']:,} episodes"
+    there = "" if s["planned_belief_optimum"] is None else f" (optimum {s['planned_belief_optimum']:.4f})"
     print(
-        f"k = {s['k']} policy on {task.name}, planned on {s['worlds']} worlds ({s['seconds']:.1f} s): "
-        f"{s['planned_mean_cost']:.4f} CRMs there (optimum {s['planned_belief_optimum']:.4f}); "
+        f"k = {s['k']} policy on {task.name}, {how} on {s['worlds']} worlds ({s['seconds']:.1f} s): "
+        f"{s['planned_mean_cost']:.4f} CRMs there{there}; "
         f"on {s['heldout']} held-out worlds {s['heldout_mean_crms']:.4f} "
         f"(success {s['heldout_success_rate']:.1%}) against a belief-space optimum of {s['belief_optimum']:.4f} "
         f"({s['gap_to_optimum']:+.1%})"

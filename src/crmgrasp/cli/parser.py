@@ -376,7 +376,8 @@ def build_parser() -> argparse.ArgumentParser:
         "plan",
         help="plan a k-order policy on sampled worlds (belief-space planning), measure it on held-out ones",
         description="Search a policy of the last k CRMs and observations on sampled worlds (starting from the "
-        "belief-space optimal policy, improved by coordinate descent), then evaluate it greedily on held-out "
+        "belief-space optimal policy, or with --init blank from nothing: then a learner from episodes, policy "
+        "search on fixed worlds; improved by coordinate descent), then evaluate it greedily on held-out "
         "worlds against their belief-space optimum; writes policy.json and summary.json to the run folder.",
     )
     _add_task(p)
@@ -385,6 +386,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--heldout", type=_STARTS, default=400, help="held-out worlds evaluated on (default 400; 1 to 1,000,000)"
     )
     p.add_argument("--k", type=_int(0, 10), default=1, help="history order of the policy (default 1; 0 to 10)")
+    p.add_argument(
+        "--init",
+        choices=("belief", "blank"),
+        default="belief",
+        help="start of the search: the belief-optimal policy (a planner: uses hidden states) or blank (a "
+        "learner: episode costs only) (default belief)",
+    )
     p.add_argument("--seed", type=_SEED, default=0, help="seed of the worlds (default 0; held-out: seed + 1)")
     _add_run(p, "plan")
 

@@ -18,6 +18,18 @@ belief-space planner's k = 1 policy (:func:`~crmgrasp.planners.korder.korder_sea
 ``planner_worlds`` worlds of the whole family) on the same held-out worlds
 (``planner_heldout_mean_crms``, ``planner_gap_to_optimum``; on the worlds it planned
 on: ``planner_planned_mean_crms`` against their optimum ``planner_planned_optimum``).
+
+A second learner, from episodes only: the same k = 1 policy search started blank
+(``init="blank"``: policy search on ``search_worlds`` fixed worlds of the training
+objects, PEGASUS-style), reported as ``search_mean_crms`` (training objects, fresh
+starts), ``search_heldout_mean_crms``, ``search_gap_to_optimum`` and ``search_episodes``
+(episodes it ran).
+
+Held-out against in-distribution, per learner: ``heldout_gap`` is the raw ratio of the
+two means minus 1; since the held-out worlds and the training objects' fresh starts are
+different samples of unequal difficulty, ``heldout_gap_normalized`` divides each mean by
+its own worlds' belief-space optimum first (``belief_optimum``, ``seen_belief_optimum``)
+before taking the ratio.
 ``strategy.csv`` lists, for the family policy on the held-out worlds, each first
 observation, the first CRM taken there, each outcome and the CRM that follows it: the
 observations the policy uses to tell the objects apart.
@@ -62,13 +74,16 @@ class GeneralizationConfig:
     references and evaluations, seed."""
 
     families: tuple[str, ...] = ("box-family", "cup-family", "l-shape", "u-handle")
-    train_objects: int = 50
+    train_objects: int = 500
     trials: int = 5
     episodes: int = 600
     heldout: int = 400
     seed: int = 0
     planner_worlds: int = 1000
     """Worlds of the whole family the k = 1 policy search plans on (0: no planner)."""
+    search_worlds: int = 10_000
+    """Worlds of the training objects the k = 1 policy search learns on from episodes,
+    starting blank (0: not run)."""
 
     @classmethod
     def quick(cls, seed: int = 0) -> GeneralizationConfig:
@@ -81,6 +96,7 @@ class GeneralizationConfig:
             heldout=100,
             seed=seed,
             planner_worlds=100,
+            search_worlds=200,
         )
 
 
@@ -153,9 +169,16 @@ def _family_summary(name: str, cfg: GeneralizationConfig, out: Path) -> dict[str
         "success_rate": float(np.mean([r.success for r in records_new])),
         "belief_optimum": belief_optimum(task, heldout),
         "clairvoyant_bound": clairvoyant_bound(task, heldout),
+        "seen_belief_optimum": belief_optimum(train, seen),
     }
-    s["heldout_gap"] = s["heldout_mean_crms"] / s["learner_mean_crms"] - 1.0
-    s["gap_to_optimum"] = s["heldout_mean_crms"] / s["belief_optimum"] - 1.0
+    _gaps(s, "")
+    if cfg.search_worlds:
+        found = korder_search(train, sample_starts(train, cfg.search_worlds, cfg.seed + 6), 1, init="blank")
+        s["search_episodes"] = found.episodes
+        s["search_trained_mean_crms"] = found.mean_cost
+        s["search_mean_crms"] = _mean(_run(train, [found.policy], seen, cfg.seed))
+        s["search_heldout_mean_crms"] = _mean(_run(task, [found.policy], heldout, cfg.seed))
+        _gaps(s, "search_")
     if cfg.planner_worlds:
         planned = korder_search(task, sample_starts(task, cfg.planner_worlds, cfg.seed + 5), 1)
         s["planner_planned_mean_crms"] = planned.mean_cost
@@ -184,6 +207,14 @@ def _family_summary(name: str, cfg: GeneralizationConfig, out: Path) -> dict[str
     return s
 
 
+def _gaps(s: dict[str, Any], p: str) -> None:
+    """The learner ``p``'s held-out gap, raw and against each set's optimum, and its gap to the optimum."""
+    s[f"{p}heldout_gap"] = s[f"{p}heldout_mean_crms"] / s[f"{p}mean_crms" if p else "learner_mean_crms"] - 1.0
+    seen_gap = s[f"{p}mean_crms" if p else "learner_mean_crms"] / s["seen_belief_optimum"]
+    s[f"{p}heldout_gap_normalized"] = s[f"{p}heldout_mean_crms"] / s["belief_optimum"] / seen_gap - 1.0
+    s[f"{p}gap_to_optimum"] = s[f"{p}heldout_mean_crms"] / s["belief_optimum"] - 1.0
+
+
 def generalization(
     out_dir: str | Path, cfg: GeneralizationConfig = GeneralizationConfig(), progress: Progress | None = None
 ) -> dict[str, Any]:
@@ -203,7 +234,7 @@ def generalization(
     summary = {
         "learner": FASTEST_LABEL,
         "budget": f"{cfg.trials} trials x {cfg.episodes} episodes on {cfg.train_objects} training objects; "
-        f"{cfg.heldout} worlds per evaluation; seed {cfg.seed}",
+        f"{cfg.heldout} worlds per evaluation; policy search on {cfg.search_worlds} worlds; seed {cfg.seed}",
         "families": families,
     }
     keys = sorted({k for v in families.values() for k in v})
@@ -229,6 +260,7 @@ def _figure(path: Path, s: dict[str, Any]) -> None:
         ("learner_mean_crms", "training objects", "tab:blue"),
         ("heldout_mean_crms", "held-out objects", "tab:orange"),
         ("out_of_range_mean_crms", "sizes out of range", "tab:red"),
+        ("search_heldout_mean_crms", "held-out: k = 1 policy search from episodes", "tab:purple"),
         ("planner_heldout_mean_crms", "held-out: k = 1 policy planned on sampled worlds", "tab:green"),
     ]
     names = list(s["families"])
@@ -236,7 +268,7 @@ def _figure(path: Path, s: dict[str, Any]) -> None:
     width = 0.8 / len(bars)
     for i, (key, label, color) in enumerate(bars):
         vals = [s["families"][n].get(key, np.nan) for n in names]
-        ax.bar(np.arange(len(names)) + (i - 2) * width, vals, width, label=label, color=color)
+        ax.bar(np.arange(len(names)) + (i - (len(bars) - 1) / 2) * width, vals, width, label=label, color=color)
     ax.set_xticks(np.arange(len(names)), names)
     ax.set_ylabel("CRMs per episode")
     ax.legend(fontsize=8, ncols=2)

@@ -1,8 +1,9 @@
 """A k-order policy planned on sampled worlds, measured on held-out ones (``crmgrasp plan``).
 
-:func:`plan_korder` runs :func:`~crmgrasp.planners.korder.korder_search` on ``worlds``
-sampled starts (a family task: worlds, an object and a start each), then evaluates the
-policy it returns through the learners' own greedy evaluation
+:func:`plan_korder` runs :func:`~crmgrasp.planners.korder.korder_search` (from the
+belief-optimal policy, or blank: a learner from episodes) on ``worlds`` sampled starts
+(a family task: worlds, an object and a start each), then evaluates the policy it
+returns through the learners' own greedy evaluation
 (:func:`~crmgrasp.experiments._episodes.greedy_records`) on ``heldout`` other worlds,
 against the belief-space optimum and the clairvoyant bound of those worlds. The policy is
 a :class:`~crmgrasp.agents.policy.GreedyPolicy` (``policy.json``): ``evaluate``, ``run``
@@ -36,16 +37,19 @@ def plan_korder(
     k: int = 1,
     heldout: int = 400,
     seed: int = 0,
+    init: str = "belief",
     out_dir: str | Path | None = None,
     progress: Progress | None = None,
 ) -> tuple[GreedyPolicy, dict[str, Any]]:
-    """Plan on ``worlds`` starts (seed ``seed``), evaluate on ``heldout`` (seed ``seed + 1``);
-    return the policy and the summary (also written to ``out_dir`` with ``policy.json``)."""
+    """Search on ``worlds`` starts (seed ``seed``) from ``init`` (``"belief"``: plan;
+    ``"blank"``: learn from episodes), evaluate on ``heldout`` (seed ``seed + 1``); return
+    the policy and the summary (also written to ``out_dir`` with ``policy.json``;
+    ``planned_belief_optimum`` is None with ``init="blank"``)."""
     integer(worlds, "worlds", 1, 1_000_000)
     integer(heldout, "heldout", 1, 1_000_000)
     stage = progress.stage(f"plan {task.name}", 3, "stages") if progress else None
     t0 = time.perf_counter()
-    policy, value, planned_opt = korder_search(task, sample_starts(task, worlds, seed), k)
+    policy, value, planned_opt, episodes = korder_search(task, sample_starts(task, worlds, seed), k, init=init)
     if stage is not None:
         stage.advance(1)
     held = sample_starts(task, heldout, seed + 1)
@@ -57,7 +61,9 @@ def plan_korder(
     summary: dict[str, Any] = {
         "task": task.name,
         "k": k,
+        "init": init,
         "worlds": worlds,
+        "episodes": episodes,
         "heldout": heldout,
         "seed": seed,
         "planned_mean_cost": value,

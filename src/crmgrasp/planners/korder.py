@@ -1,5 +1,9 @@
 """The best policy that sees only the last k actions and observations, searched on sampled worlds.
 
+Two uses of one search: a *planner* (it starts from the belief-optimal policy, which
+needs the hidden states) and a *learner from episodes* (it starts blank and sees only
+what episodes return).
+
 A learner on the k-order MDP can at best find the best *k-order policy*: a table from
 k-order histories ``(o_t, a_{t-1}, o_{t-1}, ..., a_{t-k})`` (docs/model.md section 6) to
 CRMs. The belief-space optimum (:func:`~crmgrasp.planners.references.belief_optimum`)
@@ -7,23 +11,35 @@ may need more memory than that. :func:`korder_search` finds a good k-order polic
 set of sampled starts (or worlds) with the same noise-free dynamics and cost as the
 belief optimum, so the two compare directly:
 
-1. *Start*: the belief-optimal policy projected onto k-order histories: it runs on every
-   sample start, and each history takes the action the belief policy chose there most
-   often (ties: the lowest index).
+1. *Start* (``init``): ``"belief"``, the belief-optimal policy projected onto k-order
+   histories: it runs on every sample start, and each history takes the action the
+   belief policy chose there most often (ties: the lowest index); or ``"blank"``: every
+   history takes CRM 0.
 2. *Improve*: coordinate descent. In turn, for each history that some start visits
    (most visited first), every other action is tried; the change is kept if it lowers
    the mean cost over the starts (only the starts whose episodes visit that history are
    re-run). Passes repeat until one changes nothing, or ``max_passes``.
 
+With ``init="blank"`` the search is a **learner from episodes** (policy search with
+fixed scenarios, as in PEGASUS, Ng and Jordan 2000): all it uses of a world is the cost
+of an episode of a given policy from it (CRMs, errors flagged in the observations, the
+grasp ending the episode), which a simulator reset to that world returns; the hidden
+states only memoise the noise-free steps (a step from the same state with the same CRM
+is the same), so re-running an episode costs no new simulation. Its budget is the
+number of episodes run (:attr:`KOrderResult.episodes`), about 10**5 to 10**6 for 10**3
+to 10**4 worlds: a simulator's learner, not a robot's.
+
 The result is an achievable k-order policy, so its mean cost is an *upper* bound on the
 k-order optimum over these starts (the search is local, not exhaustive) and at least the
 belief optimum: when it comes near the optimum, k-order histories are enough and a
 learner's remaining gap is the learner's; when it cannot, memory is the likely limit
-(evidence, not proof). During the search a history no start visits acts with CRM 0; the
-returned :class:`~crmgrasp.agents.policy.GreedyPolicy` gives every unvisited history the
-action of the most visited history with the same current observation (a back-off to
-k = 0; up to :data:`FILL_LIMIT` codes, beyond which unvisited histories draw uniformly),
-so it runs, saves and evaluates like a learned policy.
+(evidence, not proof). A history no start visits acts like the most visited history
+with the same current observation (a back-off to k = 0; CRM 0 if none has it), both
+during the search (the back-off of the pass's start; a history a kept change makes
+visited joins the table with that action) and in the returned
+:class:`~crmgrasp.agents.policy.GreedyPolicy` (up to :data:`FILL_LIMIT` codes, beyond
+which unvisited histories draw uniformly), so it runs, saves and evaluates like a
+learned policy, and on the starts searched it does what the search measured.
 """
 
 from __future__ import annotations
@@ -41,15 +57,18 @@ from crmgrasp.planners.references import BeliefPolicy, Start, State, _Model
 from crmgrasp.sim import Percept
 from crmgrasp.tasks import Task
 
-__all__ = ["korder_search", "KOrderResult"]
+__all__ = ["korder_search", "KOrderResult", "INITS"]
 
 
 class KOrderResult(NamedTuple):
-    """The policy found, its mean cost over the planning starts, and their belief-space optimum."""
+    """The policy found, its mean cost over the planning starts, their belief-space
+    optimum (None with ``init="blank"``: not computed) and the episodes the search ran
+    (every re-run of a start counts)."""
 
     policy: GreedyPolicy
     mean_cost: float
-    belief_optimum: float
+    belief_optimum: float | None
+    episodes: int
 
 
 class _Episodes:
@@ -61,16 +80,22 @@ class _Episodes:
         self.horizon = horizon
         self.states: list[State] = [self.model.state(c) for c in starts]
         self.first = [task.discretizer.index(self.model.tasks[i].observe(cfg), Error.NONE) for i, cfg in self.states]
+        self.count = 0
 
-    def run(self, w: int, table: dict[int, int]) -> tuple[float, list[int]]:
-        """Cost (CRMs, plus ``error_cost`` per errored CRM) and visited history codes of start ``w``."""
+    def run(self, w: int, table: dict[int, int], backoff: dict[int, int]) -> tuple[float, list[int]]:
+        """Cost (CRMs, plus ``error_cost`` per errored CRM) and visited history codes of
+        start ``w``; a history not in ``table`` acts as ``backoff`` says for its current
+        observation (CRM 0 if it says nothing)."""
         m, enc, c_err = self.model, self.enc, self.model.task.error_cost
+        self.count += 1
         state, hist = self.states[w], self.enc.start(self.first[w])
         cost, codes = 0.0, []
         for _ in range(self.horizon):
             code = enc.encode(hist)
             codes.append(code)
-            a = table.get(code, 0)
+            a = table.get(code)
+            if a is None:
+                a = backoff.get(hist[0], 0)
             nxt, obs, grasped = m.step(state, a)
             cost += 1.0 + c_err * m.errored[(state, a)]
             if grasped:
@@ -111,61 +136,100 @@ FILL_LIMIT = 100_000
 the registered tasks); beyond it only visited histories are listed."""
 
 
-def _policy(task: Task, enc: KOrderEncoder, table: dict[int, int], visits: Counter[int]) -> GreedyPolicy:
-    """The table as a policy over every history code, unvisited ones backed off to the most
-    visited history with the same current observation (only visited ones when the encoder
-    has more than :data:`FILL_LIMIT` codes: the policy file would be too large)."""
+def _backoff(enc: KOrderEncoder, table: dict[int, int], visits: Counter[int]) -> dict[int, int]:
+    """Per current observation, the action of the most visited history that has it (ties:
+    the lowest code): what a history no start visits does."""
     by_obs: dict[int, int] = {}
     for code, _ in sorted(visits.items(), key=lambda kv: (-kv[1], kv[0])):
         by_obs.setdefault(enc.decode(code)[0], table.get(code, 0))
+    return by_obs
+
+
+def _policy(task: Task, enc: KOrderEncoder, table: dict[int, int], visits: Counter[int], name: str) -> GreedyPolicy:
+    """The table as a policy over every history code, unvisited ones backed off
+    (:func:`_backoff`; only visited ones when the encoder has more than
+    :data:`FILL_LIMIT` codes: the policy file would be too large)."""
+    by_obs = _backoff(enc, table, visits)
     full: dict[int, tuple[int, ...]] = {}
     for code in range(enc.size) if enc.size <= FILL_LIMIT else sorted(visits):
         if code in visits:
             full[code] = (table.get(code, 0),)
         elif (o := enc.decode(code)[0]) in by_obs:
             full[code] = (by_obs[o],)
-    return GreedyPolicy(task, enc.k, full, "korder-search")
+    return GreedyPolicy(task, enc.k, full, name)
 
 
-def korder_search(task: Task, starts: Sequence[Start], k: int = 1, max_passes: int = 20) -> KOrderResult:
-    """A k-order policy found by coordinate descent from the projected belief-optimal
-    policy (module docstring), its mean cost over ``starts`` (CRMs per episode, plus
-    ``error_cost`` per errored CRM; a start not grasped within ``task.max_steps`` costs
-    that many), and the starts' belief-space optimum in the same units."""
+INITS = ("belief", "blank")
+"""Where :func:`korder_search` starts: the projected belief-optimal policy (a planner),
+or CRM 0 everywhere (a learner from episodes)."""
+
+
+def korder_search(
+    task: Task, starts: Sequence[Start], k: int = 1, max_passes: int = 20, init: str = "belief"
+) -> KOrderResult:
+    """A k-order policy found by coordinate descent from ``init`` (module docstring), its
+    mean cost over ``starts`` (CRMs per episode, plus ``error_cost`` per errored CRM; a
+    start not grasped within ``task.max_steps`` costs that many), the starts'
+    belief-space optimum in the same units (``init="belief"`` only) and the episodes run."""
     if not starts:
         raise CrmgraspError("korder_search needs at least one start")
     k = integer(k, "history order k", 0, 10)
     passes = integer(max_passes, "max_passes", 1, 10_000)
+    if init not in INITS:
+        raise CrmgraspError(f"unknown init {init!r}: choose one of {', '.join(INITS)}")
     ep = _Episodes(task, starts, k, task.max_steps)
-    table, optimum = _projected(task, starts, ep)
-    runs = [ep.run(w, table) for w in range(len(starts))]
+    table, optimum = _projected(task, starts, ep) if init == "belief" else ({}, None)
+    runs = [ep.run(w, table, {}) for w in range(len(starts))]
+    _adopt(ep.enc, table, runs, {})
     for _ in range(passes):
-        visits = _visits(runs)
-        changed = False
-        for code, _ in sorted(visits.items(), key=lambda kv: (-kv[1], kv[0])):
-            who = [w for w, (_, codes) in enumerate(runs) if code in codes]
-            old = sum(runs[w][0] for w in who)
-            best_a, best, best_runs = table.get(code, 0), old, None
-            for a in range(len(task.actions)):
-                if a == table.get(code, 0):
-                    continue
-                trial = {**table, code: a}
-                new_runs = [ep.run(w, trial) for w in who]
-                total = sum(c for c, _ in new_runs)
-                if total < best - 1e-9:
-                    best_a, best, best_runs = a, total, new_runs
-            if best_runs is not None:
-                table[code] = best_a
-                for w, r in zip(who, best_runs, strict=True):
-                    runs[w] = r
-                changed = True
-        if not changed:
+        if not _descend(task, ep, table, runs):
             break
-    policy = _policy(task, ep.enc, table, _visits(runs))
-    return KOrderResult(policy, sum(c for c, _ in runs) / len(starts), optimum)
+    policy = _policy(task, ep.enc, table, _visits(runs), "korder-search" if init == "belief" else "policy-search")
+    return KOrderResult(policy, sum(c for c, _ in runs) / len(starts), optimum, ep.count)
 
 
-def _visits(runs: list[tuple[float, list[int]]]) -> Counter[int]:
+Run = tuple[float, list[int]]
+
+
+def _descend(task: Task, ep: _Episodes, table: dict[int, int], runs: list[Run]) -> bool:
+    """One pass of coordinate descent over the visited histories, most visited first
+    (module docstring); ``table`` and ``runs`` change in place. During the pass an
+    unvisited history acts as the back-off of the pass's start says (the returned
+    policy's rule), and joins ``table`` with that action once a kept change visits it.
+    Whether anything changed."""
+    visits = _visits(runs)
+    backoff = _backoff(ep.enc, table, visits)
+    changed = False
+    for code, _ in sorted(visits.items(), key=lambda kv: (-kv[1], kv[0])):
+        who = [w for w, (_, codes) in enumerate(runs) if code in codes]
+        best_a, best, best_runs = table[code], sum(runs[w][0] for w in who), None
+        for a in range(len(task.actions)):
+            if a == table[code]:
+                continue
+            trial = {**table, code: a}
+            new_runs = [ep.run(w, trial, backoff) for w in who]
+            total = sum(c for c, _ in new_runs)
+            if total < best - 1e-9:
+                best_a, best, best_runs = a, total, new_runs
+        if best_runs is not None:
+            table[code] = best_a
+            for w, r in zip(who, best_runs, strict=True):
+                runs[w] = r
+            _adopt(ep.enc, table, best_runs, backoff)
+            changed = True
+    return changed
+
+
+def _adopt(enc: KOrderEncoder, table: dict[int, int], runs: list[Run], backoff: dict[int, int]) -> None:
+    """Give every history the ``runs`` visit that ``table`` lacks the action it took there
+    (the back-off's, :meth:`_Episodes.run`)."""
+    for _, codes in runs:
+        for code in codes:
+            if code not in table:
+                table[code] = backoff.get(enc.decode(code)[0], 0)
+
+
+def _visits(runs: list[Run]) -> Counter[int]:
     """In how many episodes each history code occurs."""
     out: Counter[int] = Counter()
     for _, codes in runs:
