@@ -93,3 +93,6 @@ def test_cost_of_failure_writes_its_files(tmp_path) -> None:  # type: ignore[no-
         assert {"cost", "mean_crms", "errors_per_episode", "sense_first_fraction"} <= set(r)
         assert r["try_first_fraction"] + r["sense_first_fraction"] + r["other_fraction"] == pytest.approx(1.0)
     assert s["optimal_rows"][1]["errors_per_episode"] <= s["optimal_rows"][0]["errors_per_episode"]
+    assert set(s["tasks"]) == {"notch-or-box", "box-family"} and s["task"] == "notch-or-box"
+    assert s["switch"] and s["optimal_rows"] == s["tasks"]["notch-or-box"]["optimal_rows"]  # the designed task
+    assert not s["tasks"]["box-family"]["switch"]  # no error-free sensing move on boxes

@@ -8,6 +8,11 @@ for ``c`` in :data:`COSTS`, and for each ``c`` two policies are measured on the 
 held-out worlds: the exact belief-space optimum of the cost (over sampled worlds,
 :class:`~crmgrasp.planners.references.BeliefPolicy`) and a learner's greedy policy.
 
+Two tasks: ``notch-or-box``, designed so that the prediction can show (two objects
+alike at the touched corner, a CRM that grasps the common one and errs on the rare
+one, and an error-free slide whose outcome tells them apart), and ``box-family``
+(where no error-free CRM tells the situations apart).
+
 **Classification of an episode** by its first CRM (:func:`classify`):
 
 * ``try-first``: the first CRM grasps or ends in an error: an attempt, which
@@ -25,9 +30,8 @@ from __future__ import annotations
 
 import dataclasses
 from collections import Counter, defaultdict
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -35,6 +39,7 @@ import numpy as np
 
 from crmgrasp._io import write_csv, write_json
 from crmgrasp._progress import Progress
+from crmgrasp._validation import CrmgraspError
 from crmgrasp.experiments._episodes import (
     FASTEST_LABEL,
     EpisodeRecord,
@@ -43,6 +48,7 @@ from crmgrasp.experiments._episodes import (
     train_fastest,
 )
 from crmgrasp.planners.references import BeliefPolicy, sample_starts
+from crmgrasp.sim import Policy
 from crmgrasp.tasks import Task, make_task
 
 __all__ = ["COSTS", "EpisodeRecord", "episode_records", "classify", "CostConfig", "cost_of_failure", "policy_rows"]
@@ -104,11 +110,11 @@ def policy_rows(records: Sequence[EpisodeRecord], cost: float) -> dict[str, floa
 
 @dataclass(frozen=True)
 class CostConfig:
-    """Settings: the task, the costs, the sampled worlds of the belief-space optimum,
-    the held-out worlds both policies run on, and the learner's budget (model-vi, k = 1,
-    mirror quotient where the task declares one)."""
+    """Settings: the tasks (the first is the summary's headline), the costs, the sampled
+    worlds of the belief-space optimum, the held-out worlds both policies run on, and the
+    learner's budget (model-vi, k = 1, mirror quotient where the task declares one)."""
 
-    task: str = "box-family"
+    tasks: tuple[str, ...] = ("notch-or-box", "box-family")
     costs: tuple[float, ...] = COSTS
     worlds: int = 400
     test_worlds: int = 1000
@@ -125,51 +131,102 @@ class CostConfig:
 def cost_of_failure(
     out_dir: str | Path, cfg: CostConfig = CostConfig(), progress: Progress | None = None
 ) -> dict[str, Any]:
-    """Run the experiment; write ``cost_of_failure.csv``, ``cost_of_failure.png`` and
-    ``summary.json`` to ``out_dir``; return the summary (``rows``: the learner's rows,
-    ``optimal_rows``: the belief-space optimum's; ``switch``: whether the optimum's
-    errors per episode fall and its sense-first share rises from the lowest to the
-    highest cost; ``errors_fall`` and ``prepare_first_rises`` (the share of ``other``
-    episodes) on their own)."""
+    """Run the experiment on each task of ``cfg``; write ``cost_of_failure.csv``,
+    ``cost_of_failure.png`` and ``summary.json`` to ``out_dir``; return the summary:
+    per task (``tasks``) ``rows`` (the learner's), ``optimal_rows`` (the belief-space
+    optimum's), ``switch`` (the optimum's errors per episode fall and its sense-first
+    share rises from the lowest to the highest cost), ``errors_fall`` and
+    ``prepare_first_rises`` (the share of ``other`` episodes); the first task's
+    ``rows``, ``optimal_rows`` and ``switch`` also at the top level."""
+    if not cfg.tasks:
+        raise CrmgraspError("cost of failure needs at least one task")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    base = make_task(cfg.task)
-    stage = progress.stage(f"cost of failure on {base.name}", len(cfg.costs), "costs") if progress else None
-    optimal, learned = [], []
-    for c in cfg.costs:
-        task = dataclasses.replace(base, error_cost=float(c))
-        worlds, test = sample_starts(task, cfg.worlds, cfg.seed), sample_starts(task, cfg.test_worlds, cfg.seed + 1)
-        optimal.append(policy_rows(episode_records(task, partial(BeliefPolicy, task, worlds), test, cfg.seed), c))
-        learned.append(policy_rows(_learned_records(task, test, cfg), c))
-        if stage is not None:
-            stage.advance(1)
+    stage = progress.stage("cost of failure", len(cfg.tasks) * len(cfg.costs), "costs") if progress else None
+    per_task = {name: _one_task(make_task(name), cfg, stage) for name in cfg.tasks}
     if stage is not None:
         stage.end()
-    first, last = optimal[0], optimal[-1]
-    errors_fall = last["errors_per_episode"] < first["errors_per_episode"]
+    head = per_task[cfg.tasks[0]]
     summary = {
-        "task": base.name,
-        "learner": FASTEST_LABEL if base.symmetry is not None else "model-vi k=1",
+        "task": cfg.tasks[0],
         "budget": f"{cfg.trials} trials x {cfg.episodes} episodes; optimum over {cfg.worlds} worlds; "
         f"{cfg.test_worlds} held-out worlds; seed {cfg.seed}",
-        "rows": learned,
-        "optimal_rows": optimal,
-        "errors_fall": bool(errors_fall),
-        "switch": bool(errors_fall and last["sense_first_fraction"] > first["sense_first_fraction"]),
-        "prepare_first_rises": bool(last["other_fraction"] > first["other_fraction"]),
+        "rows": head["rows"],
+        "optimal_rows": head["optimal_rows"],
+        "switch": head["switch"],
+        "tasks": per_task,
     }
-    fields = ["policy", *learned[0]]
-    table = [{"policy": "learned", **r} for r in learned] + [{"policy": "belief-optimal", **r} for r in optimal]
+    fields = ["task", "policy", *head["rows"][0]]
+    table = [
+        {"task": name, "policy": who, **r}
+        for name, t in per_task.items()
+        for who, key in (("learned", "rows"), ("belief-optimal", "optimal_rows"))
+        for r in t[key]
+    ]
     write_csv(out / "cost_of_failure.csv", fields, [[row[f] for f in fields] for row in table])
     write_json(out / "summary.json", summary)
     _figure(out / "cost_of_failure.png", summary)
     return summary
 
 
+def _always(policy: Policy) -> Callable[[], Policy]:
+    """A factory that returns ``policy`` itself every time (it restarts at each ``begin``)."""
+    return lambda: policy
+
+
+def _one_task(base: Task, cfg: CostConfig, stage: Any) -> dict[str, Any]:
+    """The optimum's and the learner's rows on one task, and what changed with the cost."""
+    optimal, learned = [], []
+    for c in cfg.costs:
+        task = dataclasses.replace(base, error_cost=float(c))
+        worlds, test = sample_starts(task, cfg.worlds, cfg.seed), sample_starts(task, cfg.test_worlds, cfg.seed + 1)
+        belief = BeliefPolicy(task, worlds)  # one solver for every episode: it restarts its belief at each begin
+        optimal.append(policy_rows(episode_records(task, _always(belief), test, cfg.seed), c))
+        learned.append(policy_rows(_learned_records(task, test, cfg), c))
+        if stage is not None:
+            stage.advance(1)
+    first, last = optimal[0], optimal[-1]
+    errors_fall = last["errors_per_episode"] < first["errors_per_episode"]
+    return {
+        "learner": FASTEST_LABEL if base.symmetry is not None else "model-vi k=1",
+        "rows": learned,
+        "optimal_rows": optimal,
+        "errors_fall": bool(errors_fall),
+        "switch": bool(errors_fall and last["sense_first_fraction"] > first["sense_first_fraction"]),
+        "prepare_first_rises": bool(last["other_fraction"] > first["other_fraction"]),
+    }
+
+
 def _learned_records(task: Task, test: Sequence[Any], cfg: CostConfig) -> list[EpisodeRecord]:
     agents = train_fastest(task, cfg.trials, cfg.episodes, cfg.seed)
     per_agent = greedy_records(task, agents, test, cfg.seed, ties=np.random.default_rng)
     return [r for records in per_agent for r in records]
+
+
+def _panels(axes: Any, t: dict[str, Any], name: str) -> None:
+    """Errors, first-CRM kinds and CRMs per episode against the cost, on one task."""
+    costs = [r["cost"] for r in t["rows"]]
+    x = np.arange(len(costs))
+    for rows, style, who in ((t["optimal_rows"], "-", "optimum"), (t["rows"], "--", "learned")):
+        axes[0].plot(x, [r["errors_per_episode"] for r in rows], "o" + style, color="black", label=who)
+        axes[2].plot(x, [r["mean_crms"] for r in rows], "o" + style, color="black", label=who)
+        for key, color, kind in (
+            ("try_first_fraction", "tab:red", "try first"),
+            ("sense_first_fraction", "tab:green", "sense first"),
+            ("other_fraction", "tab:blue", "prepare first"),
+        ):
+            axes[1].plot(x, [r[key] for r in rows], "o" + style, color=color, label=f"{kind} ({who})")
+    titles = ("errored CRMs per episode", "share of episodes by first CRM", "CRMs per episode")
+    for ax, label in zip(axes, titles, strict=True):
+        ax.set_xticks(x, [f"{c:g}" for c in costs])
+        ax.set_xlabel("extra cost c of an errored CRM")
+        ax.set_title(f"{name}: {label}", fontsize=9)
+        ax.grid(alpha=0.3)
+    axes[1].set_ylim(-0.05, 1.05)
+    lo = min(r["mean_crms"] for r in t["rows"] + t["optimal_rows"])
+    axes[2].set_ylim(lo - 0.2, lo + 1.2)
+    axes[1].legend(fontsize=7, ncols=2)
+    axes[0].legend(fontsize=8)
 
 
 def _figure(path: Path, s: dict[str, Any]) -> None:
@@ -180,29 +237,11 @@ def _figure(path: Path, s: dict[str, Any]) -> None:
 
     from crmgrasp._io import save_figure
 
-    fig, axes = plt.subplots(1, 3, figsize=(12, 3.6))
-    costs = [r["cost"] for r in s["rows"]]
-    x = np.arange(len(costs))
-    for rows, style, who in ((s["optimal_rows"], "-", "optimum"), (s["rows"], "--", "learned")):
-        axes[0].plot(x, [r["errors_per_episode"] for r in rows], "o" + style, color="black", label=who)
-        axes[2].plot(x, [r["mean_crms"] for r in rows], "o" + style, color="black", label=who)
-        for key, color, kind in (
-            ("try_first_fraction", "tab:red", "try first"),
-            ("sense_first_fraction", "tab:green", "sense first"),
-            ("other_fraction", "tab:blue", "prepare first"),
-        ):
-            axes[1].plot(x, [r[key] for r in rows], "o" + style, color=color, label=f"{kind} ({who})")
-    for ax, label in zip(axes, ("errored CRMs per episode", "share of episodes by first CRM", "CRMs per episode")):
-        ax.set_xticks(x, [f"{c:g}" for c in costs])
-        ax.set_xlabel("extra cost c of an errored CRM")
-        ax.set_title(label)
-        ax.grid(alpha=0.3)
-    axes[1].set_ylim(-0.05, 1.05)
-    lo = min(r["mean_crms"] for r in s["rows"] + s["optimal_rows"])
-    axes[2].set_ylim(lo - 0.2, lo + 0.4)
-    axes[1].legend(fontsize=7, ncols=2)
-    axes[0].legend(fontsize=8)
-    fig.suptitle(f"Cost of failure on {s['task']} ({s['budget']})", fontsize=9)
+    names = list(s["tasks"])
+    fig, grid = plt.subplots(len(names), 3, figsize=(12, 3.4 * len(names)), squeeze=False)
+    for axes, name in zip(grid, names, strict=True):
+        _panels(axes, s["tasks"][name], name)
+    fig.suptitle(f"Cost of failure ({s['budget']})", fontsize=9)
     fig.tight_layout()
     save_figure(fig, path)
     plt.close(fig)

@@ -129,15 +129,18 @@ def _cost_of_failure(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> 
     cfg = CostConfig.quick(seed) if quick else CostConfig(seed=seed)
     s = cost_of_failure(out, cfg, progress=ctx.get("progress"))
     rows: list[Row] = []
-    for opt, lrn in zip(s["optimal_rows"], s["rows"], strict=True):
-        rows.append(
-            (
-                f"error cost {opt['cost']:g}: errors per episode / sense-first / prepare-first (optimum; learned)",
-                f"{opt['errors_per_episode']:.3f} / {opt['sense_first_fraction']:.0%} / {opt['other_fraction']:.0%}; "
-                f"{lrn['errors_per_episode']:.3f} / {lrn['sense_first_fraction']:.0%} / {lrn['other_fraction']:.0%}",
-                "costly failures: sense first (Discussion, no experiment)",
+    for name, t in s["tasks"].items():
+        for opt, lrn in zip(t["optimal_rows"], t["rows"], strict=True):
+            rows.append(
+                (
+                    f"{name}, error cost {opt['cost']:g}: errors per episode / sense-first / prepare-first "
+                    "(optimum; learned)",
+                    f"{opt['errors_per_episode']:.3f} / {opt['sense_first_fraction']:.0%} / "
+                    f"{opt['other_fraction']:.0%}; {lrn['errors_per_episode']:.3f} / "
+                    f"{lrn['sense_first_fraction']:.0%} / {lrn['other_fraction']:.0%}",
+                    "costly failures: sense first (Discussion, no experiment)",
+                )
             )
-        )
     return s, rows
 
 
@@ -156,6 +159,14 @@ def _generalization(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> t
                 "works throughout the space of object variation (Discussion, no experiment)",
             )
         )
+        if "search_heldout_mean_crms" in f:
+            rows.append(
+                (
+                    f"{name}: k = 1 policy search from episodes, held-out CRMs (gap to the optimum)",
+                    f"{f['search_heldout_mean_crms']:.3f} ({f['search_gap_to_optimum']:+.1%})",
+                    "-",
+                )
+            )
         if "planner_heldout_mean_crms" in f:
             rows.append(
                 (
@@ -280,7 +291,8 @@ EXPERIMENTS: dict[str, tuple[str, Runner]] = {
         _sensitivity,
     ),
     "cost-of-failure": (
-        "Discussion: an extra cost for errored CRMs (0-30) on box-family; errors, sense-first and prepare-first shares",
+        "Discussion: an extra cost for errored CRMs (0-30) on notch-or-box and box-family; errors, sense-first and "
+        "prepare-first shares",
         _cost_of_failure,
     ),
     "generalization": (

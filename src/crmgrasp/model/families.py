@@ -456,6 +456,36 @@ class StarFamily(_Family):
 
 
 @dataclass(frozen=True)
+class FixedShape(_Family):
+    """One polygon of given ``vertices`` ((x, y) in metres), centred on their bounding
+    box, posed anew each episode: a family that does not vary in shape (alone, or as a
+    member of a :class:`MixedFamily`). Vertex ``i`` of the object is vertex ``i`` of
+    ``vertices`` when they are counter-clockwise (clockwise ones are reversed)."""
+
+    vertices: tuple[tuple[float, float], ...]
+    pose: Pose = field(default_factory=Pose)
+    kind = "polygon"
+
+    def __post_init__(self) -> None:
+        try:
+            pts = tuple((float(x), float(y)) for x, y in self.vertices)
+        except (TypeError, ValueError):
+            raise CrmgraspError(f"polygon vertices must be [x, y] pairs of numbers, got {self.vertices!r}") from None
+        object.__setattr__(self, "vertices", pts)
+        _poly(list(pts))  # the polygon's own checks: finite, at least 3, simple, non-zero area
+
+    def _shape(self, rng: np.random.Generator) -> Shape:
+        return _poly(list(self.vertices))
+
+    def nominal(self) -> Shape:
+        """The polygon, centred."""
+        return _poly(list(self.vertices))
+
+    def min_width(self) -> float:
+        return width(self.nominal())
+
+
+@dataclass(frozen=True)
 class MixedFamily:
     """A mixture: member ``i`` with probability ``weights[i] / sum(weights)`` (one
     draw), then that member's draws."""

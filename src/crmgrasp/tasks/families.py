@@ -15,7 +15,8 @@
 * the registered family tasks: ``box-family`` (the paper's hand, CRMs and corner
   starts on a random box), ``cup-family`` (discs), ``polygon-family`` (regular and
   random convex polygons), ``u-handle``, ``l-shape``, ``t-shape``, ``star`` and
-  ``mixed`` (boxes, discs, polygons, U handles and L shapes). Success is the paper's
+  ``mixed`` (boxes, discs, polygons, U handles and L shapes), and ``notch-or-box``
+  (two objects alike at the touched corner: the cost-of-failure task). Success is the paper's
   ``mu_goal = 0.05`` except where shapes without parallel sides occur
   (``polygon-family``, ``star``, ``mixed``): :data:`RUBBER`.
 """
@@ -34,6 +35,7 @@ from crmgrasp.model.families import (
     BoxFamily,
     ConvexPolygonFamily,
     DiscFamily,
+    FixedShape,
     LShapeFamily,
     MixedFamily,
     RegularPolygonFamily,
@@ -56,6 +58,7 @@ from crmgrasp.tasks.core import (
     acceptable,
     register_task,
 )
+from crmgrasp.tasks.presets import VertexStarts
 
 __all__ = [
     "BoundaryStarts",
@@ -249,6 +252,42 @@ def _box_family() -> Task:
     )
 
 
+NOTCHED_BLOCK = ((0.0, 0.0), (0.04, 0.0), (0.04, -0.05), (0.14, -0.05), (0.14, 0.20), (0.0, 0.20))
+"""A 0.14 x 0.25 m block with a 0.04 x 0.05 m notch cut from one corner; vertex 0 is the
+notch's outer corner, which looks like a box corner to two contacts near it."""
+
+PROBE_SLIDE = 0.06
+"""Slide of ``notch-or-box`` (metres): from a contact within 0.035 m of the corner, past
+the notch (0.04 m) and short of the box's far end."""
+
+
+def _notch_or_box() -> Task:
+    """The cost-of-failure task (docs/families.md): a corner of a 0.30 x 0.10 m box (4 in
+    5 episodes) or of a notched block (1 in 5), touched near vertex 0 with the labels
+    fixed. Opposing across (C1) grasps the box and errs on the block (0.25 m > the
+    aperture); opposing along (C2) grasps the block and errs on the box (0.30 m); sliding
+    the bottom contact past the notch (C5) errs on neither and puts the block's contact
+    0.05 m lower, which the moment about b shows (bins at 0.05 m)."""
+    shapes = FixedShape(((0.0, 0.0), (0.30, 0.0), (0.30, 0.10), (0.0, 0.10))), FixedShape(NOTCHED_BLOCK)
+    s = PROBE_SLIDE
+    return family_task(
+        "notch-or-box",
+        MixedFamily(shapes, (4.0, 1.0)),
+        actions=(
+            CRM("a", "b", 0.0),
+            CRM("b", "a", 0.0),
+            CRM("a", "a", s),
+            CRM("a", "a", -s),
+            CRM("b", "b", s),
+            CRM("b", "b", -s),
+        ),
+        starts=VertexStarts(0, incoming=(0.005, 0.045), outgoing=(0.005, 0.035)),
+        discretizer=Discretizer(rho=(1.0,), m_a=(0.05,), m_b=(0.05,)),
+        symmetric=False,
+        description="a box corner (4 in 5) or a notched block's (1 in 5), alike to the touch; fixed handedness",
+    )
+
+
 def _polygons() -> MixedFamily:
     return MixedFamily((RegularPolygonFamily(), ConvexPolygonFamily()))
 
@@ -277,6 +316,7 @@ FAMILY_TASKS = {
     "star": lambda: family_task(
         "star", StarFamily(), mu_goal=RUBBER, description="stars with 4-6 points, radius 0.05-0.09 m; friction 0.6"
     ),
+    "notch-or-box": _notch_or_box,
     "mixed": lambda: family_task(
         "mixed",
         MixedFamily((BoxFamily(), DiscFamily(), _polygons(), UHandleFamily(), LShapeFamily())),

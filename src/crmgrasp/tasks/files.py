@@ -30,7 +30,7 @@ from crmgrasp.model.hand import CRM, Hand
 from crmgrasp.model.sensing import Discretizer, SensorNoise
 from crmgrasp.tasks.core import CornerStarts, Symmetry, Task, UniformStarts, make_task, task_names
 from crmgrasp.tasks.families import BoundaryStarts
-from crmgrasp.tasks.presets import LongSideStarts, MixtureStarts, NearCornerStarts
+from crmgrasp.tasks.presets import LongSideStarts, MixtureStarts, NearCornerStarts, VertexStarts
 
 __all__ = ["TEMPLATE", "MAX_TASK_FILE_BYTES", "task_from_dict", "task_to_dict", "load_task_file", "resolve_task"]
 
@@ -96,11 +96,14 @@ kind = "uniform"                   # "uniform" on the whole boundary; for polygo
                                    # mix = [{ kind = "near-corner", weight = 0.4 }, ...];
                                    # "boundary": contacts anywhere on the boundary within
                                    # the aperture of each other (near_vertex = d: within d
-                                   # of a vertex); the default of family tasks
+                                   # of a vertex); the default of family tasks; "vertex":
+                                   # vertex = i, incoming = [lo, hi], outgoing = [lo, hi]
+                                   # (distances from vertex i), a_on = "incoming" (fixed labels)
 # A family task draws its object anew each episode: replace [object] by, e.g.,
 # [family]
 # kind = "box"                     # box, disc, regular-polygon, convex-polygon, u-handle,
-# length = [0.20, 0.40]            # l-shape, t-shape, star (ranges [low, high]), or
+# length = [0.20, 0.40]            # l-shape, t-shape, star (ranges [low, high]), polygon
+#                                  # (vertices = [[x, y], ...]: one fixed shape, posed), or
 # width = [0.06, 0.14]             # mixed with members = [{ kind = ... }, ...], weights = [...]
 # pose = { angle = [0.0, 6.2832], offset = [-0.05, 0.05] }
 
@@ -139,6 +142,7 @@ _STARTS: dict[str, type] = {
     "long-side": LongSideStarts,
     "mixture": MixtureStarts,
     "boundary": BoundaryStarts,
+    "vertex": VertexStarts,
 }
 _FAMILIES: dict[str, type] = {
     cls.kind: cls  # type: ignore[attr-defined]
@@ -151,6 +155,7 @@ _FAMILIES: dict[str, type] = {
         fam.LShapeFamily,
         fam.TShapeFamily,
         fam.StarFamily,
+        fam.FixedShape,
     )
 }
 
@@ -235,12 +240,13 @@ def _bins(table: Any) -> Discretizer:
 
 
 def _starts(table: Any, where: str = "[starts]") -> Any:
-    t = _keys(table, where, {"kind", "within", "lo", "hi", "weight", "mix", "near_vertex"}, {"kind"})
+    vertex_keys = {"vertex", "incoming", "outgoing", "a_on"}
+    t = _keys(table, where, {"kind", "within", "lo", "hi", "weight", "mix", "near_vertex", *vertex_keys}, {"kind"})
     kind = t["kind"]
     if kind not in _STARTS:
         raise CrmgraspError(f"{where} kind must be one of {', '.join(_STARTS)}, got {shown(kind)}")
     allowed = {"corners": set(), "uniform": set(), "near-corner": {"within"}, "long-side": {"lo", "hi"}}
-    allowed["mixture"], allowed["boundary"] = {"mix"}, {"near_vertex"}
+    allowed["mixture"], allowed["boundary"], allowed["vertex"] = {"mix"}, {"near_vertex"}, vertex_keys
     extra = set(t) - {"kind", "weight"} - allowed[kind]
     if extra:
         raise CrmgraspError(f"{where}: kind {kind!r} takes no {', '.join(sorted(extra))}")
@@ -251,6 +257,12 @@ def _starts(table: Any, where: str = "[starts]") -> Any:
     if kind == "boundary":
         near = t.get("near_vertex")
         return BoundaryStarts(None if near is None else _num(near, f"{where} near_vertex"))
+    if kind == "vertex":
+        ranges = [_numbers(t.get(k, [0.005, 0.05]), f"{where} {k}") for k in ("incoming", "outgoing")]
+        if any(len(r) != 2 for r in ranges):
+            raise CrmgraspError(f"{where}: incoming and outgoing must be [low, high] distances in metres")
+        (i0, i1), (o0, o1) = ranges
+        return VertexStarts(t.get("vertex", 0), (i0, i1), (o0, o1), t.get("a_on", "incoming"))
     if kind == "near-corner":
         return NearCornerStarts(_num(t.get("within", 0.10), f"{where} within"))
     if kind == "long-side":
@@ -272,6 +284,9 @@ def _starts_dict(starts: Any) -> dict[str, Any]:
     if type(starts) is BoundaryStarts and starts.max_tries == BoundaryStarts().max_tries:
         near = {} if starts.near_vertex is None else {"near_vertex": starts.near_vertex}
         return {"kind": "boundary", **near}
+    if type(starts) is VertexStarts and starts.max_tries == VertexStarts().max_tries:
+        ranges = {k: list(getattr(starts, k)) for k in ("incoming", "outgoing")}
+        return {"kind": "vertex", "vertex": starts.vertex, **ranges, "a_on": starts.a_on}
     if type(starts) is NearCornerStarts:
         return {"kind": "near-corner", "within": starts.within}
     if type(starts) is LongSideStarts:

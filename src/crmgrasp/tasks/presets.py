@@ -8,6 +8,8 @@ are first-class options, so that their effect can be measured
 
 * :class:`NearCornerStarts`: both contacts within ``within`` (0.10 m) of the same
   corner, like the aliased starts of the paper's Figure 8(a);
+* :class:`VertexStarts`: both contacts near one given vertex, the labels fixed (a
+  hand of fixed handedness);
 * :class:`LongSideStarts`: corner starts whose contact on the longer side is
   ``lo..hi`` from the corner, like the Robonaut trials of Figure 9;
 * :class:`MixtureStarts`: a weighted mixture of samplers;
@@ -39,7 +41,15 @@ from crmgrasp.tasks.core import (
     corner_candidate,
 )
 
-__all__ = ["NearCornerStarts", "LongSideStarts", "MixtureStarts", "START_PRESETS", "with_reading", "resolve_reading"]
+__all__ = [
+    "NearCornerStarts",
+    "VertexStarts",
+    "LongSideStarts",
+    "MixtureStarts",
+    "START_PRESETS",
+    "with_reading",
+    "resolve_reading",
+]
 
 
 def _polygon(obj: Shape, what: str) -> Polygon:
@@ -92,6 +102,56 @@ class NearCornerStarts:
             if cfg is not None:
                 return cfg
         raise CrmgraspError(f"no feasible near-corner start found in {self.max_tries} tries")
+
+
+@dataclass(frozen=True)
+class VertexStarts:
+    """Both contacts near one given vertex (index ``vertex`` of the polygon's
+    counter-clockwise vertices): one on the side that ends there (*incoming*) at a
+    distance from the vertex uniform in ``incoming`` metres, one on the side that starts
+    there (*outgoing*) at a distance uniform in ``outgoing``; contact ``a`` is on the
+    side ``a_on`` (no coin: the hand's handedness is fixed). Each attempt draws two
+    uniforms; the start rule rejects, at most ``max_tries`` times."""
+
+    vertex: int = 0
+    incoming: tuple[float, float] = (0.005, 0.05)
+    outgoing: tuple[float, float] = (0.005, 0.05)
+    a_on: str = "incoming"
+    max_tries: int = 10_000
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.vertex, int) or isinstance(self.vertex, bool) or self.vertex < 0:
+            raise CrmgraspError(f"vertex starts: vertex must be an index >= 0, got {self.vertex!r}")
+        for name in ("incoming", "outgoing"):
+            lo, hi = (float(v) for v in getattr(self, name))
+            if not (0.0 < lo <= hi and math.isfinite(hi)):
+                raise CrmgraspError(f"vertex starts: {name} must be [low, high] with 0 < low <= high, got {[lo, hi]}")
+            object.__setattr__(self, name, (lo, hi))
+        if self.a_on not in ("incoming", "outgoing"):
+            raise CrmgraspError(f"vertex starts: a_on must be 'incoming' or 'outgoing', got {self.a_on!r}")
+
+    def __call__(
+        self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator, accept: StartFilter | None = None
+    ) -> Config:
+        poly = _polygon(obj, "vertex")
+        n = len(poly.vertices)
+        if self.vertex >= n:
+            raise CrmgraspError(f"vertex starts: vertex {self.vertex} does not exist on a polygon of {n} vertices")
+        l_in, l_out = poly.edge_length((self.vertex - 1) % n), poly.edge_length(self.vertex)
+        if self.incoming[1] >= l_in or self.outgoing[1] >= l_out:
+            raise CrmgraspError(
+                f"vertex starts: distances up to {self.incoming[1]:g} / {self.outgoing[1]:g} m reach past the sides "
+                f"at vertex {self.vertex} ({l_in:g} / {l_out:g} m long)"
+            )
+        coin = 0.0 if self.a_on == "incoming" else 1.0
+        for _ in range(self.max_tries):
+            u1, u2 = rng.random(2).tolist()
+            d_in = self.incoming[0] + (self.incoming[1] - self.incoming[0]) * u1
+            d_out = self.outgoing[0] + (self.outgoing[1] - self.outgoing[0]) * u2
+            cfg = _decide(poly, hand, mu_goal, [(self.vertex + 0.5) / n, 1.0 - d_in / l_in, d_out / l_out, coin], None)
+            if cfg is not None:
+                return cfg
+        raise CrmgraspError(f"no feasible start near vertex {self.vertex} in {self.max_tries} tries")
 
 
 @dataclass(frozen=True)
