@@ -7,10 +7,11 @@ first checkpoint (5, 10, 15, 20, 30, ...) from which the mean greedy policy over
 task's reference (paper-box: the belief-space optimum 1.66; box-family: 1.75), and the
 mean greedy CRMs at checkpoint 20.
 
-Learners: ``model-vi`` (k = 1, mirror quotient: ``crmgrasp learn --preset fastest``),
-the same with a prior learned in 500 episodes on ``box-family`` (paper-box only: the
-family has paper-box's CRMs and bins), and Dyna-Q k = 1 with value-iteration sweeps on
-the mirror quotient (the fastest learner before ``model-vi``).
+Learners: ``model-vi`` from scratch (k = 1, mirror quotient: ``crmgrasp learn --agent
+model-vi --k 1 --symmetric``; ``--preset fastest`` on box-family), the same with a prior
+learned in 500 episodes on ``box-family`` (paper-box only: the family has paper-box's CRMs
+and bins; ``--preset fastest`` on paper-box), and Dyna-Q k = 1 with value-iteration
+sweeps on the mirror quotient (the fastest learner before ``model-vi``).
 
 Usage: ``python benchmarks/learner_seeds.py [EPISODES] [SEEDS]`` (defaults 60 and 10).
 Prints one JSON object.

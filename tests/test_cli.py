@@ -235,7 +235,14 @@ def test_learn_preset_fastest_and_a_family_prior(tmp_path, capsys):
     assert main([*base, "--preset", "fastest", "--out", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["agent"] == "model-vi" and summary["k"] == 1 and summary["params"]["symmetric"] is True
+    assert summary["params"]["prior_task"] == "box-family"  # paper-box: the preset learns a prior on its family
     assert summary["greedy_mean_steps"] < 1.05 * 1.66 + 0.05  # 40 episodes: near the optimum (1,000 checks)
+    scratch = tmp_path / "scratch"
+    assert main([*base, "--agent", "model-vi", "--k", "1", "--symmetric", "--out", str(scratch)]) == 0
+    assert "prior_task" not in json.loads((scratch / "summary.json").read_text())["params"]
+    family = tmp_path / "family"  # no prior where the task has none declared
+    assert main([*base, "--task", "cup-family", "--preset", "fastest", "--out", str(family)]) == 0
+    assert "prior_task" not in json.loads((family / "summary.json").read_text())["params"]
     assert main([*base, "--preset", "fastest", "--agent", "sarsa", "--out", str(tmp_path / "s")]) == 0
     assert json.loads((tmp_path / "s" / "summary.json").read_text())["agent"] == "sarsa"
     prior = tmp_path / "prior"

@@ -72,10 +72,14 @@ def _learner_params(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _apply_preset(args: argparse.Namespace, task: Any) -> None:
-    """Fill ``--agent``, ``--k`` and ``--symmetric`` from ``--preset`` where not given."""
-    from crmgrasp.cli.parser import LEARN_PRESETS
+    """Fill ``--agent``, ``--k``, ``--symmetric`` and (``fastest`` with model-vi on a task
+    of :data:`~crmgrasp.cli.parser.FASTEST_PRIORS`) ``--prior-task`` from ``--preset``
+    where not given."""
+    from crmgrasp.cli.parser import FASTEST_PRIORS, LEARN_PRESETS
 
     agent, k, symmetric = LEARN_PRESETS[args.preset]
+    if args.preset == "fastest" and (args.agent or agent) == "model-vi" and args.prior_task is None:
+        args.prior_task = FASTEST_PRIORS.get(task.name)
     args.agent = args.agent or agent
     args.k = k if args.k is None else args.k
     from crmgrasp.agents.tabular import TabularAgent

@@ -291,7 +291,8 @@ def build_parser() -> argparse.ArgumentParser:
         default="paper",
         choices=tuple(LEARN_PRESETS),
         help="learner settings: paper (SARSA, k = 2) or fastest (model-vi, k = 1, on the mirror quotient where the "
-        "task declares one); --agent and --k override them",
+        "task declares one; on paper-box with a prior learned in 500 episodes on box-family: from scratch, use "
+        "--agent model-vi --k 1 --symmetric); --agent, --k and --prior-task override them",
     )
     p.add_argument("--agent", default=None, choices=AGENT_NAMES, help="learner or baseline (default: the preset's)")
     p.add_argument(
@@ -517,6 +518,11 @@ def build_parser() -> argparse.ArgumentParser:
 LEARN_PRESETS = {"paper": ("sarsa", 2, False), "fastest": ("model-vi", 1, True)}
 """``--preset`` of ``crmgrasp learn``: agent, k, and whether to learn on the mirror quotient
 (where the task declares a symmetry)."""
+
+FASTEST_PRIORS = {"paper-box": "box-family"}
+"""Tasks on which ``--preset fastest`` also gives ``model-vi`` a prior (``--prior-task``): a
+family task with the same CRMs and bins of which the task's object is one member (the
+paper's box is one box of ``box-family``)."""
 
 _AGENT_FLAGS = (
     ("--alpha", _number, "learning rate (default 0.3)"),

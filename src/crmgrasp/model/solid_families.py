@@ -25,7 +25,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.model.families import Pose, Range, _mid, _range, _uniform, family_dict
+from crmgrasp.model.family_base import Pose, Range, _mid, _range, _uniform, family_dict
 from crmgrasp.model.solids import Cylinder, Solid, box3d, rotation_z
 
 __all__ = ["SolidFamily", "BoxOnTable", "CylinderOnTable"]
