@@ -257,9 +257,9 @@ def _figure(path: Path, s: dict[str, Any]) -> None:
     bars = [
         ("clairvoyant_bound", "clairvoyant bound", "0.85"),
         ("belief_optimum", "belief-space optimum", "0.6"),
-        ("learner_mean_crms", "training objects", "tab:blue"),
-        ("heldout_mean_crms", "held-out objects", "tab:orange"),
-        ("out_of_range_mean_crms", "sizes out of range", "tab:red"),
+        ("learner_mean_crms", "model-vi: training objects", "tab:blue"),
+        ("heldout_mean_crms", "model-vi: held-out objects", "tab:orange"),
+        ("out_of_range_mean_crms", "model-vi: sizes out of range", "tab:red"),
         ("search_heldout_mean_crms", "held-out: k = 1 policy search from episodes", "tab:purple"),
         ("planner_heldout_mean_crms", "held-out: k = 1 policy planned on sampled worlds", "tab:green"),
     ]
