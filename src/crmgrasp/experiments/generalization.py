@@ -209,10 +209,10 @@ def _family_summary(name: str, cfg: GeneralizationConfig, out: Path) -> dict[str
 
 def _gaps(s: dict[str, Any], p: str) -> None:
     """The learner ``p``'s held-out gap, raw and against each set's optimum, and its gap to the optimum."""
-    s[f"{p}heldout_gap"] = s[f"{p}heldout_mean_crms"] / s[f"{p}mean_crms" if p else "learner_mean_crms"] - 1.0
-    seen_gap = s[f"{p}mean_crms" if p else "learner_mean_crms"] / s["seen_belief_optimum"]
-    s[f"{p}heldout_gap_normalized"] = s[f"{p}heldout_mean_crms"] / s["belief_optimum"] / seen_gap - 1.0
-    s[f"{p}gap_to_optimum"] = s[f"{p}heldout_mean_crms"] / s["belief_optimum"] - 1.0
+    seen, new, opt = s[f"{p}mean_crms" if p else "learner_mean_crms"], s[f"{p}heldout_mean_crms"], s["belief_optimum"]
+    s[f"{p}heldout_gap"] = new / seen - 1.0
+    s[f"{p}heldout_gap_normalized"] = new / opt / (seen / s["seen_belief_optimum"]) - 1.0
+    s[f"{p}gap_to_optimum"] = new / opt - 1.0
 
 
 def generalization(

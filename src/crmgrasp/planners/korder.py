@@ -34,12 +34,13 @@ k-order optimum over these starts (the search is local, not exhaustive) and at l
 belief optimum: when it comes near the optimum, k-order histories are enough and a
 learner's remaining gap is the learner's; when it cannot, memory is the likely limit
 (evidence, not proof). A history no start visits acts like the most visited history
-with the same current observation (a back-off to k = 0; CRM 0 if none has it), both
-during the search (the back-off of the pass's start; a history a kept change makes
-visited joins the table with that action) and in the returned
-:class:`~crmgrasp.agents.policy.GreedyPolicy` (up to :data:`FILL_LIMIT` codes, beyond
-which unvisited histories draw uniformly), so it runs, saves and evaluates like a
-learned policy, and on the starts searched it does what the search measured.
+with the same current observation (a back-off to k = 0), both during the search (the
+back-off of the pass's start, CRM 0 where no visited history has that observation; a
+history a kept change makes visited joins the table with that action) and in the
+returned :class:`~crmgrasp.agents.policy.GreedyPolicy` (where it is left unlisted, and
+draws uniformly, if no visited history has its observation or the encoder has more than
+:data:`FILL_LIMIT` codes), so the policy runs, saves and evaluates like a learned one,
+and on the starts searched it does what the search measured.
 """
 
 from __future__ import annotations
@@ -202,15 +203,17 @@ def _descend(task: Task, ep: _Episodes, table: dict[int, int], runs: list[Run]) 
     changed = False
     for code, _ in sorted(visits.items(), key=lambda kv: (-kv[1], kv[0])):
         who = [w for w, (_, codes) in enumerate(runs) if code in codes]
-        best_a, best, best_runs = table[code], sum(runs[w][0] for w in who), None
+        kept = table[code]
+        best_a, best, best_runs = kept, sum(runs[w][0] for w in who), None
         for a in range(len(task.actions)):
-            if a == table[code]:
+            if a == kept:
                 continue
-            trial = {**table, code: a}
-            new_runs = [ep.run(w, trial, backoff) for w in who]
+            table[code] = a  # tried in place (no copy of the table per candidate), restored below
+            new_runs = [ep.run(w, table, backoff) for w in who]
             total = sum(c for c, _ in new_runs)
             if total < best - 1e-9:
                 best_a, best, best_runs = a, total, new_runs
+        table[code] = kept
         if best_runs is not None:
             table[code] = best_a
             for w, r in zip(who, best_runs, strict=True):
