@@ -113,7 +113,7 @@ def test_compare_cli_deep_steps(tmp_path, capsys):
 @needs_deep
 def test_recurrent_policy_saves_loads_predicts_and_runs(tmp_path, capsys):
     from crmgrasp.agents.deep import RecurrentPolicy
-    from crmgrasp.agents.policy import load_policy
+    from crmgrasp.agents.loading import load_policy
     from crmgrasp.cli import main
     from crmgrasp.model.sensing import observe
 

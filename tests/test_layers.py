@@ -105,3 +105,72 @@ def test_root_holds_only_the_core():
     and the small shared helpers."""
     root = sorted(p.name for p in PKG.glob("*.py"))
     assert root == ["__init__.py", "__main__.py", "_io.py", "_progress.py", "_validation.py", "sim.py"]
+
+
+def _edges() -> dict[str, set[str]]:
+    """Module -> the package's modules it imports anywhere (top level, in a function, or
+    under ``TYPE_CHECKING``): ``from pkg import name`` counts as importing ``pkg`` and,
+    where ``pkg.name`` is a module, that module too; a package's ``__init__`` is a module."""
+    out: dict[str, set[str]] = {}
+    for module, path in MODULES.items():
+        hits = set()
+        for name in _imports(path):
+            while name and name not in MODULES:
+                name = name.rpartition(".")[0]
+            if name and name not in (module, "crmgrasp"):
+                hits.add(name)
+        out[module] = hits
+    return out
+
+
+def _cycles(edges: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    found: list[list[str]] = []
+    for root in sorted(edges):
+        if root in index:
+            continue
+        work = [(root, iter(sorted(edges[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on.add(root)
+        while work:
+            v, it = work[-1]
+            w = next(it, None)
+            if w is not None:
+                if w not in index:
+                    index[w] = low[w] = len(index)
+                    stack.append(w)
+                    on.add(w)
+                    work.append((w, iter(sorted(edges[w]))))
+                elif w in on:
+                    low[v] = min(low[v], index[w])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[v])
+            if low[v] == index[v]:
+                comp = []
+                while True:
+                    w = stack.pop()
+                    on.discard(w)
+                    comp.append(w)
+                    if w == v:
+                        break
+                if len(comp) > 1:
+                    found.append(sorted(comp))
+    return found
+
+
+def test_cycle_finder_finds_a_cycle():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert _cycles({"a": {"b"}, "b": set()}) == []
+
+
+def test_no_import_cycles():
+    """No two modules import each other, directly or through others, inside a layer or
+    across one (a package's ``__init__`` and its own submodules included)."""
+    assert _cycles(_edges()) == []

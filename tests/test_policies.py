@@ -9,7 +9,7 @@ import pytest
 import crmgrasp  # noqa: F401  (registers the environments)
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents import GreedyPolicy
-from crmgrasp.agents.policy import load_policy
+from crmgrasp.agents.loading import load_policy
 from crmgrasp.agents.training import train_trials
 from crmgrasp.cli import main
 from crmgrasp.envs import KOrderHistory

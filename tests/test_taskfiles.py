@@ -13,7 +13,16 @@ from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents import GreedyPolicy
 from crmgrasp.cli import main
 from crmgrasp.model.geometry import Disc, Polygon
-from crmgrasp.tasks import TEMPLATE, load_task_file, paper_box, resolve_task, task_from_dict, task_to_dict
+from crmgrasp.tasks import (
+    TEMPLATE,
+    load_task_file,
+    make_task,
+    paper_box,
+    resolve_task,
+    task_from_dict,
+    task_names,
+    task_to_dict,
+)
 
 
 def _write(tmp_path, text, name="t.toml"):
@@ -170,3 +179,12 @@ def test_cli_bad_task_files_are_one_line_exit_2_and_write_nothing(tmp_path, caps
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "error:" in err, err
     assert not out.exists()
+
+
+@pytest.mark.parametrize("name", task_names())
+def test_every_registered_task_round_trips(name):
+    """``task_from_dict(task_to_dict(t)) == t`` for every registered task, planar and
+    spatial (solids compare by value, as polygons do)."""
+    task = make_task(name)
+    again = task_from_dict(task_to_dict(task))
+    assert again == task and again.model == task.model

@@ -238,6 +238,11 @@ class Stepper(Protocol):
 
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep: ...
 
+    def use(self, instance: Task) -> None:
+        """Step ``instance`` (a task on one object of this task's family) from now on;
+        a one-line error on a task with one object."""
+        ...
+
 
 class TaskSteps:
     """The reference :class:`Stepper` of one task: :meth:`Task.sample_start`,
@@ -254,6 +259,9 @@ class TaskSteps:
 
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
         return step_one(self.task, state, action, rng)
+
+    def use(self, instance: Task) -> None:
+        raise CrmgraspError(f"task {self.task.name!r} has one object: a World start needs a family task")
 
 
 class FamilyStepper:
@@ -319,9 +327,7 @@ def run_episode(
     if kernel is None:
         kernel = FamilyStepper(task) if task.family is not None else TaskSteps(task)
     if isinstance(start, World):
-        if not hasattr(kernel, "use"):
-            raise CrmgraspError("a World start needs a family task")
-        kernel.use(start.task)  # type: ignore[attr-defined]
+        kernel.use(start.task)
         config = start.config
     else:
         config = kernel.sample_start(rng) if start is None else start

@@ -28,7 +28,6 @@ from crmgrasp.agents.training import (
     trial_generators,
 )
 from crmgrasp.kernels import kernel_for
-from crmgrasp.model.contacts import config_from_row
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.model.sensing import Observation
@@ -79,7 +78,7 @@ def train_trials_lockstep(
     check_budget(trials, episodes, eval_episodes)
     encoder = encoder_for(task, k)
     kernel = kernel_for(task, backend)
-    noise = task.noise
+    model = task.model
     ckpts = np.array(sorted({c for c in checkpoints if 1 <= c <= episodes}), dtype=np.int64)
     steps = np.empty((trials, episodes), dtype=np.int64)
     success = np.empty((trials, episodes), dtype=bool)
@@ -90,13 +89,13 @@ def train_trials_lockstep(
     ]
     finished = [0]
 
-    cfg = np.zeros((trials, 8))  # true configurations, one row per trial
-    sen = np.zeros((trials, 8))  # their sensed readings
+    cfg = np.zeros((trials, model.row_width))  # true configurations, one row per trial
+    sen = np.zeros((trials, model.row_width))  # their sensed readings
 
     def begin(t: int, tr: _Trial) -> None:
         state, obs, index = reset(task, tr.env_rng)
-        cfg[t] = (*state.config.a, *state.config.b)
-        sen[t] = (*state.sensed.a, *state.sensed.b)
+        cfg[t] = model.row_of(state.config)
+        sen[t] = model.row_of(state.sensed)
         tr.steps = 0
         tr.policy.begin(Percept(obs, Error.NONE, index, state.sensed))
 
@@ -126,16 +125,15 @@ def train_trials_lockstep(
         acts = np.array([runs[t].policy.act() for t in active])
         new, errors = kernel.execute(cfg[active], sen[active], acts)
         cfg[active] = new
-        if noise.active:  # one reading per trial, from the trial's own generator, in trial order
+        if model.noise.active:  # one reading per trial, from the trial's own generator, in trial order
             for i, t in enumerate(active.tolist()):
-                sensed = noise.sense(config_from_row(new[i].tolist()), runs[t].env_rng)
-                sen[t] = (*sensed.a, *sensed.b)
+                sen[t] = model.row_of(model.read(model.config_of(new[i].tolist()), runs[t].env_rng))
         else:
             sen[active] = new
-        rho, m_a, m_b, index, mu = kernel.observe(new, sen[active], errors)
+        *values, index, mu = kernel.observe(new, sen[active], errors)
         done = task.grasped(mu)
         still = []
-        rows = zip(active.tolist(), sen[active].tolist(), rho.tolist(), m_a.tolist(), m_b.tolist())
+        rows = zip(active.tolist(), sen[active].tolist(), *(v.tolist() for v in values))
         for i, (t, srow, *obs) in enumerate(rows):
             tr = runs[t]
             tr.steps += 1
@@ -145,7 +143,7 @@ def train_trials_lockstep(
                 Observation(*obs),
                 Error(errors[i]),
                 int(index[i]),
-                config_from_row(srow),
+                model.config_of(srow),
                 step_reward(task, terminated, errors[i]),
                 terminated,
                 truncated,

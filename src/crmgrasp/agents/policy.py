@@ -34,7 +34,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import stat
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -59,7 +58,6 @@ __all__ = [
     "read_policy_document",
     "policy_digest",
     "policy_task",
-    "load_policy",
     "observation_indices",
 ]
 
@@ -183,28 +181,6 @@ def observation_indices(task: Task, observations: Sequence[ObservationLike], act
             raise CrmgraspError(f"observation {shown(o)} is not finite or has an unknown error flag")
         out.append(task.discretizer.index_of(values[0], values[1], values[2], int(err)))
     return out
-
-
-def _is_zip(path: str | os.PathLike[str]) -> bool:
-    """Whether ``path`` is a regular file starting with a zip signature (two bytes read;
-    anything else is left to the loaders, which report it)."""
-    try:
-        if not stat.S_ISREG(os.stat(path).st_mode):
-            return False
-        with open(path, "rb") as fh:
-            return fh.read(2) == b"PK"
-    except OSError:
-        return False
-
-
-def load_policy(path: str | os.PathLike[str], task: Task | None = None) -> Any:
-    """A saved policy of any kind: a tabular :class:`GreedyPolicy` (JSON) or a deep
-    :class:`~crmgrasp.agents.deep.RecurrentPolicy` (zip; needs the extra ``deep``)."""
-    if _is_zip(path):
-        from crmgrasp.agents.deep import RecurrentPolicy
-
-        return RecurrentPolicy.load(path, task)
-    return GreedyPolicy.load(path, task)
 
 
 def crm_rows(task: Task) -> list[list[Any]]:

@@ -12,7 +12,7 @@ from crmgrasp.tasks import Task
 
 def _task(args: argparse.Namespace, spec: str | None = None) -> Task:
     """The task of ``--task`` (or ``spec``) with ``--start-preset`` and ``--grasp-reward`` applied."""
-    from crmgrasp.tasks.presets import resolve_reading
+    from crmgrasp.tasks.files import resolve_reading
 
     return resolve_reading(
         args.task if spec is None else spec,

@@ -20,7 +20,7 @@ from crmgrasp._validation import CrmgraspError
 from crmgrasp.cli.common import _print_result, _progress, _run_folder, _task
 from crmgrasp.cli.parser import _AGENT_FLAGS, build_parser
 from crmgrasp.cli.scene import _cmd_crm, _cmd_run, _cmd_show
-from crmgrasp.tasks import TEMPLATE, SpatialTask, make_task, task_names, task_to_dict
+from crmgrasp.tasks import TEMPLATE, make_task, task_names, task_to_dict
 
 __all__ = ["main", "build_parser"]
 
@@ -145,7 +145,8 @@ def _cmd_learn(args: argparse.Namespace) -> int:
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     from crmgrasp.agents import evaluate
-    from crmgrasp.agents.policy import GreedyPolicy, load_policy
+    from crmgrasp.agents.loading import load_policy
+    from crmgrasp.agents.policy import GreedyPolicy
     from crmgrasp.kernels import kernel_for
 
     policy = load_policy(args.policy, None if args.task is None else _task(args))
@@ -251,7 +252,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     from crmgrasp.experiments.stats import fmt
 
     task = _task(args)
-    if isinstance(task, SpatialTask):
+    if task.model.kind != "planar":
         raise CrmgraspError(
             f"compare's grasp controller, sampled POMDP and deep peer are planar; on the spatial task {task.name!r} "
             "use learn, evaluate and references (or reproduce spatial)"

@@ -10,10 +10,8 @@ from typing import Any, NoReturn
 
 from crmgrasp import __version__
 from crmgrasp._validation import SEED_MAX, CrmgraspError, as_point, finite, integer, shown
-from crmgrasp.model.hand import CRM
 from crmgrasp.model.history import MAX_K
-from crmgrasp.model.spatial import CRM3D
-from crmgrasp.tasks import SpatialTask, Task
+from crmgrasp.tasks import Task
 
 __all__ = ["build_parser"]
 
@@ -104,13 +102,10 @@ def _resolve_crm(task: Task, text: str) -> Any:
         if not 1 <= i <= len(task.actions):
             raise CrmgraspError(f"task {task.name} has actions C1..C{len(task.actions)}, got {shown(text)}")
         return task.actions[i - 1]
-    if isinstance(task, SpatialTask):
-        parts = [p.strip() for p in text.split(",")]
-        if len(parts) != 4:
-            n = len(task.actions)
-            raise CrmgraspError(f"a spatial CRM is c,f,r1,r2 (e.g. a,a,0.05,0) or C1..C{n}, got {shown(text)}")
-        return task.crm(CRM3D(parts[0], parts[1], (finite(parts[2], "r1"), finite(parts[3], "r2"))))
-    return task.hand.check_crm(CRM.parse(text))
+    try:
+        return task.model.parse_crm(text)
+    except CrmgraspError as exc:
+        raise CrmgraspError(f"{exc} (or name one of the task's actions C1..C{len(task.actions)})") from None
 
 
 START_PRESET_NAMES = ("corners", "near-corner", "long-side", "mixture")

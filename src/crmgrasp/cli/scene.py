@@ -5,6 +5,7 @@ hand)."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import os
 import subprocess
@@ -20,33 +21,41 @@ from crmgrasp.cli.parser import _resolve_crm
 from crmgrasp.model.hand import Error
 from crmgrasp.model.quality import min_friction
 from crmgrasp.model.sensing import SensorNoise, observe
-from crmgrasp.model.spatial import feasible3d, sense3d
-from crmgrasp.tasks import SpatialTask, Task
+from crmgrasp.tasks import Task
 
 
 def _scene(args: argparse.Namespace) -> tuple[Task, Any, Any, SensorNoise, np.random.Generator]:
     """The task, the configuration of --a and --b (planar or spatial), the CRM, the noise, the generator."""
     task = _task(args)
-    config: Any
-    if isinstance(task, SpatialTask):
-        config = task.contacts_toward(args.a, args.b)
-    elif len(args.a) != 2 or len(args.b) != 2:
-        raise CrmgraspError(f"--a and --b take X,Y on the planar task {task.name!r}")
-    else:
-        config = task.hand.contact(task.obj, args.a, args.b)
+    config = _place(task, args)
     crm = _resolve_crm(task, args.crm) if args.crm is not None else None
     noise = SensorNoise(math.radians(args.sigma_n), args.sigma_p)
     return task, config, crm, noise, np.random.default_rng(args.seed)
 
 
+def _place(task: Task, args: argparse.Namespace) -> Any:
+    """The configuration of --a and --b on ``task``'s object (its nominal one for a family):
+    one point of the contact model's dimension per contact."""
+    dim = task.model.dim
+    if len(args.a) != dim or len(args.b) != dim:
+        axes = ",".join("XYZ"[:dim])
+        raise CrmgraspError(f"--a and --b take {axes} on the {task.model.kind} task {task.name!r}")
+    return task.place(args.a, args.b)
+
+
+def _sensing(task: Task, noise: SensorNoise) -> Task:
+    """``task`` read through ``noise`` (the command's --sigma-n and --sigma-p)."""
+    return task if noise == task.noise else dataclasses.replace(task, noise=noise)
+
+
 def _cmd_crm(args: argparse.Namespace) -> int:
     task, config, crm, noise, rng = _scene(args)
     assert crm is not None
-    if isinstance(task, SpatialTask):
-        return _crm_spatial(args, task, config, crm, noise, rng)
-    start_err = task.hand.feasible(task.obj, config)
+    start_err = task.feasible(config)
     if start_err is not Error.NONE:
         raise CrmgraspError(f"the start configuration is infeasible ({start_err.name.lower()} error)")
+    if task.model.kind != "planar":
+        return _crm_spatial(args, task, config, crm, noise, rng)
     out = task.hand.execute(task.obj, config, crm, noise=noise, rng=rng)
     obs = observe(noise.sense(out.config, rng))
     index = task.discretizer.index(obs, out.error)
@@ -80,14 +89,12 @@ def _cmd_crm(args: argparse.Namespace) -> int:
 
 
 def _crm_spatial(
-    args: argparse.Namespace, task: SpatialTask, config: Any, crm: Any, noise: SensorNoise, rng: np.random.Generator
+    args: argparse.Namespace, task: Task, config: Any, crm: Any, noise: SensorNoise, rng: np.random.Generator
 ) -> int:
     """``crmgrasp crm`` on a spatial task: the same report with 3-D contacts."""
-    start_err = feasible3d(task.solid, task.hand3d, config, task.table)
-    if start_err is not Error.NONE:
-        raise CrmgraspError(f"the start configuration is infeasible ({start_err.name.lower()} error)")
-    out: Any = task.execute(config, crm, sense3d(config, noise.sigma_n, noise.sigma_p, rng, task.hand3d))
-    obs = task.observe(sense3d(out.config, noise.sigma_n, noise.sigma_p, rng, task.hand3d))
+    t = _sensing(task, noise)
+    out: Any = t.execute(config, crm, t.read(config, rng))
+    obs = t.observe(t.read(out.config, rng))
     index = task.discretizer.index(obs, out.error)
     contacts = {lab: {"x": list(c.x), "n": list(c.n)} for lab, c in zip("ab", out.config, strict=True)}
     result = {
@@ -121,11 +128,8 @@ def _cmd_show(args: argparse.Namespace) -> int:
         raise CrmgraspError(f"--out must end in .png, .pdf or .svg, got {args.out.name!r}")
     check_output(args.out, "--out")
     task, config, crm, noise, rng = _scene(args)
-    if isinstance(task, SpatialTask):
-        sensed = sense3d(config, noise.sigma_n, noise.sigma_p, rng, task.hand3d)
-        outcome = task.execute(config, crm, sensed) if crm else None
-    else:
-        outcome = task.hand.execute(task.obj, config, crm, noise=noise, rng=rng) if crm else None
+    t = _sensing(task, noise)
+    outcome = t.execute(config, crm, t.read(config, rng)) if crm else None
     title = f"{task.name}" + (f": CRM {crm} -> {outcome.error.name.lower()}" if outcome else "")
     save_figure(scene_figure(task.obj, task.hand, config, outcome, title), args.out, dpi=120)
     print(f"wrote {args.out.resolve()}")
@@ -151,23 +155,16 @@ def _show_mujoco(args: argparse.Namespace) -> int:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from crmgrasp.agents.policy import load_policy
+    from crmgrasp.agents.loading import load_policy
     from crmgrasp.hardware.runner import KinematicHand, PolicyRunner
 
     check_output(args.log, "--log")
     policy = load_policy(args.policy)
     task = policy.task
-    spatial = isinstance(task, SpatialTask)
-    if spatial:  # the family's nominal object
+    if task.family is not None:  # the family's nominal object
         task = task.with_object(task.obj)
-        start = task.contacts_toward(args.a, args.b)
-        infeasible = feasible3d(task.obj, task.hand, start, task.table) is not Error.NONE
-    elif len(args.a) != 2 or len(args.b) != 2:
-        raise CrmgraspError(f"--a and --b take X,Y on the planar task {task.name!r}")
-    else:
-        start = task.hand.contact(task.obj, args.a, args.b)
-        infeasible = task.hand.feasible(task.obj, start) is not Error.NONE
-    if infeasible:
+    start = _place(task, args)
+    if task.feasible(start) is not Error.NONE:
         raise CrmgraspError("the start configuration is infeasible")
     rng = np.random.default_rng(args.seed)
     if args.backend == "mujoco":

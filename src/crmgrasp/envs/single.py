@@ -14,7 +14,7 @@ from gymnasium import spaces
 
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.kernels import Kernel, kernel_for
-from crmgrasp.kernels.family import FamilyKernel
+from crmgrasp.model.contact_model import ContactModel
 from crmgrasp.model.contacts import Config
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import KOrderEncoder
@@ -28,17 +28,15 @@ _empty = np.empty
 _FIRST_BLOCK, _MAX_BLOCK = 16, 1024
 
 
-def observation_space(bound: float) -> spaces.Dict:
-    """One environment's observation space: ``rho`` in ``[0, 4]``, the moments in
-    ``[-bound, bound]`` (twice the aperture, metres), the error flag."""
-    return spaces.Dict(
-        {
-            "rho": spaces.Box(0.0, 4.0, shape=(1,), dtype=np.float64),
-            "m_a": spaces.Box(-bound, bound, shape=(1,), dtype=np.float64),
-            "m_b": spaces.Box(-bound, bound, shape=(1,), dtype=np.float64),
-            "error": spaces.Discrete(len(Error)),
-        }
-    )
+def observation_space(model: ContactModel) -> spaces.Dict:
+    """One environment's observation space: each of the contact model's observations in
+    its bounds (``rho`` in ``[0, 4]``, the moments within twice the aperture, metres), and
+    the error flag."""
+    boxes: dict[str, spaces.Space[Any]] = {
+        name: spaces.Box(low, high, shape=(1,), dtype=np.float64)
+        for name, (low, high) in model.observation_bounds().items()
+    }
+    return spaces.Dict({**boxes, "error": spaces.Discrete(len(Error))})
 
 
 class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
@@ -101,7 +99,9 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         self.kernel: Kernel = kernel_for(self.task, backend)
         self.action_space = spaces.Discrete(len(self.task.actions))
         self._n_actions = len(self.task.actions)
-        self.observation_space = observation_space(self.kernel.bound)
+        self.observation_space = observation_space(self.task.model)
+        bounds = self.task.model.observation_bounds()
+        self._clip = [(name, *bounds[name]) for name in self.task.model.observation_names]
         self._state: SimState | None = None
         self._last: tuple[SimState, int] | None = None
         self._starts: list[tuple[float, ...]] = []
@@ -110,17 +110,14 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
     def _emit(self, res: OneStep) -> tuple[dict[str, Any], dict[str, Any]]:
         """The observation (clipped into the space) and ``info`` of a kernel's result."""
         self._state = res.state
-        b = self.kernel.bound
-        rho, m_a, m_b = res.rho, res.m_a, res.m_b
-        if not (0.0 <= rho <= 4.0):
-            rho = 0.0 if rho < 0.0 else 4.0
-        if not (-b <= m_a <= b):
-            m_a = -b if m_a < -b else b
-        if not (-b <= m_b <= b):
-            m_b = -b if m_b < -b else b
-        r, a, c = _empty(1), _empty(1), _empty(1)  # cheaper than np.array([x])
-        r[0], a[0], c[0] = rho, m_a, m_b
-        obs = {"rho": r, "m_a": a, "m_b": c, "error": int(res.error)}
+        obs: dict[str, Any] = {}
+        for (name, low, high), v in zip(self._clip, res.observation):
+            if not (low <= v <= high):
+                v = low if v < low else high
+            box = _empty(1)  # cheaper than np.array([v])
+            box[0] = v
+            obs[name] = box
+        obs["error"] = int(res.error)
         info = {
             "obs_index": res.obs_index,
             "config": res.state.config,
@@ -168,10 +165,10 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
     @property
     def scene_task(self) -> Task:
         """The task on this episode's object (the task itself without a family)."""
-        return self.kernel.instance if isinstance(self.kernel, FamilyKernel) else self.task
+        return self.kernel.instance
 
     def _use_world(self, world: Any) -> Config:
-        if not isinstance(self.kernel, FamilyKernel):
+        if self.task.family is None:
             raise CrmgraspError("options['world'] needs a family task; use options['config']")
         if not isinstance(world, World) or not isinstance(world.task, Task) or world.task.family is not None:
             raise CrmgraspError(f"options['world'] must be a World(task on one object, config), got {world!r}")

@@ -5,7 +5,8 @@ by the task's kernel (:meth:`crmgrasp.kernels.Kernel.step_batch`).
 vectorization_mode="vector_entry_point")`` builds it. Observations are the single
 environment's ``Dict`` batched (``rho``, ``m_a``, ``m_b`` of shape ``(N, 1)``,
 ``error`` of shape ``(N,)``); ``info`` holds arrays ``obs_index``,
-``min_friction``, ``steps`` and ``config`` (``(N, 8)``).
+``min_friction``, ``steps`` and ``config`` (``(N, W)``, the rows of the task's contact
+model: ``W = 8`` in the plane, 12 in space).
 
 Autoreset is ``NEXT_STEP`` (Gymnasium's default): the step after an episode ends
 resets that sub-environment, ignores its action and returns the new start's
@@ -64,14 +65,15 @@ class CRMGraspVectorEnv(VectorEnv):
         self.render_mode = None
         self.single_action_space = spaces.Discrete(len(self.task.actions))
         self.action_space = batch_space(self.single_action_space, num_envs)
-        self.single_observation_space = observation_space(self.kernel.bound)
+        self.single_observation_space = observation_space(self.task.model)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
-        self._cfg = np.zeros((num_envs, 8))
+        self._width = self.task.model.row_width
+        self._cfg = np.zeros((num_envs, self._width))
         self._sensed = self._cfg
         self._steps = np.zeros(num_envs, dtype=np.int64)
         self._prev_done = np.zeros(num_envs, dtype=bool)
         self._ready = False
-        self._buffer = np.empty((0, 8))
+        self._buffer = np.empty((0, self._width))
         self._next = 0
 
     def _starts(self, n: int) -> np.ndarray:
@@ -109,16 +111,16 @@ class CRMGraspVectorEnv(VectorEnv):
         if isinstance(seed, list):
             raise CrmgraspError("the vector environment takes one integer seed for its generator")
         super().reset(seed=seed)
-        self._buffer, self._next = np.empty((0, 8)), 0
+        self._buffer, self._next = np.empty((0, self._width)), 0
         n = self.num_envs
         self._cfg = np.array(self._starts(n))
-        self._sensed = self.task.noise.sense_batch(self._cfg, self.np_random)
+        self._sensed = self.kernel.read_rows(self._cfg, self.np_random)
         self._steps[:] = 0
         self._prev_done[:] = False
         self._ready = True
         err = np.zeros(n, dtype=np.int64)
-        rho, m_a, m_b, index, mu = self.kernel.observe(self._cfg, self._sensed, err)
-        return self.kernel.clip(rho, m_a, m_b, err), self._info(index, mu)
+        *values, index, mu = self.kernel.observe(self._cfg, self._sensed, err)
+        return self.kernel.clip(values, err), self._info(index, mu)
 
     def step(self, actions: Any) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """One CRM in every sub-environment (or a reset where the last step ended it)."""
@@ -153,12 +155,12 @@ class FamilyVectorEnv(CRMGraspVectorEnv):
 
     def _collect(self, results: list[Any]) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         self._states = [r.state for r in results]
-        self._cfg = np.array([(*r.state.config.a, *r.state.config.b) for r in results])
-        rho, m_a, m_b = (np.array([getattr(r, k) for r in results]) for k in ("rho", "m_a", "m_b"))
+        self._cfg = self.task.model.rows_of([r.state.config for r in results])
+        values = np.array([r.observation for r in results]).T
         err = np.array([int(r.error) for r in results], dtype=np.int64)
         index = np.array([r.obs_index for r in results], dtype=np.int64)
         mu = np.array([r.min_friction for r in results])
-        return self.kernel.clip(rho, m_a, m_b, err), self._info(index, mu)
+        return self.kernel.clip(values, err), self._info(index, mu)
 
     def _begin(self, j: int) -> Any:
         kernel = self._rows[j]

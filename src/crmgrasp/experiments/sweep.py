@@ -188,7 +188,7 @@ class _Unit:
     backend: str
 
     def __call__(self) -> dict[str, Any]:
-        from crmgrasp.tasks.presets import resolve_reading
+        from crmgrasp.tasks.files import resolve_reading
 
         c = self.cell
         try:

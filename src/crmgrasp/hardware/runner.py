@@ -29,50 +29,20 @@ from crmgrasp.model.hand import CRM, Error
 from crmgrasp.model.sensing import SensorNoise
 from crmgrasp.model.spatial import CRM3D, Config3D
 from crmgrasp.tasks import Task
-from crmgrasp.tasks.spatial import SpatialTask
 
 __all__ = ["HandInterface", "KinematicHand", "PolicyRunner", "RunResult", "log_columns"]
 
-LOG_COLUMNS = [
-    "step",
-    "ax",
-    "ay",
-    "anx",
-    "any",
-    "bx",
-    "by",
-    "bnx",
-    "bny",
-    "rho",
-    "m_a",
-    "m_b",
-    "obs_index",
-    "observation",
-    "action",
-    "crm",
-    "error",
-    "raw",
-]
-"""Columns of a planar run's step log."""
-
-LOG_COLUMNS_3D = [
-    "step",
-    *(f"{label}{q}" for label in "ab" for q in ("x", "y", "z", "nx", "ny", "nz")),
-    *LOG_COLUMNS[9:],
-]
-"""Columns of a spatial run's step log: each contact's position and inward normal in 3-D."""
+RUN_COLUMNS = ["obs_index", "observation", "action", "crm", "error", "raw"]
+"""The columns of a step log after the contacts and the observation: the observation's bin
+and label, the action taken, its CRM and error flag, and the raw sensor values."""
 
 
 def log_columns(task: Task) -> list[str]:
-    """The step-log columns of a run on ``task`` (planar or spatial)."""
-    return LOG_COLUMNS_3D if isinstance(task, SpatialTask) else LOG_COLUMNS
-
-
-def _numbers(reading: Config | Config3D) -> list[float]:
-    """A reading's contacts as one flat list (planar ``x, y, nx, ny``; spatial ``x, n``)."""
-    if isinstance(reading, Config3D):
-        return [v for c in reading for part in c for v in part]
-    return [v for c in reading for v in c]
+    """The step-log columns of a run on ``task``: ``step``, the reading's contacts in the
+    contact model's row order (``ax, ay, anx, any, ...`` in the plane; ``ax, ay, az, anx,
+    any, anz, ...`` in space), the model's observation (``rho, m_a, m_b``), then
+    :data:`RUN_COLUMNS`."""
+    return ["step", *task.model.columns, *task.model.observation_names, *RUN_COLUMNS]
 
 
 @runtime_checkable
@@ -158,7 +128,7 @@ class PolicyRunner:
             index = t.discretizer.index(obs, error)
             seen.append((obs.rho, obs.m_a, obs.m_b, int(error)))
             raw: dict[str, Any] = getattr(hand, "raw_reading", dict)()
-            row = [step, *_numbers(reading), *obs, index, t.discretizer.label(index)]
+            row = [step, *t.model.numbers(reading), *obs, index, t.discretizer.label(index)]
             if t.is_success(reading):
                 rows.append([*row, "", "", "", dumps_json(raw, indent=None)])
                 result = RunResult(step, True, "grasp sensed")

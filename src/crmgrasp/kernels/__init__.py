@@ -29,6 +29,7 @@ when first chosen, not when :mod:`crmgrasp` is imported.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Literal
 
 import numpy as np
@@ -37,14 +38,24 @@ from numpy.typing import ArrayLike, NDArray
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.kernels.base import BatchStep, Kernel
 from crmgrasp.kernels.reference import ReferenceKernel
-from crmgrasp.model.contacts import configs_to_array
+from crmgrasp.model.contact_model import ContactModel
 from crmgrasp.model.geometry import Polygon, Shape
 from crmgrasp.model.hand import CRM, Hand
 from crmgrasp.model.mesh import TriangleMesh
 from crmgrasp.sim import OneStep
-from crmgrasp.tasks import SpatialTask, Task
+from crmgrasp.tasks import Task
 
-__all__ = ["BACKENDS", "Backend", "kernel_for", "execute_batch", "Kernel", "OneStep", "BatchStep", "ReferenceKernel"]
+__all__ = [
+    "BACKENDS",
+    "Backend",
+    "PATHS",
+    "kernel_for",
+    "execute_batch",
+    "Kernel",
+    "OneStep",
+    "BatchStep",
+    "ReferenceKernel",
+]
 
 Backend = Literal["auto", "numba", "reference"]
 BACKENDS: tuple[str, ...] = ("auto", "numba", "reference")
@@ -54,23 +65,25 @@ BACKENDS: tuple[str, ...] = ("auto", "numba", "reference")
 
 
 def kernel_for(task: Task, backend: str = "auto") -> Kernel:
-    """The kernel that steps ``task`` on ``backend`` (see the module docstring)."""
+    """The kernel that steps ``task`` on ``backend`` (see the module docstring): a family's
+    kernel over per-object kernels, else the path :data:`PATHS` lists for the task's
+    contact model (``task.model.kind``)."""
     if backend not in BACKENDS:
         raise CrmgraspError(f"unknown backend {backend!r}; choose one of {', '.join(BACKENDS)}")
     if task.family is not None:
         from crmgrasp.kernels.family import FamilyKernel
 
         return FamilyKernel(task, lambda instance: kernel_for(instance, backend))
-    if isinstance(task, SpatialTask):
-        from crmgrasp.kernels.spatial import FusedSpatialKernel, SpatialKernel
+    try:
+        choose = PATHS[task.model.kind]
+    except KeyError:
+        raise CrmgraspError(f"no kernel for the contact model {task.model.kind!r}") from None
+    return choose(task, backend)
 
-        if backend == "numba" and task.noise.active:
-            raise CrmgraspError("the compiled spatial kernel is noise-free; use backend 'auto' or 'reference'")
-        mesh = isinstance(task.obj, TriangleMesh)
-        if backend == "numba" and mesh:
-            raise CrmgraspError("the compiled spatial kernel takes polyhedra and cylinders; a mesh runs on 'reference'")
-        slow = backend == "reference" or task.noise.active or mesh
-        return SpatialKernel(task) if slow else FusedSpatialKernel(task)
+
+def _planar(task: Task, backend: str) -> Kernel:
+    """Planar two-contact model: compiled on a polygon (fused when noise-free), else the
+    reference rules."""
     compiled = isinstance(task.obj, Polygon)
     if backend == "reference" or (backend == "auto" and not compiled):
         return ReferenceKernel(task)
@@ -81,13 +94,33 @@ def kernel_for(task: Task, backend: str = "auto") -> Kernel:
     return PolygonKernel(task) if task.noise.active else FusedPolygonKernel(task)
 
 
-def _rows(configs: ArrayLike, name: str) -> NDArray[np.float64]:
+def _spatial(task: Task, backend: str) -> Kernel:
+    """Spatial two-contact model: compiled and fused on a polyhedron or a cylinder without
+    noise, else the reference rules (meshes, noise)."""
+    from crmgrasp.kernels.spatial import FusedSpatialKernel, SpatialKernel
+
+    if backend == "numba" and task.noise.active:
+        raise CrmgraspError("the compiled spatial kernel is noise-free; use backend 'auto' or 'reference'")
+    mesh = isinstance(task.obj, TriangleMesh)
+    if backend == "numba" and mesh:
+        raise CrmgraspError("the compiled spatial kernel takes polyhedra and cylinders; a mesh runs on 'reference'")
+    slow = backend == "reference" or task.noise.active or mesh
+    return SpatialKernel(task) if slow else FusedSpatialKernel(task)
+
+
+PATHS: dict[str, Callable[[Task, str], Kernel]] = {"planar": _planar, "spatial": _spatial}
+"""Contact model kind -> the function that picks its kernel from the backend, the object
+and the noise. A new contact model adds one row."""
+
+
+def _rows(configs: ArrayLike, name: str, model: ContactModel) -> NDArray[np.float64]:
     if isinstance(configs, (list, tuple)) and configs and hasattr(configs[0], "a"):
-        arr = configs_to_array(list(configs))  # type: ignore[arg-type]
+        arr = model.rows_of(list(configs))
     else:
         arr = np.asarray(configs, dtype=np.float64)
-    if arr.ndim != 2 or arr.shape[1] != 8:
-        raise CrmgraspError(f"{name} must have shape (N, 8), got {arr.shape}")
+    width = model.row_width
+    if arr.ndim != 2 or arr.shape[1] != width:
+        raise CrmgraspError(f"{name} must have shape (N, {width}), got {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise CrmgraspError(f"{name} must be finite")
     return arr
@@ -104,15 +137,17 @@ def execute_batch(
     *,
     backend: str = "auto",
 ) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
-    """Execute one CRM per row: new configurations ``(N, 8)`` and error codes ``(N,)``.
+    """Execute one CRM per row of a planar hand: new configurations ``(N, 8)`` and error
+    codes ``(N,)``.
 
     ``c`` and ``f`` are contact indices (0 = a, 1 = b) and ``r`` offsets in metres,
     per row or broadcast; ``sensed`` (same layout as ``configs``) supplies the goal
     lines' frames and defaults to ``configs``. Rows whose CRM fails keep their
     configuration (:func:`crmgrasp.model.hand.execute_crm`).
     """
-    cfg = _rows(configs, "configs")
-    sen = cfg if sensed is None else _rows(sensed, "sensed configs")
+    task = Task(name="execute_batch", obj=obj, hand=hand, actions=(CRM("a", "b", 0.0),))
+    cfg = _rows(configs, "configs", task.model)
+    sen = cfg if sensed is None else _rows(sensed, "sensed configs", task.model)
     if sen.shape != cfg.shape:
         raise CrmgraspError(f"sensed configs must have shape {cfg.shape}, got {sen.shape}")
     n = len(cfg)
@@ -123,5 +158,4 @@ def execute_batch(
         raise CrmgraspError("contact indices c and f must be 0 (a) or 1 (b)")
     if not np.all(np.isfinite(rr)) or np.any(np.abs(rr) > hand.r_max):  # type: ignore[operator]
         raise CrmgraspError(f"CRM offsets r must be finite and within r_max = {hand.r_max:g}")
-    task = Task(name="execute_batch", obj=obj, hand=hand, actions=(CRM("a", "b", 0.0),))
     return kernel_for(task, backend).execute_crms(cfg, sen, ci == 1, fi == 1, rr)

@@ -1,8 +1,10 @@
 """The kernel interface: one task's dynamics over many configurations at once.
 
 A kernel evaluates the model's rules (CRM transition, observation, bins, min
-friction, start acceptance) on ``(N, 8)`` rows ``[ax, ay, anx, any, bx, by, bnx,
-bny]``, the package's one batched configuration layout. The composite steps
+friction, start acceptance) on rows of the task's contact model
+(:attr:`crmgrasp.tasks.Task.model`: ``(N, 8)`` rows ``[ax, ay, anx, any, bx, by, bnx,
+bny]`` in the plane, ``(N, 12)`` in space); the row width, the CRMs' parameters and the
+observation's names and bounds all come from the model. The composite steps
 (:meth:`Kernel.begin`, :meth:`Kernel.step_one`, :meth:`Kernel.step_batch`) are
 written here once from those rules and :mod:`crmgrasp.sim`; a compiled kernel may
 override a composite with a fused version that the tests hold equal to this one
@@ -18,7 +20,7 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from crmgrasp.model.contacts import config_from_row
+from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.hand import CRM
 from crmgrasp.sim import OneStep, SimState, begin_one, step_one
 from crmgrasp.tasks import StartFilter, Task
@@ -31,8 +33,8 @@ I64 = NDArray[np.int64]
 
 class BatchStep(NamedTuple):
     """A batch of environments after one step: true and sensed rows, the observation
-    (``rho``, ``m_a``, ``m_b`` as ``(N, 1)`` clipped into the observation space,
-    ``error`` as ``(N,)``), bin indices and min friction of the true rows."""
+    (each of the model's observation names as ``(N, 1)`` clipped into the observation
+    space, ``error`` as ``(N,)``), bin indices and min friction of the true rows."""
 
     config: F64
     sensed: F64
@@ -60,12 +62,19 @@ class Kernel(ABC):
 
     def __init__(self, task: Task) -> None:
         self.task = task
+        self.model = task.model
         self.acts = self.action_table(task)
-        self.bound = 2.0 * task.hand.aperture  # the observation space's moment bound, m
+        self.bounds = self.model.observation_bounds()  # the observation space: name -> (low, high)
         self.start_filter: StartFilter | None = None  # a compiled one, where the kernel has it
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.task.name!r})"
+
+    def rebind(self, instance: Task) -> Kernel:
+        """This kernel's path for ``instance``, the task on another object of the same kind
+        (one episode of a family): a new kernel of the same class. A compiled kernel may
+        share what does not depend on the object instead of computing it again."""
+        return type(self)(instance)
 
     @staticmethod
     def action_table(task: Task) -> F64:
@@ -73,14 +82,24 @@ class Kernel(ABC):
         array per CRM set (a family task builds a kernel per episode), not to be written to."""
         return _action_table(tuple((a.c, a.f, repr(a.r)) for a in task.actions), task.actions)
 
-    @staticmethod
-    def config_of(row: Any) -> Any:
-        """The configuration of one row (:func:`~crmgrasp.model.contacts.config_from_row`)."""
-        return config_from_row(row)
+    @property
+    def instance(self) -> Task:
+        """The task on the current episode's object: the task itself (a family's kernel
+        says which object it steps now)."""
+        return self.task
+
+    def use(self, instance: Task) -> None:
+        """Step ``instance``, a task on one object drawn from this task's family: only a
+        family task's kernel can (a one-line error here)."""
+        raise CrmgraspError(f"task {self.task.name!r} has one object: a World start needs a family task")
+
+    def config_of(self, row: Any) -> Any:
+        """The configuration of one row (the model's ``config_of``)."""
+        return self.model.config_of(row)
 
     def read_rows(self, rows: F64, rng: np.random.Generator) -> F64:
-        """One sensed reading per row (:meth:`~crmgrasp.model.sensing.SensorNoise.sense_batch`)."""
-        return self.task.noise.sense_batch(rows, rng)
+        """One sensed reading per row (the model's ``read_rows``)."""
+        return self.model.read_rows(rows, rng)
 
     # ------------------------------------------------------------ the rules
     @abstractmethod
@@ -97,9 +116,11 @@ class Kernel(ABC):
 
     # ------------------------------------------------------------ composites
     def execute(self, cfg: F64, sen: F64, actions: I64) -> tuple[F64, NDArray[np.int8]]:
-        """:meth:`execute_crms` of the task's actions ``actions`` (indices)."""
+        """:meth:`execute_crms` of the task's actions ``actions`` (indices; the offsets are
+        ``(N,)`` for a scalar offset, ``(N, offset_dim)`` otherwise)."""
         a = self.acts[actions]
-        return self.execute_crms(cfg, sen, a[:, 0] != 0.0, a[:, 1] != 0.0, np.ascontiguousarray(a[:, 2]))
+        r = np.ascontiguousarray(a[:, 2]) if self.model.offset_dim == 1 else a[:, 2:]
+        return self.execute_crms(cfg, sen, a[:, 0] != 0.0, a[:, 1] != 0.0, r)
 
     def sample_start(self, rng: np.random.Generator) -> Any:
         """One start (:meth:`crmgrasp.tasks.Task.sample_start`, with :attr:`start_filter`):
@@ -107,7 +128,7 @@ class Kernel(ABC):
         return self.task.sample_start(rng, self.start_filter)
 
     def sample_starts(self, rng: np.random.Generator, n: int) -> F64:
-        """``n`` starts as ``(n, 8)`` rows (:meth:`crmgrasp.tasks.Task.sample_starts`, with
+        """``n`` starts as rows (:meth:`crmgrasp.tasks.Task.sample_starts`, with
         :attr:`start_filter`)."""
         return self.task.sample_starts(rng, n, self.start_filter)
 
@@ -132,17 +153,16 @@ class Kernel(ABC):
             new[rows] = starts
             err[rows] = 0
         sensed = self.read_rows(new, rng)
-        rho, m_a, m_b, index, mu = self.observe(new, sensed, err)
-        return BatchStep(new, sensed, self.clip(rho, m_a, m_b, err), index, mu)
+        *values, index, mu = self.observe(new, sensed, err)
+        return BatchStep(new, sensed, self.clip(values, err), index, mu)
 
-    def clip(self, rho: F64, m_a: F64, m_b: F64, err: np.ndarray) -> dict[str, np.ndarray]:
-        """The observation dict, clipped into the observation space (``rho <= 4``,
-        ``|m| <= 2 A``; ``rho = |n_a + n_b|^2 >= 0`` needs no lower clip)."""
-        b = self.bound
+    def clip(self, values: Any, err: np.ndarray) -> dict[str, np.ndarray]:
+        """The observation dict: each of the model's observations (``values``, in the
+        model's order) clipped into its bounds as ``(N, 1)``, and the error codes."""
+        out: dict[str, np.ndarray] = {}
         with np.errstate(invalid="ignore"):
-            return {
-                "rho": np.minimum(rho, 4.0)[:, None],
-                "m_a": np.minimum(np.maximum(m_a, -b), b)[:, None],
-                "m_b": np.minimum(np.maximum(m_b, -b), b)[:, None],
-                "error": np.asarray(err, dtype=np.int64),
-            }
+            for name, v in zip(self.model.observation_names, values, strict=True):
+                low, high = self.bounds[name]
+                out[name] = np.minimum(np.maximum(v, low), high)[:, None]
+        out["error"] = np.asarray(err, dtype=np.int64)
+        return out

@@ -2,9 +2,10 @@
 
 A family task draws its object per episode (:meth:`crmgrasp.tasks.Task.instance`), so
 the rows of a batch would each need their own object. :class:`FamilyKernel` therefore
-steps one episode at a time: :meth:`sample_start` draws the object and builds its
-kernel through :func:`crmgrasp.kernels.kernel_for` (compiled for polygons, the
-reference for discs), and every step goes to that kernel. Batched steps over rows
+steps one episode at a time: :meth:`sample_start` draws the object and gives it a
+kernel, the one :func:`crmgrasp.kernels.kernel_for` picks for the first object of that
+type (compiled for polygons, the reference for discs) rebound to the new object
+(:meth:`~crmgrasp.kernels.base.Kernel.rebind`), and every step goes to that kernel. Batched steps over rows
 (:meth:`step_batch`, :meth:`sample_starts`) are refused with the reason.
 """
 
@@ -32,7 +33,19 @@ class FamilyKernel(Kernel):
 
     def __init__(self, task: Task, make: Callable[[Task], Kernel]) -> None:
         super().__init__(task)
-        self.stepper = FamilyStepper(task, make)  # type: ignore[arg-type]
+        self._make = make
+        self._templates: dict[type, Kernel] = {}
+        self.stepper = FamilyStepper(task, self._kernel)  # type: ignore[arg-type]
+
+    def _kernel(self, instance: Task) -> Kernel:
+        """The kernel of one episode's object: ``make(instance)`` for the first object of its
+        type, then that kernel rebound to each new object (:meth:`Kernel.rebind`: the same
+        path, as ``make`` chooses by the object's type, and the same results)."""
+        template = self._templates.get(type(instance.obj))
+        if template is None:
+            template = self._templates[type(instance.obj)] = self._make(instance)
+            return template
+        return template.rebind(instance)
 
     @property
     def current(self) -> Kernel:

@@ -14,7 +14,7 @@ __all__ = ["value_iteration"]
 
 def value_iteration(agent: Any, tol: float) -> int:
     """Solve ``agent``'s model in place (its ``q`` and ``q_greedy`` rows); returns the sweeps."""
-    from crmgrasp.kernels import _vi_jit
+    import crmgrasp.kernels._vi_jit as _vi_jit
 
     n = agent.n_actions
     states = list(agent.q)

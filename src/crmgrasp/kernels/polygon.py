@@ -8,13 +8,14 @@ own modules when a kernel is built, so the compiled functions
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+import crmgrasp.kernels._polygon_jit as jit
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.kernels import _polygon_jit as jit
 from crmgrasp.kernels.base import F64, I64, BatchStep, Kernel
 from crmgrasp.model import quality, shape
 from crmgrasp.model.contacts import Config, config_from_row
@@ -60,6 +61,24 @@ class PolygonKernel(Kernel):
         self.e = np.ascontiguousarray(task.obj.edge_array)
         self.p, self.q, self.th = params(task)
         self.start_filter = self._accept
+
+    def rebind(self, instance: Task) -> PolygonKernel:
+        """The kernel of ``instance`` (the same hand, CRMs, bins and goal on another
+        polygon): the parameters shared, the object's edges and convexity its own (what
+        :func:`params` would give, without recomputing the rest)."""
+        obj = instance.obj
+        assert isinstance(obj, Polygon)
+        new = copy.copy(self)
+        new.task = instance
+        new.e = np.ascontiguousarray(obj.edge_array)
+        new.q = self.q.copy()
+        new.q[jit.CONVEX] = obj.convex
+        new.start_filter = new._accept
+        new._fresh()
+        return new
+
+    def _fresh(self) -> None:
+        """Reset per-kernel buffers after a copy (none here)."""
 
     def execute_crms(
         self, cfg: F64, sen: F64, c_is_b: NDArray[np.bool_], f_is_b: NDArray[np.bool_], r: F64
@@ -116,6 +135,9 @@ class FusedPolygonKernel(PolygonKernel):
 
     def __init__(self, task: Task) -> None:
         super().__init__(task)
+        self._fresh()
+
+    def _fresh(self) -> None:
         # the configuration stepped from (columns 0-7) and the step's output (0-7: the new
         # configuration, 8-11: rho, m_a, m_b, min friction); swapped after a move
         self._v, self._out = np.empty((1, 12)), np.empty((1, 12))

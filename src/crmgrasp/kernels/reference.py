@@ -13,7 +13,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from crmgrasp.kernels.base import F64, I64, Kernel
-from crmgrasp.model.hand import CRM
 
 __all__ = ["ReferenceKernel"]
 
@@ -25,22 +24,19 @@ class ReferenceKernel(Kernel):
     :meth:`crmgrasp.model.sensing.Discretizer.index_of`, row by row."""
 
     name = "reference"
-    width = 8  # columns of a row
 
-    @staticmethod
-    def crm_of(c_is_b: bool, f_is_b: bool, r: Any) -> Any:
-        """The CRM of one row's ``(c is b, f is b, r)``."""
-        return CRM("ab"[c_is_b], "ab"[f_is_b], r)
+    def crm_of(self, c_is_b: bool, f_is_b: bool, r: Any) -> Any:
+        """The CRM of one row's ``(c is b, f is b, r)`` (the model's ``crm``)."""
+        return self.model.crm(int(c_is_b), int(f_is_b), r)
 
-    @staticmethod
-    def row_of(config: Any) -> list[float]:
-        """The row of a configuration."""
-        return [*config.a, *config.b]
+    def row_of(self, config: Any) -> list[float]:
+        """The row of a configuration (the model's ``row_of``)."""
+        return self.model.row_of(config)
 
     def execute_crms(
         self, cfg: F64, sen: F64, c_is_b: NDArray[np.bool_], f_is_b: NDArray[np.bool_], r: F64
     ) -> tuple[F64, NDArray[np.int8]]:
-        new = np.array(cfg, dtype=np.float64, copy=True).reshape(-1, self.width)
+        new = np.array(cfg, dtype=np.float64, copy=True).reshape(-1, self.model.row_width)
         n = len(new)
         err = np.zeros(n, dtype=np.int8)
         crms: dict[tuple[bool, bool, Any], Any] = {}

@@ -15,61 +15,30 @@ import numpy as np
 from numpy.typing import NDArray
 
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.kernels.base import F64, I64
+from crmgrasp.kernels.base import F64
 from crmgrasp.kernels.reference import ReferenceKernel
 from crmgrasp.model.hand import Error
 from crmgrasp.model.solids import Cylinder
-from crmgrasp.model.spatial import CRM3D, Config3D, Contact3D
+from crmgrasp.model.spatial import CRM3D, Config3D
 from crmgrasp.sim import OneStep, SimState, episode_end, step_reward
 from crmgrasp.tasks.spatial import SurfaceStarts
 
-__all__ = ["SpatialKernel", "FusedSpatialKernel", "spatial_params", "config3d_from_row"]
+__all__ = ["SpatialKernel", "FusedSpatialKernel", "spatial_params"]
 
 _ERRORS = tuple(Error)
 
 
-def config3d_from_row(row: Any) -> Config3D:
-    """The :class:`Config3D` of a 12-row."""
-    v = [float(x) for x in row]
-    return Config3D(Contact3D(tuple(v[0:3]), tuple(v[3:6])), Contact3D(tuple(v[6:9]), tuple(v[9:12])))  # type: ignore[arg-type]
-
-
-def _row(cfg: Config3D) -> list[float]:
-    return [*cfg.a.x, *cfg.a.n, *cfg.b.x, *cfg.b.n]
-
-
 class SpatialKernel(ReferenceKernel):
-    """A spatial task's rules over 12-rows (the reference kernel's loops, with spatial
-    rows, CRMs and readings)."""
+    """The reference kernel on a spatial task's 12-rows (the rows, CRMs and readings come
+    from the task's :class:`~crmgrasp.model.spatial_model.SpatialModel`)."""
 
     name = "spatial"
-    width = 12
-
-    @staticmethod
-    def crm_of(c_is_b: bool, f_is_b: bool, r: Any) -> Any:
-        return CRM3D("ab"[c_is_b], "ab"[f_is_b], (float(r[0]), float(r[1])))
-
-    @staticmethod
-    def row_of(config: Any) -> list[float]:
-        return _row(config)
-
-    @staticmethod
-    def config_of(row: Any) -> Any:
-        return config3d_from_row(row)
-
-    def read_rows(self, rows: F64, rng: np.random.Generator) -> F64:
-        return np.array([_row(self.task.read(config3d_from_row(r), rng)) for r in rows.tolist()]).reshape(-1, 12)
-
-    def execute(self, cfg: F64, sen: F64, actions: I64) -> tuple[F64, NDArray[np.int8]]:
-        """:meth:`execute_crms` of the task's actions (offsets ``r_1, r_2``: ``(N, 2)``)."""
-        a = self.acts[actions]
-        return self.execute_crms(cfg, sen, a[:, 0] != 0.0, a[:, 1] != 0.0, a[:, 2:4])
 
 
 def spatial_params(task: Any) -> tuple[F64, NDArray[np.int64], F64, F64, F64]:
     """``(p, q, th, planes, cyl)`` for :mod:`crmgrasp.kernels._spatial_jit`: every
     parameter and tolerance read from the model's modules and the task now."""
-    from crmgrasp.kernels import _spatial_jit as jit
+    import crmgrasp.kernels._spatial_jit as jit
     from crmgrasp.model import quality, solids, spatial
 
     hand, solid, d, starts = task.hand3d, task.solid, task.discretizer, task.starts
@@ -105,7 +74,7 @@ class FusedSpatialKernel(SpatialKernel):
 
     def __init__(self, task: Any) -> None:
         super().__init__(task)
-        from crmgrasp.kernels import _spatial_jit
+        import crmgrasp.kernels._spatial_jit as _spatial_jit
 
         self._jit = _spatial_jit
         self.p, self.q, self.th, self.planes, self.cyl = spatial_params(task)
@@ -116,7 +85,7 @@ class FusedSpatialKernel(SpatialKernel):
 
     def _load(self, config: Config3D) -> None:
         if config is not self._v_of:
-            self._v[:12] = _row(config)
+            self._v[:12] = self.model.row_of(config)
             self._v_of = config
 
     def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
@@ -137,7 +106,7 @@ class FusedSpatialKernel(SpatialKernel):
         )
         o = self._out.tolist()
         if not code:
-            config = config3d_from_row(o)  # type: ignore[assignment]
+            config = self.model.config_of(o)  # type: ignore[assignment]
             self._v, self._out = self._out, self._v  # the output is the next step's input
             self._v_of = config  # type: ignore[assignment]
         steps = state.steps + 1
@@ -160,4 +129,4 @@ class FusedSpatialKernel(SpatialKernel):
         """:class:`~crmgrasp.tasks.spatial.SurfaceStarts`' decision on one try, compiled."""
         out = np.empty(12)
         ok = self._jit.accept_start(np.ascontiguousarray(d), self.planes, self.cyl, self.p, self.q, out)
-        return config3d_from_row(out.tolist()) if ok else None
+        return self.model.config_of(out.tolist()) if ok else None

@@ -103,7 +103,7 @@ def place(shape: Shape, angle: float, dx: float, dy: float) -> Shape:
         x, y = shape.center
         return Disc(shape.radius, (c * x - s * y + dx, s * x + c * y + dy))
     if isinstance(shape, Polygon):
-        return Polygon([(c * x - s * y + dx, s * x + c * y + dy) for x, y in shape.vertices])
+        return shape.moved(angle, dx, dy)
     raise CrmgraspError(f"cannot place a {type(shape).__name__}; families draw polygons and discs")
 
 

@@ -60,7 +60,7 @@ def Rectangle(length: float, width: float) -> Polygon:  # noqa: N802 - reads as 
     """
     hx = positive(length, "rectangle length") / 2.0
     hy = positive(width, "rectangle width") / 2.0
-    return Polygon([(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)])
+    return Polygon([(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)], _simple=True)
 
 
 def regular_polygon(
@@ -82,5 +82,6 @@ def regular_polygon(
         [
             (cx + r * math.cos(rot + 2 * math.pi * k / n), cy + r * math.sin(rot + 2 * math.pi * k / n))
             for k in range(int(n))
-        ]
+        ],
+        _simple=True,
     )

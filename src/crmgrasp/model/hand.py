@@ -36,7 +36,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from enum import IntEnum
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -45,8 +45,17 @@ from crmgrasp._validation import CrmgraspError, as_point, finite, non_negative, 
 from crmgrasp.model.contacts import Config, Contact, label_index
 from crmgrasp.model.geometry import Shape
 
-if TYPE_CHECKING:
-    from crmgrasp.model.sensing import SensorNoise
+
+class Sensor(Protocol):
+    """What :meth:`Hand.execute` reads the goal line's frame through: a sensor model such as
+    :class:`~crmgrasp.model.sensing.SensorNoise` (written as a protocol so that the hand,
+    whose error flags the sensing module bins, does not import that module)."""
+
+    @property
+    def active(self) -> bool: ...
+
+    def sense(self, config: Config, rng: np.random.Generator) -> Config: ...
+
 
 __all__ = [
     "Hand",
@@ -236,7 +245,7 @@ class Hand:
         config: Config,
         crm: CRM,
         *,
-        noise: SensorNoise | None = None,
+        noise: Sensor | None = None,
         rng: np.random.Generator | None = None,
         sensed: Config | None = None,
     ) -> Outcome:

@@ -63,14 +63,14 @@ def _closest_on_triangle(p: F64, a: F64, b: F64, c: F64) -> F64:
     return a + ab * (vb * denom) + ac * (vc * denom)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True)
 class TriangleMesh:
     """A closed, manifold, outward-oriented triangle mesh (metres)."""
 
     vertices: tuple[tuple[float, float, float], ...]
     faces: tuple[tuple[int, int, int], ...]
-    _v: F64 = field(init=False, repr=False)
-    _n: F64 = field(init=False, repr=False)
+    _v: F64 = field(init=False, repr=False, compare=False)
+    _n: F64 = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         v = np.asarray(self.vertices, dtype=np.float64)

@@ -68,27 +68,46 @@ class Polygon:
 
     vertices: tuple[tuple[float, float], ...]
 
-    def __init__(self, vertices: ArrayLike) -> None:
+    def __init__(self, vertices: ArrayLike, _simple: bool = False) -> None:
+        """``_simple=True`` (for the package's own constructions: rectangles, regular
+        polygons, rigid motions of a checked polygon) skips the self-intersection test,
+        the only check whose cost grows with the square of the vertices; every other
+        check still runs."""
         try:
             raw: list[Any] = list(vertices)  # type: ignore[call-overload, arg-type]
         except TypeError:
             raise CrmgraspError(f"polygon vertices must be a sequence of (x, y), got {vertices!r}") from None
         if len(raw) < 3:
             raise CrmgraspError(f"a polygon needs at least 3 vertices, got {len(raw)}")
-        pts = [as_point(v, f"vertex {i}") for i, v in enumerate(raw)]
-        for i, (x, y) in enumerate(pts):
-            if abs(x) > MAX_COORD or abs(y) > MAX_COORD:
-                raise CrmgraspError(f"vertex {i} ({x:g}, {y:g}) is beyond +-{MAX_COORD:g} m")
-        area2 = sum(
-            pts[i][0] * pts[(i + 1) % len(pts)][1] - pts[(i + 1) % len(pts)][0] * pts[i][1] for i in range(len(pts))
-        )
+        if _simple:  # the package's own (x, y) pairs: one bound check for all
+            pts = [(float(x), float(y)) for x, y in raw]
+            if not max(max(abs(x), abs(y)) for x, y in pts) <= MAX_COORD:  # a NaN fails too
+                raise CrmgraspError(f"a vertex is not finite or beyond +-{MAX_COORD:g} m")
+        else:
+            pts = [as_point(v, f"vertex {i}") for i, v in enumerate(raw)]
+            for i, (x, y) in enumerate(pts):
+                if abs(x) > MAX_COORD or abs(y) > MAX_COORD:
+                    raise CrmgraspError(f"vertex {i} ({x:g}, {y:g}) is beyond +-{MAX_COORD:g} m")
+        area2 = sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in zip(pts, pts[1:] + pts[:1]))
         scale = max(max(abs(x), abs(y)) for x, y in pts) or 1.0
         if abs(area2) <= 1e-12 * scale * scale:
             raise CrmgraspError("polygon has zero area")
         if area2 < 0:
             pts.reverse()
-        _check_simple(pts)
+        if not _simple:
+            _check_simple(pts)
         object.__setattr__(self, "vertices", tuple(pts))
+
+    def moved(self, angle: float, dx: float, dy: float) -> Polygon:
+        """This polygon rotated by ``angle`` (radians, counter-clockwise) about the origin,
+        then translated by ``(dx, dy)`` (metres). A rigid motion keeps a simple polygon
+        simple, so only the cheap checks run again.
+
+        >>> Polygon([(0, 0), (1, 0), (0, 1)]).moved(0.0, 1.0, 2.0).vertices
+        ((1.0, 2.0), (2.0, 2.0), (1.0, 3.0))
+        """
+        c, s = math.cos(angle), math.sin(angle)
+        return Polygon([(c * x - s * y + dx, s * x + c * y + dy) for x, y in self.vertices], _simple=True)
 
     def __repr__(self) -> str:
         return f"Polygon({[tuple(round(c, 6) for c in v) for v in self.vertices]})"

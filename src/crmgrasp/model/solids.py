@@ -87,7 +87,7 @@ def _unit(v: ArrayLike, name: str) -> F64:
     return u / np.linalg.norm(u)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True)
 class ConvexPolyhedron:
     """``{x : a_k . x <= b_k}`` for unit outward normals ``a_k`` (rows of ``planes``:
     ``(a_x, a_y, a_z, b)``); bounded and with an interior (checked on construction by
@@ -199,7 +199,7 @@ def box3d(lo: ArrayLike, hi: ArrayLike) -> ConvexPolyhedron:
     return box
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True)
 class Cylinder:
     """A closed solid cylinder: base centre ``origin``, unit ``axis``, ``radius`` and
     ``height`` (metres). It is convex: the intersection of an infinite cylinder and the

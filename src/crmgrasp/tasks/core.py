@@ -18,12 +18,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from crmgrasp._validation import CrmgraspError, finite, non_negative
+from crmgrasp.model.contact_model import ContactModel
 from crmgrasp.model.contacts import Config, Contact, config_from_row
 from crmgrasp.model.families import ShapeFamily
 from crmgrasp.model.geometry import Polygon, Rectangle, Shape
-from crmgrasp.model.hand import CRM, Error, Hand, check_config, execute_crm, feasible
+from crmgrasp.model.hand import CRM, Error, Hand, feasible
+from crmgrasp.model.planar_model import PlanarModel, mirror_crm
 from crmgrasp.model.quality import min_friction
-from crmgrasp.model.sensing import Discretizer, Observation, SensorNoise, observe
+from crmgrasp.model.sensing import Discretizer, Observation, SensorNoise
 
 __all__ = [
     "StartSampler",
@@ -244,14 +246,6 @@ class Symmetry:
     actions: tuple[int, ...]
 
 
-SWAP = {"a": "b", "b": "a"}
-
-
-def mirror_crm(crm: CRM) -> CRM:
-    """The planar mirror of a CRM: labels swapped, ``r -> -r`` (:class:`Symmetry`)."""
-    return CRM(SWAP[crm.c], SWAP[crm.f], -crm.r)
-
-
 def _check_symmetry(
     sym: Symmetry, actions: tuple[Any, ...], disc: Discretizer, mirror: Callable[[Any], Any] = mirror_crm
 ) -> None:
@@ -326,12 +320,14 @@ class Task:
     grasp_reward: float = -1.0
     family: ShapeFamily | None = None
     error_cost: float = 0.0
+    model: ContactModel = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if not isinstance(self.obj, Shape):
             raise CrmgraspError(f"task object must be a Shape (Polygon, Disc, ...), got {self.obj!r}")
         if not isinstance(self.hand, Hand):
             raise CrmgraspError(f"task hand must be a Hand, got {self.hand!r}")
+        self._set_model(PlanarModel(self.hand, self.noise))
         self._check_common()
         if self.family is not None:
             if not isinstance(self.family, ShapeFamily):
@@ -345,6 +341,10 @@ class Task:
                 f"family {self.family.describe()['kind']!r}: its smallest object is {w:.4g} m wide, "  # type: ignore[union-attr]
                 f"beyond the hand's aperture {self.hand.aperture:g} m; no object it draws can be grasped"
             )
+
+    def _set_model(self, model: ContactModel) -> None:
+        """Hold ``model``, the contact model every rule of this task goes through."""
+        object.__setattr__(self, "model", model)
 
     def _check_common(self) -> None:
         """The checks every task takes, planar or spatial: actions (through the hand's
@@ -374,37 +374,45 @@ class Task:
         ):
             raise CrmgraspError(f"reference_mean_steps must be > 0, got {self.reference_mean_steps!r}")
 
-    # -- the model's rules in this task's world (each written once in crmgrasp.model;
-    # a spatial task, crmgrasp.tasks.spatial, overrides them with the spatial model's,
-    # so configurations and CRMs are typed Any here: planar Config / CRM, or Config3D / CRM3D)
-    @staticmethod
-    def mirror_crm(crm: Any) -> Any:
-        """The CRM a declared mirror symmetry maps ``crm`` to (:func:`mirror_crm`)."""
-        return mirror_crm(crm)
+    # -- the model's rules in this task's world: each written once in crmgrasp.model and
+    # applied through the task's contact model (Task.model), planar or spatial alike
+    def mirror_crm(self, crm: Any) -> Any:
+        """The CRM a declared mirror symmetry maps ``crm`` to (the model's ``mirror_crm``)."""
+        return self.model.mirror_crm(crm)
 
     def crm(self, action: Any) -> Any:
         """The CRM of action index ``action``, or ``action`` itself checked against the hand."""
-        return self.hand.check_crm(action) if isinstance(action, CRM) else self.actions[action]
+        return self.model.check_crm(action) if self.model.is_crm(action) else self.actions[action]
 
     def execute(self, config: Any, crm: Any, sensed: Any) -> Any:
-        """The CRM transition (:func:`~crmgrasp.model.hand.execute_crm`), goal line from ``sensed``."""
-        return execute_crm(self.obj, self.hand, config, crm, sensed)
+        """The CRM transition (the model's ``execute``), goal line from ``sensed``."""
+        return self.model.execute(self.obj, config, crm, sensed)
 
     def read(self, config: Any, rng: np.random.Generator) -> Any:
-        """One sensed reading of ``config`` (:meth:`~crmgrasp.model.sensing.SensorNoise.sense`)."""
-        return self.noise.sense(config, rng)
+        """One sensed reading of ``config`` (the model's ``read``)."""
+        return self.model.read(config, rng)
 
     def observe(self, sensed: Any) -> Observation:
-        """The observation of a reading (:func:`~crmgrasp.model.sensing.observe`)."""
-        return observe(sensed)
+        """The observation of a reading (the model's ``observe``)."""
+        return self.model.observe(sensed)
 
     def quality(self, config: Any) -> float:
-        """The min friction of a configuration (:func:`~crmgrasp.model.quality.min_friction`)."""
-        return min_friction(config)
+        """The min friction of a configuration (the model's ``quality``)."""
+        return self.model.quality(config)
+
+    def feasible(self, config: Any) -> Error:
+        """``Error.NONE`` if ``config`` is feasible on the object (the model's ``feasible``)."""
+        return self.model.feasible(self.obj, config)
 
     def check_config(self, config: object, name: str = "configuration") -> Any:
         """``config`` if it is a valid configuration on the object, else a one-line error."""
-        return check_config(self.obj, config, name)
+        return self.model.check_config(self.obj, config, name)
+
+    def place(self, *points: Any) -> Any:
+        """The configuration a user's points name on the object, one per contact (the
+        model's ``place``: the nearest boundary points in the plane, the surface points
+        toward them from the centre in space)."""
+        return self.model.place(self.obj, points)
 
     def instance(self, rng: np.random.Generator) -> Task:
         """This task with an object drawn from its family (one episode's world; the
@@ -441,13 +449,13 @@ class Task:
         return self.starts(self.obj, self.hand, self.mu_goal, rng)
 
     def sample_starts(self, rng: np.random.Generator, n: int, accept: StartFilter | None = None) -> np.ndarray:
-        """``n`` starts as ``(n, 8)`` rows: :meth:`CornerStarts.batch` (another stream than
+        """``n`` starts as rows of the model's layout: :meth:`CornerStarts.batch` (another stream than
         :meth:`sample_start`'s, the same distribution; ``accept`` as there), or ``n``
         scalar draws for other samplers."""
         self._one_object()
         if isinstance(self.starts, CornerStarts):
             return self.starts.batch(self.obj, self.hand, self.mu_goal, rng, n, accept or accept_corner_candidates)
-        return np.array([(*c.a, *c.b) for c in (self.sample_start(rng) for _ in range(n))]).reshape(n, 8)
+        return self.model.rows_of([self.sample_start(rng) for _ in range(n)])
 
     @overload
     def grasped(self, mu: float) -> bool: ...

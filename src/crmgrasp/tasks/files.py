@@ -18,7 +18,6 @@ import importlib
 import math
 import re
 import tomllib
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -26,18 +25,33 @@ from crmgrasp._io import read_bounded
 from crmgrasp._validation import CrmgraspError, shown
 from crmgrasp.model import families as fam
 from crmgrasp.model.geometry import Disc, Polygon
-from crmgrasp.model.hand import CRM, Hand
-from crmgrasp.model.sensing import Discretizer, SensorNoise
-from crmgrasp.tasks.core import CornerStarts, Symmetry, Task, UniformStarts, make_task, task_names
+from crmgrasp.model.hand import Hand
+from crmgrasp.tasks.core import CornerStarts, Task, UniformStarts, make_task, task_names
 from crmgrasp.tasks.families import BoundaryStarts
-from crmgrasp.tasks.presets import LongSideStarts, MixtureStarts, NearCornerStarts, VertexStarts
+from crmgrasp.tasks.presets import LongSideStarts, MixtureStarts, NearCornerStarts, VertexStarts, with_reading
+from crmgrasp.tasks.schema import (
+    checked_name,
+    common_keys,
+    crm_tables,
+    number,
+    numbers,
+    section,
+    table_keys,
+)
 
-__all__ = ["TEMPLATE", "MAX_TASK_FILE_BYTES", "task_from_dict", "task_to_dict", "load_task_file", "resolve_task"]
+__all__ = [
+    "TEMPLATE",
+    "MAX_TASK_FILE_BYTES",
+    "task_from_dict",
+    "task_to_dict",
+    "load_task_file",
+    "resolve_task",
+    "resolve_reading",
+]
 
 MAX_TASK_FILE_BYTES = 1 << 20
 """Largest task file read (1 MiB)."""
 
-_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
 _FACTORY = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*:[A-Za-z_][A-Za-z0-9_]*")
 
 TEMPLATE = """\
@@ -160,88 +174,37 @@ _FAMILIES: dict[str, type] = {
 }
 
 
-def _keys(table: Any, where: str, allowed: set[str], required: set[str] = frozenset()) -> dict[str, Any]:  # type: ignore[assignment]
-    if not isinstance(table, dict):
-        raise CrmgraspError(f"{where} must be a table, got {shown(table)}")
-    for key in table:
-        if key not in allowed:
-            raise CrmgraspError(f"unknown key {key!r} in {where}; known: {', '.join(sorted(allowed))}")
-    for key in sorted(required):
-        if key not in table:
-            raise CrmgraspError(f"{where} needs the key {key!r}")
-    return table
-
-
-def _num(value: Any, key: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise CrmgraspError(f"{key} must be a finite number, got {shown(value)}")
-    return float(value)
-
-
-def _numbers(value: Any, key: str) -> tuple[float, ...]:
-    if not isinstance(value, list):
-        raise CrmgraspError(f"{key} must be a list of numbers, got {shown(value)}")
-    return tuple(_num(v, f"{key}[{i}]") for i, v in enumerate(value))
-
-
 def _object(table: Any) -> Polygon | Disc:
-    t = _keys(table, "[object]", {"polygon", "disc", "rectangle"})
+    t = table_keys(table, "[object]", {"polygon", "disc", "rectangle"})
     if len(t) != 1:
         raise CrmgraspError("[object] needs exactly one of polygon, disc, rectangle")
     ((kind, value),) = t.items()
     if kind == "polygon":
         if not isinstance(value, list) or not all(isinstance(p, list) and len(p) == 2 for p in value):
             raise CrmgraspError("object.polygon must be a list of [x, y] pairs")
-        return Polygon([(_num(x, "object.polygon x"), _num(y, "object.polygon y")) for x, y in value])
+        return Polygon([(number(x, "object.polygon x"), number(y, "object.polygon y")) for x, y in value])
     if kind == "disc":
-        d = _keys(value, "object.disc", {"radius", "center"}, {"radius"})
-        center = _numbers(d.get("center", [0.0, 0.0]), "object.disc.center")
+        d = table_keys(value, "object.disc", {"radius", "center"}, {"radius"})
+        center = numbers(d.get("center", [0.0, 0.0]), "object.disc.center")
         if len(center) != 2:
             raise CrmgraspError("object.disc.center must be [x, y]")
-        return Disc(_num(d["radius"], "object.disc.radius"), (center[0], center[1]))
-    r = _keys(value, "object.rectangle", {"length", "width"}, {"length", "width"})
-    hx, hy = _num(r["length"], "object.rectangle.length") / 2, _num(r["width"], "object.rectangle.width") / 2
+        return Disc(number(d["radius"], "object.disc.radius"), (center[0], center[1]))
+    r = table_keys(value, "object.rectangle", {"length", "width"}, {"length", "width"})
+    hx, hy = number(r["length"], "object.rectangle.length") / 2, number(r["width"], "object.rectangle.width") / 2
     if hx <= 0 or hy <= 0:
         raise CrmgraspError("object.rectangle length and width must be > 0")
     return Polygon([(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)])
 
 
 def _hand(table: Any) -> Hand:
-    t = _keys(table, "[hand]", _HAND, {"aperture", "palm_depth"})
-    values: dict[str, Any] = {k: _num(v, f"hand.{k}") for k, v in t.items()}
+    t = table_keys(table, "[hand]", _HAND, {"aperture", "palm_depth"})
+    values: dict[str, Any] = {k: number(v, f"hand.{k}") for k, v in t.items()}
     return Hand(**values)
-
-
-def _crms(value: Any, make: Callable[[str, str, Any, str], Any] | None = None) -> tuple[Any, ...]:
-    """The ``[[crm]]`` tables; ``make(c, f, r, where)`` builds each (default: a planar CRM,
-    ``r`` a number, 0 when absent)."""
-    if not isinstance(value, list) or not value:
-        raise CrmgraspError("the task needs at least one [[crm]] table")
-    out = []
-    for i, t in enumerate(value):
-        where = f"[[crm]] number {i + 1}"
-        t = _keys(t, where, {"c", "f", "r"}, {"c", "f"})
-        if t["c"] not in ("a", "b") or t["f"] not in ("a", "b"):
-            raise CrmgraspError(f'{where}: c and f must be "a" or "b", got {shown(t["c"])}, {shown(t["f"])}')
-        if make is None:
-            out.append(CRM(t["c"], t["f"], _num(t.get("r", 0.0), f"{where} r")))
-        else:
-            out.append(make(t["c"], t["f"], t.get("r"), where))
-    return tuple(out)
-
-
-def _bins(table: Any) -> Discretizer:
-    t = _keys(table, "[bins]", {"rho", "m_a", "m_b", "abs_moments"})
-    abs_m = t.get("abs_moments", True)
-    if not isinstance(abs_m, bool):
-        raise CrmgraspError(f"bins.abs_moments must be true or false, got {shown(abs_m)}")
-    kw = {q: _numbers(t[q], f"bins.{q}") for q in ("rho", "m_a", "m_b") if q in t}
-    return Discretizer(**kw, abs_moments=abs_m)  # type: ignore[arg-type]
 
 
 def _starts(table: Any, where: str = "[starts]") -> Any:
     vertex_keys = {"vertex", "incoming", "outgoing", "a_on"}
-    t = _keys(table, where, {"kind", "within", "lo", "hi", "weight", "mix", "near_vertex", *vertex_keys}, {"kind"})
+    t = table_keys(table, where, {"kind", "within", "lo", "hi", "weight", "mix", "near_vertex", *vertex_keys}, {"kind"})
     kind = t["kind"]
     if kind not in _STARTS:
         raise CrmgraspError(f"{where} kind must be one of {', '.join(_STARTS)}, got {shown(kind)}")
@@ -256,22 +219,22 @@ def _starts(table: Any, where: str = "[starts]") -> Any:
         return UniformStarts()
     if kind == "boundary":
         near = t.get("near_vertex")
-        return BoundaryStarts(None if near is None else _num(near, f"{where} near_vertex"))
+        return BoundaryStarts(None if near is None else number(near, f"{where} near_vertex"))
     if kind == "vertex":
-        ranges = [_numbers(t.get(k, [0.005, 0.05]), f"{where} {k}") for k in ("incoming", "outgoing")]
+        ranges = [numbers(t.get(k, [0.005, 0.05]), f"{where} {k}") for k in ("incoming", "outgoing")]
         if any(len(r) != 2 for r in ranges):
             raise CrmgraspError(f"{where}: incoming and outgoing must be [low, high] distances in metres")
         (i0, i1), (o0, o1) = ranges
         return VertexStarts(t.get("vertex", 0), (i0, i1), (o0, o1), t.get("a_on", "incoming"))
     if kind == "near-corner":
-        return NearCornerStarts(_num(t.get("within", 0.10), f"{where} within"))
+        return NearCornerStarts(number(t.get("within", 0.10), f"{where} within"))
     if kind == "long-side":
-        return LongSideStarts(_num(t.get("lo", 0.10), f"{where} lo"), float(t["hi"]) if "hi" in t else math.inf)
+        return LongSideStarts(number(t.get("lo", 0.10), f"{where} lo"), float(t["hi"]) if "hi" in t else math.inf)
     mix = t.get("mix")
     if not isinstance(mix, list) or not mix:
         raise CrmgraspError(f"{where}: a mixture needs mix = [{{ kind = ..., weight = ... }}, ...]")
     parts = [_starts(m, f"{where} mix[{i}]") for i, m in enumerate(mix)]
-    weights = [_num(m.get("weight", 1.0), f"{where} mix[{i}] weight") for i, m in enumerate(mix)]
+    weights = [number(m.get("weight", 1.0), f"{where} mix[{i}] weight") for i, m in enumerate(mix)]
     return MixtureStarts(tuple(parts), tuple(weights))
 
 
@@ -302,7 +265,7 @@ def _family(table: Any, where: str = "[family]") -> Any:
     ``pose = { angle = [..], offset = [..] }``; ``kind = "mixed"`` takes
     ``members = [{ kind = ..., ... }, ...]`` and optional ``weights``."""
     kinds = [*_FAMILIES, "mixed"]
-    t = _keys(
+    t = table_keys(
         table, where, {"kind", "pose", "members", "weights"} | {f for c in _FAMILIES.values() for f in _fields(c)}
     )
     kind = t.get("kind")
@@ -314,7 +277,7 @@ def _family(table: Any, where: str = "[family]") -> Any:
         if extra or not isinstance(members, list) or not members:
             raise CrmgraspError(f"{where}: a mixed family takes members = [{{ kind = ... }}, ...] and weights only")
         parts = tuple(_family(m, f"{where} members[{i}]") for i, m in enumerate(members))
-        weights = _numbers(t["weights"], f"{where} weights") if "weights" in t else ()
+        weights = numbers(t["weights"], f"{where} weights") if "weights" in t else ()
         return fam.MixedFamily(parts, weights)
     cls = _FAMILIES[kind]
     extra = set(t) - {"kind", "pose", *_fields(cls)}
@@ -324,33 +287,13 @@ def _family(table: Any, where: str = "[family]") -> Any:
         )
     kw: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in t.items() if k not in ("kind", "pose")}
     if "pose" in t:
-        pose = _keys(t["pose"], f"{where} pose", {"angle", "offset"})
+        pose = table_keys(t["pose"], f"{where} pose", {"angle", "offset"})
         kw["pose"] = fam.Pose(**{k: tuple(v) if isinstance(v, list) else v for k, v in pose.items()})
     return cls(**kw)
 
 
 def _fields(cls: type) -> tuple[str, ...]:
     return tuple(f.name for f in dataclasses.fields(cls) if f.name != "pose")
-
-
-def _section(key: str, build: Callable[[Any], Any], value: Any) -> Any:
-    """``build(value)`` with the key named in any error."""
-    try:
-        return build(value)
-    except CrmgraspError as exc:
-        text = str(exc)
-        raise CrmgraspError(text if key in text else f"{key}: {text}") from None
-    except (TypeError, ValueError) as exc:
-        raise CrmgraspError(f"{key}: {exc}") from None
-
-
-def checked_name(name: Any) -> str:
-    """``name`` if it is a valid task name (one-line error otherwise)."""
-    if not isinstance(name, str) or not _NAME.fullmatch(name):
-        raise CrmgraspError(
-            f"name must be 1-64 letters, digits, '.', '_' or '-' (first a letter or digit), got {shown(name)}"
-        )
-    return name
 
 
 def task_from_dict(doc: Any) -> Task:
@@ -365,56 +308,24 @@ def task_from_dict(doc: Any) -> Task:
         return spatial_from_dict(doc)
     if isinstance(doc, dict):
         doc = {k: v for k, v in doc.items() if k != "model"}
-    d = _keys(doc, "the task file", _TOP, {"name", "hand", "crm"})
+    d = table_keys(doc, "the task file", _TOP, {"name", "hand", "crm"})
     name = checked_name(d["name"])
     kw: dict[str, Any] = {
-        "hand": _section("hand", _hand, d["hand"]),
-        "actions": _section("crm", _crms, d["crm"]),
+        "hand": section("hand", _hand, d["hand"]),
+        "actions": section("crm", crm_tables, d["crm"]),
     }
     if ("object" in d) == ("family" in d):
         raise CrmgraspError("the task file needs exactly one of [object] and [family]")
     if "family" in d:
-        kw["family"] = _section("family", _family, d["family"])
+        kw["family"] = section("family", _family, d["family"])
         kw["obj"] = kw["family"].nominal()
     else:
-        kw["obj"] = _section("object", _object, d["object"])
-    kw["starts"] = _section("starts", _starts, d.get("starts", {"kind": "boundary" if "family" in d else "uniform"}))
+        kw["obj"] = section("object", _object, d["object"])
+    kw["starts"] = section("starts", _starts, d.get("starts", {"kind": "boundary" if "family" in d else "uniform"}))
     if getattr(kw["starts"], "takes_corner_filter", False) and not isinstance(kw["obj"], Polygon):
         raise CrmgraspError('starts kinds "corners", "near-corner", "long-side" need a polygon object; use "uniform"')
     common_keys(d, kw)
-    return _section("task", lambda kw: Task(name=name, **kw), kw)
-
-
-def common_keys(d: dict[str, Any], kw: dict[str, Any]) -> None:
-    """The keys planar and spatial task files share (bins, noise, goal, rewards, length,
-    reference, description, symmetry), checked into the task's keyword arguments ``kw``."""
-    if "bins" in d:
-        kw["discretizer"] = _section("bins", _bins, d["bins"])
-    if "noise" in d:
-        t = _section("noise", lambda v: _keys(v, "[noise]", {"sigma_n", "sigma_p"}), d["noise"])
-        kw["noise"] = _section("noise", lambda t: SensorNoise(**{k: _num(v, f"noise.{k}") for k, v in t.items()}), t)
-    if "mu_goal" in d:
-        kw["mu_goal"] = _num(d["mu_goal"], "mu_goal")
-    if "grasp_reward" in d:
-        kw["grasp_reward"] = _num(d["grasp_reward"], "grasp_reward")
-    if "error_cost" in d:
-        kw["error_cost"] = _num(d["error_cost"], "error_cost")
-    if "max_steps" in d:
-        m = d["max_steps"]
-        if isinstance(m, bool) or not isinstance(m, int) or not 1 <= m <= 1000:
-            raise CrmgraspError(f"max_steps must be an integer in [1, 1000], got {shown(m)}")
-        kw["max_steps"] = m
-    if d.get("reference_mean_steps") is not None:
-        kw["reference_mean_steps"] = _num(d["reference_mean_steps"], "reference_mean_steps")
-    if "description" in d:
-        if not isinstance(d["description"], str):
-            raise CrmgraspError(f"description must be a string, got {shown(d['description'])}")
-        kw["description"] = d["description"]
-    if d.get("symmetry") is not None:
-        sym = d["symmetry"]
-        if not isinstance(sym, list) or any(isinstance(i, bool) or not isinstance(i, int) for i in sym):
-            raise CrmgraspError(f"symmetry must be a list of action indices, got {shown(sym)}")
-        kw["symmetry"] = Symmetry(tuple(sym))
+    return section("task", lambda kw: Task(name=name, **kw), kw)
 
 
 def _object_dict(obj: Any) -> dict[str, Any]:
@@ -522,3 +433,10 @@ def resolve_task(spec: str | Path | Task) -> Task:
         f"unknown task {shown(text)}; known tasks: {', '.join(task_names())} "
         "(or a .toml task file, or package.module:factory)"
     )
+
+
+def resolve_reading(spec: str | Task, *, starts: str | None = None, grasp_reward: float | None = None) -> Task:
+    """:func:`~crmgrasp.tasks.presets.with_reading` of the task ``spec`` names
+    (:func:`resolve_task`): what ``--task``, ``--start-preset`` and ``--grasp-reward``
+    (or a study cell) state."""
+    return with_reading(resolve_task(spec), starts=starts, grasp_reward=grasp_reward)

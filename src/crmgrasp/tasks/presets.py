@@ -48,7 +48,6 @@ __all__ = [
     "MixtureStarts",
     "START_PRESETS",
     "with_reading",
-    "resolve_reading",
 ]
 
 
@@ -239,11 +238,3 @@ def with_reading(task: Task, *, starts: str | None = None, grasp_reward: float |
     if grasp_reward is not None:
         changes["grasp_reward"] = grasp_reward
     return dataclasses.replace(task, **changes) if changes else task  # type: ignore[arg-type]
-
-
-def resolve_reading(spec: str | Task, *, starts: str | None = None, grasp_reward: float | None = None) -> Task:
-    """:func:`with_reading` of the task ``spec`` names (:func:`~crmgrasp.tasks.files.resolve_task`):
-    what ``--task``, ``--start-preset`` and ``--grasp-reward`` (or a study cell) state."""
-    from crmgrasp.tasks.files import resolve_task
-
-    return with_reading(resolve_task(spec), starts=starts, grasp_reward=grasp_reward)

@@ -4,9 +4,10 @@ A :class:`SpatialTask` is a :class:`~crmgrasp.tasks.Task` whose world is the spa
 model's: a solid (:mod:`crmgrasp.model.solids`) or a family of solids on the table
 (:mod:`crmgrasp.model.solid_families`), the :class:`~crmgrasp.model.spatial.Hand3D`,
 :class:`~crmgrasp.model.spatial.CRM3D` actions and :class:`~crmgrasp.model.spatial.Config3D`
-configurations. It overrides the task's rule methods (``crm``, ``execute``, ``read``,
-``observe``, ``quality``, ``check_config``) with the spatial model's, so the one
-episode loop (:mod:`crmgrasp.sim`), the learners, the references and the environments
+configurations. It holds the spatial contact model
+(:class:`~crmgrasp.model.spatial_model.SpatialModel`), through which the task's rule
+methods (``crm``, ``execute``, ``read``, ``observe``, ``quality``, ``check_config``) run, so
+the one episode loop (:mod:`crmgrasp.sim`), the learners, the references and the environments
 step it unchanged. What the agent sees is the planar model's: ``rho``, ``|m_a|``,
 ``|m_b|`` in the same bins (24 discretized observations) and the error flag.
 
@@ -21,23 +22,17 @@ from typing import Any
 import numpy as np
 
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.model.hand import Error, Outcome
+from crmgrasp.model.hand import Error
 from crmgrasp.model.mesh import TriangleMesh
-from crmgrasp.model.quality3d import min_friction_3d
-from crmgrasp.model.sensing import Observation
 from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable, SolidFamily
 from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, Solid, dot, surface_point
 from crmgrasp.model.spatial import (
     CRM3D,
     Config3D,
-    Contact3D,
     Hand3D,
-    execute_crm3d,
-    feasible3d,
-    observe3d,
-    sense3d,
 )
-from crmgrasp.tasks.core import PAPER_BINS, SWAP, Symmetry, Task, register_task
+from crmgrasp.model.spatial_model import SpatialModel, contact3d
+from crmgrasp.tasks.core import PAPER_BINS, Symmetry, Task, register_task
 
 __all__ = [
     "SpatialTask",
@@ -65,10 +60,6 @@ def spatial_crms(step: float = 0.05) -> tuple[CRM3D, ...]:
         *(CRM3D("a", "a", r) for r in slides),
         *(CRM3D("b", "b", r) for r in slides),
     )
-
-
-def _contact(point: np.ndarray, normal: np.ndarray) -> Contact3D:
-    return Contact3D(tuple(point.tolist()), tuple(normal.tolist()))  # type: ignore[arg-type]
 
 
 @dataclass(frozen=True)
@@ -101,7 +92,7 @@ class SurfaceStarts:
             pa, pb = surface_point(task.solid, d[0]), surface_point(task.solid, d[1])
             if pa is None or pb is None:
                 continue
-            cfg = Config3D(_contact(*pa), _contact(*pb))
+            cfg = Config3D(contact3d(*pa), contact3d(*pb))
             both_on_top = all(dot(c.n, h) <= -self.up for c in cfg)
             if not both_on_top and task.acceptable(cfg):
                 return cfg
@@ -127,6 +118,7 @@ class SpatialTask(Task):
             )
         if not isinstance(self.hand, Hand3D):
             raise CrmgraspError(f"a spatial task's hand must be a Hand3D, got {self.hand!r}")
+        self._set_model(SpatialModel(self.hand, self.noise, self.table))
         self._check_common()
         if self.family is not None:
             if not isinstance(self.family, SolidFamily):
@@ -143,74 +135,14 @@ class SpatialTask(Task):
         """The hand (typed as a :class:`Hand3D`)."""
         return self.hand  # type: ignore[return-value]
 
-    @staticmethod
-    def mirror_crm(crm: Any) -> Any:
-        """The spatial mirror of a CRM: labels swapped, ``(r_1, r_2) -> (-r_1, r_2)``.
-
-        A reflection ``M`` in a vertical plane that contains the hand's forward axis ``g``
-        (``y -> -y`` for the default axes) maps each tangent frame's ``t_1`` to ``-M t_1`` and
-        ``t_2`` to ``M t_2`` (a reflection reverses cross products), the palm side to its
-        mirror once the labels are swapped, and leaves ``rho`` and the pair
-        ``{|m_a|, |m_b|}`` unchanged. A task whose object and start distributions are
-        invariant under it (``box-3d``, ``cup-3d``: any yaw, offsets symmetric about 0)
-        may declare the symmetry (:func:`spatial_symmetry`); ``tests/test_spatial_tasks.py``
-        checks the equivariance on sampled worlds. The registered tasks do not declare it:
-        model-vi on the mirror quotient did worse on ``cup-3d`` (10.4% above the optimum
-        after 6,000 episodes against 4.8% without) and about the same on ``box-3d``
-        (40.8% against 42%), and a declared symmetry makes ``--preset fastest`` use it."""
-        return CRM3D(SWAP[crm.c], SWAP[crm.f], (-crm.r[0], crm.r[1]))
-
-    # -- the spatial model's rules (crmgrasp.model.spatial, crmgrasp.model.quality3d)
-    def crm(self, action: Any) -> Any:
-        return self.hand3d.check_crm(action) if isinstance(action, CRM3D) else self.actions[action]
-
-    def execute(self, config: Any, crm: Any, sensed: Any) -> Outcome:
-        return execute_crm3d(self.solid, self.hand3d, config, crm, sensed, self.table)  # type: ignore[return-value]
-
-    def read(self, config: Any, rng: np.random.Generator) -> Any:
-        return sense3d(config, self.noise.sigma_n, self.noise.sigma_p, rng, self.hand3d)
-
-    def observe(self, sensed: Any) -> Observation:
-        return Observation(*observe3d(sensed))
-
-    def quality(self, config: Any) -> float:
-        return min_friction_3d([config.a.x, config.b.x], [config.a.n, config.b.n])
-
     def acceptable(self, config: Config3D) -> bool:
         """The start rule: feasible (with the table) and not already a grasp."""
-        return feasible3d(self.solid, self.hand3d, config, self.table) is Error.NONE and not self.is_success(config)
-
-    def check_config(self, config: object, name: str = "configuration") -> Any:
-        """``config`` if it is a :class:`Config3D` of finite contacts with unit normals on
-        the object's surface (within 1e-6 m), else a one-line error."""
-        if not isinstance(config, Config3D) or not all(isinstance(c, Contact3D) for c in config):
-            raise CrmgraspError(f"{name} must be a Config3D of two Contact3D, got {config!r}")
-        for label, c in zip("ab", config):
-            x, n = np.asarray(c.x, dtype=float), np.asarray(c.n, dtype=float)
-            if x.shape != (3,) or n.shape != (3,) or not (np.all(np.isfinite(x)) and np.all(np.isfinite(n))):
-                raise CrmgraspError(f"{name}: contact {label} must be finite 3-vectors, got {tuple(c)}")
-            if abs(float(np.linalg.norm(n)) - 1.0) > 1e-6:
-                raise CrmgraspError(f"{name}: contact {label}'s normal must be a unit vector, got {c.n}")
-            off = abs(self.solid.gap(x))
-            if off > 1e-6:
-                raise CrmgraspError(f"{name}: contact {label} at {c.x} is {off:.3g} m off the object")
-        return config
+        return self.feasible(config) is Error.NONE and not self.is_success(config)
 
     def contacts_toward(self, a: Any, b: Any) -> Config3D:
         """The configuration with each contact where the ray from the object's centre
-        toward the point ``a`` (``b``) leaves it (points: finite ``(x, y, z)``, metres)."""
-        out = []
-        for label, p in (("a", a), ("b", b)):
-            v = np.asarray(p, dtype=np.float64)
-            if v.shape != (3,) or not np.all(np.isfinite(v)):
-                raise CrmgraspError(f"contact {label} on a spatial task takes a finite X,Y,Z, got {p!r}")
-            if np.allclose(v, self.solid.centre, atol=1e-12):
-                raise CrmgraspError(f"contact {label}'s point is the object's centre: it gives no direction")
-            hit = surface_point(self.solid, v - self.solid.centre)
-            if hit is None:
-                raise CrmgraspError(f"the ray from the object's centre toward contact {label}'s point misses it")
-            out.append(_contact(*hit))
-        return Config3D(out[0], out[1])
+        toward the point ``a`` (``b``) leaves it (:meth:`~crmgrasp.tasks.Task.place`)."""
+        return self.place(a, b)  # type: ignore[no-any-return]
 
     def sample_start(self, rng: np.random.Generator, accept: Any = None) -> Any:
         """A start on the object (:class:`SurfaceStarts`; ``accept``: a kernel's compiled
@@ -221,14 +153,28 @@ class SpatialTask(Task):
     def sample_starts(self, rng: np.random.Generator, n: int, accept: Any = None) -> np.ndarray:
         """``n`` starts as ``(n, 12)`` rows ``[x_a, n_a, x_b, n_b]``."""
         self._one_object()
-        return np.array([[*c.a.x, *c.a.n, *c.b.x, *c.b.n] for c in (self.sample_start(rng) for _ in range(n))])
+        return self.model.rows_of([self.sample_start(rng) for _ in range(n)])
 
 
 def spatial_symmetry(actions: tuple[CRM3D, ...]) -> Symmetry:
-    """The mirror symmetry of a spatial CRM set closed under :meth:`SpatialTask.mirror_crm`."""
+    """The mirror symmetry of a spatial CRM set closed under
+    :meth:`~crmgrasp.model.spatial_model.SpatialModel.mirror_crm`.
+
+    A reflection ``M`` in a vertical plane that contains the hand's forward axis ``g``
+    (``y -> -y`` for the default axes) maps each tangent frame's ``t_1`` to ``-M t_1`` and
+    ``t_2`` to ``M t_2`` (a reflection reverses cross products), the palm side to its
+    mirror once the labels are swapped, and leaves ``rho`` and the pair
+    ``{|m_a|, |m_b|}`` unchanged. A task whose object and start distributions are
+    invariant under it (``box-3d``, ``cup-3d``: any yaw, offsets symmetric about 0)
+    may declare the symmetry; ``tests/test_spatial_tasks.py`` checks the equivariance on
+    sampled worlds. The registered tasks do not declare it: model-vi on the mirror
+    quotient did worse on ``cup-3d`` (10.4% above the optimum after 6,000 episodes
+    against 4.8% without) and about the same on ``box-3d`` (40.8% against 42%), and a
+    declared symmetry makes ``--preset fastest`` use it."""
     index = {a: i for i, a in enumerate(actions)}
+    mirror = SpatialModel(SPATIAL_HAND).mirror_crm
     try:
-        return Symmetry(tuple(index[SpatialTask.mirror_crm(a)] for a in actions))
+        return Symmetry(tuple(index[mirror(a)] for a in actions))
     except KeyError as exc:
         raise CrmgraspError(f"the CRM set has no mirror of {exc.args[0]}") from None
 

@@ -37,6 +37,7 @@ from crmgrasp.model.mesh import TriangleMesh, open_cup
 from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable
 from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, box3d
 from crmgrasp.model.spatial import CRM3D, Hand3D
+from crmgrasp.tasks.schema import checked_name, common_keys, crm_tables, number, numbers, section, table_keys
 from crmgrasp.tasks.spatial import SpatialTask, SurfaceStarts
 
 __all__ = ["spatial_from_dict", "spatial_to_dict", "SPATIAL_KEYS"]
@@ -64,24 +65,17 @@ _HAND3D = {"aperture", "palm_depth", "backoff", "r_max", "min_separation", "palm
 _FAMILIES3D: dict[str, type] = {"box3d": BoxOnTable, "cylinder": CylinderOnTable}
 
 
-def _helpers() -> Any:
-    from crmgrasp.tasks import files  # the planar schema's checkers (imported here: files dispatches to this module)
-
-    return files
-
-
 def _vector(value: Any, key: str, n: int) -> tuple[float, ...]:
-    out = _helpers()._numbers(value, key)
+    out = numbers(value, key)
     if len(out) != n:
         raise CrmgraspError(f"{key} must have {n} numbers, got {len(out)}")
     return out
 
 
 def _hand(table: Any) -> Hand3D:
-    f = _helpers()
-    t = f._keys(table, "[hand]", _HAND3D, {"aperture", "palm_depth"})
+    t = table_keys(table, "[hand]", _HAND3D, {"aperture", "palm_depth"})
     kw: dict[str, Any] = {
-        k: _vector(v, f"hand.{k}", 3) if k in ("h", "g") else f._num(v, f"hand.{k}") for k, v in t.items()
+        k: _vector(v, f"hand.{k}", 3) if k in ("h", "g") else number(v, f"hand.{k}") for k, v in t.items()
     }
     return Hand3D(**kw)
 
@@ -92,28 +86,27 @@ def _crm(c: str, f: str, r: Any, where: str) -> CRM3D:
 
 
 def _solid(table: Any) -> Any:
-    f = _helpers()
     kinds = {"box", "polyhedron", "cylinder", "mesh", "open_cup"}
-    t = f._keys(table, "[solid]", kinds)
+    t = table_keys(table, "[solid]", kinds)
     if len(t) != 1:
         raise CrmgraspError(f"[solid] needs exactly one of {', '.join(sorted(kinds))}")
     ((kind, value),) = t.items()
     where = f"solid.{kind}"
     if kind == "box":
-        v = f._keys(value, where, {"lo", "hi"}, {"lo", "hi"})
+        v = table_keys(value, where, {"lo", "hi"}, {"lo", "hi"})
         return box3d(_vector(v["lo"], f"{where}.lo", 3), _vector(v["hi"], f"{where}.hi", 3))
     if kind == "polyhedron":
-        v = f._keys(value, where, {"planes"}, {"planes"})
+        v = table_keys(value, where, {"planes"}, {"planes"})
         if not isinstance(v["planes"], list):
             raise CrmgraspError(f"{where}.planes must be a list of [ax, ay, az, b]")
         return ConvexPolyhedron(tuple(_vector(p, f"{where}.planes[{i}]", 4) for i, p in enumerate(v["planes"])))  # type: ignore[arg-type,misc]
     if kind == "cylinder":
-        v = f._keys(value, where, {"origin", "axis", "radius", "height"}, {"radius", "height"})
+        v = table_keys(value, where, {"origin", "axis", "radius", "height"}, {"radius", "height"})
         origin = _vector(v.get("origin", [0.0, 0.0, 0.0]), f"{where}.origin", 3)
         axis = _vector(v.get("axis", [0.0, 0.0, 1.0]), f"{where}.axis", 3)
-        return Cylinder(origin, axis, f._num(v["radius"], f"{where}.radius"), f._num(v["height"], f"{where}.height"))  # type: ignore[arg-type]
+        return Cylinder(origin, axis, number(v["radius"], f"{where}.radius"), number(v["height"], f"{where}.height"))  # type: ignore[arg-type]
     if kind == "mesh":
-        v = f._keys(value, where, {"vertices", "faces"}, {"vertices", "faces"})
+        v = table_keys(value, where, {"vertices", "faces"}, {"vertices", "faces"})
         if not isinstance(v["vertices"], list) or not isinstance(v["faces"], list):
             raise CrmgraspError(f"{where} needs vertices = [[x, y, z], ..] and faces = [[i, j, k], ..]")
         verts = tuple(_vector(p, f"{where}.vertices[{i}]", 3) for i, p in enumerate(v["vertices"]))
@@ -125,17 +118,16 @@ def _solid(table: Any) -> Any:
             ):
                 raise CrmgraspError(f"{where}.faces[{i}] must be three corner indices, got {shown(tri)}")
         return TriangleMesh(verts, tuple(tuple(tri) for tri in v["faces"]))  # type: ignore[arg-type]
-    v = f._keys(value, where, {"radius", "height", "wall", "segments"}, {"radius", "height"})
-    kw = {k: f._num(x, f"{where}.{k}") for k, x in v.items() if k != "segments"}
+    v = table_keys(value, where, {"radius", "height", "wall", "segments"}, {"radius", "height"})
+    kw: dict[str, Any] = {k: number(x, f"{where}.{k}") for k, x in v.items() if k != "segments"}
     if "segments" in v:
         kw["segments"] = v["segments"]
     return open_cup(**kw)
 
 
 def _family(table: Any) -> Any:
-    f = _helpers()
     fields = {fl.name for cls in _FAMILIES3D.values() for fl in dataclasses.fields(cls)}
-    t = f._keys(table, "[family]", {"kind"} | fields)
+    t = table_keys(table, "[family]", {"kind"} | fields)
     kind = t.get("kind")
     if kind not in _FAMILIES3D:
         raise CrmgraspError(
@@ -150,19 +142,18 @@ def _family(table: Any) -> Any:
         )
     kw: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in t.items() if k not in ("kind", "pose")}
     if "pose" in t:
-        pose = f._keys(t["pose"], "[family] pose", {"angle", "offset"})
+        pose = table_keys(t["pose"], "[family] pose", {"angle", "offset"})
         kw["pose"] = Pose(**{k: tuple(v) if isinstance(v, list) else v for k, v in pose.items()})
     return cls(**kw)
 
 
 def _starts(table: Any) -> SurfaceStarts:
-    f = _helpers()
-    t = f._keys(table, "[starts]", {"kind", "up", "max_tries"}, {"kind"})
+    t = table_keys(table, "[starts]", {"kind", "up", "max_tries"}, {"kind"})
     if t["kind"] != "surface":
         raise CrmgraspError(f'a spatial task\'s starts kind is "surface", got {shown(t["kind"])}')
     kw: dict[str, Any] = {}
     if "up" in t:
-        kw["up"] = f._num(t["up"], "starts.up")
+        kw["up"] = number(t["up"], "starts.up")
     if "max_tries" in t:
         m = t["max_tries"]
         if isinstance(m, bool) or not isinstance(m, int) or not 1 <= m <= 1_000_000:
@@ -173,24 +164,23 @@ def _starts(table: Any) -> SurfaceStarts:
 
 def spatial_from_dict(doc: Any) -> SpatialTask:
     """The :class:`SpatialTask` of a task document with ``model = "spatial"``."""
-    f = _helpers()
-    d = f._keys(doc, "the task file", SPATIAL_KEYS, {"name", "hand", "crm"})
-    name = f.checked_name(d["name"])
+    d = table_keys(doc, "the task file", SPATIAL_KEYS, {"name", "hand", "crm"})
+    name = checked_name(d["name"])
     if ("solid" in d) == ("family" in d):
         raise CrmgraspError("a spatial task file needs exactly one of [solid] and [family]")
     kw: dict[str, Any] = {
-        "hand": f._section("hand", _hand, d["hand"]),
-        "actions": f._section("crm", lambda v: f._crms(v, _crm), d["crm"]),
+        "hand": section("hand", _hand, d["hand"]),
+        "actions": section("crm", lambda v: crm_tables(v, _crm), d["crm"]),
     }
     if "family" in d:
-        kw["family"] = f._section("family", _family, d["family"])
+        kw["family"] = section("family", _family, d["family"])
         kw["obj"] = kw["family"].nominal()
     else:
-        kw["obj"] = f._section("solid", _solid, d["solid"])
-    kw["starts"] = f._section("starts", _starts, d.get("starts", {"kind": "surface"}))
-    kw["table"] = None if "table" not in d or d["table"] is None else f._num(d["table"], "table")
-    f.common_keys(d, kw)
-    return f._section("task", lambda kw: SpatialTask(name=name, **kw), kw)  # type: ignore[no-any-return]
+        kw["obj"] = section("solid", _solid, d["solid"])
+    kw["starts"] = section("starts", _starts, d.get("starts", {"kind": "surface"}))
+    kw["table"] = None if "table" not in d or d["table"] is None else number(d["table"], "table")
+    common_keys(d, kw)
+    return section("task", lambda kw: SpatialTask(name=name, **kw), kw)  # type: ignore[no-any-return]
 
 
 def _solid_dict(obj: Any) -> dict[str, Any]:

@@ -97,7 +97,7 @@ def spatial_mjcf(task: SpatialTask, params: PhysicsParams | None = None) -> str:
     """MJCF text of the spatial stand-in scene: ``task``'s solid on the table and the
     two-fingertip hand (``params.height`` and ``params.lift`` are the planar scene's and
     unused here)."""
-    if not isinstance(task, SpatialTask):
+    if task.model.kind != "spatial":
         raise CrmgraspError(f"the spatial MuJoCo stand-in needs a spatial task, got {task.name!r}")
     p = PhysicsParams() if params is None else params
     asset, geom = _solid_geom(task, p)
@@ -125,11 +125,16 @@ def spatial_mjcf(task: SpatialTask, params: PhysicsParams | None = None) -> str:
 
 
 def mujoco_hand(task: Task, start: Any, rng: np.random.Generator, params: PhysicsParams | None = None) -> MujocoHand:
-    """The MuJoCo stand-in for ``task``: :class:`MujocoHand3D` on a spatial task (a family
-    task on its nominal solid), else the planar :class:`~crmgrasp.hardware.mujoco.hand.MujocoHand`."""
-    if isinstance(task, SpatialTask):
-        return MujocoHand3D(task.with_object(task.obj) if task.family is not None else task, start, rng, params)  # type: ignore[arg-type]
-    return MujocoHand(task, start, rng, params)
+    """The MuJoCo stand-in for ``task`` by its contact model (:data:`HANDS`):
+    :class:`MujocoHand3D` on a spatial task (a family task on its nominal solid), the
+    planar :class:`~crmgrasp.hardware.mujoco.hand.MujocoHand` on a planar one."""
+    try:
+        hand = HANDS[task.model.kind]
+    except KeyError:
+        raise CrmgraspError(f"no MuJoCo stand-in for the contact model {task.model.kind!r}") from None
+    if hand is MujocoHand3D and task.family is not None:
+        task = task.with_object(task.obj)
+    return hand(task, start, rng, params)
 
 
 class MujocoHand3D(MujocoHand):
@@ -155,7 +160,7 @@ class MujocoHand3D(MujocoHand):
     def __init__(
         self, task: SpatialTask, start: Config3D, rng: np.random.Generator, params: PhysicsParams | None = None
     ) -> None:
-        if not isinstance(task, SpatialTask) or task.family is not None:
+        if task.model.kind != "spatial" or task.family is not None:
             raise CrmgraspError(
                 "the spatial MuJoCo hand needs a spatial task on one solid (task.sample_world(rng).task)"
             )
@@ -309,3 +314,7 @@ class MujocoHand3D(MujocoHand):
             self._hold(i, n)
         self._sensed = None
         return error
+
+
+HANDS: dict[str, type[MujocoHand]] = {"planar": MujocoHand, "spatial": MujocoHand3D}
+"""Contact model kind -> the MuJoCo stand-in that holds it."""

@@ -1,0 +1,40 @@
+"""Loading a saved policy of any kind: the one entry point that knows every policy file.
+
+:func:`load_policy` looks at the file and hands it to the loader of its kind: a tabular
+:class:`~crmgrasp.agents.policy.GreedyPolicy` (JSON) or a deep
+:class:`~crmgrasp.agents.deep.RecurrentPolicy` (zip). It lives apart from both so that
+neither policy module imports the other.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+from typing import Any
+
+from crmgrasp.agents.policy import GreedyPolicy
+from crmgrasp.tasks import Task
+
+__all__ = ["load_policy"]
+
+
+def _is_zip(path: str | os.PathLike[str]) -> bool:
+    """Whether ``path`` is a regular file starting with a zip signature (two bytes read;
+    anything else is left to the loaders, which report it)."""
+    try:
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            return False
+        with open(path, "rb") as fh:
+            return fh.read(2) == b"PK"
+    except OSError:
+        return False
+
+
+def load_policy(path: str | os.PathLike[str], task: Task | None = None) -> Any:
+    """A saved policy of any kind: a tabular :class:`GreedyPolicy` (JSON) or a deep
+    :class:`~crmgrasp.agents.deep.RecurrentPolicy` (zip; needs the extra ``deep``)."""
+    if _is_zip(path):
+        from crmgrasp.agents.deep import RecurrentPolicy
+
+        return RecurrentPolicy.load(path, task)
+    return GreedyPolicy.load(path, task)

@@ -1,0 +1,238 @@
+"""The contact model: one object that states what a hand's contacts are, do and sense.
+
+A task holds its contact model (``Task.model``) the way a POMDP problem holds its
+transition and observation models: everything above the model layer (the episode loop,
+the kernels' seam, the environments, the runner, the command line) reads the number of
+contacts, the batched row layout, the action parameterization and the observation's
+names and bounds from it, and applies the model's rules through it. Nothing above the
+model writes a contact count, a row width or an observation name of its own.
+
+:class:`ContactModel` is the protocol. Two models implement it from the rules that live
+in their own modules:
+
+* :class:`~crmgrasp.model.planar_model.PlanarModel`: two contacts in the plane
+  (:mod:`crmgrasp.model.hand`, :mod:`crmgrasp.model.sensing`, :mod:`crmgrasp.model.quality`);
+* :class:`~crmgrasp.model.spatial_model.SpatialModel`: two contacts on a solid on a
+  table (:mod:`crmgrasp.model.spatial`, :mod:`crmgrasp.model.quality3d`).
+
+A new model (three contacts, say) is one new module implementing this protocol and, for
+speed, one kernel behind :func:`crmgrasp.kernels.kernel_for`'s table.
+
+Layout
+------
+A configuration of ``n`` contacts in ``d`` dimensions is one row of ``2 n d`` floats:
+per contact in label order, its position then its inward unit normal
+(``[ax, ay, anx, any, bx, by, bnx, bny]`` in the plane). A CRM ``(c, f, r)`` is the
+index of the moving contact, the index of the frame contact and ``offset_dim`` offset
+coordinates (metres).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, ClassVar, Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from crmgrasp.model.contacts import LABELS
+from crmgrasp.model.hand import Error
+from crmgrasp.model.sensing import Observation, SensorNoise
+
+__all__ = ["ContactModel", "TwoContacts", "OBSERVATION_NAMES", "RHO_MAX", "row_width", "contact_columns"]
+
+OBSERVATION_NAMES = ("rho", "m_a", "m_b")
+"""The continuous observation of a two-contact model, in order: the squared frictionless
+force residual and the two frictionless moments (docs/model.md section 4)."""
+
+RHO_MAX = 4.0
+"""The largest squared force residual of two unit normals, ``|n_a + n_b|^2 <= 4``."""
+
+
+def row_width(n_contacts: int, dim: int) -> int:
+    """Floats in one configuration row: a position and a normal of ``dim`` each per contact.
+
+    >>> row_width(2, 2), row_width(2, 3), row_width(3, 3)
+    (8, 12, 18)
+    """
+    return 2 * n_contacts * dim
+
+
+def contact_columns(labels: Sequence[str], axes: str) -> tuple[str, ...]:
+    """The names of a row's columns: per contact its position ``<label><axis>`` then its
+    normal ``<label>n<axis>``.
+
+    >>> contact_columns("ab", "xy")
+    ('ax', 'ay', 'anx', 'any', 'bx', 'by', 'bnx', 'bny')
+    """
+    return tuple(f"{lab}{p}{q}" for lab in labels for p in ("", "n") for q in axes)
+
+
+class ContactModel(Protocol):
+    """What a task's contact model states and does.
+
+    A model states its sizes (read-only attributes, class constants in the two built-in
+    models), applies its rules, and holds the hand and the sensing noise they use.
+    """
+
+    @property
+    def kind(self) -> str:
+        """The model's name (``"planar"``, ``"spatial"``): the key of the kernel seam's table."""
+        ...
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """The contacts' labels in index order (``("a", "b")``)."""
+        ...
+
+    @property
+    def dim(self) -> int:
+        """Coordinates of a contact's position (2 in the plane, 3 in space)."""
+        ...
+
+    @property
+    def offset_dim(self) -> int:
+        """Coordinates of a CRM's offset ``r`` (1 in the plane, 2 in space)."""
+        ...
+
+    @property
+    def observation_names(self) -> tuple[str, ...]:
+        """The continuous observation's names, in order (:data:`OBSERVATION_NAMES`)."""
+        ...
+
+    @property
+    def hand(self) -> Any:
+        """The hand whose limits the rules apply (aperture, palm, reach)."""
+        ...
+
+    @property
+    def noise(self) -> SensorNoise:
+        """The sensing noise of every reading (:class:`~crmgrasp.model.sensing.SensorNoise`)."""
+        ...
+
+    @property
+    def n_contacts(self) -> int:
+        """The number of contacts."""
+        ...
+
+    @property
+    def row_width(self) -> int:
+        """Floats in one configuration row (:func:`row_width`)."""
+        ...
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """The names of a row's columns (:func:`contact_columns`)."""
+        ...
+
+    def observation_bounds(self) -> dict[str, tuple[float, float]]:
+        """Each observation's ``(low, high)``: the box an environment clips into."""
+        ...
+
+    # -- configurations and CRMs
+    def config_of(self, row: Sequence[float]) -> Any:
+        """The configuration of one row of plain floats (no checks)."""
+        ...
+
+    def row_of(self, config: Any) -> list[float]:
+        """The row of a configuration."""
+        ...
+
+    def rows_of(self, configs: Sequence[Any]) -> NDArray[np.float64]:
+        """Configurations stacked as ``(N, row_width)`` rows."""
+        ...
+
+    def crm(self, c: int, f: int, r: Any) -> Any:
+        """The CRM moving contact index ``c`` relative to contact index ``f`` by offset ``r``."""
+        ...
+
+    def is_crm(self, action: object) -> bool:
+        """Whether ``action`` is a CRM of this model (rather than an action index)."""
+        ...
+
+    def check_crm(self, crm: object) -> Any:
+        """``crm`` if it is a CRM of this model within the hand's reach, else a one-line error."""
+        ...
+
+    def parse_crm(self, text: str) -> Any:
+        """The CRM written as ``c,f,r`` (``c,f,r1,r2`` in space), checked (one-line errors)."""
+        ...
+
+    def offset_data(self, r: Any) -> Any:
+        """A CRM offset as JSON data (a number, or a list)."""
+        ...
+
+    def mirror_crm(self, crm: Any) -> Any:
+        """The CRM a mirror symmetry maps ``crm`` to (labels swapped)."""
+        ...
+
+    # -- the rules
+    def execute(self, obj: Any, config: Any, crm: Any, sensed: Any) -> Any:
+        """The CRM transition from ``config``, goal line from ``sensed``: an outcome with
+        ``config`` (unchanged on an error) and ``error``."""
+        ...
+
+    def read(self, config: Any, rng: np.random.Generator) -> Any:
+        """One sensed reading of ``config`` (the model's sensing noise)."""
+        ...
+
+    def read_rows(self, rows: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.float64]:
+        """One sensed reading per row, as :meth:`read` row after row."""
+        ...
+
+    def observe(self, sensed: Any) -> Observation:
+        """The observation of a reading."""
+        ...
+
+    def quality(self, config: Any) -> float:
+        """The least friction coefficient at which ``config`` is force closure."""
+        ...
+
+    def feasible(self, obj: Any, config: Any) -> Error:
+        """``Error.NONE`` if ``config`` is feasible on ``obj``, else the violated limit."""
+        ...
+
+    def check_config(self, obj: Any, config: object, name: str = "configuration") -> Any:
+        """``config`` if it is a valid configuration on ``obj``, else a one-line error."""
+        ...
+
+    def place(self, obj: Any, points: Sequence[ArrayLike]) -> Any:
+        """The configuration a user's points name on ``obj`` (one point per contact)."""
+        ...
+
+    def numbers(self, config: Any) -> list[float]:
+        """A configuration's contacts as one flat list (the row's order)."""
+        ...
+
+
+class TwoContacts:
+    """What the two-contact models share: labels ``a`` and ``b``, the observation
+    ``(rho, m_a, m_b)`` and its bounds, and the row layout over the model's ``axes``."""
+
+    labels: ClassVar[tuple[str, ...]] = LABELS
+    observation_names: ClassVar[tuple[str, ...]] = OBSERVATION_NAMES
+    axes: ClassVar[str]
+    """The names of a position's coordinates (``"xy"``, ``"xyz"``)."""
+    hand: Any
+
+    @property
+    def dim(self) -> int:
+        return len(self.axes)
+
+    @property
+    def n_contacts(self) -> int:
+        return len(self.labels)
+
+    @property
+    def row_width(self) -> int:
+        return row_width(self.n_contacts, self.dim)
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        return contact_columns(self.labels, self.axes)
+
+    def observation_bounds(self) -> dict[str, tuple[float, float]]:
+        """``rho`` in ``[0, 4]``; each moment within ``2 A`` (two contacts at most ``A`` apart,
+        metres; ``A`` the aperture, doubled to leave room for sensing noise)."""
+        b = 2.0 * self.hand.aperture
+        return {"rho": (0.0, RHO_MAX), "m_a": (-b, b), "m_b": (-b, b)}

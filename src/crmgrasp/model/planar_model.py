@@ -1,0 +1,125 @@
+"""The planar two-contact model (docs/model.md sections 2-5) as a :class:`ContactModel`.
+
+:class:`PlanarModel` holds the hand and the sensing noise and applies the rules that live
+in their own modules: the CRM transition and feasibility (:mod:`crmgrasp.model.hand`),
+readings and observations (:mod:`crmgrasp.model.sensing`), min friction
+(:mod:`crmgrasp.model.quality`). It adds no rule of its own.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.model.contact_model import TwoContacts
+from crmgrasp.model.contacts import Config, config_from_row
+from crmgrasp.model.hand import CRM, Error, Hand, Outcome, check_config, execute_crm, feasible
+from crmgrasp.model.quality import min_friction
+from crmgrasp.model.sensing import Observation, SensorNoise, observe
+
+__all__ = ["PlanarModel", "SWAP", "mirror_crm"]
+
+SWAP = {"a": "b", "b": "a"}
+"""The labels a mirror exchanges."""
+
+
+def mirror_crm(crm: CRM) -> CRM:
+    """The planar mirror of a CRM: labels swapped, ``r -> -r``.
+
+    >>> mirror_crm(CRM("a", "a", 0.08))
+    CRM('b', 'b', -0.08)
+    """
+    return CRM(SWAP[crm.c], SWAP[crm.f], -crm.r)
+
+
+@dataclass(frozen=True)
+class PlanarModel(TwoContacts):
+    """Two contacts ``a``, ``b`` in the plane: rows ``[ax, ay, anx, any, bx, by, bnx, bny]``,
+    CRMs ``(c, f, r)`` with a scalar offset, observation ``(rho, m_a, m_b)``.
+
+    Parameters
+    ----------
+    hand
+        The planar hand (aperture, palm, reach).
+    noise
+        Sensing noise of every reading (off by default).
+    """
+
+    hand: Hand
+    noise: SensorNoise = field(default_factory=SensorNoise)
+
+    kind: ClassVar[str] = "planar"
+    axes: ClassVar[str] = "xy"
+    offset_dim: ClassVar[int] = 1
+
+    # -- configurations and CRMs
+    def config_of(self, row: Sequence[float]) -> Config:
+        return config_from_row(row)
+
+    def row_of(self, config: Config) -> list[float]:
+        return [*config.a, *config.b]
+
+    def rows_of(self, configs: Sequence[Config]) -> NDArray[np.float64]:
+        return np.asarray(configs, dtype=np.float64).reshape(len(configs), self.row_width)
+
+    def crm(self, c: int, f: int, r: Any) -> CRM:
+        return CRM(self.labels[c], self.labels[f], r)
+
+    def is_crm(self, action: object) -> bool:
+        return isinstance(action, CRM)
+
+    def check_crm(self, crm: object) -> CRM:
+        return self.hand.check_crm(crm)  # type: ignore[arg-type]
+
+    def parse_crm(self, text: str) -> CRM:
+        return self.hand.check_crm(CRM.parse(text))
+
+    def offset_data(self, r: Any) -> float:
+        return float(r)
+
+    def mirror_crm(self, crm: CRM) -> CRM:
+        return mirror_crm(crm)
+
+    # -- the rules
+    def execute(self, obj: Any, config: Config, crm: CRM, sensed: Config | None) -> Outcome:
+        """:func:`~crmgrasp.model.hand.execute_crm`."""
+        return execute_crm(obj, self.hand, config, crm, sensed)
+
+    def read(self, config: Config, rng: np.random.Generator) -> Config:
+        """:meth:`~crmgrasp.model.sensing.SensorNoise.sense`."""
+        return self.noise.sense(config, rng)
+
+    def read_rows(self, rows: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.float64]:
+        """:meth:`~crmgrasp.model.sensing.SensorNoise.sense_batch`."""
+        return self.noise.sense_batch(rows, rng)
+
+    def observe(self, sensed: Config) -> Observation:
+        """:func:`~crmgrasp.model.sensing.observe`."""
+        return observe(sensed)
+
+    def quality(self, config: Config) -> float:
+        """:func:`~crmgrasp.model.quality.min_friction`."""
+        return min_friction(config)
+
+    def feasible(self, obj: Any, config: Config) -> Error:
+        """:func:`~crmgrasp.model.hand.feasible`."""
+        return feasible(obj, self.hand, config)
+
+    def check_config(self, obj: Any, config: object, name: str = "configuration") -> Config:
+        """:func:`~crmgrasp.model.hand.check_config`."""
+        return check_config(obj, config, name)
+
+    def place(self, obj: Any, points: Sequence[ArrayLike]) -> Config:
+        """Each contact at the boundary point nearest its point (finite ``(x, y)``, metres;
+        :meth:`~crmgrasp.model.hand.Hand.contact`)."""
+        if len(points) != self.n_contacts:
+            raise CrmgraspError(f"the planar model takes {self.n_contacts} points, got {len(points)}")
+        return self.hand.contact(obj, points[0], points[1])
+
+    def numbers(self, config: Config) -> list[float]:
+        return [v for c in config for v in c]

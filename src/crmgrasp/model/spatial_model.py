@@ -1,0 +1,172 @@
+"""The spatial two-contact model (docs/model-3d.md) as a :class:`ContactModel`.
+
+:class:`SpatialModel` holds the 3-D hand, the sensing noise and the table, and applies
+the rules of :mod:`crmgrasp.model.spatial` (CRM transition, feasibility with the table,
+readings, observation) and :mod:`crmgrasp.model.quality3d` (min friction). What the agent
+sees is the planar model's observation: ``rho``, ``|m_a|``, ``|m_b|``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from crmgrasp._validation import CrmgraspError, finite
+from crmgrasp.model.contact_model import TwoContacts
+from crmgrasp.model.hand import Error
+from crmgrasp.model.planar_model import SWAP
+from crmgrasp.model.quality3d import min_friction_3d
+from crmgrasp.model.sensing import Observation, SensorNoise
+from crmgrasp.model.solids import surface_point
+from crmgrasp.model.spatial import (
+    CRM3D,
+    Config3D,
+    Contact3D,
+    Hand3D,
+    Outcome3D,
+    execute_crm3d,
+    feasible3d,
+    observe3d,
+    sense3d,
+)
+
+__all__ = ["SpatialModel", "contact3d"]
+
+SURFACE_TOL = 1e-6
+"""How far (m) a given contact may lie from the solid's surface, and its normal's length
+from 1, before :meth:`SpatialModel.check_config` refuses it."""
+
+
+def contact3d(point: ArrayLike, normal: ArrayLike) -> Contact3D:
+    """A :class:`~crmgrasp.model.spatial.Contact3D` of plain floats."""
+    return Contact3D(tuple(np.asarray(point).tolist()), tuple(np.asarray(normal).tolist()))  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
+class SpatialModel(TwoContacts):
+    """Two contacts ``a``, ``b`` on a solid: rows ``[x_a, n_a, x_b, n_b]`` (12 floats), CRMs
+    ``(c, f, (r_1, r_2))`` with the offset in ``f``'s tangent frame, observation
+    ``(rho, |m_a|, |m_b|)``.
+
+    Parameters
+    ----------
+    hand
+        The 3-D hand (aperture, palm, axes, reach).
+    noise
+        Sensing noise of every reading (:func:`~crmgrasp.model.spatial.sense3d`).
+    table
+        Height of the table plane, metres (``None``: no table).
+    """
+
+    hand: Hand3D
+    noise: SensorNoise = field(default_factory=SensorNoise)
+    table: float | None = 0.0
+
+    kind: ClassVar[str] = "spatial"
+    axes: ClassVar[str] = "xyz"
+    offset_dim: ClassVar[int] = 2
+
+    # -- configurations and CRMs
+    def config_of(self, row: Sequence[float]) -> Config3D:
+        return Config3D(
+            Contact3D((row[0], row[1], row[2]), (row[3], row[4], row[5])),
+            Contact3D((row[6], row[7], row[8]), (row[9], row[10], row[11])),
+        )
+
+    def row_of(self, config: Config3D) -> list[float]:
+        return [*config.a.x, *config.a.n, *config.b.x, *config.b.n]
+
+    def rows_of(self, configs: Sequence[Config3D]) -> NDArray[np.float64]:
+        return np.array([self.row_of(c) for c in configs], dtype=np.float64).reshape(len(configs), self.row_width)
+
+    def crm(self, c: int, f: int, r: Any) -> CRM3D:
+        return CRM3D(self.labels[c], self.labels[f], (r[0], r[1]))
+
+    def is_crm(self, action: object) -> bool:
+        return isinstance(action, CRM3D)
+
+    def check_crm(self, crm: object) -> CRM3D:
+        return self.hand.check_crm(crm)
+
+    def parse_crm(self, text: str) -> CRM3D:
+        parts = [p.strip() for p in str(text).split(",")]
+        if len(parts) != 4:
+            raise CrmgraspError(f"a spatial CRM is c,f,r1,r2 (e.g. a,a,0.05,0), got {text!r:.60}")
+        return self.hand.check_crm(CRM3D(parts[0], parts[1], (finite(parts[2], "r1"), finite(parts[3], "r2"))))
+
+    def offset_data(self, r: Any) -> list[float]:
+        return [float(v) for v in r]
+
+    def mirror_crm(self, crm: CRM3D) -> CRM3D:
+        """Labels swapped, ``(r_1, r_2) -> (-r_1, r_2)``: a reflection in a vertical plane
+        through the hand's forward axis maps ``t_1`` to ``-M t_1`` and ``t_2`` to ``M t_2``
+        (docs/model-3d.md)."""
+        return CRM3D(SWAP[crm.c], SWAP[crm.f], (-crm.r[0], crm.r[1]))
+
+    # -- the rules
+    def execute(self, obj: Any, config: Config3D, crm: CRM3D, sensed: Config3D | None) -> Outcome3D:
+        """:func:`~crmgrasp.model.spatial.execute_crm3d` with the table."""
+        return execute_crm3d(obj, self.hand, config, crm, sensed, self.table)
+
+    def read(self, config: Config3D, rng: np.random.Generator) -> Config3D:
+        """:func:`~crmgrasp.model.spatial.sense3d`."""
+        return sense3d(config, self.noise.sigma_n, self.noise.sigma_p, rng, self.hand)
+
+    def read_rows(self, rows: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.float64]:
+        """:meth:`read` row after row (the same draws in the same order)."""
+        if not self.noise.active:
+            return rows.copy()
+        return self.rows_of([self.read(self.config_of(r), rng) for r in rows.tolist()])
+
+    def observe(self, sensed: Config3D) -> Observation:
+        """:func:`~crmgrasp.model.spatial.observe3d`."""
+        return Observation(*observe3d(sensed))
+
+    def quality(self, config: Config3D) -> float:
+        """:func:`~crmgrasp.model.quality3d.min_friction_3d` of the two contacts."""
+        return min_friction_3d([config.a.x, config.b.x], [config.a.n, config.b.n])
+
+    def feasible(self, obj: Any, config: Config3D) -> Error:
+        """:func:`~crmgrasp.model.spatial.feasible3d` with the table."""
+        return feasible3d(obj, self.hand, config, self.table)
+
+    def check_config(self, obj: Any, config: object, name: str = "configuration") -> Config3D:
+        """``config`` if it is a :class:`Config3D` of finite contacts with unit normals on
+        the solid's surface (within :data:`SURFACE_TOL`), else a one-line error."""
+        if not isinstance(config, Config3D) or not all(isinstance(c, Contact3D) for c in config):
+            raise CrmgraspError(f"{name} must be a Config3D of two Contact3D, got {config!r}")
+        for label, c in zip(self.labels, config):
+            x, n = np.asarray(c.x, dtype=float), np.asarray(c.n, dtype=float)
+            if x.shape != (3,) or n.shape != (3,) or not (np.all(np.isfinite(x)) and np.all(np.isfinite(n))):
+                raise CrmgraspError(f"{name}: contact {label} must be finite 3-vectors, got {tuple(c)}")
+            if abs(float(np.linalg.norm(n)) - 1.0) > SURFACE_TOL:
+                raise CrmgraspError(f"{name}: contact {label}'s normal must be a unit vector, got {c.n}")
+            off = abs(obj.gap(x))
+            if off > SURFACE_TOL:
+                raise CrmgraspError(f"{name}: contact {label} at {c.x} is {off:.3g} m off the object")
+        return config
+
+    def place(self, obj: Any, points: Sequence[ArrayLike]) -> Config3D:
+        """Each contact where the ray from the solid's centre toward its point (finite
+        ``(x, y, z)``, metres) leaves the solid."""
+        if len(points) != self.n_contacts:
+            raise CrmgraspError(f"the spatial model takes {self.n_contacts} points, got {len(points)}")
+        out = []
+        for label, p in zip(self.labels, points):
+            v = np.asarray(p, dtype=np.float64)
+            if v.shape != (3,) or not np.all(np.isfinite(v)):
+                raise CrmgraspError(f"contact {label} on a spatial task takes a finite X,Y,Z, got {p!r}")
+            if np.allclose(v, obj.centre, atol=1e-12):
+                raise CrmgraspError(f"contact {label}'s point is the object's centre: it gives no direction")
+            hit = surface_point(obj, v - obj.centre)
+            if hit is None:
+                raise CrmgraspError(f"the ray from the object's centre toward contact {label}'s point misses it")
+            out.append(contact3d(*hit))
+        return Config3D(out[0], out[1])
+
+    def numbers(self, config: Config3D) -> list[float]:
+        return [v for c in config for part in c for v in part]

@@ -1,0 +1,114 @@
+"""The contact model a task holds: both two-contact models state the protocol, their
+layout round-trips, the kernel seam is a table keyed by the model, and nothing outside
+the task layer tests a task's class."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from crmgrasp import kernels
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.kernels import PATHS, ReferenceKernel, kernel_for
+from crmgrasp.model.contact_model import ContactModel, contact_columns, row_width
+from crmgrasp.model.planar_model import PlanarModel
+from crmgrasp.model.spatial_model import SpatialModel
+from crmgrasp.tasks import make_task, task_names
+
+PKG = Path(__file__).resolve().parents[1] / "src" / "crmgrasp"
+
+MEMBERS = sorted(
+    name
+    for name in {*vars(ContactModel), *getattr(ContactModel, "__annotations__", {})}
+    if not name.startswith("_") and name not in {"mro"}
+)
+
+
+@pytest.mark.parametrize("cls", [PlanarModel, SpatialModel])
+def test_models_state_every_member_of_the_protocol(cls):
+    missing = [m for m in MEMBERS if not hasattr(cls, m) and m not in {f for f in cls.__dataclass_fields__}]
+    assert missing == []
+
+
+@pytest.mark.parametrize("name", ["paper-box", "u-handle", "box-3d", "cup-3d"])
+def test_rows_round_trip_and_name_their_columns(name):
+    task = make_task(name)
+    rng = np.random.default_rng(3)
+    model = task.model
+    configs = [task.sample_world(rng).config for _ in range(20)]
+    rows = model.rows_of(configs)
+    assert rows.shape == (20, model.row_width) == (20, row_width(model.n_contacts, model.dim))
+    assert len(model.columns) == model.row_width
+    assert [model.config_of(r) for r in rows.tolist()] == configs
+    assert [model.row_of(c) for c in configs] == rows.tolist() == [model.numbers(c) for c in configs]
+    assert model.observation_names == tuple(model.observation_bounds())
+
+
+def test_the_two_models_differ_only_in_what_they_state():
+    planar, spatial = make_task("paper-box").model, make_task("cup-3d").model
+    assert (planar.kind, planar.dim, planar.offset_dim, planar.row_width) == ("planar", 2, 1, 8)
+    assert (spatial.kind, spatial.dim, spatial.offset_dim, spatial.row_width) == ("spatial", 3, 2, 12)
+    assert contact_columns(planar.labels, "xy") == planar.columns
+    assert spatial.columns[:6] == ("ax", "ay", "az", "anx", "any", "anz")
+
+
+@pytest.mark.parametrize("name", task_names())
+def test_every_registered_task_holds_a_model_the_seam_knows(name):
+    task = make_task(name)
+    assert task.model.kind in PATHS
+    inst = task.instance(np.random.default_rng(0))
+    assert kernel_for(inst, "reference").model == inst.model
+
+
+def test_a_new_model_kind_is_one_row_of_the_seam(monkeypatch):
+    """A task whose model names a kind the table lacks is refused in one line; adding the
+    row is all it takes for kernel_for (and so every environment and loop) to step it."""
+    task = make_task("paper-box")
+
+    class Toy(PlanarModel):
+        kind = "toy"
+
+    object.__setattr__(task, "model", Toy(task.hand))
+    with pytest.raises(CrmgraspError, match="no kernel for the contact model 'toy'"):
+        kernel_for(task)
+    monkeypatch.setitem(kernels.PATHS, "toy", lambda t, backend: ReferenceKernel(t))
+    assert type(kernel_for(task)) is ReferenceKernel
+
+
+def test_place_refuses_the_wrong_number_of_points():
+    with pytest.raises(CrmgraspError, match="takes 2 points"):
+        make_task("paper-box").place((-0.15, -0.02))
+    with pytest.raises(CrmgraspError, match="finite X,Y,Z"):
+        make_task("box-3d").with_object(make_task("box-3d").obj).place((0.0, 0.0), (1.0, 0.0, 0.0))
+
+
+def _task_isinstance(path: Path) -> list[int]:
+    """Lines of ``isinstance(x, <a task subclass: a name ending in Task>)`` (or a tuple
+    holding one); ``isinstance(x, Task)``, a check of the input's type, is not one."""
+    hits = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "isinstance" and len(node.args) == 2:
+            kinds = node.args[1].elts if isinstance(node.args[1], ast.Tuple) else [node.args[1]]
+            names = [getattr(k, "id", getattr(k, "attr", "")) for k in kinds]
+            if any(n.endswith("Task") and n != "Task" for n in names):
+                hits.append(node.lineno)
+    return hits
+
+
+def test_no_isinstance_on_tasks_outside_the_task_layer():
+    """Code above the task layer asks the task's model, never the task's class."""
+    found = {
+        str(p.relative_to(PKG)): lines
+        for p in PKG.rglob("*.py")
+        if p.relative_to(PKG).parts[0] != "tasks" and (lines := _task_isinstance(p))
+    }
+    assert found == {}
+
+
+def test_the_isinstance_finder_finds_one(tmp_path):
+    f = tmp_path / "m.py"
+    f.write_text("def g(t):\n    return isinstance(t, (int, SpatialTask))\n")
+    assert _task_isinstance(f) == [2]
