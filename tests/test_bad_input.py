@@ -74,7 +74,7 @@ def test_every_seed_is_checked_before_any_work(argv, seed, capsys, tmp_path, mon
         (["crm", *NEAR, "--crm", "C" + "\u0661"], "CRM must be written c,f,r"),
         (["crm", *NEAR, "--crm", "a,b,\u0663"], "ASCII digits"),
         (["crm", *NEAR, "--crm", "C" + HUGE], "has actions C1..C4"),
-        (["crm", *NEAR, "--crm", "C1", "--sigma-n", HUGE], "finite"),
+        (["crm", *NEAR, "--crm", "C1", "--sigma-n-deg", HUGE], "finite"),
         (["reproduce", "figure4", "figure4"], "'figure4' is named more than once"),
     ],
 )

@@ -27,7 +27,7 @@ def test_crm_json_and_action_names(capsys):
 
 
 def test_crm_with_noise_is_seeded(capsys):
-    args = ["crm", *NEAR, "--crm", "C1", "--json", "--sigma-n", "3", "--sigma-p", "0.002", "--seed", "7"]
+    args = ["crm", *NEAR, "--crm", "C1", "--json", "--sigma-n-deg", "3", "--sigma-p", "0.002", "--seed", "7"]
     main(args)
     first = capsys.readouterr().out
     main(args)
@@ -47,7 +47,7 @@ def test_crm_with_noise_is_seeded(capsys):
         (["crm", "--a", "-0.2,-0.1", "--b", "0,-0.05", "--crm", "C1"], "vertex"),
         (["crm", "--a", "-0.15,0.0", "--b", "0.15,0.0", "--crm", "C1"], "infeasible"),
         (["crm", *NEAR], "required: --crm"),
-        (["crm", *NEAR, "--crm", "C1", "--sigma-n", "inf"], "finite"),
+        (["crm", *NEAR, "--crm", "C1", "--sigma-n-deg", "inf"], "finite"),
         (["show", *NEAR, "--out", "x.txt"], ".png, .pdf or .svg"),
         (["reproduce", "figure99"], "unknown experiment 'figure99'"),
         (["frobnicate"], "invalid choice"),
@@ -202,12 +202,25 @@ def test_learn_gives_the_same_curve_on_every_kernel_backend(tmp_path):
         main([*base, "--lockstep", "--backend", "gpu", "--out", str(tmp_path / "x")])
 
 
-def test_parser_lists_match_the_registries():
-    from crmgrasp.agents.training import AGENTS
-    from crmgrasp.cli.parser import AGENT_NAMES, EXPERIMENT_NAMES
+def test_the_command_line_shows_what_the_library_knows():
+    """Choices, presets and defaults come from the registries, not from copies in the CLI."""
+    from crmgrasp.agents.presets import PRESETS
+    from crmgrasp.agents.training import AGENTS, parameter_defaults
+    from crmgrasp.cli.parser import build_parser
     from crmgrasp.experiments.registry import EXPERIMENTS
+    from crmgrasp.tasks.presets import START_PRESETS
 
-    assert AGENT_NAMES == tuple(AGENTS) and EXPERIMENT_NAMES == tuple(EXPERIMENTS)
+    sub = next(a for a in build_parser()._actions if a.dest == "command").choices
+    learn = {a.dest: a for a in sub["learn"]._actions}
+    assert tuple(learn["agent"].choices) == tuple(AGENTS) and tuple(learn["preset"].choices) == tuple(PRESETS)
+    assert tuple(learn["start_preset"].choices) == tuple(START_PRESETS)
+    assert all(p.description in learn["preset"].help for p in PRESETS.values())
+    assert parameter_defaults("lam") == {"sarsa-lambda": 0.9} and "sarsa-lambda: default 0.9" in learn["lam"].help
+    assert all(name in sub["reproduce"]._actions[1].help for name in EXPERIMENTS)
+    jobs = {a.default for p in sub.values() for a in p._actions if a.dest == "jobs"}
+    assert jobs == {1}  # one default for --jobs across commands
+    backends = {tuple(a.choices) for p in sub.values() for a in p._actions if "--backend" in a.option_strings}
+    assert backends == {("auto", "numba", "reference")}  # --backend means the kernel, in every command
 
 
 def test_every_option_shows_its_default_or_choices():

@@ -138,12 +138,11 @@ def test_policy_runner_grasps_on_mujoco(task, policy_file, tmp_path):
 
 def test_cli_run_and_show_on_mujoco(policy_file, tmp_path, capsys):
     log = tmp_path / "run.csv"
-    argv = ["run", "--backend", "mujoco", "--policy", str(policy_file), "--a=-0.15,-0.02", "--b=-0.01,-0.05"]
+    argv = ["run", "--hand", "mujoco", "--policy", str(policy_file), "--a=-0.15,-0.02", "--b=-0.01,-0.05"]
     assert main([*argv, "--log", str(log)]) == 0
     assert "grasp sensed after 2 CRMs" in capsys.readouterr().out
     assert (
-        main(["show", "--backend", "mujoco", "--a=-0.15,-0.02", "--b=-0.1,-0.05", "--out", str(tmp_path / "x.pdf")])
-        == 2
+        main(["show", "--hand", "mujoco", "--a=-0.15,-0.02", "--b=-0.1,-0.05", "--out", str(tmp_path / "x.pdf")]) == 2
     )
     assert "must end in .png or .gif" in capsys.readouterr().err
 
@@ -181,7 +180,7 @@ def test_show_retries_with_osmesa_when_egl_fails(monkeypatch, tmp_path):
     monkeypatch.setattr(
         subprocess, "run", lambda cmd, env, check: calls.append((cmd, env)) or subprocess.CompletedProcess(cmd, 0)
     )
-    argv = ["show", "--backend", "mujoco", "--a=-0.15,-0.02", "--b=-0.1,-0.05", "--out", str(tmp_path / "s.png")]
+    argv = ["show", "--hand", "mujoco", "--a=-0.15,-0.02", "--b=-0.1,-0.05", "--out", str(tmp_path / "s.png")]
     assert main(argv) == 0
     ((cmd, env),) = calls
     assert env["MUJOCO_GL"] == "osmesa" and cmd[-len(argv) :] == argv

@@ -125,11 +125,11 @@ def test_cli_run_and_show_on_mujoco(cup_policy, tmp_path, capsys):
 
     path = tmp_path / "cup.json"
     cup_policy.save(path)
-    argv = ["run", "--backend", "mujoco", "--policy", str(path), "--a=0.1,0,0.05", "--b=0,0.1,0.12"]
+    argv = ["run", "--hand", "mujoco", "--policy", str(path), "--a=0.1,0,0.05", "--b=0,0.1,0.12"]
     assert main([*argv, "--log", str(tmp_path / "run.csv")]) == 0
     out = capsys.readouterr().out
     assert "grasp sensed after 1 CRMs" in out and "true min_friction 0.0" in out
-    show = ["show", "--task", "cup-3d", "--backend", "mujoco", "--a=0.1,0,0.05", "--b=0,0.1,0.12", "--crm", "C1"]
+    show = ["show", "--task", "cup-3d", "--hand", "mujoco", "--a=0.1,0,0.05", "--b=0,0.1,0.12", "--crm", "C1"]
     code = main([*show, "--out", str(tmp_path / "s.png")])
     got = capsys.readouterr()
     if code != 0 and "rendering failed" in got.err:

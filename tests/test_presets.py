@@ -100,9 +100,6 @@ def test_grasp_reward_reaches_every_step_path():
 def test_cli_reading_options(tmp_path, capsys):
     import json
 
-    from crmgrasp.cli.parser import START_PRESET_NAMES
-
-    assert START_PRESET_NAMES == tuple(START_PRESETS)
     argv = ["learn", "--start-preset", "near-corner", "--grasp-reward", "0", "--trials", "2", "--episodes", "30"]
     assert main([*argv, "--eval-episodes", "5", "--quiet", "--out", str(tmp_path / "r")]) == 0
     capsys.readouterr()
@@ -114,3 +111,18 @@ def test_cli_reading_options(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_:
         main(["references", "--start-preset", "everywhere"])
     assert exit_.value.code == 2 and "invalid choice" in capsys.readouterr().err
+
+
+def test_learner_presets_fill_what_the_user_left_out():
+    from crmgrasp.agents.presets import LearnerChoice, apply_preset
+    from crmgrasp.tasks import make_task
+
+    box, cup = make_task("paper-box"), make_task("cup-3d")
+    assert apply_preset("paper", box) == LearnerChoice("sarsa", 2, False, None)
+    assert apply_preset("fastest", box) == LearnerChoice("model-vi", 1, True, "box-family")
+    assert apply_preset("fastest", cup) == LearnerChoice("model-vi", 1, False, None)  # no symmetry declared
+    assert apply_preset("fastest", box, agent="dyna-q", k=2) == LearnerChoice("dyna-q", 2, True, None)
+    assert apply_preset("fastest", box, prior_task="mixed").prior_task == "mixed"
+    assert apply_preset("fastest", box, agent="random").symmetric is False  # not tabular
+    with pytest.raises(CrmgraspError, match="unknown preset 'slow'"):
+        apply_preset("slow", box)

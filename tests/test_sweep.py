@@ -112,12 +112,12 @@ def test_ray_gives_the_local_results_on_one_and_two_nodes(tmp_path, capsys):
     path = _write(tmp_path)
     local, on_ray, on_cluster = tmp_path / "local", tmp_path / "ray", tmp_path / "cluster"
     assert main(["sweep", str(path), "--quiet", "--jobs", "1", "--out", str(local)]) == 1
-    assert main(["sweep", str(path), "--quiet", "--jobs", "2", "--backend", "ray", "--out", str(on_ray)]) == 1
+    assert main(["sweep", str(path), "--quiet", "--jobs", "2", "--executor", "ray", "--out", str(on_ray)]) == 1
     assert (on_ray / "results.csv").read_bytes() == (local / "results.csv").read_bytes()
     cluster = Cluster(initialize_head=True, head_node_args={"num_cpus": 1})
     cluster.add_node(num_cpus=1)
     try:
-        argv = ["sweep", str(path), "--quiet", "--backend", "ray", "--address", cluster.address]
+        argv = ["sweep", str(path), "--quiet", "--executor", "ray", "--address", cluster.address]
         assert main([*argv, "--out", str(on_cluster)]) == 1
     finally:
         ray.shutdown()
@@ -147,7 +147,7 @@ def test_ctrl_c_leaves_a_resumable_study(tmp_path):
 
 def test_unreachable_ray_address_is_one_line(tmp_path, capsys):
     pytest.importorskip("ray", reason="needs the extra: pip install 'crmgrasp[ray]'")
-    argv = ["sweep", str(_write(tmp_path)), "--quiet", "--backend", "ray", "--address", "127.0.0.1:9"]
+    argv = ["sweep", str(_write(tmp_path)), "--quiet", "--executor", "ray", "--address", "127.0.0.1:9"]
     assert main([*argv, "--out", str(tmp_path / "run")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "Ray address 127.0.0.1:9 is unreachable" in err

@@ -34,6 +34,9 @@ __all__ = [
     "AGENTS",
     "make_agent",
     "build_agent",
+    "parameter_defaults",
+    "PRIOR_KEYS",
+    "PRIOR_DEFAULTS",
     "encoder_for",
     "run_episode",
     "evaluate",
@@ -92,14 +95,35 @@ def agent_parameters(name: str) -> tuple[str, ...]:
     return tuple(dict.fromkeys(out))
 
 
+def parameter_defaults(param: str) -> dict[str, object]:
+    """The default of keyword parameter ``param`` of every registered agent that takes it
+    (agent name -> default), read from the constructors; the prior's keys
+    (:data:`PRIOR_KEYS`) are ``model-vi``'s, with :data:`PRIOR_DEFAULTS`."""
+    import inspect
+
+    if param in PRIOR_DEFAULTS:
+        return {"model-vi": PRIOR_DEFAULTS[param]}
+    out: dict[str, object] = {}
+    for name, made in AGENTS.items():
+        if param not in agent_parameters(name):
+            continue
+        for klass in getattr(made, "__mro__", ()):
+            init = klass.__dict__.get("__init__")
+            p = None if init is None else inspect.signature(init).parameters.get(param)
+            if p is not None and p.default is not p.empty:
+                out[name] = p.default
+                break
+    return out
+
+
 def build_agent(task: Task, encoder: KOrderEncoder, name: str, params: dict[str, object] | None = None) -> Agent:
     """:func:`make_agent`, wrapped in a :class:`~crmgrasp.agents.symmetric.SymmetricAgent`
     when ``params`` has ``symmetric=True`` (the task must declare a symmetry).
 
     ``prior_task`` (a task name, file or factory with the same CRMs and bins, e.g. an
     object family) gives a ``model-vi`` agent a prior: the model one agent with the
-    same settings learns there in ``prior_episodes`` episodes (500; seed
-    ``prior_seed``, 0), added as ``prior_weight`` (1.0) pseudo-counts per pair
+    same settings learns there in ``prior_episodes`` episodes (seed ``prior_seed``), added
+    as ``prior_weight`` pseudo-counts per pair (defaults: :data:`PRIOR_DEFAULTS`)
     (:meth:`~crmgrasp.agents.model_based.ModelVI.set_prior`). The prior is computed once
     per setting and reused by every trial."""
     p = dict(params or {})
@@ -123,6 +147,9 @@ def build_agent(task: Task, encoder: KOrderEncoder, name: str, params: dict[str,
 PRIOR_KEYS = ("prior_task", "prior_episodes", "prior_weight", "prior_seed")
 """The parameters of :func:`build_agent` that give a ``model-vi`` agent a prior."""
 
+PRIOR_DEFAULTS: dict[str, object] = {"prior_task": None, "prior_episodes": 500, "prior_weight": 1.0, "prior_seed": 0}
+"""The prior's settings when not given (``prior_task`` None: no prior)."""
+
 _PRIORS: dict[tuple, Any] = {}
 
 
@@ -136,9 +163,9 @@ def _prior(
     spec = prior.get("prior_task")
     if not isinstance(spec, str):
         raise CrmgraspError(f"prior_task must be a task name, file or factory, got {spec!r}")
-    episodes = integer(prior.get("prior_episodes", 500), "prior_episodes", 1, 1_000_000)
-    seed = integer(prior.get("prior_seed", 0), "prior_seed", 0, 2**63 - 1)
-    weight = float(prior.get("prior_weight", 1.0))  # checked by set_prior
+    episodes = integer(prior.get("prior_episodes", PRIOR_DEFAULTS["prior_episodes"]), "prior_episodes", 1, 1_000_000)
+    seed = integer(prior.get("prior_seed", PRIOR_DEFAULTS["prior_seed"]), "prior_seed", 0, 2**63 - 1)
+    weight = float(prior.get("prior_weight", PRIOR_DEFAULTS["prior_weight"]))  # type: ignore[arg-type]  # checked by set_prior
     key = (spec, k, name, tuple(sorted(params.items())), symmetric, episodes, seed)
     if key not in _PRIORS:
         source = resolve_task(spec)

@@ -72,22 +72,14 @@ def _learner_params(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _apply_preset(args: argparse.Namespace, task: Any) -> None:
-    """Fill ``--agent``, ``--k``, ``--symmetric`` and (``fastest`` with model-vi on a task
-    of :data:`~crmgrasp.cli.parser.FASTEST_PRIORS`) ``--prior-task`` from ``--preset``
-    where not given."""
-    from crmgrasp.cli.parser import FASTEST_PRIORS, LEARN_PRESETS
+    """Fill ``--agent``, ``--k``, ``--symmetric`` and ``--prior-task`` from ``--preset``
+    where not given (:func:`crmgrasp.agents.presets.apply_preset`)."""
+    from crmgrasp.agents.presets import apply_preset
 
-    agent, k, symmetric = LEARN_PRESETS[args.preset]
-    if args.preset == "fastest" and (args.agent or agent) == "model-vi" and args.prior_task is None:
-        args.prior_task = FASTEST_PRIORS.get(task.name)
-    args.agent = args.agent or agent
-    args.k = k if args.k is None else args.k
-    from crmgrasp.agents.tabular import TabularAgent
-    from crmgrasp.agents.training import AGENTS
-
-    made = AGENTS[args.agent]
-    tabular = isinstance(made, type) and issubclass(made, TabularAgent)
-    args.symmetric = args.symmetric or (symmetric and tabular and task.symmetry is not None)
+    choice = apply_preset(
+        args.preset, task, agent=args.agent, k=args.k, symmetric=args.symmetric, prior_task=args.prior_task
+    )
+    args.agent, args.k, args.symmetric, args.prior_task = choice
 
 
 def _cmd_learn(args: argparse.Namespace) -> int:
@@ -339,9 +331,9 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             study,
             run,
             jobs=args.jobs,
-            backend=args.kernel,
+            backend=args.backend,
             progress=_progress(args),
-            executor=args.backend,
+            executor=args.executor,
             address=args.address,
         )
     print(

@@ -10,8 +10,12 @@ from typing import Any, NoReturn
 
 from crmgrasp import __version__
 from crmgrasp._validation import SEED_MAX, CrmgraspError, as_point, finite, integer, shown
+from crmgrasp.agents.presets import PRESETS
+from crmgrasp.agents.training import AGENTS, parameter_defaults
+from crmgrasp.experiments.registry import EXPERIMENTS
 from crmgrasp.model.history import MAX_K
 from crmgrasp.tasks import Task
+from crmgrasp.tasks.presets import START_PRESETS
 
 __all__ = ["build_parser"]
 
@@ -108,30 +112,6 @@ def _resolve_crm(task: Task, text: str) -> Any:
         raise CrmgraspError(f"{exc} (or name one of the task's actions C1..C{len(task.actions)})") from None
 
 
-START_PRESET_NAMES = ("corners", "near-corner", "long-side", "mixture")
-"""The start presets (a test keeps this equal to :data:`crmgrasp.tasks.presets.START_PRESETS`)."""
-
-AGENT_NAMES = ("sarsa", "q", "sarsa-lambda", "dyna-q", "model-vi", "random", "fixed")
-"""The registered agents (a test keeps this equal to :data:`crmgrasp.agents.training.AGENTS`)."""
-
-EXPERIMENT_NAMES = (
-    "figure4",
-    "figure7",
-    "figure8",
-    "figure9",
-    "compare",
-    "figure7-sensitivity",
-    "cost-of-failure",
-    "generalization",
-    "non-convex",
-    "spatial",
-    "figure4-mujoco",
-    "figure9-mujoco",
-    "spatial-mujoco",
-)
-"""The experiments of ``reproduce`` (a test keeps this equal to the registry)."""
-
-
 def _add_task(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--task",
@@ -142,7 +122,7 @@ def _add_task(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--start-preset",
-        choices=START_PRESET_NAMES,
+        choices=tuple(START_PRESETS),
         default=None,
         help="replace the task's start distribution by a preset: corners (the paper-box rule), near-corner "
         "(both contacts within 0.10 m of a corner, like Fig. 8a), long-side (the long-side contact over 0.10 m "
@@ -176,14 +156,17 @@ def _add_run(p: argparse.ArgumentParser, command: str) -> None:
     _add_quiet(p)
 
 
-def _add_jobs(p: argparse.ArgumentParser, default: int = 1) -> None:
+JOBS_DEFAULT = 1
+"""``--jobs`` of every command that runs workers: one process unless asked for more."""
+
+
+def _add_jobs(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--jobs",
         type=_int(0, 1024),
-        default=default,
+        default=JOBS_DEFAULT,
         metavar="N",
-        help="worker processes running at once, 0 for every usable core (the same results) "
-        f"(default {default}{': every usable core' if default == 0 else ''})",
+        help=f"worker processes running at once, 0 for every usable core (the same results) (default {JOBS_DEFAULT})",
     )
 
 
@@ -206,7 +189,11 @@ def _add_scene_args(p: argparse.ArgumentParser, crm_required: bool) -> None:
         help="CRM as c,f,r (e.g. a,b,0 or b,b,-0.08) or a task action C1..Cn",
     )
     p.add_argument(
-        "--sigma-n", type=_number, default=0.0, metavar="DEG", help="normal sensing noise, degrees (default 0)"
+        "--sigma-n-deg",
+        type=_number,
+        default=0.0,
+        metavar="DEG",
+        help="normal sensing noise, degrees (task files state it in radians: noise.sigma_n) (default 0)",
     )
     p.add_argument(
         "--sigma-p", type=_number, default=0.0, metavar="M", help="position sensing noise, metres (default 0)"
@@ -224,9 +211,9 @@ def _add_kernel_backend(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _add_backend(p: argparse.ArgumentParser) -> None:
+def _add_hand(p: argparse.ArgumentParser) -> None:
     p.add_argument(
-        "--backend",
+        "--hand",
         choices=("kinematic", "mujoco"),
         default="kinematic",
         help="kinematic simulator (default) or the MuJoCo stand-in hand (extra crmgrasp[mujoco]; "
@@ -234,12 +221,8 @@ def _add_backend(p: argparse.ArgumentParser) -> None:
     )
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the ``crmgrasp`` command."""
-    parser = _Parser(prog="crmgrasp", description="Grasp strategies composed of contact relative motions (Platt).")
-    parser.add_argument("--version", action="version", version=f"crmgrasp {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-
+def _parser_crm(sub: Any) -> None:
+    """``crmgrasp crm``."""
     p = sub.add_parser(
         "crm",
         help="execute one CRM and print the outcome",
@@ -248,6 +231,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_scene_args(p, crm_required=True)
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
 
+
+def _parser_show(sub: Any) -> None:
+    """``crmgrasp show``."""
     p = sub.add_parser(
         "show",
         help="draw the scene (and a CRM) to an image",
@@ -255,8 +241,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_scene_args(p, crm_required=False)
     p.add_argument("--out", type=_path, required=True, help="image file (.png, .pdf, .svg; mujoco: .png or .gif)")
-    _add_backend(p)
+    _add_hand(p)
 
+
+def _parser_reproduce(sub: Any) -> None:
+    """``crmgrasp reproduce``."""
     p = sub.add_parser(
         "reproduce",
         help="run the paper's experiments",
@@ -266,7 +255,7 @@ def build_parser() -> argparse.ArgumentParser:
         "experiments",
         nargs="*",
         metavar="NAME",
-        help=f"experiments to run: {', '.join(EXPERIMENT_NAMES)} (default: all; the MuJoCo ones need crmgrasp[mujoco])",
+        help=f"experiments to run: {', '.join(EXPERIMENTS)} (default: all; the MuJoCo ones need crmgrasp[mujoco])",
     )
     p.add_argument("--seed", type=_SEED, default=0, help="seed of the run (default 0; 0 to 2**63-1)")
     p.add_argument("--quick", action="store_true", help="small budgets (under a minute on 2 cores; not converged)")
@@ -274,6 +263,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_jobs(p)
     _add_kernel_backend(p)
 
+
+def _parser_learn(sub: Any) -> None:
+    """``crmgrasp learn``."""
     p = sub.add_parser(
         "learn",
         help="train a learner over independent trials",
@@ -284,12 +276,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--preset",
         default="paper",
-        choices=tuple(LEARN_PRESETS),
-        help="learner settings: paper (SARSA, k = 2) or fastest (model-vi, k = 1, on the mirror quotient where the "
-        "task declares one; on paper-box with a prior learned in 500 episodes on box-family: from scratch, use "
-        "--agent model-vi --k 1 --symmetric); --agent, --k and --prior-task override them",
+        choices=tuple(PRESETS),
+        help="learner settings: "
+        + "; ".join(f"{name} ({preset.description})" for name, preset in PRESETS.items())
+        + "; --agent, --k and --prior-task override them",
     )
-    p.add_argument("--agent", default=None, choices=AGENT_NAMES, help="learner or baseline (default: the preset's)")
+    p.add_argument("--agent", default=None, choices=tuple(AGENTS), help="learner or baseline (default: the preset's)")
     p.add_argument(
         "--k",
         type=_int(0, MAX_K),
@@ -321,11 +313,15 @@ def build_parser() -> argparse.ArgumentParser:
         help="learn on the mirror quotient of the task (tabular learners; the task must declare a symmetry)",
     )
     for flag, kind, text in _AGENT_FLAGS:
+        help_text = f"{text} ({_defaults_text(flag)})"
         if isinstance(kind, tuple):
-            p.add_argument(flag, choices=kind, default=None, help=text)
+            p.add_argument(flag, choices=kind, default=None, help=help_text)
         else:
-            p.add_argument(flag, type=kind, default=None, help=text)
+            p.add_argument(flag, type=kind, default=None, help=help_text)
 
+
+def _parser_evaluate(sub: Any) -> None:
+    """``crmgrasp evaluate``."""
     p = sub.add_parser(
         "evaluate",
         help="evaluate a saved policy",
@@ -347,6 +343,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_quiet(p)
     _add_kernel_backend(p)
 
+
+def _parser_bench(sub: Any) -> None:
+    """``crmgrasp bench``."""
     p = sub.add_parser(
         "bench",
         help="speed benchmarks against Gymnasium's CartPole",
@@ -356,6 +355,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rounds", type=_int(1, 1000), default=15, help="alternating rounds (default 15; 1 to 1,000)")
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
 
+
+def _parser_references(sub: Any) -> None:
+    """``crmgrasp references``."""
     p = sub.add_parser(
         "references",
         help="clairvoyant bound and belief-space optimum of a task",
@@ -368,6 +370,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
     _add_quiet(p)
 
+
+def _parser_plan(sub: Any) -> None:
+    """``crmgrasp plan``."""
     p = sub.add_parser(
         "plan",
         help="plan a k-order policy on sampled worlds (belief-space planning), measure it on held-out ones",
@@ -392,6 +397,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=_SEED, default=0, help="seed of the worlds (default 0; held-out: seed + 1)")
     _add_run(p, "plan")
 
+
+def _parser_compare(sub: Any) -> None:
+    """``crmgrasp compare``."""
     p = sub.add_parser(
         "compare",
         help="every method on one task, one table",
@@ -412,6 +420,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_kernel_backend(p)
 
+
+def _parser_pomdp(sub: Any) -> None:
+    """``crmgrasp pomdp``."""
     p = sub.add_parser(
         "pomdp",
         help="build the sampled POMDP of a task, solve it, export it",
@@ -442,11 +453,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=_path, required=True, help="the .pomdp file to write")
     _add_quiet(p)
 
+
+def _parser_run(sub: Any) -> None:
+    """``crmgrasp run``."""
     p = sub.add_parser(
         "run",
         help="run a saved policy on the kinematic hand, logging every step",
         description="Run a saved policy through the hand interface (the kinematic simulator, or with "
-        "--backend mujoco the MuJoCo stand-in) from the configuration given by --a and --b (X,Y; on a spatial "
+        "--hand mujoco the MuJoCo stand-in) from the configuration given by --a and --b (X,Y; on a spatial "
         "task X,Y,Z, projected to the family's nominal object from its centre); write the step log to --log.",
     )
     p.add_argument(
@@ -456,14 +470,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--b", type=_point, required=True, metavar="X,Y[,Z]", help="start point for contact b (m)")
     p.add_argument("--log", type=_path, required=True, help="CSV step log to write")
     p.add_argument(
-        "--sigma-n", type=_number, default=0.0, metavar="DEG", help="normal sensing noise, degrees (default 0)"
+        "--sigma-n-deg",
+        type=_number,
+        default=0.0,
+        metavar="DEG",
+        help="normal sensing noise, degrees (task files state it in radians: noise.sigma_n) (default 0)",
     )
     p.add_argument(
         "--sigma-p", type=_number, default=0.0, metavar="M", help="position sensing noise, metres (default 0)"
     )
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
-    _add_backend(p)
+    _add_hand(p)
 
+
+def _parser_sweep(sub: Any) -> None:
+    """``crmgrasp sweep``."""
     p = sub.add_parser(
         "sweep",
         help="run a study (grid of tasks, learners, parameters, seeds) or report on one",
@@ -474,9 +495,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("target", metavar="STUDY.toml|report", help="a study file, or the word report")
     p.add_argument("folder", nargs="?", type=_path, metavar="DIR", help="with report: the study's run folder")
     _add_run(p, "sweep")
-    _add_jobs(p, default=0)
+    _add_jobs(p)
     p.add_argument(
-        "--backend",
+        "--executor",
         choices=("local", "ray"),
         default="local",
         help="local worker processes, or Ray tasks (extra crmgrasp[ray]); the same results",
@@ -485,21 +506,27 @@ def build_parser() -> argparse.ArgumentParser:
         "--address",
         default=None,
         metavar="auto|HOST:PORT",
-        help="with --backend ray: the cluster to use (default: a local Ray instance of --jobs CPUs)",
+        help="with --executor ray: the cluster to use (default: a local Ray instance of --jobs CPUs)",
     )
-    p.add_argument(
-        "--kernel",
-        choices=("auto", "numba", "reference"),
-        default="auto",
-        help="kernel that episodes step through (as --backend of learn); all give the same results",
-    )
+    _add_kernel_backend(p)
 
+
+def _parser_tasks(sub: Any) -> None:
+    """``crmgrasp tasks``."""
     sub.add_parser("tasks", help="list the built-in tasks", description="List the registered (built-in) tasks.")
+
+
+def _parser_task_template(sub: Any) -> None:
+    """``crmgrasp task-template``."""
     sub.add_parser(
         "task-template",
         help="print a commented example task file",
         description="Print a commented example task file (TOML): `crmgrasp task-template > my.toml`.",
     )
+
+
+def _parser_status(sub: Any) -> None:
+    """``crmgrasp status``."""
     p = sub.add_parser(
         "status",
         help="say whether a run completed",
@@ -507,32 +534,64 @@ def build_parser() -> argparse.ArgumentParser:
         "(says running, but its process is gone).",
     )
     p.add_argument("run", type=_path, metavar="DIR", help="a run folder")
+
+
+COMMANDS: tuple[Callable[[Any], None], ...] = (
+    _parser_crm,
+    _parser_show,
+    _parser_reproduce,
+    _parser_learn,
+    _parser_evaluate,
+    _parser_bench,
+    _parser_references,
+    _parser_plan,
+    _parser_compare,
+    _parser_pomdp,
+    _parser_run,
+    _parser_sweep,
+    _parser_tasks,
+    _parser_task_template,
+    _parser_status,
+)
+"""The commands, in the order ``--help`` lists them."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``crmgrasp`` command: one sub-parser per command
+    (:data:`COMMANDS`)."""
+    parser = _Parser(prog="crmgrasp", description="Grasp strategies composed of contact relative motions (Platt).")
+    parser.add_argument("--version", action="version", version=f"crmgrasp {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for add in COMMANDS:
+        add(sub)
     return parser
 
 
-LEARN_PRESETS = {"paper": ("sarsa", 2, False), "fastest": ("model-vi", 1, True)}
-"""``--preset`` of ``crmgrasp learn``: agent, k, and whether to learn on the mirror quotient
-(where the task declares a symmetry)."""
-
-FASTEST_PRIORS = {"paper-box": "box-family"}
-"""Tasks on which ``--preset fastest`` also gives ``model-vi`` a prior (``--prior-task``): a
-family task with the same CRMs and bins of which the task's object is one member (the
-paper's box is one box of ``box-family``)."""
-
 _AGENT_FLAGS = (
-    ("--alpha", _number, "learning rate (default 0.3)"),
-    ("--gamma", _number, "discount factor (default 0.9)"),
-    ("--epsilon", _number, "exploration probability (default 0: greedy)"),
-    ("--q0", _number, "initial Q value (default 0: optimistic)"),
-    ("--lam", _number, "sarsa-lambda: trace decay lambda (default 0.9)"),
-    ("--trace", ("replacing", "accumulating"), "sarsa-lambda: eligibility traces (default replacing)"),
+    ("--alpha", _number, "learning rate"),
+    ("--gamma", _number, "discount factor"),
+    ("--epsilon", _number, "exploration probability (0: greedy)"),
+    ("--q0", _number, "initial Q value (0: optimistic)"),
+    ("--lam", _number, "trace decay lambda"),
+    ("--trace", ("replacing", "accumulating"), "eligibility traces"),
     (
         "--n-planning",
         _int(0, 1_000_000),
-        "dyna-q: planning updates (sample) or max sweeps (sweep) per step (default 20)",
+        "planning updates (sample) or max sweeps (sweep) per step",
     ),
-    ("--planning", ("sample", "sweep"), "dyna-q: sampled updates or value-iteration sweeps (default sample)"),
-    ("--q-act", _number, "model-vi: acting value of an untried CRM (default -1.5)"),
-    ("--prior-task", str, "model-vi: a task with the same CRMs and bins (e.g. box-family) to learn a prior on"),
-    ("--prior-episodes", _int(1, 1_000_000), "model-vi: episodes of the prior (default 500)"),
+    ("--planning", ("sample", "sweep"), "sampled updates or value-iteration sweeps"),
+    ("--q-act", _number, "acting value of an untried CRM"),
+    ("--prior-task", str, "a task with the same CRMs and bins (e.g. box-family) to learn a prior on"),
+    ("--prior-episodes", _int(1, 1_000_000), "episodes of the prior"),
 )
+"""The agents' keyword parameters as options of ``crmgrasp learn``: flag, type or choices,
+meaning. Which agents take each, and their defaults, come from the agents themselves."""
+
+
+def _defaults_text(flag: str) -> str:
+    """``"sarsa, q: default 0.3"``-style text: the agents taking the parameter of ``flag``,
+    grouped by their default (read from the agents' constructors)."""
+    groups: dict[str, list[str]] = {}
+    for agent, default in parameter_defaults(flag.lstrip("-").replace("-", "_")).items():
+        groups.setdefault(repr(default) if isinstance(default, str) else f"{default}", []).append(agent)
+    return "; ".join(f"{', '.join(agents)}: default {value}" for value, agents in groups.items())

@@ -29,7 +29,7 @@ def _scene(args: argparse.Namespace) -> tuple[Task, Any, Any, SensorNoise, np.ra
     task = _task(args)
     config = _place(task, args)
     crm = _resolve_crm(task, args.crm) if args.crm is not None else None
-    noise = SensorNoise(math.radians(args.sigma_n), args.sigma_p)
+    noise = SensorNoise(math.radians(args.sigma_n_deg), args.sigma_p)
     return task, config, crm, noise, np.random.default_rng(args.seed)
 
 
@@ -44,7 +44,7 @@ def _place(task: Task, args: argparse.Namespace) -> Any:
 
 
 def _sensing(task: Task, noise: SensorNoise) -> Task:
-    """``task`` read through ``noise`` (the command's --sigma-n and --sigma-p)."""
+    """``task`` read through ``noise`` (the command's --sigma-n-deg and --sigma-p)."""
     return task if noise == task.noise else dataclasses.replace(task, noise=noise)
 
 
@@ -122,7 +122,7 @@ def _crm_spatial(
 def _cmd_show(args: argparse.Namespace) -> int:
     from crmgrasp.plotting import scene_figure
 
-    if args.backend == "mujoco":
+    if args.hand == "mujoco":
         return _show_mujoco(args)
     if args.out.suffix.lower() not in {".png", ".pdf", ".svg"}:
         raise CrmgraspError(f"--out must end in .png, .pdf or .svg, got {args.out.name!r}")
@@ -167,17 +167,17 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if task.feasible(start) is not Error.NONE:
         raise CrmgraspError("the start configuration is infeasible")
     rng = np.random.default_rng(args.seed)
-    if args.backend == "mujoco":
+    if args.hand == "mujoco":
         from crmgrasp.hardware.mujoco import hardware_task
         from crmgrasp.hardware.mujoco.spatial import mujoco_hand
 
         task = hardware_task(task)
         hand: Any = mujoco_hand(task, start, rng)
     else:
-        hand = KinematicHand(task, start, rng, SensorNoise(math.radians(args.sigma_n), args.sigma_p))
+        hand = KinematicHand(task, start, rng, SensorNoise(math.radians(args.sigma_n_deg), args.sigma_p))
     res = PolicyRunner(policy, task).run(hand, rng, log=args.log)
     crms = " ".join(r[-3] for r in res.rows if r[-3])
-    true = hand.config if args.backend == "kinematic" else hand.true_config()
+    true = hand.config if args.hand == "kinematic" else hand.true_config()
     mu = f"{task.quality(true):.4g}" if true is not None else "n/a (no contact)"
     print(f"{res.stopped} after {res.crms} CRMs ({crms}); true min_friction {mu}")
     print(f"wrote {args.log.resolve()}")

@@ -7,12 +7,34 @@ and writes an index ``README.md`` that shows every figure and compares our numbe
 with the paper's.
 """
 
-from crmgrasp.experiments.figure4 import Figure4Config, figure_4_opposition_quality
-from crmgrasp.experiments.figure7 import Figure7Config, figure_7_learning_curve
-from crmgrasp.experiments.figure8 import Figure8Config, figure_8_strategies
-from crmgrasp.experiments.figure9 import Figure9Config, figure_9_robonaut_trials
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
 from crmgrasp.experiments.registry import EXPERIMENTS
 from crmgrasp.experiments.reproduce import reproduce
+
+_HOMES = {
+    "figure_4_opposition_quality": "crmgrasp.experiments.figure4",
+    "Figure4Config": "crmgrasp.experiments.figure4",
+    "figure_7_learning_curve": "crmgrasp.experiments.figure7",
+    "Figure7Config": "crmgrasp.experiments.figure7",
+    "figure_8_strategies": "crmgrasp.experiments.figure8",
+    "Figure8Config": "crmgrasp.experiments.figure8",
+    "figure_9_robonaut_trials": "crmgrasp.experiments.figure9",
+    "Figure9Config": "crmgrasp.experiments.figure9",
+}
+"""Where each figure's function lives: imported on first use (PEP 562), so that the
+command line reads the registry without loading plotting and every experiment."""
+
+
+def __getattr__(name: str) -> Any:
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module 'crmgrasp.experiments' has no attribute {name!r}")
+    return getattr(importlib.import_module(home), name)
+
 
 __all__ = [
     "EXPERIMENTS",

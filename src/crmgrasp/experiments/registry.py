@@ -11,11 +11,6 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from crmgrasp.experiments.compare import CompareConfig, compare
-from crmgrasp.experiments.figure4 import Figure4Config, figure_4_opposition_quality
-from crmgrasp.experiments.figure7 import Figure7Config, figure_7_learning_curve
-from crmgrasp.experiments.figure8 import Figure8Config, figure_8_strategies
-from crmgrasp.experiments.figure9 import Figure9Config, figure_9_robonaut_trials
 from crmgrasp.experiments.stats import fmt
 
 __all__ = ["EXPERIMENTS", "NEEDS_MUJOCO", "IMAGES", "Row", "Runner"]
@@ -25,6 +20,8 @@ Runner = Callable[[Path, int, bool, dict[str, Any]], tuple[dict[str, Any], list[
 
 
 def _figure4(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    from crmgrasp.experiments.figure4 import Figure4Config, figure_4_opposition_quality
+
     s: dict[str, Any] = figure_4_opposition_quality(out, Figure4Config(seed=seed))
     return s, [
         ("opposition grasps", f"{s['trials'] - s['failures']} of {s['trials']}", "30 of 30"),
@@ -37,6 +34,8 @@ def _figure4(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
 
 
 def _figure7(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    from crmgrasp.experiments.figure7 import Figure7Config, figure_7_learning_curve
+
     cfg = Figure7Config(seed=seed)
     if quick:
         cfg = replace(cfg, trials=5, episodes=300, eval_episodes=200, checkpoint_episodes=50)
@@ -65,6 +64,8 @@ def _figure7(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
 
 
 def _figure8(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    from crmgrasp.experiments.figure8 import Figure8Config, figure_8_strategies
+
     s = figure_8_strategies(out, Figure8Config(seed=seed, policy=ctx.get("policy")), backend=ctx["backend"])
     labels = list(s)
     return s, [
@@ -78,6 +79,8 @@ def _figure8(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
 
 
 def _figure9(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    from crmgrasp.experiments.figure9 import Figure9Config, figure_9_robonaut_trials
+
     s = figure_9_robonaut_trials(out, Figure9Config(seed=seed, policy=ctx.get("policy")), backend=ctx["backend"])
     return s, [
         ("grasps / trials", f"{s['successes']} / {s['trials']}", "11 / 11"),
@@ -91,6 +94,8 @@ def _figure9(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[di
 
 
 def _compare(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    from crmgrasp.experiments.compare import CompareConfig, compare
+
     cfg = CompareConfig.quick(seed=seed) if quick else CompareConfig(seed=seed)
     s = compare(out, cfg, backend=ctx["backend"], progress=ctx.get("progress"), jobs=ctx.get("jobs", 1))
     return s, [

@@ -2,7 +2,7 @@
 
 MuJoCo picks its OpenGL backend when it is first imported, from ``MUJOCO_GL``;
 :func:`~crmgrasp.hardware.mujoco.require_mujoco` sets it to ``egl`` unless the user set
-it. Where EGL is missing, ``crmgrasp show --backend mujoco`` retries once in a
+it. Where EGL is missing, ``crmgrasp show --hand mujoco`` retries once in a
 child process with ``MUJOCO_GL=osmesa``.
 """
 

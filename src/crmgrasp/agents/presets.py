@@ -1,0 +1,96 @@
+"""Learner presets: named settings of ``crmgrasp learn`` (and of any caller), with the
+rule that fills what the user did not give.
+
+A preset names an agent, a history order, whether to learn on the mirror quotient where
+the task declares a symmetry (tabular learners), and the tasks on which its agent also
+learns a prior first (a family task with the same CRMs and bins of which the task's
+object is one member). :func:`apply_preset` is the one place that combines a preset with
+the user's choices; the command line lists :data:`PRESETS` and their descriptions.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.agents.tabular import TabularAgent
+from crmgrasp.agents.training import AGENTS
+from crmgrasp.tasks import Task
+
+__all__ = ["LearnerPreset", "PRESETS", "LearnerChoice", "apply_preset"]
+
+
+@dataclass(frozen=True)
+class LearnerPreset:
+    """A named learner setting.
+
+    Parameters
+    ----------
+    agent
+        A registered agent (:data:`crmgrasp.agents.training.AGENTS`).
+    k
+        History order.
+    symmetric
+        Learn on the mirror quotient where the task declares a symmetry (tabular agents only).
+    priors
+        Task name -> the task the agent learns a prior on first (``model-vi`` only).
+    description
+        One line for ``--help``.
+    """
+
+    agent: str
+    k: int
+    symmetric: bool = False
+    priors: Mapping[str, str] = field(default_factory=dict)
+    description: str = ""
+
+
+PRESETS: dict[str, LearnerPreset] = {
+    "paper": LearnerPreset("sarsa", 2, description="the paper's SARSA, k = 2"),
+    "fastest": LearnerPreset(
+        "model-vi",
+        1,
+        symmetric=True,
+        priors={"paper-box": "box-family"},
+        description="model-vi, k = 1, on the mirror quotient where the task declares one; on paper-box with a "
+        "prior learned in 500 episodes on box-family (from scratch: --agent model-vi --k 1 --symmetric)",
+    ),
+}
+"""The presets of ``crmgrasp learn --preset``."""
+
+
+class LearnerChoice(NamedTuple):
+    """What a learner run uses: agent, history order, mirror quotient, prior task (or None)."""
+
+    agent: str
+    k: int
+    symmetric: bool
+    prior_task: str | None
+
+
+def apply_preset(
+    name: str,
+    task: Task,
+    *,
+    agent: str | None = None,
+    k: int | None = None,
+    symmetric: bool = False,
+    prior_task: str | None = None,
+) -> LearnerChoice:
+    """The preset ``name`` with the user's choices on top: a given ``agent``, ``k`` or
+    ``prior_task`` wins; the preset's prior applies only to its own agent on one of its
+    tasks; the mirror quotient is on if asked for, or if the preset wants it, the agent
+    is tabular and the task declares a symmetry."""
+    try:
+        preset = PRESETS[name]
+    except KeyError:
+        raise CrmgraspError(f"unknown preset {name!r}; known presets: {', '.join(PRESETS)}") from None
+    chosen = agent or preset.agent
+    if prior_task is None and chosen == preset.agent:
+        prior_task = preset.priors.get(task.name)
+    made = AGENTS.get(chosen)
+    tabular = isinstance(made, type) and issubclass(made, TabularAgent)
+    mirror = symmetric or (preset.symmetric and tabular and task.symmetry is not None)
+    return LearnerChoice(chosen, preset.k if k is None else k, mirror, prior_task)
