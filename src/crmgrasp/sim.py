@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.contacts import Config
-from crmgrasp.model.hand import CRM, Error, Outcome
+from crmgrasp.model.hand import CRM, Error
 from crmgrasp.model.sensing import Observation
 from crmgrasp.tasks import Task, World
 
@@ -34,12 +34,9 @@ __all__ = [
     "Stepper",
     "TaskSteps",
     "FamilyStepper",
-    "begin_one",
-    "step_one",
     "Episode",
     "Transition",
     "SimState",
-    "StepResult",
     "Percept",
     "Policy",
     "begin",
@@ -72,24 +69,11 @@ class Percept(NamedTuple):
     truncated: bool = False
 
 
-class StepResult(NamedTuple):
-    """Outcome of one CRM (reward :func:`step_reward`: -1 per CRM, ``task.grasp_reward``
-    for the grasping one)."""
-
-    state: SimState
-    observation: Observation
-    error: Error
-    obs_index: int
-    reward: float
-    terminated: bool
-    truncated: bool
-    min_friction: float
-    outcome: Outcome
-
-
 class OneStep(NamedTuple):
     """The state after a reset or a CRM and what is sensed there, as plain numbers: the
-    result type of :func:`begin_one`, :func:`step_one` and every kernel's single step.
+    result type of :func:`begin`, :func:`step` and every kernel's single step (the one
+    step type; :class:`Percept` is what a policy may see of it, and a kernel's
+    :class:`~crmgrasp.kernels.base.BatchStep` its batched form).
     ``error`` is :class:`~crmgrasp.model.hand.Error` (an ``int``)."""
 
     state: SimState
@@ -122,22 +106,24 @@ class OneStep(NamedTuple):
         )
 
 
-def begin(task: Task, config: Config, rng: np.random.Generator) -> tuple[SimState, Observation, int]:
-    """Start an episode at ``config``: one reading; the state, its observation and
-    discretized index (error none)."""
+def begin(task: Task, config: Any, rng: np.random.Generator) -> OneStep:
+    """Start an episode at ``config``: one reading, its observation and discretized index
+    (error none, reward 0), and the min friction of ``config``."""
     sensed = task.read(config, rng)
     obs = task.observe(sensed)
-    return SimState(config, sensed, 0), obs, task.discretizer.index(obs, Error.NONE)
+    index = task.discretizer.index(obs, Error.NONE)
+    return OneStep(SimState(config, sensed, 0), obs.rho, obs.m_a, obs.m_b, Error.NONE, index, task.quality(config))
 
 
-def reset(task: Task, rng: np.random.Generator) -> tuple[SimState, Observation, int]:
+def reset(task: Task, rng: np.random.Generator) -> OneStep:
     """Draw a start (the task's scalar sampler), then :func:`begin`."""
     return begin(task, task.sample_start(rng), rng)
 
 
-def step(task: Task, state: SimState, action: int | CRM, rng: np.random.Generator) -> StepResult:
+def step(task: Task, state: SimState, action: Any, rng: np.random.Generator) -> OneStep:
     """Execute ``task.actions[action]`` (or the CRM ``action`` itself, within the
-    hand's ``r_max``) from ``state``.
+    hand's reach) from ``state``: the CRM from the state's reading, then one reading of
+    the configuration it leads to.
 
     ``terminated`` when the true configuration is a grasp (``min_friction <=
     mu_goal``); ``truncated`` when ``max_steps`` CRMs have been executed without.
@@ -148,31 +134,17 @@ def step(task: Task, state: SimState, action: int | CRM, rng: np.random.Generato
     mu = task.quality(out.config)
     steps = state.steps + 1
     terminated, truncated = episode_end(task, mu, steps)
-    return StepResult(
+    return OneStep(
         SimState(out.config, sensed, steps),
-        obs,
+        obs.rho,
+        obs.m_a,
+        obs.m_b,
         out.error,
         task.discretizer.index(obs, out.error),
+        mu,
         step_reward(task, terminated, out.error),
         terminated,
         truncated,
-        mu,
-        out,
-    )
-
-
-def begin_one(task: Task, config: Config, rng: np.random.Generator) -> OneStep:
-    """:func:`begin` as a :class:`OneStep` (error none, reward 0)."""
-    state, obs, index = begin(task, config, rng)
-    return OneStep(state, obs.rho, obs.m_a, obs.m_b, Error.NONE, index, task.quality(config))
-
-
-def step_one(task: Task, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
-    """:func:`step` as a :class:`OneStep` (without the CRM's path)."""
-    r = step(task, state, action, rng)
-    o = r.observation
-    return OneStep(
-        r.state, o.rho, o.m_a, o.m_b, r.error, r.obs_index, r.min_friction, r.reward, r.terminated, r.truncated
     )
 
 
@@ -230,7 +202,7 @@ class Policy(Protocol):
 class Stepper(Protocol):
     """What :func:`run_episode` steps through: a kernel of :mod:`crmgrasp.kernels` (its
     ``sample_start``, ``begin`` and ``step_one`` equal :meth:`Task.sample_start`,
-    :func:`begin_one` and :func:`step_one` bit for bit)."""
+    :func:`begin` and :func:`step` bit for bit)."""
 
     def sample_start(self, rng: np.random.Generator) -> Config: ...
 
@@ -246,7 +218,7 @@ class Stepper(Protocol):
 
 class TaskSteps:
     """The reference :class:`Stepper` of one task: :meth:`Task.sample_start`,
-    :func:`begin_one` and :func:`step_one`."""
+    :func:`begin` and :func:`step`."""
 
     def __init__(self, task: Task) -> None:
         self.task = task
@@ -255,10 +227,10 @@ class TaskSteps:
         return self.task.sample_start(rng)
 
     def begin(self, config: Config, rng: np.random.Generator) -> OneStep:
-        return begin_one(self.task, config, rng)
+        return begin(self.task, config, rng)
 
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
-        return step_one(self.task, state, action, rng)
+        return step(self.task, state, action, rng)
 
     def use(self, instance: Task) -> None:
         raise CrmgraspError(f"task {self.task.name!r} has one object: a World start needs a family task")
@@ -321,8 +293,8 @@ def run_episode(
     """Run ``policy`` for one episode of ``task``: from a start drawn from ``rng`` (the
     task's scalar sampler, after the object for a family task) or from ``start`` (a
     :class:`~crmgrasp.tasks.World` for a family task), one step per action until the
-    episode ends; starts and readings draw from ``rng``. Steps are :func:`begin_one`
-    and :func:`step_one` (of the episode's object), or the same steps of ``kernel``
+    episode ends; starts and readings draw from ``rng``. Steps are :func:`begin`
+    and :func:`step` (of the episode's object), or the same steps of ``kernel``
     (faster, the same results)."""
     if kernel is None:
         kernel = FamilyStepper(task) if task.family is not None else TaskSteps(task)

@@ -37,7 +37,6 @@ from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents.training import checkpoint_generators, checkpoints_to_within
 from crmgrasp.model.contacts import Config
 from crmgrasp.model.hand import Error
-from crmgrasp.model.sensing import observe
 from crmgrasp.sim import SimState, step
 from crmgrasp.tasks import Task, World
 
@@ -261,8 +260,8 @@ def evaluate_recurrent(
     n = len(starts)
     tasks = [s.task if isinstance(s, World) else task for s in starts]
     configs = [s.config if isinstance(s, World) else s for s in starts]
-    states = [SimState(c, task.noise.sense(c, rng), 0) for c in configs]
-    obs = np.stack([features(*observe(s.sensed), 0, task.hand.aperture) for s in states])
+    states = [SimState(c, t.read(c, rng), 0) for t, c in zip(tasks, configs)]
+    obs = np.stack([features(*t.observe(s.sensed), 0, task.hand.aperture) for t, s in zip(tasks, states)])
     steps, success = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=bool)
     active = np.ones(n, dtype=bool)
     lstm, first = None, np.ones(n, dtype=bool)

@@ -93,11 +93,12 @@ def train_trials_lockstep(
     sen = np.zeros((trials, model.row_width))  # their sensed readings
 
     def begin(t: int, tr: _Trial) -> None:
-        state, obs, index = reset(task, tr.env_rng)
+        first = reset(task, tr.env_rng)
+        state = first.state
         cfg[t] = model.row_of(state.config)
         sen[t] = model.row_of(state.sensed)
         tr.steps = 0
-        tr.policy.begin(Percept(obs, Error.NONE, index, state.sensed))
+        tr.policy.begin(first.percept)
 
     def finish(t: int, tr: _Trial, ok: bool) -> bool:
         """Record the episode; start the next one. False when the trial is over."""

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.hand import CRM
-from crmgrasp.sim import OneStep, SimState, begin_one, step_one
+from crmgrasp.sim import OneStep, SimState, begin, step
 from crmgrasp.tasks import StartFilter, Task
 
 __all__ = ["Kernel", "OneStep", "BatchStep"]
@@ -133,13 +133,13 @@ class Kernel(ABC):
         return self.task.sample_starts(rng, n, self.start_filter)
 
     def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
-        """An episode starting at ``config`` (:func:`crmgrasp.sim.begin_one`)."""
-        return begin_one(self.task, config, rng)
+        """An episode starting at ``config`` (:func:`crmgrasp.sim.begin`)."""
+        return begin(self.task, config, rng)
 
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
         """The CRM ``task.actions[action]`` (or the CRM ``action``) from ``state``
-        (:func:`crmgrasp.sim.step_one`)."""
-        return step_one(self.task, state, action, rng)
+        (:func:`crmgrasp.sim.step`)."""
+        return step(self.task, state, action, rng)
 
     def step_batch(
         self, cfg: F64, sen: F64, actions: I64, resets: NDArray[np.bool_], starts: F64, rng: np.random.Generator

@@ -9,6 +9,7 @@ is the task's (:class:`crmgrasp.tasks.spatial.SpatialTask`, which calls
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 import numpy as np
@@ -37,33 +38,42 @@ class SpatialKernel(ReferenceKernel):
 
 def spatial_params(task: Any) -> tuple[F64, NDArray[np.int64], F64, F64, F64]:
     """``(p, q, th, planes, cyl)`` for :mod:`crmgrasp.kernels._spatial_jit`: every
-    parameter and tolerance read from the model's modules and the task now."""
+    parameter and tolerance read from the model's modules and the task now (the solid's
+    own entries by :func:`solid_params`)."""
     import crmgrasp.kernels._spatial_jit as jit
     from crmgrasp.model import quality, solids, spatial
 
-    hand, solid, d, starts = task.hand3d, task.solid, task.discretizer, task.starts
+    hand, d, starts = task.hand3d, task.discretizer, task.starts
     p = np.empty(jit.N_P)
     p[jit.APERTURE], p[jit.DEPTH], p[jit.PALM_TOL] = hand.aperture, hand.palm_depth, hand.palm_normal_tol
     p[jit.SURF], p[jit.ANTIPODAL_TOL], p[jit.MU_GOAL] = solids.SURFACE, quality.ANTIPODAL_TOL, task.mu_goal
     p[jit.MIN_SEP], p[jit.TABLE] = hand.min_separation, 0.0 if task.table is None else task.table
     p[jit.UP] = starts.up if isinstance(starts, SurfaceStarts) else np.inf
     p[jit.HX : jit.HZ + 1], p[jit.GX : jit.GZ + 1] = hand._h, hand._g
-    centre = solid.centre
-    p[jit.CX : jit.CZ + 1] = centre
-    p[jit.FAR] = 1.0 + float(np.max(np.abs(centre)))
     p[jit.TIE], p[jit.PARALLEL] = solids.TIE, spatial.PARALLEL
     q = np.zeros(jit.N_Q, dtype=np.int64)
-    q[jit.KIND], q[jit.HAS_TABLE] = isinstance(solid, Cylinder), task.table is not None
+    q[jit.HAS_TABLE] = task.table is not None
     q[jit.NA], q[jit.NB], q[jit.ABS_M] = len(d.m_a) + 1, len(d.m_b) + 1, d.abs_moments
     width = max(len(d.rho), len(d.m_a), len(d.m_b), 1)
     th = np.full((3, width), np.inf)
     for row, thresholds in zip(th, (d.rho, d.m_a, d.m_b), strict=True):
         row[: len(thresholds)] = thresholds
-    if isinstance(solid, Cylinder):
-        planes, cyl = np.zeros((1, 4)), np.array([*solid.origin, *solid.axis, solid.radius, solid.height])
-    else:
-        planes, cyl = np.ascontiguousarray(solid.planes, dtype=np.float64), np.zeros(8)
+    planes, cyl = solid_params(task.solid, p, q)
     return p, q, th, planes, cyl
+
+
+def solid_params(solid: Any, p: F64, q: NDArray[np.int64]) -> tuple[F64, F64]:
+    """The solid's entries of ``p`` (its centre, and the distance beyond which every point
+    is outside) and of ``q`` (its kind), written in place, and its ``(planes, cyl)`` arrays."""
+    import crmgrasp.kernels._spatial_jit as jit
+
+    centre = solid.centre
+    p[jit.CX : jit.CZ + 1] = centre
+    p[jit.FAR] = 1.0 + float(np.max(np.abs(centre)))
+    q[jit.KIND] = isinstance(solid, Cylinder)
+    if isinstance(solid, Cylinder):
+        return np.zeros((1, 4)), np.array([*solid.origin, *solid.axis, solid.radius, solid.height])
+    return np.ascontiguousarray(solid.planes, dtype=np.float64), np.zeros(8)
 
 
 class FusedSpatialKernel(SpatialKernel):
@@ -79,9 +89,22 @@ class FusedSpatialKernel(SpatialKernel):
         self._jit = _spatial_jit
         self.p, self.q, self.th, self.planes, self.cyl = spatial_params(task)
         self.acts4 = np.ascontiguousarray(self.acts)
+        self._fresh()
+
+    def _fresh(self) -> None:
         self._v, self._out = np.empty(16), np.empty(16)
         self._v_of: Config3D | None = None
         self.start_filter = self._accept  # type: ignore[assignment]
+
+    def rebind(self, instance: Any) -> FusedSpatialKernel:
+        """The kernel of ``instance`` (the same hand, CRMs, bins and table on another solid
+        of the same kind): the parameters shared, the solid's entries its own
+        (:func:`solid_params`, as :func:`spatial_params` would write them)."""
+        new = copy.copy(self)
+        new.task, new.p, new.q = instance, self.p.copy(), self.q.copy()
+        new.planes, new.cyl = solid_params(instance.solid, new.p, new.q)
+        new._fresh()
+        return new
 
     def _load(self, config: Config3D) -> None:
         if config is not self._v_of:
