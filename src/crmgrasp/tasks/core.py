@@ -261,6 +261,10 @@ def _check_symmetry(
         raise CrmgraspError("a symmetric task needs moments binned by magnitude with the same m_a and m_b thresholds")
 
 
+MAX_STEPS = 1000
+"""The longest episode a task may ask for, in CRMs (the task files' bound too)."""
+
+
 @dataclass(frozen=True)
 class Task:
     """A grasping task.
@@ -282,7 +286,7 @@ class Task:
     mu_goal
         Success when ``min_friction(true config) <= mu_goal`` (unitless, >= 0).
     max_steps
-        Episode truncation, in CRMs.
+        Episode truncation, in CRMs (1 to :data:`MAX_STEPS`).
     noise
         Sensing noise applied during the task (off by default).
     reference_mean_steps
@@ -356,8 +360,12 @@ class Task:
             self.hand.check_crm(a)
         object.__setattr__(self, "actions", actions)
         object.__setattr__(self, "mu_goal", non_negative(self.mu_goal, "mu_goal"))
-        if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) or self.max_steps < 1:
-            raise CrmgraspError(f"max_steps must be an integer >= 1, got {self.max_steps!r}")
+        if (
+            isinstance(self.max_steps, bool)
+            or not isinstance(self.max_steps, int)
+            or not 1 <= self.max_steps <= MAX_STEPS
+        ):
+            raise CrmgraspError(f"max_steps must be an integer in [1, {MAX_STEPS}], got {self.max_steps!r}")
         if self.symmetry is not None:
             if not isinstance(self.symmetry, Symmetry):
                 raise CrmgraspError(f"task symmetry must be a Symmetry, got {self.symmetry!r}")

@@ -33,6 +33,7 @@ from crmgrasp.tasks.schema import (
     checked_name,
     common_keys,
     crm_tables,
+    init_keys,
     number,
     numbers,
     section,
@@ -148,7 +149,6 @@ _TOP = {
     "noise",
     "symmetry",
 }
-_HAND = {"aperture", "palm_depth", "backoff", "r_max", "palm_normal_tol", "min_separation"}
 _STARTS: dict[str, type] = {
     "corners": CornerStarts,
     "uniform": UniformStarts,
@@ -197,7 +197,7 @@ def _object(table: Any) -> Polygon | Disc:
 
 
 def _hand(table: Any) -> Hand:
-    t = table_keys(table, "[hand]", _HAND, {"aperture", "palm_depth"})
+    t = table_keys(table, "[hand]", *init_keys(Hand))
     values: dict[str, Any] = {k: number(v, f"hand.{k}") for k, v in t.items()}
     return Hand(**values)
 

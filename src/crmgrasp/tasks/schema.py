@@ -11,6 +11,7 @@ readers.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from collections.abc import Callable
@@ -21,9 +22,27 @@ from crmgrasp.model.hand import CRM
 from crmgrasp.model.sensing import Discretizer, SensorNoise
 from crmgrasp.tasks.core import Symmetry
 
-__all__ = ["table_keys", "number", "numbers", "crm_tables", "bins_table", "section", "checked_name", "common_keys"]
+__all__ = [
+    "init_keys",
+    "table_keys",
+    "number",
+    "numbers",
+    "crm_tables",
+    "bins_table",
+    "section",
+    "checked_name",
+    "common_keys",
+]
 
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
+
+
+def init_keys(cls: type) -> tuple[set[str], set[str]]:
+    """The keys a table for the dataclass ``cls`` takes (its constructor's fields) and the
+    ones it needs (those without a default): the class owns its schema, the readers ask it."""
+    fields = [f for f in dataclasses.fields(cls) if f.init]
+    required = {f.name for f in fields if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING}
+    return {f.name for f in fields}, required
 
 
 def table_keys(table: Any, where: str, allowed: set[str], required: set[str] = frozenset()) -> dict[str, Any]:  # type: ignore[assignment]
@@ -113,9 +132,9 @@ def common_keys(d: dict[str, Any], kw: dict[str, Any]) -> None:
         kw["error_cost"] = number(d["error_cost"], "error_cost")
     if "max_steps" in d:
         m = d["max_steps"]
-        if isinstance(m, bool) or not isinstance(m, int) or not 1 <= m <= 1000:
-            raise CrmgraspError(f"max_steps must be an integer in [1, 1000], got {shown(m)}")
-        kw["max_steps"] = m
+        if isinstance(m, bool) or not isinstance(m, int):
+            raise CrmgraspError(f"max_steps must be an integer, got {shown(m)}")
+        kw["max_steps"] = m  # its bounds: Task's (MAX_STEPS)
     if d.get("reference_mean_steps") is not None:
         kw["reference_mean_steps"] = number(d["reference_mean_steps"], "reference_mean_steps")
     if "description" in d:

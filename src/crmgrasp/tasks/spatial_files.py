@@ -37,7 +37,16 @@ from crmgrasp.model.mesh import TriangleMesh, open_cup
 from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable
 from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, box3d
 from crmgrasp.model.spatial import CRM3D, Hand3D
-from crmgrasp.tasks.schema import checked_name, common_keys, crm_tables, number, numbers, section, table_keys
+from crmgrasp.tasks.schema import (
+    checked_name,
+    common_keys,
+    crm_tables,
+    init_keys,
+    number,
+    numbers,
+    section,
+    table_keys,
+)
 from crmgrasp.tasks.spatial import SpatialTask, SurfaceStarts
 
 __all__ = ["spatial_from_dict", "spatial_to_dict", "SPATIAL_KEYS"]
@@ -61,7 +70,6 @@ SPATIAL_KEYS = {
     "starts",
     "symmetry",
 }
-_HAND3D = {"aperture", "palm_depth", "backoff", "r_max", "min_separation", "palm_normal_tol", "h", "g"}
 _FAMILIES3D: dict[str, type] = {"box3d": BoxOnTable, "cylinder": CylinderOnTable}
 
 
@@ -73,7 +81,7 @@ def _vector(value: Any, key: str, n: int) -> tuple[float, ...]:
 
 
 def _hand(table: Any) -> Hand3D:
-    t = table_keys(table, "[hand]", _HAND3D, {"aperture", "palm_depth"})
+    t = table_keys(table, "[hand]", *init_keys(Hand3D))
     kw: dict[str, Any] = {
         k: _vector(v, f"hand.{k}", 3) if k in ("h", "g") else number(v, f"hand.{k}") for k, v in t.items()
     }
