@@ -304,6 +304,8 @@ def run_episode(
     else:
         config = kernel.sample_start(rng) if start is None else start
     now, advance = kernel.begin(config, rng), kernel.step_one
+    if now.terminated or now.truncated:  # a stepper that senses its start (a hand) may end here
+        return Episode(now.state.steps, now.terminated)
     policy.begin(now.percept)
     steps: list[Transition] = []
     while True:

@@ -28,6 +28,7 @@ from crmgrasp.model.contacts import Config
 from crmgrasp.model.hand import CRM, Error
 from crmgrasp.model.sensing import SensorNoise
 from crmgrasp.model.spatial import CRM3D, Config3D
+from crmgrasp.sim import OneStep, Percept, SimState, run_episode
 from crmgrasp.tasks import Task
 
 __all__ = ["HandInterface", "KinematicHand", "PolicyRunner", "RunResult", "log_columns"]
@@ -112,38 +113,100 @@ class PolicyRunner:
     def run(
         self, hand: HandInterface, rng: np.random.Generator, log: str | os.PathLike[str] | None = None
     ) -> RunResult:
-        """Run one episode; write the step log to ``log`` (CSV) if given."""
+        """Run one episode through the one episode loop (:func:`crmgrasp.sim.run_episode`,
+        with the hand as its stepper); write the step log to ``log`` (CSV) if given."""
         t = self.task
-        rows: list[list[Any]] = []
-        error = Error.NONE
-        seen: list[tuple[float, float, float, int]] = []
-        taken: list[int] = []
-        result = None
-        for step in range(t.max_steps + 1):
-            reading = hand.sense()
-            if isinstance(reading, NoContact):
-                result = RunResult(step, False, f"no contact: {reading.reason}")
-                break
-            obs = t.observe(reading)
-            index = t.discretizer.index(obs, error)
-            seen.append((obs.rho, obs.m_a, obs.m_b, int(error)))
-            raw: dict[str, Any] = getattr(hand, "raw_reading", dict)()
-            row = [step, *t.model.numbers(reading), *obs, index, t.discretizer.label(index)]
-            if t.is_success(reading):
-                rows.append([*row, "", "", "", dumps_json(raw, indent=None)])
-                result = RunResult(step, True, "grasp sensed")
-                break
-            if step == t.max_steps:
-                rows.append([*row, "", "", "", dumps_json(raw, indent=None)])
-                result = RunResult(step, False, "step limit")
-                break
-            action = self.policy.predict(seen, taken, rng)
-            taken.append(action)
-            crm = t.actions[action]
-            error = hand.execute(crm)
-            rows.append([*row, action, str(crm), error.name.lower(), dumps_json(raw, indent=None)])
-        assert result is not None
+        steps = _HandSteps(t, hand)
+        episode = run_episode(t, _Predicting(self.policy, rng), rng, trace=True, kernel=steps)
+        rows = [steps.row(tr.before, tr.action, tr.after.error) for tr in episode.trace]  # type: ignore[arg-type]
+        last = episode.trace[-1].after if episode.trace else steps.first
+        if steps.lost is None:
+            rows.append(steps.row(last))
+        if steps.lost is not None:
+            result = RunResult(last.state.steps, False, f"no contact: {steps.lost}")
+        elif episode.success:
+            result = RunResult(last.state.steps, True, "grasp sensed")
+        else:
+            result = RunResult(last.state.steps, False, "step limit")
         result.rows = rows
         if log is not None:
             write_csv(log, log_columns(t), rows)
         return result
+
+
+_HERE = object()
+"""The start of a run on a hand: wherever the hand is."""
+
+
+class _HandSteps:
+    """A hand as the episode loop's stepper: each step executes the CRM on the hand, then
+    senses once. The episode ends when the *sensed* configuration is a grasp (all a real
+    robot can check), when contact is lost, or after ``max_steps`` CRMs. It keeps what the
+    step log needs beside the steps: the raw sensor values of every reading."""
+
+    def __init__(self, task: Task, hand: HandInterface) -> None:
+        self.task, self.hand = task, hand
+        self.raws: list[dict[str, Any]] = []
+        self.lost: str | None = None
+        self.first: OneStep
+
+    def _sense(self, steps: int, error: Error) -> OneStep:
+        t, reading = self.task, self.hand.sense()
+        if isinstance(reading, NoContact):
+            self.lost = reading.reason
+            nan = float("nan")
+            return OneStep(SimState(None, None, steps), nan, nan, nan, error, -1, nan, -1.0, False, True)  # type: ignore[arg-type]
+        self.raws.append(getattr(self.hand, "raw_reading", dict)())
+        obs = t.observe(reading)
+        mu = t.quality(reading)
+        grasped = bool(t.grasped(mu))
+        index = t.discretizer.index(obs, error)
+        end = steps >= t.max_steps and not grasped
+        state = SimState(reading, reading, steps)  # type: ignore[arg-type]
+        return OneStep(state, *obs, error, index, mu, -1.0, grasped, end)
+
+    def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
+        self.first = self._sense(0, Error.NONE)
+        return self.first
+
+    def step_one(self, state: SimState, action: Any, rng: np.random.Generator) -> OneStep:
+        return self._sense(state.steps + 1, self.hand.execute(self.task.actions[action]))
+
+    def sample_start(self, rng: np.random.Generator) -> Any:
+        return _HERE
+
+    def use(self, instance: Task) -> None:
+        raise CrmgraspError("a hand runs where it is: it takes no world")
+
+    def row(self, now: OneStep, action: int | None = None, error: Error | None = None) -> list[Any]:
+        """The step log's row of a reading: contacts, observation, its bin and label, then
+        the action, its CRM and error (blank after the last reading), and the raw values."""
+        t = self.task
+        row: list[Any] = [now.state.steps, *t.model.numbers(now.state.sensed), *now.observation]
+        row += [now.obs_index, t.discretizer.label(now.obs_index)]
+        if action is None or error is None:
+            row += ["", "", ""]
+        else:
+            row += [action, str(t.actions[action]), error.name.lower()]
+        return [*row, dumps_json(self.raws[now.state.steps], indent=None)]
+
+
+class _Predicting:
+    """A saved policy (``predict(observations, actions, rng)``) as the episode loop's
+    :class:`~crmgrasp.sim.Policy`: it keeps the history of readings and actions."""
+
+    def __init__(self, policy: Any, rng: np.random.Generator) -> None:
+        self.policy, self.rng = policy, rng
+        self.seen: list[tuple[float, float, float, int]] = []
+        self.taken: list[int] = []
+
+    def begin(self, first: Percept) -> None:
+        self.seen, self.taken = [(*first.observation, int(first.error))], []
+
+    def act(self) -> int:
+        action = int(self.policy.predict(self.seen, self.taken, self.rng))
+        self.taken.append(action)
+        return action
+
+    def tell(self, percept: Percept) -> None:
+        self.seen.append((*percept.observation, int(percept.error)))
