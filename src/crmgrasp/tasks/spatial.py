@@ -139,11 +139,6 @@ class SpatialTask(Task):
         """The start rule: feasible (with the table) and not already a grasp."""
         return self.feasible(config) is Error.NONE and not self.is_success(config)
 
-    def contacts_toward(self, a: Any, b: Any) -> Config3D:
-        """The configuration with each contact where the ray from the object's centre
-        toward the point ``a`` (``b``) leaves it (:meth:`~crmgrasp.tasks.Task.place`)."""
-        return self.place(a, b)  # type: ignore[no-any-return]
-
     def sample_start(self, rng: np.random.Generator, accept: Any = None) -> Any:
         """A start on the object (:class:`SurfaceStarts`; ``accept``: a kernel's compiled
         decision, the same start either way)."""
