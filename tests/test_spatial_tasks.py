@@ -169,7 +169,7 @@ def test_episodes_step_through_the_one_loop_and_the_row_kernel_agrees() -> None:
             new[0], [*one.state.config.a.x, *one.state.config.a.n, *one.state.config.b.x, *one.state.config.b.n]
         )
         rho, m_a, m_b, index, mu = kernel.observe(new, new, err)
-        assert (rho[0], m_a[0], m_b[0], index[0], mu[0]) == (one.rho, one.m_a, one.m_b, one.obs_index, one.min_friction)
+        assert (rho[0], m_a[0], m_b[0], index[0], mu[0]) == (*one.observation, one.obs_index, one.min_friction)
 
 
 def test_upright_cylinders_need_one_crm_with_full_information() -> None:

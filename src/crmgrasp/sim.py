@@ -70,16 +70,15 @@ class Percept(NamedTuple):
 
 
 class OneStep(NamedTuple):
-    """The state after a reset or a CRM and what is sensed there, as plain numbers: the
-    result type of :func:`begin`, :func:`step` and every kernel's single step (the one
-    step type; :class:`Percept` is what a policy may see of it, and a kernel's
-    :class:`~crmgrasp.kernels.base.BatchStep` its batched form).
+    """The state after a reset or a CRM and what is sensed there: the result type of
+    :func:`begin`, :func:`step` and every kernel's single step (the one step type;
+    :class:`Percept` is what a policy may see of it, and a kernel's
+    :class:`~crmgrasp.kernels.base.BatchStep` its batched form). ``observation`` is the
+    contact model's observation of the reading (its ``observation_names``, in order);
     ``error`` is :class:`~crmgrasp.model.hand.Error` (an ``int``)."""
 
     state: SimState
-    rho: float
-    m_a: float
-    m_b: float
+    observation: Observation
     error: Error
     obs_index: int
     min_friction: float
@@ -88,15 +87,10 @@ class OneStep(NamedTuple):
     truncated: bool = False
 
     @property
-    def observation(self) -> Observation:
-        """``(rho, m_a, m_b)`` of the sensed configuration."""
-        return Observation(self.rho, self.m_a, self.m_b)
-
-    @property
     def percept(self) -> Percept:
         """What a policy perceives of this step."""
         return Percept(
-            Observation(self.rho, self.m_a, self.m_b),
+            self.observation,
             self.error,
             self.obs_index,
             self.state.sensed,
@@ -112,7 +106,7 @@ def begin(task: Task, config: Any, rng: np.random.Generator) -> OneStep:
     sensed = task.read(config, rng)
     obs = task.observe(sensed)
     index = task.discretizer.index(obs, Error.NONE)
-    return OneStep(SimState(config, sensed, 0), obs.rho, obs.m_a, obs.m_b, Error.NONE, index, task.quality(config))
+    return OneStep(SimState(config, sensed, 0), obs, Error.NONE, index, task.quality(config))
 
 
 def reset(task: Task, rng: np.random.Generator) -> OneStep:
@@ -136,9 +130,7 @@ def step(task: Task, state: SimState, action: Any, rng: np.random.Generator) -> 
     terminated, truncated = episode_end(task, mu, steps)
     return OneStep(
         SimState(out.config, sensed, steps),
-        obs.rho,
-        obs.m_a,
-        obs.m_b,
+        obs,
         out.error,
         task.discretizer.index(obs, out.error),
         mu,

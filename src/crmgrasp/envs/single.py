@@ -6,7 +6,6 @@
 
 from __future__ import annotations
 
-import operator
 from typing import Any
 
 import gymnasium as gym
@@ -101,10 +100,8 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         self.action_space = spaces.Discrete(len(self.task.actions))
         self._n_actions = len(self.task.actions)
         self.observation_space = observation_space(self.task.model)
-        names = self.task.model.observation_names
         bounds = self.task.model.observation_bounds()
-        self._clip = [(name, *bounds[name]) for name in names]
-        self._values = operator.attrgetter(*names)  # a step's observation, in the model's order
+        self._clip = [(name, *bounds[name]) for name in self.task.model.observation_names]
         self._state: SimState | None = None
         self._last: tuple[SimState, int] | None = None
         self._starts: list[tuple[float, ...]] = []
@@ -114,7 +111,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         """The observation (clipped into the space) and ``info`` of a kernel's result."""
         self._state = res.state
         obs: dict[str, Any] = {}
-        for (name, low, high), v in zip(self._clip, self._values(res)):
+        for (name, low, high), v in zip(self._clip, res.observation):
             if not (low <= v <= high):
                 v = low if v < low else high
             box = _empty(1)  # cheaper than np.array([v])

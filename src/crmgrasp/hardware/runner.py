@@ -26,7 +26,7 @@ from crmgrasp.agents.policy import GreedyPolicy
 from crmgrasp.hardware.contact_sensing import NoContact
 from crmgrasp.model.contacts import Config
 from crmgrasp.model.hand import CRM, Error
-from crmgrasp.model.sensing import SensorNoise
+from crmgrasp.model.sensing import Observation, SensorNoise
 from crmgrasp.model.spatial import CRM3D, Config3D
 from crmgrasp.sim import OneStep, Percept, SimState, run_episode
 from crmgrasp.tasks import Task
@@ -155,7 +155,8 @@ class _HandSteps:
         if isinstance(reading, NoContact):
             self.lost = reading.reason
             nan = float("nan")
-            return OneStep(SimState(None, None, steps), nan, nan, nan, error, -1, nan, -1.0, False, True)  # type: ignore[arg-type]
+            lost = Observation(nan, nan, nan)
+            return OneStep(SimState(None, None, steps), lost, error, -1, nan, -1.0, False, True)  # type: ignore[arg-type]
         self.raws.append(getattr(self.hand, "raw_reading", dict)())
         obs = t.observe(reading)
         mu = t.quality(reading)
@@ -163,7 +164,7 @@ class _HandSteps:
         index = t.discretizer.index(obs, error)
         end = steps >= t.max_steps and not grasped
         state = SimState(reading, reading, steps)  # type: ignore[arg-type]
-        return OneStep(state, *obs, error, index, mu, -1.0, grasped, end)
+        return OneStep(state, obs, error, index, mu, -1.0, grasped, end)
 
     def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
         self.first = self._sense(0, Error.NONE)

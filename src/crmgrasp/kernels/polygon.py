@@ -21,6 +21,7 @@ from crmgrasp.model import quality, shape
 from crmgrasp.model.contacts import Config, config_from_row
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.model.hand import CRM, Error
+from crmgrasp.model.sensing import Observation
 from crmgrasp.sim import OneStep, SimState, episode_end, step_reward
 from crmgrasp.tasks import Task
 
@@ -148,7 +149,7 @@ class FusedPolygonKernel(PolygonKernel):
         self._v_of = config
         index = jit.begin_one(self._v, self.th, self.p, self.q, self._out)
         _, _, _, _, _, _, _, _, rho, m_a, m_b, mu = self._out[0].tolist()
-        return OneStep(SimState(config, config, 0), rho, m_a, m_b, Error.NONE, index, mu)
+        return OneStep(SimState(config, config, 0), Observation(rho, m_a, m_b), Error.NONE, index, mu)
 
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
         if isinstance(action, CRM):  # a CRM outside the task's set: the reference step
@@ -169,7 +170,8 @@ class FusedPolygonKernel(PolygonKernel):
         terminated, truncated = episode_end(self.task, o[11], steps)
         state = SimState(config, config, steps)
         reward = step_reward(self.task, terminated, code)
-        return OneStep(state, o[8], o[9], o[10], _ERRORS[code], index, o[11], reward, terminated, truncated)
+        obs = Observation(o[8], o[9], o[10])
+        return OneStep(state, obs, _ERRORS[code], index, o[11], reward, terminated, truncated)
 
     def step_batch(
         self, cfg: F64, sen: F64, actions: I64, resets: NDArray[np.bool_], starts: F64, rng: np.random.Generator

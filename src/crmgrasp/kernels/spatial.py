@@ -19,6 +19,7 @@ from crmgrasp._validation import CrmgraspError
 from crmgrasp.kernels.base import F64
 from crmgrasp.kernels.reference import ReferenceKernel
 from crmgrasp.model.hand import Error
+from crmgrasp.model.sensing import Observation
 from crmgrasp.model.solids import Cylinder
 from crmgrasp.model.spatial import CRM3D, Config3D
 from crmgrasp.sim import OneStep, SimState, episode_end, step_reward
@@ -115,7 +116,7 @@ class FusedSpatialKernel(SpatialKernel):
         self._load(config)
         index = self._jit.begin_one(self._v, self.th, self.p, self.q, self._v)
         rho, m_a, m_b, mu = self._v[12:16].tolist()
-        return OneStep(SimState(config, config, 0), rho, m_a, m_b, Error.NONE, index, mu)
+        return OneStep(SimState(config, config, 0), Observation(rho, m_a, m_b), Error.NONE, index, mu)
 
     def step_one(self, state: SimState, action: Any, rng: np.random.Generator) -> OneStep:
         if isinstance(action, CRM3D):  # a CRM outside the task's set: the reference step
@@ -137,9 +138,7 @@ class FusedSpatialKernel(SpatialKernel):
         reward = step_reward(self.task, terminated, code)
         return OneStep(
             SimState(config, config, steps),
-            o[12],
-            o[13],
-            o[14],
+            Observation(o[12], o[13], o[14]),
             _ERRORS[code],
             index,
             o[15],
