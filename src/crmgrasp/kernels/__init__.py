@@ -158,4 +158,4 @@ def execute_batch(
         raise CrmgraspError("contact indices c and f must be 0 (a) or 1 (b)")
     if not np.all(np.isfinite(rr)) or np.any(np.abs(rr) > hand.r_max):  # type: ignore[operator]
         raise CrmgraspError(f"CRM offsets r must be finite and within r_max = {hand.r_max:g}")
-    return kernel_for(task, backend).execute_crms(cfg, sen, ci == 1, fi == 1, rr)
+    return kernel_for(task, backend).execute_crms(cfg, sen, ci, fi, rr)

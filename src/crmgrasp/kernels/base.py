@@ -44,10 +44,12 @@ class BatchStep(NamedTuple):
 
 
 @functools.lru_cache(maxsize=64)
-def _action_table(key: tuple[Any, ...], actions: Any) -> F64:
-    """The table of ``actions``, cached; ``key`` (labels and the offsets' reprs) tells
-    -0.0 from 0.0, which equality of the CRMs alone does not."""
-    table = np.array([(a.c == "b", a.f == "b", *np.atleast_1d(a.r)) for a in actions], dtype=np.float64)
+def _action_table(key: tuple[Any, ...], actions: Any, labels: tuple[str, ...]) -> F64:
+    """The table of ``actions``, cached: per CRM the index of the moving contact, of the
+    frame contact (in ``labels``' order) and the offset's coordinates; ``key`` (labels and
+    the offsets' reprs) tells -0.0 from 0.0, which equality of the CRMs alone does not."""
+    index = labels.index
+    table = np.array([(index(a.c), index(a.f), *np.atleast_1d(a.r)) for a in actions], dtype=np.float64)
     table.flags.writeable = False
     return table
 
@@ -78,9 +80,11 @@ class Kernel(ABC):
 
     @staticmethod
     def action_table(task: Task) -> F64:
-        """One row per action: ``(c is b, f is b, r)`` (``r_1, r_2`` for a spatial CRM); one
-        array per CRM set (a family task builds a kernel per episode), not to be written to."""
-        return _action_table(tuple((a.c, a.f, repr(a.r)) for a in task.actions), task.actions)
+        """One row per action: ``(c, f, r)``, the moving and the frame contact's indices and
+        the offset (``r_1, r_2`` for a spatial CRM; for two contacts the indices read as "is
+        b", which the compiled kernels take); one array per CRM set, not to be written to."""
+        key = tuple((a.c, a.f, repr(a.r)) for a in task.actions)
+        return _action_table(key, task.actions, task.model.labels)
 
     @property
     def instance(self) -> Task:
@@ -103,11 +107,10 @@ class Kernel(ABC):
 
     # ------------------------------------------------------------ the rules
     @abstractmethod
-    def execute_crms(
-        self, cfg: F64, sen: F64, c_is_b: NDArray[np.bool_], f_is_b: NDArray[np.bool_], r: F64
-    ) -> tuple[F64, NDArray[np.int8]]:
-        """The CRM ``(c, f, r)`` of each row from true rows ``cfg`` and sensed rows
-        ``sen`` (:func:`crmgrasp.model.hand.execute_crm`): new rows and error codes."""
+    def execute_crms(self, cfg: F64, sen: F64, c: I64, f: I64, r: F64) -> tuple[F64, NDArray[np.int8]]:
+        """The CRM ``(c, f, r)`` of each row (``c``, ``f``: contact indices in the model's
+        label order; ``r``: offsets) from true rows ``cfg`` and sensed rows ``sen`` (the
+        model's ``execute``): new rows and error codes."""
 
     @abstractmethod
     def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[F64, F64, F64, I64, F64]:
@@ -120,7 +123,7 @@ class Kernel(ABC):
         ``(N,)`` for a scalar offset, ``(N, offset_dim)`` otherwise)."""
         a = self.acts[actions]
         r = np.ascontiguousarray(a[:, 2]) if self.model.offset_dim == 1 else a[:, 2:]
-        return self.execute_crms(cfg, sen, a[:, 0] != 0.0, a[:, 1] != 0.0, r)
+        return self.execute_crms(cfg, sen, a[:, 0].astype(np.int64), a[:, 1].astype(np.int64), r)
 
     def sample_start(self, rng: np.random.Generator) -> Any:
         """One start (:meth:`crmgrasp.tasks.Task.sample_start`, with :attr:`start_filter`):

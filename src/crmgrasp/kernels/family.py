@@ -61,10 +61,8 @@ class FamilyKernel(Kernel):
         """Step ``instance`` from now on (:meth:`crmgrasp.sim.FamilyStepper.use`)."""
         self.stepper.use(instance)
 
-    def execute_crms(
-        self, cfg: F64, sen: F64, c_is_b: NDArray[np.bool_], f_is_b: NDArray[np.bool_], r: F64
-    ) -> tuple[F64, NDArray[np.int8]]:
-        return self.current.execute_crms(cfg, sen, c_is_b, f_is_b, r)
+    def execute_crms(self, cfg: F64, sen: F64, c: I64, f: I64, r: F64) -> tuple[F64, NDArray[np.int8]]:
+        return self.current.execute_crms(cfg, sen, c, f, r)
 
     def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[F64, F64, F64, I64, F64]:
         return self.current.observe(cfg, sen, err)

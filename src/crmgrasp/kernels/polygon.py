@@ -81,9 +81,9 @@ class PolygonKernel(Kernel):
     def _fresh(self) -> None:
         """Reset per-kernel buffers after a copy (none here)."""
 
-    def execute_crms(
-        self, cfg: F64, sen: F64, c_is_b: NDArray[np.bool_], f_is_b: NDArray[np.bool_], r: F64
-    ) -> tuple[F64, NDArray[np.int8]]:
+    def execute_crms(self, cfg: F64, sen: F64, c: I64, f: I64, r: F64) -> tuple[F64, NDArray[np.int8]]:
+        """The planar model's compiled CRMs: contact indices 0 (a) and 1 (b) become the
+        compiled code's "is b" flags here, at its boundary."""
         cfg = np.ascontiguousarray(cfg, dtype=np.float64)
         n = len(cfg)
         new = np.empty_like(cfg)
@@ -91,8 +91,8 @@ class PolygonKernel(Kernel):
         jit.execute_rows(
             cfg,
             np.ascontiguousarray(sen, dtype=np.float64),
-            np.ascontiguousarray(np.broadcast_to(c_is_b, n)),
-            np.ascontiguousarray(np.broadcast_to(f_is_b, n)),
+            np.ascontiguousarray(np.broadcast_to(np.asarray(c) == 1, n)),
+            np.ascontiguousarray(np.broadcast_to(np.asarray(f) == 1, n)),
             np.ascontiguousarray(np.broadcast_to(r, n), dtype=np.float64),
             self.e,
             self.p,

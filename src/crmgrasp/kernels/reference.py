@@ -25,34 +25,32 @@ class ReferenceKernel(Kernel):
 
     name = "reference"
 
-    def crm_of(self, c_is_b: bool, f_is_b: bool, r: Any) -> Any:
-        """The CRM of one row's ``(c is b, f is b, r)`` (the model's ``crm``)."""
-        return self.model.crm(int(c_is_b), int(f_is_b), r)
+    def crm_of(self, c: int, f: int, r: Any) -> Any:
+        """The CRM of one row's ``(c, f, r)`` (the model's ``crm``)."""
+        return self.model.crm(c, f, r)
 
     def row_of(self, config: Any) -> list[float]:
         """The row of a configuration (the model's ``row_of``)."""
         return self.model.row_of(config)
 
-    def execute_crms(
-        self, cfg: F64, sen: F64, c_is_b: NDArray[np.bool_], f_is_b: NDArray[np.bool_], r: F64
-    ) -> tuple[F64, NDArray[np.int8]]:
+    def execute_crms(self, cfg: F64, sen: F64, c: I64, f: I64, r: F64) -> tuple[F64, NDArray[np.int8]]:
         new = np.array(cfg, dtype=np.float64, copy=True).reshape(-1, self.model.row_width)
         n = len(new)
         err = np.zeros(n, dtype=np.int8)
-        crms: dict[tuple[bool, bool, Any], Any] = {}
+        crms: dict[tuple[int, int, Any], Any] = {}
         rr = np.broadcast_to(r, (n, *np.shape(r)[1:])).tolist()
         rows = zip(
             new.tolist(),
             np.asarray(sen).tolist(),
-            np.broadcast_to(c_is_b, n).tolist(),
-            np.broadcast_to(f_is_b, n).tolist(),
+            np.broadcast_to(c, n).tolist(),
+            np.broadcast_to(f, n).tolist(),
             rr,
         )
-        for j, (row, srow, cb, fb, rj) in enumerate(rows):
-            key = (cb, fb, tuple(rj) if isinstance(rj, list) else rj)
+        for j, (row, srow, cj, fj, rj) in enumerate(rows):
+            key = (cj, fj, tuple(rj) if isinstance(rj, list) else rj)
             crm = crms.get(key)
             if crm is None:
-                crm = crms[key] = self.crm_of(cb, fb, key[2])
+                crm = crms[key] = self.crm_of(cj, fj, key[2])
             out = self.task.execute(self.config_of(row), crm, self.config_of(srow))
             new[j] = self.row_of(out.config)
             err[j] = out.error
