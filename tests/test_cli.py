@@ -226,7 +226,8 @@ def test_the_command_line_shows_what_the_library_knows():
 def test_every_option_shows_its_default_or_choices():
     import argparse
 
-    from crmgrasp.cli.parser import _Help, build_parser
+    from crmgrasp.cli.options import _Help
+    from crmgrasp.cli.parser import build_parser
 
     parser = build_parser()
     subs = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))

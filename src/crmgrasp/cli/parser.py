@@ -1,224 +1,38 @@
-"""Argument parser of the ``crmgrasp`` command (one-line errors, negative-number values)."""
+"""Argument parser of the ``crmgrasp`` command: one builder per command (:data:`COMMANDS`), on
+the shared option groups of :mod:`crmgrasp.cli.options`."""
 
 from __future__ import annotations
 
 import argparse
-import re
 from collections.abc import Callable
-from pathlib import Path
-from typing import Any, NoReturn
+from typing import Any
 
 from crmgrasp import __version__
-from crmgrasp._validation import SEED_MAX, CrmgraspError, as_point, finite, integer, shown
 from crmgrasp.agents.presets import PRESETS
 from crmgrasp.agents.training import AGENTS, parameter_defaults
+from crmgrasp.cli.options import (
+    _EPISODES,
+    _EVAL_EPISODES,
+    _SEED,
+    _STARTS,
+    _TRIALS,
+    _add_hand,
+    _add_jobs,
+    _add_kernel_backend,
+    _add_quiet,
+    _add_run,
+    _add_scene_args,
+    _add_task,
+    _int,
+    _number,
+    _Parser,
+    _path,
+    _point,
+)
 from crmgrasp.experiments.registry import EXPERIMENTS
 from crmgrasp.model.history import MAX_K
-from crmgrasp.tasks import Task
-from crmgrasp.tasks.presets import START_PRESETS
 
 __all__ = ["build_parser"]
-
-_NUMBERISH = re.compile(r"^-[\d.]")
-
-
-class _Help(argparse.HelpFormatter):
-    """Help that shows every option's default (unless its text already states it)."""
-
-    def _get_help_string(self, action: argparse.Action) -> str | None:
-        text = action.help or ""
-        if (
-            "default" in text
-            or action.default is None
-            or action.default is False
-            or action.default == argparse.SUPPRESS
-            or action.option_strings == []
-            or isinstance(action, (argparse._StoreTrueAction, argparse._VersionAction))
-        ):
-            return text
-        return f"{text} (default: %(default)s)"
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse with one-line errors, defaults in the help, and values such as
-    ``-0.15,-0.02``."""
-
-    def __init__(self, *args: object, **kwargs: object) -> None:
-        kwargs.setdefault("formatter_class", _Help)
-        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
-        self._negative_number_matcher = _NUMBERISH
-
-    def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
-
-
-def _point(text: str) -> tuple[float, ...]:
-    """X,Y (a planar task) or X,Y,Z (a spatial one; the task checks which it needs)."""
-    parts = str(text).split(",")
-    if len(parts) not in (2, 3):
-        raise argparse.ArgumentTypeError(f"expected X,Y or X,Y,Z (numbers), got {text!r}")
-    try:
-        xy = as_point(parts[:2], "point")
-        return xy if len(parts) == 2 else (*xy, finite(parts[2], "point z"))
-    except CrmgraspError as exc:
-        raise argparse.ArgumentTypeError(f"{exc} in {text!r}") from None
-
-
-def _int(low: int, high: int) -> Callable[[str], int]:
-    """An argparse type: an integer in ``[low, high]`` written in ASCII digits."""
-
-    def parse(text: str) -> int:
-        try:
-            return integer(text, "value", low, high)
-        except CrmgraspError as exc:
-            raise argparse.ArgumentTypeError(str(exc)) from None
-
-    parse.__name__ = "integer"
-    return parse
-
-
-_SEED = _int(0, SEED_MAX)
-_TRIALS = _int(1, 100_000)
-_EPISODES = _int(1, 10_000_000)
-_EVAL_EPISODES = _int(0, 10_000_000)
-_STARTS = _int(1, 1_000_000)
-
-
-def _path(text: str) -> Path:
-    """An argparse type: a non-empty path (``Path("")`` would silently mean ``.``)."""
-    if text == "":
-        raise argparse.ArgumentTypeError("the path is empty")
-    return Path(text)
-
-
-def _number(text: str) -> float:
-    try:
-        return finite(text, "value")
-    except CrmgraspError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-
-
-def _resolve_crm(task: Task, text: str) -> Any:
-    """``C1``..``Cn`` names the task's actions; anything else is parsed as ``c,f,r``."""
-    m = re.fullmatch(r"[Cc]([0-9]+)", text.strip())
-    if m:
-        i = int(m.group(1)) if len(m.group(1)) <= 6 else 0
-        if not 1 <= i <= len(task.actions):
-            raise CrmgraspError(f"task {task.name} has actions C1..C{len(task.actions)}, got {shown(text)}")
-        return task.actions[i - 1]
-    try:
-        return task.model.parse_crm(text)
-    except CrmgraspError as exc:
-        raise CrmgraspError(f"{exc} (or name one of the task's actions C1..C{len(task.actions)})") from None
-
-
-def _add_task(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--task",
-        default="paper-box",
-        metavar="TASK",
-        help="a registered task (`crmgrasp tasks` lists them), a .toml task file "
-        "(`crmgrasp task-template` writes one), or package.module:factory (default: paper-box)",
-    )
-    p.add_argument(
-        "--start-preset",
-        choices=tuple(START_PRESETS),
-        default=None,
-        help="replace the task's start distribution by a preset: corners (the paper-box rule), near-corner "
-        "(both contacts within 0.10 m of a corner, like Fig. 8a), long-side (the long-side contact over 0.10 m "
-        "from the corner, like Fig. 9), mixture (40%% near-corner, 60%% long-side) (default: the task's own)",
-    )
-    p.add_argument(
-        "--grasp-reward",
-        type=_number,
-        default=None,
-        metavar="R",
-        help="reward of the grasping CRM, every other CRM -1 (default: the task's own, -1 for paper-box; "
-        "0 reads the paper's reward as -1 in every non-goal state)",
-    )
-
-
-def _add_run(p: argparse.ArgumentParser, command: str) -> None:
-    """The run-folder and progress options of a command that writes a run."""
-    p.add_argument(
-        "--out",
-        type=_path,
-        default=None,
-        metavar="DIR",
-        help=f"run folder (default: runs/{command}-<task>-<UTC time>); an existing non-empty one is "
-        "refused unless --overwrite or --resume",
-    )
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("--overwrite", action="store_true", help="replace the run in --out (it must be a run folder)")
-    g.add_argument(
-        "--resume", action="store_true", help="continue the interrupted run in --out (same settings; done work is kept)"
-    )
-    _add_quiet(p)
-
-
-JOBS_DEFAULT = 1
-"""``--jobs`` of every command that runs workers: one process unless asked for more."""
-
-
-def _add_jobs(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--jobs",
-        type=_int(0, 1024),
-        default=JOBS_DEFAULT,
-        metavar="N",
-        help=f"worker processes running at once, 0 for every usable core (the same results) (default {JOBS_DEFAULT})",
-    )
-
-
-def _add_quiet(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--quiet", action="store_true", help="no progress display")
-
-
-def _add_scene_args(p: argparse.ArgumentParser, crm_required: bool) -> None:
-    _add_task(p)
-    p.add_argument(
-        "--a", type=_point, required=True, metavar="X,Y", help="point projected onto the boundary for contact a (m)"
-    )
-    p.add_argument(
-        "--b", type=_point, required=True, metavar="X,Y", help="point projected onto the boundary for contact b (m)"
-    )
-    p.add_argument(
-        "--crm",
-        required=crm_required,
-        metavar="C",
-        help="CRM as c,f,r (e.g. a,b,0 or b,b,-0.08) or a task action C1..Cn",
-    )
-    p.add_argument(
-        "--sigma-n-deg",
-        type=_number,
-        default=0.0,
-        metavar="DEG",
-        help="normal sensing noise, degrees (task files state it in radians: noise.sigma_n) (default 0)",
-    )
-    p.add_argument(
-        "--sigma-p", type=_number, default=0.0, metavar="M", help="position sensing noise, metres (default 0)"
-    )
-    p.add_argument("--seed", type=_SEED, default=0, help="seed of the sensing noise (default 0; 0 to 2**63-1)")
-
-
-def _add_kernel_backend(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--backend",
-        choices=("auto", "numba", "reference"),
-        default="auto",
-        help="kernel that episodes step through: compiled where one exists (auto, default), compiled "
-        "(numba), or the readable rules (reference); all give the same results",
-    )
-
-
-def _add_hand(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--hand",
-        choices=("kinematic", "mujoco"),
-        default="kinematic",
-        help="kinematic simulator (default) or the MuJoCo stand-in hand (extra crmgrasp[mujoco]; "
-        "fingertip palm tolerance 10 degrees, its own sensor noise)",
-    )
 
 
 def _parser_crm(sub: Any) -> None:

@@ -17,7 +17,7 @@ import numpy as np
 from crmgrasp._io import check_output, dumps_json, save_figure
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.cli.common import _task
-from crmgrasp.cli.parser import _resolve_crm
+from crmgrasp.cli.options import _resolve_crm
 from crmgrasp.model.hand import Error
 from crmgrasp.model.quality import min_friction
 from crmgrasp.model.sensing import SensorNoise, observe
