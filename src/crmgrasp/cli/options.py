@@ -183,6 +183,12 @@ def _add_scene_args(p: argparse.ArgumentParser, crm_required: bool) -> None:
         metavar="C",
         help="CRM as c,f,r (e.g. a,b,0 or b,b,-0.08) or a task action C1..Cn",
     )
+    _add_noise(p)
+    p.add_argument("--seed", type=_SEED, default=0, help="seed of the sensing noise (default 0; 0 to 2**63-1)")
+
+
+def _add_noise(p: argparse.ArgumentParser) -> None:
+    """The sensing noise of a scene or a run: ``--sigma-n-deg`` (degrees) and ``--sigma-p`` (m)."""
     p.add_argument(
         "--sigma-n-deg",
         type=_number,
@@ -193,7 +199,6 @@ def _add_scene_args(p: argparse.ArgumentParser, crm_required: bool) -> None:
     p.add_argument(
         "--sigma-p", type=_number, default=0.0, metavar="M", help="position sensing noise, metres (default 0)"
     )
-    p.add_argument("--seed", type=_SEED, default=0, help="seed of the sensing noise (default 0; 0 to 2**63-1)")
 
 
 def _add_kernel_backend(p: argparse.ArgumentParser) -> None:

@@ -19,6 +19,7 @@ from crmgrasp.cli.options import (
     _add_hand,
     _add_jobs,
     _add_kernel_backend,
+    _add_noise,
     _add_quiet,
     _add_run,
     _add_scene_args,
@@ -283,16 +284,7 @@ def _parser_run(sub: Any) -> None:
     p.add_argument("--a", type=_point, required=True, metavar="X,Y[,Z]", help="start point for contact a (m)")
     p.add_argument("--b", type=_point, required=True, metavar="X,Y[,Z]", help="start point for contact b (m)")
     p.add_argument("--log", type=_path, required=True, help="CSV step log to write")
-    p.add_argument(
-        "--sigma-n-deg",
-        type=_number,
-        default=0.0,
-        metavar="DEG",
-        help="normal sensing noise, degrees (task files state it in radians: noise.sigma_n) (default 0)",
-    )
-    p.add_argument(
-        "--sigma-p", type=_number, default=0.0, metavar="M", help="position sensing noise, metres (default 0)"
-    )
+    _add_noise(p)
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
     _add_hand(p)
 

@@ -29,7 +29,7 @@ def _scene(args: argparse.Namespace) -> tuple[Task, Any, Any, SensorNoise, np.ra
     task = _task(args)
     config = _place(task, args)
     crm = _resolve_crm(task, args.crm) if args.crm is not None else None
-    noise = SensorNoise(math.radians(args.sigma_n_deg), args.sigma_p)
+    noise = _noise(args)
     return task, config, crm, noise, np.random.default_rng(args.seed)
 
 
@@ -41,6 +41,11 @@ def _place(task: Task, args: argparse.Namespace) -> Any:
         axes = ",".join("XYZ"[:dim])
         raise CrmgraspError(f"--a and --b take {axes} on the {task.model.kind} task {task.name!r}")
     return task.place(args.a, args.b)
+
+
+def _noise(args: argparse.Namespace) -> SensorNoise:
+    """The sensing noise of --sigma-n-deg (degrees) and --sigma-p (metres)."""
+    return SensorNoise(math.radians(args.sigma_n_deg), args.sigma_p)
 
 
 def _sensing(task: Task, noise: SensorNoise) -> Task:
@@ -174,7 +179,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         task = hardware_task(task)
         hand: Any = mujoco_hand(task, start, rng)
     else:
-        hand = KinematicHand(task, start, rng, SensorNoise(math.radians(args.sigma_n_deg), args.sigma_p))
+        hand = KinematicHand(task, start, rng, _noise(args))
     res = PolicyRunner(policy, task).run(hand, rng, log=args.log)
     crms = " ".join(r[-3] for r in res.rows if r[-3])
     true = hand.config if args.hand == "kinematic" else hand.true_config()

@@ -100,8 +100,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         self.action_space = spaces.Discrete(len(self.task.actions))
         self._n_actions = len(self.task.actions)
         self.observation_space = observation_space(self.task.model)
-        bounds = self.task.model.observation_bounds()
-        self._clip = [(name, *bounds[name]) for name in self.task.model.observation_names]
+        self._clip = [(name, *self.kernel.bounds[name]) for name in self.task.model.observation_names]
         self._state: SimState | None = None
         self._last: tuple[SimState, int] | None = None
         self._starts: list[tuple[float, ...]] = []
