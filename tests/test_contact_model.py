@@ -112,3 +112,89 @@ def test_the_isinstance_finder_finds_one(tmp_path):
     f = tmp_path / "m.py"
     f.write_text("def g(t):\n    return isinstance(t, (int, SpatialTask))\n")
     assert _task_isinstance(f) == [2]
+
+
+OBSERVATION_NAMES = set(PlanarModel.observation_names) | set(SpatialModel.observation_names)
+
+
+def _named_observations(path: Path) -> list[int]:
+    """Lines where code (not a docstring) writes an observation quantity's name: a string,
+    an attribute, a variable or a keyword ``m_a``; the keywords of a ``Discretizer(...)``
+    call are a task's own bins and allowed in the task layer."""
+    tree = ast.parse(path.read_text())
+    docs = {
+        id(node.body[0].value)
+        for node in ast.walk(tree)
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef))
+        and node.body
+        and isinstance(node.body[0], ast.Expr)
+        and isinstance(node.body[0].value, ast.Constant)
+    }
+    bins = {
+        id(kw)
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "Discretizer"
+        for kw in node.keywords
+    }
+    task_layer = path.relative_to(PKG).parts[0] == "tasks" if path.is_relative_to(PKG) else False
+    lines = []
+    for node in ast.walk(tree):
+        name = (
+            node.value
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docs
+            else getattr(node, "attr", None) or getattr(node, "id", None)
+        )
+        if isinstance(node, ast.keyword) and not (task_layer and id(node) in bins):
+            name = node.arg
+        if name in OBSERVATION_NAMES:
+            lines.append(node.lineno if hasattr(node, "lineno") else node.value.lineno)
+    return sorted(lines)
+
+
+def test_no_observation_name_outside_the_model_and_its_kernels():
+    """Code above the model reads the observation's names from the task's model."""
+    found = {
+        str(p.relative_to(PKG)): lines
+        for p in PKG.rglob("*.py")
+        if p.relative_to(PKG).parts[0] not in ("model", "kernels") and (lines := _named_observations(p))
+    }
+    assert found == {}
+
+
+def test_the_observation_name_finder_finds_each_form(tmp_path):
+    f = tmp_path / "m.py"
+    f.write_text('"""m_a in a docstring is fine."""\ndef g(o):\n    x = o.m_a\n    return {"m_b": x}, f(rho=1)\n')
+    assert _named_observations(f) == [3, 4, 4]
+
+
+def test_bins_over_any_observation_names():
+    from crmgrasp.model.sensing import Discretizer, Error
+
+    d = Discretizer(names=("rho", "m_a", "m_b", "m_c"), m_c=(0.05, 0.2))
+    assert d.sizes == (2, 2, 2, 3) and d.size == 2 * 2 * 2 * 3 * 3
+    seen = set()
+    for i in range(d.size):
+        bins, err = d.decode(i)
+        assert d.compose(bins, err) == i
+        seen.add(i)
+    assert seen == set(range(d.size))
+    assert d.index((2.0, 0.0, -0.3, -0.1), Error.PALM) == d.compose((1, 0, 1, 1), 2)
+    assert d.to_dict() == {"rho": [1.0], "m_a": [0.1], "m_b": [0.1], "m_c": [0.05, 0.2], "abs_moments": True}
+    assert Discretizer(names=d.names, **{k: v for k, v in d.to_dict().items()}) == d
+    assert repr(Discretizer()) == "Discretizer(rho=(1.0,), m_a=(0.1,), m_b=(0.1,), abs_moments=True)"
+
+
+def test_a_task_refuses_bins_over_other_quantities():
+    import dataclasses
+
+    from crmgrasp.model.sensing import Discretizer
+
+    with pytest.raises(CrmgraspError, match="bins are over rho, m_a, m_b, m_c, but the planar model observes"):
+        dataclasses.replace(make_task("paper-box"), discretizer=Discretizer(names=("rho", "m_a", "m_b", "m_c")))
+
+
+def test_the_model_says_where_each_moment_is_and_what_a_mirror_swaps():
+    for name in ("paper-box", "cup-3d"):
+        model = make_task(name).model
+        assert [model.observation_names[model.moment_index(lab)] for lab in model.labels] == ["m_a", "m_b"]
+        assert [model.observation_names[i] for i in model.mirror_axes] == ["rho", "m_b", "m_a"]

@@ -4,6 +4,7 @@ import csv
 import json
 
 import numpy as np
+import pytest
 
 from crmgrasp import Error, min_friction
 from crmgrasp.agents.controller import GraspController, run_controller
@@ -77,3 +78,11 @@ def test_compare_cli_quick(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "belief-space optimum" in out and "grasp controller" in out
     assert main(["compare", "--task", "nope", "--out", str(tmp_path)]) == 2
+
+
+def test_the_controller_refuses_a_spatial_task():
+    from crmgrasp import CrmgraspError, make_task
+    from crmgrasp.agents.controller import GraspController
+
+    with pytest.raises(CrmgraspError, match="two contacts in the plane; 'cup-3d' is spatial"):
+        GraspController(make_task("cup-3d"))

@@ -25,7 +25,7 @@ TINY = RecurrentPPOConfig(total_steps=512, n_envs=2, n_steps=64, checkpoint_epis
 
 
 def test_features_scale_clip_and_one_hot():
-    v = features(2.0, 0.16, -1.0, 2, aperture=0.16)
+    v = features((2.0, 0.16, -1.0), 2, ((0.0, 4.0), (-0.32, 0.32), (-0.32, 0.32)))
     np.testing.assert_allclose(v, [0.5, 0.5, -1.0, 0.0, 0.0, 1.0])
     assert v.dtype == np.float32
 
@@ -147,6 +147,6 @@ def test_recurrent_policy_saves_loads_predicts_and_runs(tmp_path, capsys):
 
 
 def policy_features(task, obs):
-    from crmgrasp.agents.deep import features
+    from crmgrasp.agents.deep import bounds_of, features
 
-    return features(obs[0], obs[1], obs[2], obs[3], task.hand.aperture)
+    return features(obs[:-1], obs[-1], bounds_of(task))

@@ -86,3 +86,14 @@ def test_site_builds_strictly(tmp_path):
     )
     assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-6000:]
     assert (tmp_path / "site" / "index.html").exists() and (tmp_path / "site" / "api" / "model" / "index.html").exists()
+
+
+def test_the_task_file_key_table_is_the_one_the_code_states(capsys):
+    """docs/usage.md's key table is `crmgrasp task-template --keys`, generated from the classes."""
+    from crmgrasp.tasks.files import key_reference
+
+    text = (ROOT / "docs" / "usage.md").read_text(encoding="utf-8")
+    block = text.split("<!-- task-keys:start -->\n", 1)[1].split("<!-- task-keys:end -->", 1)[0]
+    assert block == key_reference()
+    assert main(["task-template", "--keys"]) == 0 and capsys.readouterr().out == block
+    assert '| [starts] kind = "vertex" | `incoming` | 2 numbers | [0.005, 0.05] |' in block

@@ -54,7 +54,7 @@ def _crm_arrays(crms: list[CRM]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def _odd_task() -> Task:
     """A hexagon, other bins (more than three thresholds, signed moments) and CRMs."""
-    disc = Discretizer((0.5, 1.0, 2.0, 3.0), tuple(np.linspace(-0.1, 0.1, 5)), (), abs_moments=False)
+    disc = Discretizer(rho=(0.5, 1.0, 2.0, 3.0), m_a=tuple(np.linspace(-0.1, 0.1, 5)), m_b=(), abs_moments=False)
     crms = (CRM("a", "b", 0.0), CRM("b", "a", 0.01), CRM("a", "a", 0.05), CRM("b", "b", -0.05))
     return Task("hexagon", regular_polygon(6, 0.08), Hand(0.2, 0.05), crms, discretizer=disc)
 
@@ -257,8 +257,8 @@ def test_batch_input_errors(task):
     "disc",
     [
         Discretizer(),
-        Discretizer((0.5, 1.5), (0.02, 0.1, 0.2), ()),
-        Discretizer((1.0,), tuple(np.linspace(-0.2, 0.2, 9)), (0.1,), abs_moments=False),
+        Discretizer(rho=(0.5, 1.5), m_a=(0.02, 0.1, 0.2), m_b=()),
+        Discretizer(rho=(1.0,), m_a=tuple(np.linspace(-0.2, 0.2, 9)), m_b=(0.1,), abs_moments=False),
     ],
 )
 @pytest.mark.parametrize("noisy", [False, True])

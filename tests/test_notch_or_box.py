@@ -149,7 +149,7 @@ def test_the_task_in_a_file(tmp_path) -> None:  # type: ignore[no-untyped-def]
         obj, a = world.task.obj, world.config.a
         assert obj.edge_index((a.x, a.y)) == len(obj.vertices) - 1
     path.write_text(NOTCH_TOML.replace("incoming = [0.005, 0.045]", "incoming = [0.005, 0.045, 0.1]"))
-    with pytest.raises(CrmgraspError, match="incoming and outgoing must be \\[low, high\\]"):
+    with pytest.raises(CrmgraspError, match=r"\[starts\] incoming must have 2 numbers, got 3"):
         load_task_file(path)
     path.write_text(
         NOTCH_TOML.replace(

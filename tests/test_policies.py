@@ -42,7 +42,7 @@ def test_predict_takes_raw_observations_and_checks_the_history():
     policy = _policy()
     d = policy.task.discretizer
     raw = (2.0, 0.05, -0.12, 0)
-    assert policy.predict([raw]) == policy.predict([d.index_of(*raw)])
+    assert policy.predict([raw]) == policy.predict([d.index(raw[:-1], raw[-1])])
     for observations, actions, message in (
         ([], [], "one more observation"),
         ([0, 1], [], "one more observation"),
@@ -77,3 +77,28 @@ def test_internal_errors_are_one_line(monkeypatch, capsys):
     assert main(["tasks"]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "internal error (ZeroDivisionError: deep inside second line)" in err
+
+
+def test_a_policy_saved_before_a_key_was_written_still_loads(tmp_path):
+    """A stored task spec is compared as today's writer states it: a file whose spec lacks
+    a key that reads back as its default (``max_tries`` of the starts, written since) loads;
+    one that differs in a value does not."""
+    from crmgrasp.agents.policy import policy_digest
+
+    policy = _policy()
+    doc = policy.to_dict()
+    assert doc["task_spec"]["starts"] == {"kind": "corners", "max_tries": 10_000}
+    for change, ok in (
+        (lambda s: s["starts"].pop("max_tries"), True),
+        (lambda s: s["hand"].update(aperture=0.2), False),
+    ):
+        old = {k: v for k, v in policy.to_dict().items() if k != "sha256"}
+        change(old["task_spec"])
+        old["sha256"] = policy_digest(old)
+        if ok:
+            assert GreedyPolicy.from_dict(old, paper_box()).table == policy.table
+        else:
+            with pytest.raises(
+                CrmgraspError, match=r"another version of task 'paper-box' \(it differs in hand.aperture\)"
+            ):
+                GreedyPolicy.from_dict(old, paper_box())

@@ -20,8 +20,7 @@ def test_paper_bins_roundtrip_all_24():
                 for err in Error:
                     i = d.index(Observation(rho, ma, mb), err)
                     seen.add(i)
-                    r, a, b, e = d.decode(i)
-                    assert (r, a, b, e) == (int(rho >= 1), int(abs(ma) >= 0.1), int(abs(mb) >= 0.1), err)
+                    assert d.decode(i) == ((int(rho >= 1), int(abs(ma) >= 0.1), int(abs(mb) >= 0.1)), err)
     assert seen == set(range(24))
     assert d.label(0) == "rho<1 |m_a|<0.1 |m_b|<0.1 error=none"
     assert d.label(23) == "rho>=1 |m_a|>=0.1 |m_b|>=0.1 error=palm"

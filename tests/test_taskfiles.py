@@ -188,3 +188,52 @@ def test_every_registered_task_round_trips(name):
     task = make_task(name)
     again = task_from_dict(task_to_dict(task))
     assert again == task and again.model == task.model
+
+
+@pytest.mark.parametrize(
+    ("starts", "message"),
+    [
+        ({"kind": "long-side", "hi": "0.2"}, "[starts] hi must be a finite number"),
+        ({"kind": "long-side", "hi": True}, "[starts] hi must be a finite number"),
+        ({"kind": "vertex", "vertex": 1.5}, "[starts] vertex must be an integer"),
+        ({"kind": "corners", "max_tries": 0}, "max_tries must be an integer in [1, 1000000]"),
+        ({"kind": "boundary", "near_vertex": "x"}, "[starts] near_vertex must be a finite number"),
+        ({"kind": "vertex", "a_on": 3}, "[starts] a_on must be a string"),
+        ({"kind": "near-corner", "lo": 0.1}, "kind 'near-corner' takes no lo; it takes max_tries, within"),
+    ],
+)
+def test_start_keys_are_typed_by_their_class(starts, message):
+    doc = {**task_to_dict(paper_box()), "starts": starts, "symmetry": None}
+    with pytest.raises(CrmgraspError) as err:
+        task_from_dict(doc)
+    assert message in str(err.value) and "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize(
+    "starts",
+    [
+        {"kind": "corners", "max_tries": 7},
+        {"kind": "uniform"},
+        {"kind": "near-corner", "within": 0.05},
+        {"kind": "long-side", "lo": 0.02, "hi": 0.2},
+        {"kind": "long-side"},
+        {"kind": "boundary", "near_vertex": 0.03, "max_tries": 50},
+        {"kind": "vertex", "vertex": 2, "incoming": [0.01, 0.02], "a_on": "outgoing"},
+        {"kind": "mixture", "mix": [{"kind": "near-corner", "weight": 2.0}, {"kind": "uniform", "weight": 1.0}]},
+    ],
+)
+def test_every_start_kind_round_trips_with_its_keys(starts):
+    task = task_from_dict({**task_to_dict(paper_box()), "starts": starts, "symmetry": None})
+    assert task_from_dict(task_to_dict(task)) == task
+    written = task_to_dict(task)["starts"]
+    assert written["kind"] == starts["kind"] and all(written[k] == v for k, v in starts.items() if k != "mix")
+
+
+def test_spatial_starts_up_is_a_cosine():
+    from crmgrasp.tasks import make_task
+
+    doc = task_to_dict(make_task("cup-3d"))
+    assert doc["starts"] == {"kind": "surface", "max_tries": 10_000, "up": 0.5}
+    for up, message in ((2, r"starts.up is a cosine and must be in \[-1, 1\], got 2"), ("1", "starts.up must be a")):
+        with pytest.raises(CrmgraspError, match=message):
+            task_from_dict({**doc, "starts": {"kind": "surface", "up": up}})

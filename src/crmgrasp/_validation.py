@@ -4,10 +4,24 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["CrmgraspError", "as_point", "finite", "positive", "non_negative", "integer", "shown", "SEED_MAX"]
+__all__ = [
+    "CrmgraspError",
+    "as_point",
+    "finite",
+    "positive",
+    "non_negative",
+    "integer",
+    "shown",
+    "tries",
+    "SEED_MAX",
+    "MAX_TRIES",
+]
 
 SEED_MAX = 2**63 - 1
 """Largest seed accepted anywhere (seeds are non-negative and fit a signed 64-bit integer)."""
+
+MAX_TRIES = 1_000_000
+"""The most attempts a sampler may be given (``max_tries``) before it gives up."""
 
 _MAX_DIGITS = 30  # longer integers are refused before conversion (no run needs more)
 
@@ -96,3 +110,12 @@ def integer(value: object, name: str, low: int, high: int) -> int:
     if not low <= value <= high:
         raise CrmgraspError(f"{name} must be an integer in [{low}, {high}], got {value}")
     return value
+
+
+def tries(value: object) -> int:
+    """A sampler's ``max_tries``: an integer in ``[1, MAX_TRIES]``.
+
+    >>> tries(10)
+    10
+    """
+    return integer(value, "max_tries", 1, MAX_TRIES)

@@ -28,9 +28,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.contacts import Config
 from crmgrasp.model.hand import CRM, Error
-from crmgrasp.model.sensing import observe
 from crmgrasp.sim import Percept, run_episode
 from crmgrasp.tasks import Task
 
@@ -43,6 +43,9 @@ class GraspController:
     name = "grasp-controller"
 
     def __init__(self, task: Task, r_step: float | None = None) -> None:
+        if task.model.kind != "planar":
+            kind = task.model.kind
+            raise CrmgraspError(f"the grasp controller drives two contacts in the plane; {task.name!r} is {kind}")
         self.task = task
         own = [abs(a.r) for a in task.actions if a.c == a.f]
         self.r_step = r_step if r_step is not None else (max(own) if own else 0.5 * task.hand.aperture)
@@ -68,14 +71,15 @@ class GraspController:
 
     def choose(self, sensed: Config) -> CRM:
         """The next CRM, given the sensed configuration and the last CRM's outcome."""
-        _, m_a, m_b = observe(sensed)
+        _, *moments = self.task.observe(sensed)
+        m = dict(zip(self.task.model.labels, moments, strict=True))  # the moment about each contact
         last = self._last
         if last is None or self._last_error is Error.NONE:
-            c = "a" if abs(m_a) >= abs(m_b) else "b"
+            c = "a" if abs(m["a"]) >= abs(m["b"]) else "b"
             return CRM(c, "b" if c == "a" else "a", 0.0)
         if last.opposition:
-            m = m_a if last.c == "a" else m_b
-            r = float(np.clip(-m, -self.r_step, self.r_step))
+            m_c = m[last.c]
+            r = float(np.clip(-m_c, -self.r_step, self.r_step))
             if abs(r) >= 1e-3:
                 return CRM(last.f, last.f, r)
         # the slide failed, or would be too short to matter: oppose with the other contact

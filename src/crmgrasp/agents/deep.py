@@ -5,8 +5,9 @@ this module imports them only when training or evaluating, and raises a one-line
 :class:`~crmgrasp._validation.CrmgraspError` naming the extra when they are missing.
 
 The policy sees what the tabular learners see before discretisation, as a float
-vector ``[rho / 4, m_a / (2A), m_b / (2A), one-hot(error)]`` (``A`` the hand
-aperture, values clipped as in :class:`~crmgrasp.envs.single.CRMGraspEnv`); the LSTM
+vector: each of the contact model's observation quantities scaled by its bound
+(``[rho / 4, m_a / (2A), m_b / (2A)]`` for two contacts, ``A`` the hand aperture, values
+clipped as in :class:`~crmgrasp.envs.single.CRMGraspEnv`), then the error flag one-hot; the LSTM
 carries the history that the k-order state spells out for the tabular learners.
 Training runs ``n_envs`` environments in a ``DummyVecEnv`` with one torch thread
 (deterministic for a seed on a given machine). The learning curve is the CRMs
@@ -48,20 +49,29 @@ __all__ = [
     "train_recurrent_ppo",
     "evaluate_recurrent",
     "RecurrentPolicy",
+    "features",
+    "bounds_of",
 ]
 
 N_ERRORS = len(Error)
 
 
-def features(rho: float, m_a: float, m_b: float, error: int, aperture: float) -> np.ndarray:
-    """The policy's input vector (float32, length ``3 + len(Error)``)."""
-    v = np.zeros(3 + N_ERRORS, dtype=np.float32)
-    b = 2.0 * aperture
-    v[0] = min(max(rho, 0.0), 4.0) / 4.0
-    v[1] = min(max(m_a, -b), b) / b
-    v[2] = min(max(m_b, -b), b) / b
-    v[3 + int(error)] = 1.0
+def features(values: Sequence[float], error: int, bounds: Sequence[tuple[float, float]]) -> np.ndarray:
+    """The policy's input vector (float32, length ``len(bounds) + len(Error)``): each
+    observation value clipped into its ``(low, high)`` and divided by ``max(-low, high)``
+    (``rho / 4`` and ``m / (2A)`` for two contacts), then the error flag one-hot."""
+    n = len(bounds)
+    v = np.zeros(n + N_ERRORS, dtype=np.float32)
+    for i, (x, (lo, hi)) in enumerate(zip(values, bounds, strict=True)):
+        v[i] = min(max(x, lo), hi) / max(-lo, hi)
+    v[n + int(error)] = 1.0
     return v
+
+
+def bounds_of(task: Task) -> tuple[tuple[float, float], ...]:
+    """The ``(low, high)`` of each of the task's observation quantities, in order (the
+    model's :meth:`~crmgrasp.model.contact_model.ContactModel.observation_bounds`)."""
+    return tuple(task.model.observation_bounds().values())
 
 
 class ContinuousObservation(gym.ObservationWrapper):
@@ -69,12 +79,13 @@ class ContinuousObservation(gym.ObservationWrapper):
 
     def __init__(self, env: gym.Env) -> None:
         super().__init__(env)
-        self.aperture = float(env.unwrapped.task.hand.aperture)  # type: ignore[attr-defined]
-        self.observation_space = spaces.Box(-1.0, 1.0, (3 + N_ERRORS,), np.float32)
+        task = env.unwrapped.task  # type: ignore[attr-defined]
+        self.names, self.bounds = task.model.observation_names, bounds_of(task)
+        self.observation_space = spaces.Box(-1.0, 1.0, (len(self.names) + N_ERRORS,), np.float32)
 
     def observation(self, observation: dict[str, Any]) -> np.ndarray:
         o = observation
-        return features(float(o["rho"][0]), float(o["m_a"][0]), float(o["m_b"][0]), int(o["error"]), self.aperture)
+        return features([float(o[n][0]) for n in self.names], int(o["error"]), self.bounds)
 
 
 @dataclass(frozen=True)
@@ -156,15 +167,15 @@ class RecurrentPolicy:
     def predict(
         self, observations: Sequence[Any], actions: Sequence[int] = (), rng: np.random.Generator | None = None
     ) -> int:
-        """The deterministic action after an episode's history (observations
-        ``(rho, m_a, m_b, error)``, one more than ``actions``; the LSTM reads the
+        """The deterministic action after an episode's history (observations: the model's
+        values then the error flag, one more than ``actions``; the LSTM reads the
         observations from the episode's start; ``actions`` are checked, ``rng`` unused)."""
         from crmgrasp.agents.policy import observation_indices
 
         observation_indices(self.task, [tuple(o) for o in observations], actions)  # checks
-        state, action = None, None
+        state, action, bounds = None, None, bounds_of(self.task)
         for i, o in enumerate(observations):
-            f = features(float(o[0]), float(o[1]), float(o[2]), int(o[3]), self.task.hand.aperture)
+            f = features([float(v) for v in o[:-1]], int(o[-1]), bounds)
             action, state = self.model.predict(
                 f[None], state=state, episode_start=np.array([i == 0]), deterministic=True
             )
@@ -261,7 +272,8 @@ def evaluate_recurrent(
     tasks = [s.task if isinstance(s, World) else task for s in starts]
     configs = [s.config if isinstance(s, World) else s for s in starts]
     states = [SimState(c, t.read(c, rng), 0) for t, c in zip(tasks, configs)]
-    obs = np.stack([features(*t.observe(s.sensed), 0, task.hand.aperture) for t, s in zip(tasks, states)])
+    bounds = bounds_of(task)
+    obs = np.stack([features(t.observe(s.sensed), 0, bounds) for t, s in zip(tasks, states)])
     steps, success = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=bool)
     active = np.ones(n, dtype=bool)
     lstm, first = None, np.ones(n, dtype=bool)
@@ -271,7 +283,7 @@ def evaluate_recurrent(
         for i in np.flatnonzero(active):
             res = step(tasks[i], states[i], int(actions[i]), rng)
             states[i], steps[i] = res.state, steps[i] + 1
-            obs[i] = features(*res.observation, int(res.error), task.hand.aperture)
+            obs[i] = features(res.observation, int(res.error), bounds)
             if res.terminated or res.truncated:
                 active[i], success[i] = False, res.terminated
     return steps, success

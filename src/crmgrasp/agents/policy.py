@@ -114,6 +114,16 @@ def read_policy_document(path: str | os.PathLike[str]) -> Any:
         raise CrmgraspError(f"policy file {str(p)!r} is not valid JSON ({exc})") from None
 
 
+def _written(spec: Any) -> Any:
+    """A stored task spec as today's writer states it (read, then written back), so that a
+    file saved before a key was added or left out by default still matches its task; the
+    spec as stored when it does not read."""
+    try:
+        return task_to_dict(task_from_dict(spec))
+    except CrmgraspError:
+        return spec
+
+
 def first_difference(a: Any, b: Any, where: str = "") -> str | None:
     """The first key path at which two JSON values differ (``None`` if equal)."""
     if isinstance(a, dict) and isinstance(b, dict):
@@ -150,8 +160,9 @@ def policy_task(doc: Any, source: str = "policy") -> Task:
     return make_task(name)
 
 
-ObservationLike = int | tuple[float, float, float, int] | Sequence[float]
-"""A discrete observation index, or ``(rho, m_a, m_b, error)``."""
+ObservationLike = int | Sequence[float]
+"""A discrete observation index, or the model's observation values then the error flag
+(``(rho, m_a, m_b, error)`` for two contacts)."""
 
 
 def observation_indices(task: Task, observations: Sequence[ObservationLike], actions: Sequence[int]) -> list[int]:
@@ -172,14 +183,17 @@ def observation_indices(task: Task, observations: Sequence[ObservationLike], act
                 raise CrmgraspError(f"observation index {o} is outside [0, {task.discretizer.size})")
             out.append(int(o))
             continue
+        names = task.model.observation_names
         try:
-            rho, m_a, m_b, err = o  # type: ignore[misc]
-            values = [float(rho), float(m_a), float(m_b)]
+            *raw, err = o  # type: ignore[misc]
+            values = [float(v) for v in raw]
         except (TypeError, ValueError):
-            raise CrmgraspError(f"an observation is an index or (rho, m_a, m_b, error), got {shown(o)}") from None
+            values, err = [], None
+        if len(values) != len(names):
+            raise CrmgraspError(f"an observation is an index or ({', '.join(names)}, error), got {shown(o)}")
         if not all(np.isfinite(values)) or err not in range(len(Error)):
             raise CrmgraspError(f"observation {shown(o)} is not finite or has an unknown error flag")
-        out.append(task.discretizer.index_of(values[0], values[1], values[2], int(err)))
+        out.append(task.discretizer.index(values, int(err)))  # type: ignore[arg-type]
     return out
 
 
@@ -233,8 +247,9 @@ class GreedyPolicy:
         """The action after an episode's history: ``observations`` ``o_0 .. o_t`` and the
         ``actions`` ``a_0 .. a_{t-1}`` taken between them (one fewer).
 
-        Each observation is a discrete index of the task's bins, or a tuple
-        ``(rho, m_a, m_b, error)`` (binned here). Ties and unlisted states draw from
+        Each observation is a discrete index of the task's bins, or a tuple of the
+        model's observation values and the error flag (``(rho, m_a, m_b, error)`` for two
+        contacts; binned here). Ties and unlisted states draw from
         ``rng`` (default: a generator seeded with 0, so a call is repeatable)."""
         codes = observation_indices(self.task, observations, actions)
         hist = self.encoder.start(codes[0])
@@ -293,7 +308,7 @@ class GreedyPolicy:
         if doc["task"] != task.name:
             raise bad(f"policy is for task {doc['task']!r}, not {task.name!r}")
         if "task_spec" in doc:
-            where = first_difference(doc["task_spec"], task_to_dict(task))
+            where = first_difference(_written(doc["task_spec"]), task_to_dict(task))
             if where is not None:
                 raise bad(f"policy was made for another version of task {task.name!r} (it differs in {where})")
         k = doc["k"]

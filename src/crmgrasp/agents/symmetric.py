@@ -30,11 +30,11 @@ __all__ = ["SymmetricAgent", "mirror_observation_map"]
 
 def mirror_observation_map(task: Task) -> list[int]:
     """Discretized observation index -> index of its mirror image (padding maps to itself)."""
-    d = task.discretizer
+    d, axes = task.discretizer, task.model.mirror_axes
     out = []
     for i in range(d.size):
-        r, a, b, e = d.decode(i)
-        out.append(d.compose(r, b, a, int(e)))  # m_a and m_b bins swapped
+        bins, e = d.decode(i)
+        out.append(d.compose([bins[j] for j in axes], e))  # two contacts: the m_a and m_b bins swapped
     return [*out, d.size]
 
 

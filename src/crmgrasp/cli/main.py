@@ -352,7 +352,9 @@ def _cmd_tasks(args: argparse.Namespace) -> int:
 
 
 def _cmd_task_template(args: argparse.Namespace) -> int:
-    sys.stdout.write(TEMPLATE)
+    from crmgrasp.tasks.files import key_reference
+
+    sys.stdout.write(key_reference() if args.keys else TEMPLATE)
     return 0
 
 

@@ -324,11 +324,12 @@ def _parser_tasks(sub: Any) -> None:
 
 def _parser_task_template(sub: Any) -> None:
     """``crmgrasp task-template``."""
-    sub.add_parser(
+    p = sub.add_parser(
         "task-template",
         help="print a commented example task file",
         description="Print a commented example task file (TOML): `crmgrasp task-template > my.toml`.",
     )
+    p.add_argument("--keys", action="store_true", help="print every key a task file takes (type, default) instead")
 
 
 def _parser_status(sub: Any) -> None:

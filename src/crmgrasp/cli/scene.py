@@ -10,6 +10,7 @@ import math
 import os
 import subprocess
 import sys
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -53,6 +54,21 @@ def _sensing(task: Task, noise: SensorNoise) -> Task:
     return task if noise == task.noise else dataclasses.replace(task, noise=noise)
 
 
+def _observation(task: Task, obs: Sequence[float], index: int) -> dict[str, Any]:
+    """An observation as JSON data: each of the model's quantities by name, its bin index and label."""
+    return {
+        **dict(zip(task.model.observation_names, obs, strict=True)),
+        "index": index,
+        "label": task.discretizer.label(index),
+    }
+
+
+def _observation_line(task: Task, obs: Sequence[float], index: int) -> str:
+    """An observation as one line of the ``crm`` report."""
+    values = " ".join(f"{n}={v:.6g}" for n, v in zip(task.model.observation_names, obs, strict=True))
+    return f"  observation: {values}  [{index}: {task.discretizer.label(index)}]"
+
+
 def _cmd_crm(args: argparse.Namespace) -> int:
     task, config, crm, noise, rng = _scene(args)
     assert crm is not None
@@ -69,13 +85,7 @@ def _cmd_crm(args: argparse.Namespace) -> int:
         "crm": {"c": crm.c, "f": crm.f, "r": crm.r},
         "error": out.error.name.lower(),
         "config": out.config.to_dict(),
-        "observation": {
-            "rho": obs.rho,
-            "m_a": obs.m_a,
-            "m_b": obs.m_b,
-            "index": index,
-            "label": task.discretizer.label(index),
-        },
+        "observation": _observation(task, obs, index),
         "min_friction": min_friction(out.config),
         "success": task.is_success(out.config),
         "path": [list(p) for p in out.path],
@@ -84,11 +94,10 @@ def _cmd_crm(args: argparse.Namespace) -> int:
         print(dumps_json(result))
         return 0
     print(f"CRM {crm} on {task.name}: error={result['error']}")
-    for lab in ("a", "b"):
+    for lab in task.model.labels:
         c = out.config[lab]
         print(f"  {lab}: x=({c.x + 0.0:.6g}, {c.y + 0.0:.6g})  n=({c.nx + 0.0:.6g}, {c.ny + 0.0:.6g})")
-    label = task.discretizer.label(index)
-    print(f"  observation: rho={obs.rho:.6g} m_a={obs.m_a:.6g} m_b={obs.m_b:.6g}  [{index}: {label}]")
+    print(_observation_line(task, obs, index))
     print(f"  min_friction={result['min_friction']:.6g}  success={result['success']}")
     return 0
 
@@ -101,13 +110,13 @@ def _crm_spatial(
     out: Any = t.execute(config, crm, t.read(config, rng))
     obs = t.observe(t.read(out.config, rng))
     index = task.discretizer.index(obs, out.error)
-    contacts = {lab: {"x": list(c.x), "n": list(c.n)} for lab, c in zip("ab", out.config, strict=True)}
+    contacts = {lab: {"x": list(c.x), "n": list(c.n)} for lab, c in zip(task.model.labels, out.config, strict=True)}
     result = {
         "task": task.name,
         "crm": {"c": crm.c, "f": crm.f, "r": list(crm.r)},
         "error": out.error.name.lower(),
         "config": contacts,
-        "observation": {"rho": obs.rho, "m_a": obs.m_a, "m_b": obs.m_b, "index": index},
+        "observation": _observation(task, obs, index),
         "min_friction": task.quality(out.config),
         "success": task.is_success(out.config),
     }
@@ -118,8 +127,7 @@ def _crm_spatial(
     for lab, c in contacts.items():
         x, n = (", ".join(f"{v + 0.0:.6g}" for v in c[key]) for key in ("x", "n"))
         print(f"  {lab}: x=({x})  n=({n})")
-    label = task.discretizer.label(index)
-    print(f"  observation: rho={obs.rho:.6g} |m_a|={obs.m_a:.6g} |m_b|={obs.m_b:.6g}  [{index}: {label}]")
+    print(_observation_line(task, obs, index))
     print(f"  min_friction={result['min_friction']:.6g}  success={result['success']}")
     return 0
 

@@ -77,8 +77,9 @@ def thumb_far_start(task: Task, rng: np.random.Generator, lo: float, hi: float) 
     raise RuntimeError("no start found")  # pragma: no cover - the range is wide
 
 
-def _point(obs: Observation, fingers: str) -> tuple[float, float]:
-    return (obs.rho, abs(obs.m_a if fingers == "a" else obs.m_b))
+def _point(task: Task, obs: Observation, fingers: str) -> tuple[float, float]:
+    """``(rho, |moment about the fingers|)`` of an observation."""
+    return (obs[0], abs(obs[task.model.moment_index(fingers)]))
 
 
 class Clusters:
@@ -124,7 +125,8 @@ def figure_9_robonaut_trials(
         successes += ok
         tight += base.grasped(steps[-1].min_friction)
         crms.append(len(steps))
-        readings = [_point(st.observation, fingers) for st in steps] + [_point(steps[-1].next_observation, fingers)]
+        readings = [_point(task, st.observation, fingers) for st in steps]
+        readings.append(_point(task, steps[-1].next_observation, fingers))
         clusters.add(readings)
         points = readings[:2] + readings[-1:] if len(steps) > 1 else readings
         actions = " ".join(task.action_names()[s.action].split()[0] for s in steps)

@@ -34,7 +34,7 @@ from crmgrasp.hardware.contact_sensing import NoContact
 from crmgrasp.hardware.mujoco import hardware_task
 from crmgrasp.hardware.mujoco.hand import MujocoHand
 from crmgrasp.hardware.mujoco.model import PhysicsParams
-from crmgrasp.hardware.runner import KinematicHand, PolicyRunner
+from crmgrasp.hardware.runner import KinematicHand, PolicyRunner, log_columns
 from crmgrasp.model.contacts import Config
 from crmgrasp.model.hand import CRM, Error, execute_crm
 from crmgrasp.model.quality import min_friction
@@ -105,10 +105,11 @@ def _point_normal(c: Any) -> tuple[tuple[float, ...], tuple[float, ...]]:
     return (tuple(c.point), tuple(c.normal)) if hasattr(c, "point") else (tuple(c.x), tuple(c.n))
 
 
-def _points(rows: list[list[Any]], fingers: str) -> list[tuple[float, float]]:
-    """(rho, |moment about the fingers|) of each logged reading."""
-    col = 10 if fingers == "a" else 11  # m_a / m_b columns of the runner log
-    return [(float(r[9]), abs(float(r[col]))) for r in rows]
+def _points(task: Task, rows: list[list[Any]], fingers: str) -> list[tuple[float, float]]:
+    """(rho, |moment about the fingers|) of each logged reading (the runner's log columns)."""
+    cols, names = log_columns(task), task.model.observation_names
+    at_rho, at_moment = cols.index(names[0]), cols.index(names[task.model.moment_index(fingers)])
+    return [(float(r[at_rho]), abs(float(r[at_moment]))) for r in rows]
 
 
 def animate(task: Task, start: Any, policy: Any, rng: np.random.Generator, path: Path) -> str:
@@ -141,7 +142,7 @@ def figure_9_mujoco(
     runner, kin_runner = PolicyRunner(policy, task), PolicyRunner(policy, kin_task)
     rng = np.random.default_rng(c.seed)
     out = Path(out_dir)
-    names = [n.split()[0] for n in task.action_names()]
+    names, action = [n.split()[0] for n in task.action_names()], log_columns(task).index("action")
     clusters = Clusters()
     rows, errors, seconds, starts = [], SensingErrors(), [], []
     for trial in range(c.trials):
@@ -153,11 +154,11 @@ def figure_9_mujoco(
         true = hand.true_config()
         mu = min_friction(true) if true is not None else math.inf
         kin = kin_runner.run(KinematicHand(kin_task, start, rng), rng)
-        pts = _points(run.rows, fingers) or [(math.nan, math.nan)]
+        pts = _points(task, run.rows, fingers) or [(math.nan, math.nan)]
         clusters.add(pts)
         pts = (pts + pts[-1:])[:2] + pts[-1:]
         seconds += hand.crm_seconds
-        actions = " ".join(names[r[14]] for r in run.rows if r[14] != "")
+        actions = " ".join(names[r[action]] for r in run.rows if r[action] != "")
         rows.append([trial, fingers, actions, run.crms, kin.crms, run.stopped, task.grasped(mu), mu, *np.ravel(pts)])
     write_csv(
         out / "data.csv",

@@ -22,10 +22,11 @@ from numpy.typing import NDArray
 
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.hand import CRM
+from crmgrasp.model.sensing import Discretizer
 from crmgrasp.sim import OneStep, SimState, begin, step
 from crmgrasp.tasks import StartFilter, Task
 
-__all__ = ["Kernel", "OneStep", "BatchStep"]
+__all__ = ["Kernel", "OneStep", "BatchStep", "bin_thresholds"]
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -41,6 +42,16 @@ class BatchStep(NamedTuple):
     obs: dict[str, np.ndarray]
     obs_index: I64
     min_friction: F64
+
+
+def bin_thresholds(d: Discretizer) -> F64:
+    """The thresholds of ``d`` as one array for compiled code: a row per quantity, in
+    ``d.names``' order, padded with ``+inf`` (a value is never ``>= inf``, so the padding
+    changes no bin)."""
+    th = np.full((len(d.thresholds), max(1, *map(len, d.thresholds))), np.inf)
+    for row, t in zip(th, d.thresholds, strict=True):
+        row[: len(t)] = t
+    return th
 
 
 @functools.lru_cache(maxsize=64)
@@ -113,9 +124,10 @@ class Kernel(ABC):
         model's ``execute``): new rows and error codes."""
 
     @abstractmethod
-    def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[F64, F64, F64, I64, F64]:
-        """``(rho, m_a, m_b)`` and the bin index of each sensed row (with the rows'
-        error codes), and the min friction of each true row."""
+    def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Each of the model's observation quantities (one ``(N,)`` array per name, in
+        order), then the bin index of each sensed row (with the rows' error codes) and the
+        min friction of each true row."""
 
     # ------------------------------------------------------------ composites
     def execute(self, cfg: F64, sen: F64, actions: I64) -> tuple[F64, NDArray[np.int8]]:

@@ -64,7 +64,7 @@ class FamilyKernel(Kernel):
     def execute_crms(self, cfg: F64, sen: F64, c: I64, f: I64, r: F64) -> tuple[F64, NDArray[np.int8]]:
         return self.current.execute_crms(cfg, sen, c, f, r)
 
-    def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[F64, F64, F64, I64, F64]:
+    def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[np.ndarray, ...]:
         return self.current.observe(cfg, sen, err)
 
     def sample_start(self, rng: np.random.Generator) -> Any:

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 import crmgrasp.kernels._polygon_jit as jit
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.kernels.base import F64, I64, BatchStep, Kernel
+from crmgrasp.kernels.base import F64, I64, BatchStep, Kernel, bin_thresholds
 from crmgrasp.model import quality, shape
 from crmgrasp.model.contacts import Config, config_from_row
 from crmgrasp.model.geometry import Polygon
@@ -42,11 +42,9 @@ def params(task: Task) -> tuple[F64, NDArray[np.int64], F64]:
     p[jit.ANTIPODAL_TOL], p[jit.MU_GOAL], p[jit.BOUND] = quality.ANTIPODAL_TOL, task.mu_goal, 2.0 * hand.aperture
     p[jit.MIN_SEP] = hand.min_separation
     q = np.empty(jit.N_Q, dtype=np.int64)
-    q[jit.CONVEX], q[jit.NA], q[jit.NB], q[jit.ABS_M] = obj.convex, len(d.m_a) + 1, len(d.m_b) + 1, d.abs_moments
-    width = max(len(d.rho), len(d.m_a), len(d.m_b), 1)
-    th = np.full((3, width), np.inf)
-    for row, thresholds in zip(th, (d.rho, d.m_a, d.m_b)):
-        row[: len(thresholds)] = thresholds
+    q[jit.CONVEX], q[jit.ABS_M] = obj.convex, d.abs_moments
+    q[jit.NA], q[jit.NB] = d.sizes[1], d.sizes[2]  # the two moments' bin counts
+    th = bin_thresholds(d)
     return p, q, th
 
 
@@ -102,7 +100,7 @@ class PolygonKernel(Kernel):
         )
         return new, err
 
-    def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[F64, F64, F64, I64, F64]:
+    def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[np.ndarray, ...]:
         n = len(cfg)
         rho, m_a, m_b, mu = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
         index = np.empty(n, dtype=np.int64)

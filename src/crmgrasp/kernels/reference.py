@@ -56,14 +56,14 @@ class ReferenceKernel(Kernel):
             err[j] = out.error
         return new, err
 
-    def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[F64, F64, F64, I64, F64]:
+    def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[np.ndarray, ...]:
         n = len(cfg)
-        rho, m_a, m_b, mu = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        values, mu = np.empty((len(self.model.observation_names), n)), np.empty(n)
         index = np.empty(n, dtype=np.int64)
-        index_of, config_of = self.task.discretizer.index_of, self.config_of
+        bin_index, config_of = self.task.discretizer.index, self.config_of
         for j, (row, srow, e) in enumerate(zip(np.asarray(cfg).tolist(), np.asarray(sen).tolist(), err.tolist())):
             o = self.task.observe(config_of(srow))
-            rho[j], m_a[j], m_b[j] = o
-            index[j] = index_of(o.rho, o.m_a, o.m_b, e)
+            values[:, j] = o
+            index[j] = bin_index(o, e)
             mu[j] = self.task.quality(config_of(row))
-        return rho, m_a, m_b, index, mu
+        return (*values, index, mu)

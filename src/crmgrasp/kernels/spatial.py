@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.kernels.base import F64
+from crmgrasp.kernels.base import F64, bin_thresholds
 from crmgrasp.kernels.reference import ReferenceKernel
 from crmgrasp.model.hand import Error
 from crmgrasp.model.sensing import Observation
@@ -54,11 +54,9 @@ def spatial_params(task: Any) -> tuple[F64, NDArray[np.int64], F64, F64, F64]:
     p[jit.TIE], p[jit.PARALLEL] = solids.TIE, spatial.PARALLEL
     q = np.zeros(jit.N_Q, dtype=np.int64)
     q[jit.HAS_TABLE] = task.table is not None
-    q[jit.NA], q[jit.NB], q[jit.ABS_M] = len(d.m_a) + 1, len(d.m_b) + 1, d.abs_moments
-    width = max(len(d.rho), len(d.m_a), len(d.m_b), 1)
-    th = np.full((3, width), np.inf)
-    for row, thresholds in zip(th, (d.rho, d.m_a, d.m_b), strict=True):
-        row[: len(thresholds)] = thresholds
+    q[jit.ABS_M] = d.abs_moments
+    q[jit.NA], q[jit.NB] = d.sizes[1], d.sizes[2]  # the two moments' bin counts
+    th = bin_thresholds(d)
     planes, cyl = solid_params(task.solid, p, q)
     return p, q, th, planes, cyl
 

@@ -41,7 +41,7 @@ from crmgrasp.model.sensing import Observation, SensorNoise
 
 __all__ = ["ContactModel", "TwoContacts", "OBSERVATION_NAMES", "RHO_MAX", "row_width", "contact_columns"]
 
-OBSERVATION_NAMES = ("rho", "m_a", "m_b")
+OBSERVATION_NAMES: tuple[str, ...] = Observation._fields
 """The continuous observation of a two-contact model, in order: the squared frictionless
 force residual and the two frictionless moments (docs/model.md section 4)."""
 
@@ -166,6 +166,16 @@ class ContactModel(Protocol):
         """The CRM a mirror symmetry maps ``crm`` to (labels swapped)."""
         ...
 
+    def moment_index(self, label: str) -> int:
+        """The position in the observation of the moment about contact ``label``."""
+        ...
+
+    @property
+    def mirror_axes(self) -> tuple[int, ...]:
+        """Where a mirror symmetry sends each observation quantity: quantity ``i`` of the
+        mirror image is quantity ``mirror_axes[i]`` of the original, up to sign."""
+        ...
+
     # -- the rules
     def execute(self, obj: Any, config: Any, crm: Any, sensed: Any) -> Any:
         """The CRM transition from ``config``, goal line from ``sensed``: an outcome with
@@ -211,6 +221,8 @@ class TwoContacts:
 
     labels: ClassVar[tuple[str, ...]] = LABELS
     observation_names: ClassVar[tuple[str, ...]] = OBSERVATION_NAMES
+    mirror_axes: ClassVar[tuple[int, ...]] = (0, 2, 1)
+    """A mirror swaps the labels: ``rho`` stays, ``(m_a, m_b)`` becomes ``(-m_b, -m_a)``."""
     axes: ClassVar[str]
     """The names of a position's coordinates (``"xy"``, ``"xyz"``)."""
     hand: Any
@@ -230,6 +242,11 @@ class TwoContacts:
     @property
     def columns(self) -> tuple[str, ...]:
         return contact_columns(self.labels, self.axes)
+
+    def moment_index(self, label: str) -> int:
+        """The observation is ``rho`` then the moment about each contact in label order:
+        ``m_a`` is quantity 1, ``m_b`` quantity 2."""
+        return 1 + self.labels.index(label)
 
     def observation_bounds(self) -> dict[str, tuple[float, float]]:
         """``rho`` in ``[0, 4]``; each moment within ``2 A`` (two contacts at most ``A`` apart,

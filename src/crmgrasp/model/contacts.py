@@ -119,16 +119,20 @@ def config_from_row(row: Sequence[float]) -> Config:
     return Config(Contact(row[0], row[1], row[2], row[3]), Contact(row[4], row[5], row[6], row[7]))
 
 
-def configs_to_array(configs: list[Config] | tuple[Config, ...]) -> NDArray[np.float64]:
-    """Stack configurations into the batched ``(N, 8)`` layout."""
-    return np.asarray(configs, dtype=np.float64).reshape(len(configs), 8)
+ROW_WIDTH = 4 * len(LABELS)
+"""Floats in the batched row of a :class:`Config`: per contact ``x, y, nx, ny`` (8)."""
+
+
+def configs_to_array(configs: Sequence[Config]) -> NDArray[np.float64]:
+    """Stack configurations into the batched ``(N, ROW_WIDTH)`` layout."""
+    return np.asarray(configs, dtype=np.float64).reshape(len(configs), ROW_WIDTH)
 
 
 def array_to_configs(arr: ArrayLike) -> list[Config]:
     """Inverse of :func:`configs_to_array`."""
     a = np.asarray(arr, dtype=np.float64)
-    if a.ndim != 2 or a.shape[1] != 8:
-        raise CrmgraspError(f"configuration array must have shape (N, 8), got {a.shape}")
+    if a.ndim != 2 or a.shape[1] != ROW_WIDTH:
+        raise CrmgraspError(f"configuration array must have shape (N, {ROW_WIDTH}), got {a.shape}")
     return [config_from_row(r) for r in a.tolist()]
 
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -34,6 +35,8 @@ __all__ = [
     "MAX_SIGMA_N",
     "MAX_SIGMA_P",
     "Discretizer",
+    "DEFAULT_RHO",
+    "DEFAULT_MOMENT",
 ]
 
 
@@ -147,14 +150,27 @@ def _thresholds(value: object, name: str) -> tuple[float, ...]:
     return out
 
 
-@dataclass(frozen=True)
+DEFAULT_RHO = (1.0,)
+"""The force residual's default threshold (the paper's bins: ``rho >= 1``)."""
+
+DEFAULT_MOMENT = (0.10,)
+"""Each moment's default threshold, metres (the paper's bins: ``|m| >= 0.10``)."""
+
+
+@dataclass(frozen=True, init=False, repr=False)
 class Discretizer:
     """Threshold bins per observed quantity, combined with the error flag.
+
+    The quantities are a contact model's observation, in its order: the squared force
+    residual first (``rho``), then one frictionless moment per contact (``m_a``,
+    ``m_b``, ... for the two-contact models: :class:`Observation`'s names, the default).
+    Thresholds are given per name as keywords; a name left out takes its default
+    (:data:`DEFAULT_RHO` for the first, :data:`DEFAULT_MOMENT` for the moments).
 
     A value ``v`` falls in bin ``k`` = the number of thresholds ``t`` with
     ``v >= t`` (so each quantity has ``len(thresholds) + 1`` bins). Moments are
     binned by magnitude when ``abs_moments`` is true (docs/model.md section 7). The index
-    is mixed-radix, error fastest:
+    is mixed-radix over the quantities in order, error fastest; for two contacts
     ``((rho_bin * n_ma + ma_bin) * n_mb + mb_bin) * 3 + error``.
 
     Examples
@@ -166,71 +182,96 @@ class Discretizer:
     15
     >>> d.label(15)
     'rho>=1 |m_a|<0.1 |m_b|>=0.1 error=none'
+    >>> d.decode(15)
+    ((1, 0, 1), <Error.NONE: 0>)
+    >>> Discretizer(m_c=(0.1,))
+    Traceback (most recent call last):
+    ...
+    crmgrasp._validation.CrmgraspError: unknown observation 'm_c' in the bins; known: rho, m_a, m_b
+    >>> Discretizer(names=("rho", "m_a", "m_b", "m_c")).size     # three contacts' moments
+    48
     """
 
-    rho: tuple[float, ...] = (1.0,)
-    m_a: tuple[float, ...] = (0.10,)
-    m_b: tuple[float, ...] = (0.10,)
-    abs_moments: bool = True
-    _sizes: tuple[int, int, int] = field(init=False, repr=False, compare=False)
+    names: tuple[str, ...]
+    """The quantities binned, in the index's order (the model's observation names)."""
+    thresholds: tuple[tuple[float, ...], ...]
+    """Each quantity's thresholds, strictly increasing, in the order of :attr:`names`."""
+    abs_moments: bool
+    """Whether the moments (every quantity but the first) are binned by magnitude."""
+    _strides: tuple[int, ...] = field(repr=False, compare=False)
 
-    def __post_init__(self) -> None:
-        for name in ("rho", "m_a", "m_b"):
-            object.__setattr__(self, name, _thresholds(getattr(self, name), name))
-        object.__setattr__(self, "_sizes", (len(self.rho) + 1, len(self.m_a) + 1, len(self.m_b) + 1))
+    def __init__(
+        self, *, names: Sequence[str] = Observation._fields, abs_moments: bool = True, **thresholds: object
+    ) -> None:
+        names = tuple(names)
+        if len(names) < 1 or len(set(names)) != len(names) or not all(isinstance(n, str) for n in names):
+            raise CrmgraspError(f"bins need distinct observation names, got {names!r}")
+        for key in thresholds:
+            if key not in names:
+                raise CrmgraspError(f"unknown observation {key!r} in the bins; known: {', '.join(names)}")
+        if not isinstance(abs_moments, bool):
+            raise CrmgraspError(f"abs_moments must be true or false, got {abs_moments!r}")
+        th = tuple(_thresholds(thresholds.get(n, DEFAULT_MOMENT if i else DEFAULT_RHO), n) for i, n in enumerate(names))
+        strides = [len(Error)]
+        for t in reversed(th[1:]):
+            strides.insert(0, strides[0] * (len(t) + 1))
+        object.__setattr__(self, "names", names)
+        object.__setattr__(self, "thresholds", th)
+        object.__setattr__(self, "abs_moments", abs_moments)
+        object.__setattr__(self, "_strides", tuple(strides))
+
+    def __repr__(self) -> str:
+        parts = ", ".join(f"{n}={t!r}" for n, t in zip(self.names, self.thresholds))
+        return f"Discretizer({parts}, abs_moments={self.abs_moments!r})"
+
+    @property
+    def sizes(self) -> tuple[int, ...]:
+        """Bins per quantity, in the order of :attr:`names`."""
+        return tuple(len(t) + 1 for t in self.thresholds)
 
     @property
     def size(self) -> int:
         """Number of discrete observations (including the error flag)."""
-        r, a, b = self._sizes
-        return r * a * b * len(Error)
+        return self._strides[0] * (len(self.thresholds[0]) + 1)
 
-    def bins(self, obs: Observation) -> tuple[int, int, int]:
-        """Bin of each of ``rho``, ``m_a``, ``m_b``: the number of thresholds ``t`` with
-        ``value >= t`` (NaN is in bin 0)."""
-        ma, mb = (abs(obs.m_a), abs(obs.m_b)) if self.abs_moments else (obs.m_a, obs.m_b)
-        return (_bin(obs.rho, self.rho), _bin(ma, self.m_a), _bin(mb, self.m_b))
+    def bins(self, values: Sequence[float]) -> tuple[int, ...]:
+        """Bin of each quantity (an :class:`Observation`, or its values in order): the
+        number of thresholds ``t`` with ``value >= t`` (NaN is in bin 0)."""
+        absolute = self.abs_moments
+        return tuple(_bin(abs(v) if absolute and i else v, t) for i, (v, t) in enumerate(zip(values, self.thresholds)))
 
-    def index(self, obs: Observation, error: Error | int) -> int:
-        """Integer in ``[0, size)`` for an observation and error flag."""
-        return self.index_of(obs.rho, obs.m_a, obs.m_b, int(error))
+    def index(self, values: Sequence[float], error: Error | int) -> int:
+        """Integer in ``[0, size)`` for an observation (its values in order) and error flag."""
+        return self.compose(self.bins(values), int(error))
 
-    def index_of(self, rho: float, m_a: float, m_b: float, error: int) -> int:
-        """:meth:`index` from plain numbers (the environments' hot path)."""
-        if self.abs_moments:
-            m_a, m_b = abs(m_a), abs(m_b)
-        return self.compose(_bin(rho, self.rho), _bin(m_a, self.m_a), _bin(m_b, self.m_b), error)
-
-    def compose(self, rho_bin: int, ma_bin: int, mb_bin: int, error: int) -> int:
+    def compose(self, bins: Sequence[int], error: int) -> int:
         """The index of the bins and error flag (mixed radix, error fastest); inverse of
         :meth:`decode`."""
-        _, na, nb = self._sizes
-        return ((rho_bin * na + ma_bin) * nb + mb_bin) * len(Error) + error
+        return sum(b * s for b, s in zip(bins, self._strides)) + int(error)
 
-    def decode(self, index: int) -> tuple[int, int, int, Error]:
-        """Inverse of :meth:`index`: ``(rho_bin, ma_bin, mb_bin, error)``."""
+    def decode(self, index: int) -> tuple[tuple[int, ...], Error]:
+        """Inverse of :meth:`index`: the bins of the quantities, and the error flag."""
         if not 0 <= int(index) < self.size:
             raise CrmgraspError(f"observation index {index} is outside [0, {self.size})")
         rest, err = divmod(int(index), len(Error))
-        _, na, nb = self._sizes
-        rest, b = divmod(rest, nb)
-        r, a = divmod(rest, na)
-        return (r, a, b, Error(err))
+        out = []
+        for n in reversed(self.sizes[1:]):
+            rest, b = divmod(rest, n)
+            out.append(b)
+        return (rest, *reversed(out)), Error(err)
 
     def label(self, index: int) -> str:
         """Readable form of an index, e.g. ``'rho>=1 |m_a|<0.1 |m_b|>=0.1 error=none'``."""
-        r, a, b, err = self.decode(index)
-        fmt = "|{}|" if self.abs_moments else "{}"
+        bins, err = self.decode(index)
         parts = [
-            _bin_text("rho", self.rho, r),
-            _bin_text(fmt.format("m_a"), self.m_a, a),
-            _bin_text(fmt.format("m_b"), self.m_b, b),
+            _bin_text(f"|{n}|" if self.abs_moments and i else n, t, b)
+            for i, (n, t, b) in enumerate(zip(self.names, self.thresholds, bins))
         ]
         return " ".join(parts) + f" error={err.name.lower()}"
 
     def to_dict(self) -> dict[str, object]:
-        """JSON-friendly form (round-trips through ``Discretizer(**d)``)."""
-        return {"rho": list(self.rho), "m_a": list(self.m_a), "m_b": list(self.m_b), "abs_moments": self.abs_moments}
+        """JSON-friendly form (round-trips through ``Discretizer(names=..., **d)``)."""
+        return {**{n: list(t) for n, t in zip(self.names, self.thresholds)}, "abs_moments": self.abs_moments}
 
 
 def _bin(value: float, thresholds: tuple[float, ...]) -> int:

@@ -12,18 +12,18 @@ import copy
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple, Protocol, overload, runtime_checkable
+from typing import Any, ClassVar, NamedTuple, Protocol, overload, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
 
-from crmgrasp._validation import CrmgraspError, finite, non_negative
+from crmgrasp._validation import CrmgraspError, finite, non_negative, tries
 from crmgrasp.model.contact_model import ContactModel
-from crmgrasp.model.contacts import Config, Contact, config_from_row
+from crmgrasp.model.contacts import ROW_WIDTH, Config, Contact, config_from_row, configs_to_array
 from crmgrasp.model.families import ShapeFamily
 from crmgrasp.model.geometry import Polygon, Rectangle, Shape
 from crmgrasp.model.hand import CRM, Error, Hand, feasible
-from crmgrasp.model.planar_model import PlanarModel, mirror_crm
+from crmgrasp.model.planar_model import PlanarModel
 from crmgrasp.model.quality import min_friction
 from crmgrasp.model.sensing import Discretizer, Observation, SensorNoise
 
@@ -51,9 +51,10 @@ class StartSampler(Protocol):
 
 StartFilter = Callable[[Shape, Hand, float, np.ndarray], np.ndarray]
 """``(obj, hand, mu_goal, u) -> starts``: the accepted corner-start candidates of the
-uniforms ``u`` (``(4, m)``, see :meth:`CornerStarts.candidate`), in order, as ``(k, 8)``
-rows. :func:`accept_corner_candidates` is the reference; :mod:`crmgrasp.kernels`
-supplies a compiled one that makes the same decisions."""
+uniforms ``u`` (``(4, m)``, see :func:`corner_candidate`), in order, as rows of the
+planar layout (:func:`~crmgrasp.model.contacts.configs_to_array`).
+:func:`accept_corner_candidates` is the reference; :mod:`crmgrasp.kernels` supplies a
+compiled one that makes the same decisions."""
 
 
 def acceptable(obj: Shape, hand: Hand, mu_goal: float, config: Config) -> bool:
@@ -89,8 +90,8 @@ def accept_corner_candidates(obj: Shape, hand: Hand, mu_goal: float, u: np.ndarr
     for uc, ui, uo, coin in u.T.tolist():
         cfg = corner_candidate(obj, uc, ui, uo, coin)
         if cfg is not None and acceptable(obj, hand, mu_goal, cfg):
-            rows.append((*cfg.a, *cfg.b))
-    return np.array(rows, dtype=np.float64).reshape(len(rows), 8)
+            rows.append(cfg)
+    return configs_to_array(rows)
 
 
 def corner_boxes(obj: Polygon, aperture: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -156,6 +157,10 @@ class CornerStarts:
 
     max_tries: int = 10_000
     takes_corner_filter = True  # class attribute: decides candidates through a start filter
+    kind: ClassVar[str] = "corners"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "max_tries", tries(self.max_tries))
 
     def __call__(
         self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator, accept: StartFilter | None = None
@@ -183,7 +188,7 @@ class CornerStarts:
         n: int,
         accept: StartFilter = accept_corner_candidates,
     ) -> np.ndarray:
-        """``n`` starts as ``(n, 8)`` rows, drawn in rounds of candidates.
+        """``n`` starts as rows of the planar layout (``(n, 8)``), drawn in rounds of candidates.
 
         Same distribution as :meth:`__call__`, not the same stream: candidates come
         from a tighter proposal (:func:`corner_proposal`) and pass :func:`acceptable`
@@ -193,7 +198,7 @@ class CornerStarts:
         if not isinstance(obj, Polygon):
             raise CrmgraspError(f"corner starts need a polygon, got {type(obj).__name__}")
         cum, c_in, c_out = corner_boxes(obj, hand.aperture)
-        out = np.empty((n, 8))
+        out = np.empty((n, ROW_WIDTH))
         filled, rounds, rate = 0, 0, 0.5
         while filled < n:
             rounds += 1
@@ -215,6 +220,10 @@ class UniformStarts:
     feasible, not a grasp and (for polygons) off the vertices."""
 
     max_tries: int = 10_000
+    kind: ClassVar[str] = "uniform"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "max_tries", tries(self.max_tries))
 
     def __call__(self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator) -> Config:
         vertices = set(obj.vertex_arclengths()) if isinstance(obj, Polygon) else set()
@@ -246,19 +255,20 @@ class Symmetry:
     actions: tuple[int, ...]
 
 
-def _check_symmetry(
-    sym: Symmetry, actions: tuple[Any, ...], disc: Discretizer, mirror: Callable[[Any], Any] = mirror_crm
-) -> None:
+def _check_symmetry(sym: Symmetry, actions: tuple[Any, ...], disc: Discretizer, model: ContactModel) -> None:
     perm = tuple(sym.actions)
     n = len(actions)
     if sorted(perm) != list(range(n)) or any(perm[perm[i]] != i for i in range(n)):
         raise CrmgraspError(f"symmetry actions must be an involutive permutation of 0..{n - 1}, got {perm!r}")
     for i, crm in enumerate(actions):
-        m, expected = actions[perm[i]], mirror(crm)
+        m, expected = actions[perm[i]], model.mirror_crm(crm)
         if m != expected:
             raise CrmgraspError(f"symmetry maps {crm} to {m}, but its mirror is {expected}")
-    if not disc.abs_moments or disc.m_a != disc.m_b:
-        raise CrmgraspError("a symmetric task needs moments binned by magnitude with the same m_a and m_b thresholds")
+    axes, th = model.mirror_axes, disc.thresholds
+    swapped = [(disc.names[i], disc.names[j]) for i, j in enumerate(axes) if i < j]
+    if not disc.abs_moments or any(th[i] != th[j] for i, j in enumerate(axes)):
+        same = ", ".join(f"{a} and {b}" for a, b in swapped)
+        raise CrmgraspError(f"a symmetric task needs moments binned by magnitude with the same {same} thresholds")
 
 
 MAX_STEPS = 1000
@@ -360,6 +370,13 @@ class Task:
             self.hand.check_crm(a)
         object.__setattr__(self, "actions", actions)
         object.__setattr__(self, "mu_goal", non_negative(self.mu_goal, "mu_goal"))
+        if not isinstance(self.discretizer, Discretizer):
+            raise CrmgraspError(f"task discretizer must be a Discretizer, got {self.discretizer!r}")
+        if self.discretizer.names != self.model.observation_names:
+            raise CrmgraspError(
+                f"the bins are over {', '.join(self.discretizer.names)}, but the {self.model.kind} model observes "
+                f"{', '.join(self.model.observation_names)}"
+            )
         if (
             isinstance(self.max_steps, bool)
             or not isinstance(self.max_steps, int)
@@ -370,7 +387,7 @@ class Task:
             if not isinstance(self.symmetry, Symmetry):
                 raise CrmgraspError(f"task symmetry must be a Symmetry, got {self.symmetry!r}")
             try:
-                _check_symmetry(self.symmetry, actions, self.discretizer, self.mirror_crm)
+                _check_symmetry(self.symmetry, actions, self.discretizer, self.model)
             except CrmgraspError as exc:
                 raise CrmgraspError(
                     f"{exc} (a task made from a symmetric one with other CRMs or bins needs symmetry=None)"

@@ -26,10 +26,11 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
-from crmgrasp._validation import CrmgraspError, positive
+from crmgrasp._validation import CrmgraspError, positive, tries
 from crmgrasp.model.contacts import Config, Contact
 from crmgrasp.model.families import (
     BoxFamily,
@@ -144,8 +145,10 @@ class BoundaryStarts:
 
     near_vertex: float | None = None
     max_tries: int = 10_000
+    kind: ClassVar[str] = "boundary"
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "max_tries", tries(self.max_tries))
         if self.near_vertex is not None:
             object.__setattr__(self, "near_vertex", positive(self.near_vertex, "near_vertex"))
 

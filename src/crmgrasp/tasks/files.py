@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
-import math
 import re
 import tomllib
 from pathlib import Path
@@ -26,18 +25,25 @@ from crmgrasp._validation import CrmgraspError, shown
 from crmgrasp.model import families as fam
 from crmgrasp.model.geometry import Disc, Polygon
 from crmgrasp.model.hand import Hand
+from crmgrasp.model.sensing import Discretizer, SensorNoise
 from crmgrasp.tasks.core import CornerStarts, Task, UniformStarts, make_task, task_names
 from crmgrasp.tasks.families import BoundaryStarts
 from crmgrasp.tasks.presets import LongSideStarts, MixtureStarts, NearCornerStarts, VertexStarts, with_reading
 from crmgrasp.tasks.schema import (
+    COMMON_SECTIONS,
+    SCALAR_KEYS,
     checked_name,
+    common_dict,
     common_keys,
     crm_tables,
+    field_rows,
     init_keys,
     number,
     numbers,
+    read_fields,
     section,
     table_keys,
+    write_fields,
 )
 
 __all__ = [
@@ -48,6 +54,9 @@ __all__ = [
     "load_task_file",
     "resolve_task",
     "resolve_reading",
+    "STARTS",
+    "starts_dict",
+    "key_reference",
 ]
 
 MAX_TASK_FILE_BYTES = 1 << 20
@@ -132,32 +141,22 @@ kind = "uniform"                   # "uniform" on the whole boundary; for polygo
 # [solid] or a 3-D [family]: see docs/model-3d.md, section 6.
 """
 
-_TOP = {
-    "name",
-    "grasp_reward",
-    "error_cost",
-    "description",
-    "mu_goal",
-    "max_steps",
-    "reference_mean_steps",
-    "object",
-    "family",
-    "hand",
-    "crm",
-    "bins",
-    "starts",
-    "noise",
-    "symmetry",
+_TOP = {*COMMON_SECTIONS, "object"}
+"""The keys of a planar task file."""
+STARTS: dict[str, type] = {
+    cls.kind: cls  # type: ignore[attr-defined]
+    for cls in (
+        CornerStarts,
+        UniformStarts,
+        NearCornerStarts,
+        LongSideStarts,
+        MixtureStarts,
+        BoundaryStarts,
+        VertexStarts,
+    )
 }
-_STARTS: dict[str, type] = {
-    "corners": CornerStarts,
-    "uniform": UniformStarts,
-    "near-corner": NearCornerStarts,
-    "long-side": LongSideStarts,
-    "mixture": MixtureStarts,
-    "boundary": BoundaryStarts,
-    "vertex": VertexStarts,
-}
+"""The planar start samplers a task file names, by ``kind`` (each class states its kind,
+keys, defaults and bounds)."""
 _FAMILIES: dict[str, type] = {
     cls.kind: cls  # type: ignore[attr-defined]
     for cls in (
@@ -197,67 +196,45 @@ def _object(table: Any) -> Polygon | Disc:
 
 
 def _hand(table: Any) -> Hand:
-    t = table_keys(table, "[hand]", *init_keys(Hand))
-    values: dict[str, Any] = {k: number(v, f"hand.{k}") for k, v in t.items()}
-    return Hand(**values)
+    return Hand(**read_fields(Hand, table, "[hand]", "hand."))
 
 
 def _starts(table: Any, where: str = "[starts]") -> Any:
-    vertex_keys = {"vertex", "incoming", "outgoing", "a_on"}
-    t = table_keys(table, where, {"kind", "within", "lo", "hi", "weight", "mix", "near_vertex", *vertex_keys}, {"kind"})
-    kind = t["kind"]
-    if kind not in _STARTS:
-        raise CrmgraspError(f"{where} kind must be one of {', '.join(_STARTS)}, got {shown(kind)}")
-    allowed = {"corners": set(), "uniform": set(), "near-corner": {"within"}, "long-side": {"lo", "hi"}}
-    allowed["mixture"], allowed["boundary"], allowed["vertex"] = {"mix"}, {"near_vertex"}, vertex_keys
-    extra = set(t) - {"kind", "weight"} - allowed[kind]
+    """A start sampler: ``kind`` and the keys of that kind's class (a mixture: ``mix``, a
+    list of samplers each with a ``weight``)."""
+    if not isinstance(table, dict):
+        raise CrmgraspError(f"{where} must be a table, got {shown(table)}")
+    kind = table.get("kind")
+    if kind not in STARTS:
+        raise CrmgraspError(f"{where} kind must be one of {', '.join(STARTS)}, got {shown(kind)}")
+    cls = STARTS[kind]
+    keys = {"mix"} if cls is MixtureStarts else init_keys(cls)[0]
+    rest = {k: v for k, v in table.items() if k not in ("kind", "weight")}
+    extra = set(rest) - keys
     if extra:
-        raise CrmgraspError(f"{where}: kind {kind!r} takes no {', '.join(sorted(extra))}")
-    if kind == "corners":
-        return CornerStarts()
-    if kind == "uniform":
-        return UniformStarts()
-    if kind == "boundary":
-        near = t.get("near_vertex")
-        return BoundaryStarts(None if near is None else number(near, f"{where} near_vertex"))
-    if kind == "vertex":
-        ranges = [numbers(t.get(k, [0.005, 0.05]), f"{where} {k}") for k in ("incoming", "outgoing")]
-        if any(len(r) != 2 for r in ranges):
-            raise CrmgraspError(f"{where}: incoming and outgoing must be [low, high] distances in metres")
-        (i0, i1), (o0, o1) = ranges
-        return VertexStarts(t.get("vertex", 0), (i0, i1), (o0, o1), t.get("a_on", "incoming"))
-    if kind == "near-corner":
-        return NearCornerStarts(number(t.get("within", 0.10), f"{where} within"))
-    if kind == "long-side":
-        return LongSideStarts(number(t.get("lo", 0.10), f"{where} lo"), float(t["hi"]) if "hi" in t else math.inf)
-    mix = t.get("mix")
-    if not isinstance(mix, list) or not mix:
+        takes = f"; it takes {', '.join(sorted(keys))}" if keys else ""
+        raise CrmgraspError(f"{where}: kind {kind!r} takes no {', '.join(sorted(extra))}{takes}")
+    if cls is not MixtureStarts:
+        return cls(**read_fields(cls, rest, where, f"{where} "))
+    mix = rest.get("mix")
+    if not isinstance(mix, list) or not mix or not all(isinstance(m, dict) for m in mix):
         raise CrmgraspError(f"{where}: a mixture needs mix = [{{ kind = ..., weight = ... }}, ...]")
     parts = [_starts(m, f"{where} mix[{i}]") for i, m in enumerate(mix)]
     weights = [number(m.get("weight", 1.0), f"{where} mix[{i}] weight") for i, m in enumerate(mix)]
     return MixtureStarts(tuple(parts), tuple(weights))
 
 
-def _starts_dict(starts: Any) -> dict[str, Any]:
-    """A start sampler in the task-file schema (``{"kind": "custom"}`` for Python code)."""
-    if type(starts) is CornerStarts and starts == CornerStarts():
-        return {"kind": "corners"}
-    if type(starts) is UniformStarts and starts == UniformStarts():
-        return {"kind": "uniform"}
-    if type(starts) is BoundaryStarts and starts.max_tries == BoundaryStarts().max_tries:
-        near = {} if starts.near_vertex is None else {"near_vertex": starts.near_vertex}
-        return {"kind": "boundary", **near}
-    if type(starts) is VertexStarts and starts.max_tries == VertexStarts().max_tries:
-        ranges = {k: list(getattr(starts, k)) for k in ("incoming", "outgoing")}
-        return {"kind": "vertex", "vertex": starts.vertex, **ranges, "a_on": starts.a_on}
-    if type(starts) is NearCornerStarts:
-        return {"kind": "near-corner", "within": starts.within}
-    if type(starts) is LongSideStarts:
-        return {"kind": "long-side", "lo": starts.lo, **({"hi": starts.hi} if math.isfinite(starts.hi) else {})}
-    if type(starts) is MixtureStarts:
-        mix = [{**_starts_dict(c), "weight": w} for c, w in zip(starts.components, starts.weights)]
-        return {"kind": "custom"} if any(m["kind"] == "custom" for m in mix) else {"kind": "mixture", "mix": mix}
-    return {"kind": "custom"}
+def starts_dict(starts: Any) -> dict[str, Any]:
+    """A start sampler in the task-file schema: its ``kind`` and its fields
+    (:func:`~crmgrasp.tasks.schema.write_fields`); ``{"kind": "custom"}`` for a sampler
+    written in Python, which does not travel."""
+    kind = getattr(type(starts), "kind", "")
+    if STARTS.get(kind) is not type(starts):
+        return {"kind": "custom"}
+    if type(starts) is not MixtureStarts:
+        return {"kind": kind, **write_fields(starts)}
+    mix = [{**starts_dict(c), "weight": w} for c, w in zip(starts.components, starts.weights)]
+    return {"kind": "custom"} if any(m["kind"] == "custom" for m in mix) else {"kind": kind, "mix": mix}
 
 
 def _family(table: Any, where: str = "[family]") -> Any:
@@ -347,33 +324,41 @@ def task_to_dict(task: Task) -> dict[str, Any]:
         from crmgrasp.tasks.spatial_files import spatial_to_dict
 
         return spatial_to_dict(task)
-    h = task.hand
-    hand: dict[str, Any] = {"aperture": h.aperture, "palm_depth": h.palm_depth, "backoff": h.backoff}
-    hand.update({k: getattr(h, k) for k in ("palm_normal_tol", "min_separation")})
-    if h.r_max is not None:
-        hand["r_max"] = h.r_max
-    doc: dict[str, Any] = {
-        "name": task.name,
-        "description": task.description,
-        "mu_goal": task.mu_goal,
-        "max_steps": task.max_steps,
-        "hand": hand,
-        "crm": [{"c": a.c, "f": a.f, "r": a.r} for a in task.actions],
-        "bins": task.discretizer.to_dict(),
-        "starts": _starts_dict(task.starts),
-        "grasp_reward": task.grasp_reward,
-        "error_cost": task.error_cost,
-        "noise": {"sigma_n": task.noise.sigma_n, "sigma_p": task.noise.sigma_p},
-    }
+    doc = common_dict(task, task.hand)
+    doc["crm"] = [{"c": a.c, "f": a.f, "r": a.r} for a in task.actions]
+    doc["starts"] = starts_dict(task.starts)
     if task.family is None:
         doc["object"] = _object_dict(task.obj)
     else:
         doc["family"] = task.family.describe()  # a sampler family (Python code) is written, not read back
-    if task.reference_mean_steps is not None:
-        doc["reference_mean_steps"] = task.reference_mean_steps
-    if task.symmetry is not None:
-        doc["symmetry"] = list(task.symmetry.actions)
     return doc
+
+
+def key_reference() -> str:
+    """Every key a task file takes, as a Markdown table read from the classes that own
+    them (:class:`~crmgrasp.tasks.core.Task`, the hands, the noise, the bins and each
+    start sampler): key, type and default. ``crmgrasp task-template --keys`` prints it."""
+    from crmgrasp.model.spatial import Hand3D
+    from crmgrasp.tasks.spatial import SurfaceStarts
+
+    rows = [("top level", "name", "string", "required"), ("top level", "symmetry", "list of action indices", "none")]
+    rows += [("top level", *r) for r in field_rows(Task, {f.name for f in dataclasses.fields(Task)} - {*SCALAR_KEYS})]
+    rows += [("[hand]", *r) for r in field_rows(Hand)]
+    rows += [("[hand] (spatial)", *r) for r in field_rows(Hand3D)]
+    rows += [("[[crm]]", "c", 'string: "a" or "b" (the moving contact)', "required")]
+    rows += [("[[crm]]", "f", 'string: "a" or "b" (the frame contact)', "required")]
+    rows += [("[[crm]]", "r", "number (spatial: 2 numbers)", "0")]
+    rows += [("[noise]", *r) for r in field_rows(SensorNoise)]
+    d = Discretizer()
+    rows += [("[bins]", n, "list of numbers", repr(list(t))) for n, t in zip(d.names, d.thresholds)]
+    rows.append(("[bins]", "abs_moments", "true or false", "true"))
+    for kind, cls in [*STARTS.items(), (SurfaceStarts.kind, SurfaceStarts)]:
+        where = f'[starts] kind = "{kind}"'
+        if cls is MixtureStarts:
+            rows.append((where, "mix", "list of [starts] tables, each with a weight (number, 1.0)", "required"))
+        rows += [(where, *r) for r in (() if cls is MixtureStarts else field_rows(cls))]
+    lines = ["| table | key | type | default |", "| --- | --- | --- | --- |"]
+    return "\n".join([*lines, *(f"| {t} | `{k}` | {ty} | {df} |" for t, k, ty, df in rows)]) + "\n"
 
 
 def load_task_file(path: str | Path) -> Task:

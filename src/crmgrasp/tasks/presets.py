@@ -25,10 +25,11 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
-from crmgrasp._validation import CrmgraspError, positive
+from crmgrasp._validation import CrmgraspError, positive, tries
 from crmgrasp.model.contacts import Config, config_from_row
 from crmgrasp.model.geometry import Polygon, Shape
 from crmgrasp.model.hand import Hand
@@ -80,8 +81,10 @@ class NearCornerStarts:
     within: float = 0.10
     max_tries: int = 10_000
     takes_corner_filter = True
+    kind: ClassVar[str] = "near-corner"
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "max_tries", tries(self.max_tries))
         positive(self.within, "within")
 
     def __call__(
@@ -117,8 +120,10 @@ class VertexStarts:
     outgoing: tuple[float, float] = (0.005, 0.05)
     a_on: str = "incoming"
     max_tries: int = 10_000
+    kind: ClassVar[str] = "vertex"
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "max_tries", tries(self.max_tries))
         if not isinstance(self.vertex, int) or isinstance(self.vertex, bool) or self.vertex < 0:
             raise CrmgraspError(f"vertex starts: vertex must be an index >= 0, got {self.vertex!r}")
         for name in ("incoming", "outgoing"):
@@ -162,8 +167,10 @@ class LongSideStarts:
     hi: float = math.inf
     max_tries: int = 100_000
     takes_corner_filter = True
+    kind: ClassVar[str] = "long-side"
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "max_tries", tries(self.max_tries))
         if not (0.0 <= self.lo < self.hi):
             raise CrmgraspError(f"long-side starts need 0 <= lo < hi, got lo={self.lo!r}, hi={self.hi!r}")
 
@@ -192,6 +199,7 @@ class MixtureStarts:
     components: tuple[StartSampler, ...]
     weights: tuple[float, ...]
     takes_corner_filter = True
+    kind: ClassVar[str] = "mixture"
 
     def __post_init__(self) -> None:
         w = tuple(float(x) for x in self.weights)

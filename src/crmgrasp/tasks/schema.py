@@ -12,18 +12,27 @@ readers.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import re
-from collections.abc import Callable
+import types
+import typing
+from collections.abc import Callable, Collection
 from typing import Any
 
 from crmgrasp._validation import CrmgraspError, shown
 from crmgrasp.model.hand import CRM
 from crmgrasp.model.sensing import Discretizer, SensorNoise
-from crmgrasp.tasks.core import Symmetry
+from crmgrasp.tasks.core import Symmetry, Task
 
 __all__ = [
     "init_keys",
+    "read_fields",
+    "write_fields",
+    "field_rows",
+    "SCALAR_KEYS",
+    "COMMON_SECTIONS",
+    "common_dict",
     "table_keys",
     "number",
     "numbers",
@@ -43,6 +52,94 @@ def init_keys(cls: type) -> tuple[set[str], set[str]]:
     fields = [f for f in dataclasses.fields(cls) if f.init]
     required = {f.name for f in fields if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING}
     return {f.name for f in fields}, required
+
+
+@functools.cache
+def _hints(cls: type) -> dict[str, Any]:
+    return typing.get_type_hints(cls)
+
+
+def _typed(value: Any, hint: Any, key: str) -> Any:
+    """``value`` checked against a field's type: a float is a finite number, an int an
+    integer (not a boolean), a bool true or false, a str a string, ``X | None`` an ``X``
+    (or absent), a tuple of floats a list of numbers (of the tuple's length when it
+    states one)."""
+    if isinstance(hint, types.UnionType) or typing.get_origin(hint) is typing.Union:
+        (inner,) = (a for a in typing.get_args(hint) if a is not type(None))
+        return None if value is None else _typed(value, inner, key)
+    if hint is float:
+        return number(value, key)
+    if hint is bool or hint is int or hint is str:
+        if not isinstance(value, hint) or (hint is int and isinstance(value, bool)):
+            what = {bool: "true or false", int: "an integer", str: "a string"}[hint]
+            raise CrmgraspError(f"{key} must be {what}, got {shown(value)}")
+        return value
+    args = typing.get_args(hint)
+    if typing.get_origin(hint) is tuple and args:
+        out = numbers(value, key)
+        if args[-1] is not Ellipsis and len(out) != len(args):
+            raise CrmgraspError(f"{key} must have {len(args)} numbers, got {len(out)}")
+        return out
+    raise TypeError(f"{key}: a field of type {hint} has no task-file form")  # a bug, not bad input
+
+
+def read_fields(cls: type, table: Any, where: str, prefix: str, skip: Collection[str] = ()) -> dict[str, Any]:
+    """The keyword arguments that ``table`` states for the dataclass ``cls``.
+
+    Its keys are the class's constructor fields (less ``skip``); each value is checked
+    against the field's type (:func:`_typed`; errors name the key as ``prefix + key``); a
+    key left out takes the class's default, and the class itself checks the bounds. The
+    class owns its schema: defaults, types and bounds are stated once, there."""
+    allowed, required = init_keys(cls)
+    t = table_keys(table, where, allowed - set(skip), required - set(skip))
+    hints = _hints(cls)
+    return {k: _typed(v, hints[k], f"{prefix}{k}") for k, v in t.items()}
+
+
+def write_fields(obj: Any, skip: Collection[str] = ()) -> dict[str, Any]:
+    """A dataclass as the table :func:`read_fields` reads back: every constructor field
+    (less ``skip``) in declaration order, tuples as lists; a field that is ``None`` or
+    infinite is left out, which reads back as its default (``None`` or infinity)."""
+    out: dict[str, Any] = {}
+    for f in dataclasses.fields(obj):
+        v = getattr(obj, f.name)
+        if not f.init or f.name in skip or v is None or (isinstance(v, float) and math.isinf(v)):
+            continue
+        out[f.name] = list(v) if isinstance(v, tuple) else v
+    return out
+
+
+def _type_text(hint: Any) -> str:
+    """A field's type in a task file's words (``number``, ``integer``, ``2 numbers``)."""
+    if isinstance(hint, types.UnionType) or typing.get_origin(hint) is typing.Union:
+        (inner,) = (a for a in typing.get_args(hint) if a is not type(None))
+        return f"{_type_text(inner)} (optional)"
+    args = typing.get_args(hint)
+    if typing.get_origin(hint) is tuple:
+        return "list of numbers" if args[-1] is Ellipsis else f"{len(args)} numbers"
+    return {float: "number", int: "integer", bool: "true or false", str: "string"}[hint]
+
+
+def _value_text(value: Any) -> str:
+    """A default as a task file writes it (``true``, ``"incoming"``, ``[0.005, 0.05]``)."""
+    if value is None or (isinstance(value, float) and math.isinf(value)):
+        return "none" if value is None else "no bound"
+    if isinstance(value, bool):
+        return str(value).lower()
+    if isinstance(value, str):
+        return f'"{value}"'
+    return repr(list(value)) if isinstance(value, tuple) else repr(value)
+
+
+def field_rows(cls: type, skip: Collection[str] = ()) -> list[tuple[str, str, str]]:
+    """``(key, type, default)`` of each key a table for ``cls`` takes, in the task file's
+    words, for the docs (``crmgrasp task-template --keys``)."""
+    rows = []
+    for f in dataclasses.fields(cls):
+        if f.init and f.name not in skip:
+            default = "required" if f.default is dataclasses.MISSING else _value_text(f.default)
+            rows.append((f.name, _type_text(_hints(cls)[f.name]), default))
+    return rows
 
 
 def table_keys(table: Any, where: str, allowed: set[str], required: set[str] = frozenset()) -> dict[str, Any]:  # type: ignore[assignment]
@@ -87,13 +184,16 @@ def crm_tables(value: Any, make: Callable[[str, str, Any, str], Any] | None = No
     return tuple(out)
 
 
-def bins_table(table: Any) -> Discretizer:
-    t = table_keys(table, "[bins]", {"rho", "m_a", "m_b", "abs_moments"})
+def bins_table(table: Any, names: tuple[str, ...] = Discretizer().names) -> Discretizer:
+    """The ``[bins]`` table: thresholds per observation name of the model (``names``;
+    each a list of numbers, its default :class:`~crmgrasp.model.sensing.Discretizer`'s when
+    left out) and ``abs_moments``."""
+    t = table_keys(table, "[bins]", {*names, "abs_moments"})
     abs_m = t.get("abs_moments", True)
     if not isinstance(abs_m, bool):
         raise CrmgraspError(f"bins.abs_moments must be true or false, got {shown(abs_m)}")
-    kw = {q: numbers(t[q], f"bins.{q}") for q in ("rho", "m_a", "m_b") if q in t}
-    return Discretizer(**kw, abs_moments=abs_m)  # type: ignore[arg-type]
+    kw = {q: numbers(t[q], f"bins.{q}") for q in names if q in t}
+    return Discretizer(names=names, abs_moments=abs_m, **kw)
 
 
 def section(key: str, build: Callable[[Any], Any], value: Any) -> Any:
@@ -116,33 +216,43 @@ def checked_name(name: Any) -> str:
     return name
 
 
+SCALAR_KEYS = ("description", "mu_goal", "max_steps", "grasp_reward", "error_cost", "reference_mean_steps")
+"""The top-level keys of every task file that are fields of :class:`~crmgrasp.tasks.core.Task`
+itself: read by their field types, bounded by the Task."""
+
+COMMON_SECTIONS = ("name", "hand", "crm", "bins", "starts", "noise", "family", "symmetry", *SCALAR_KEYS)
+"""The keys planar and spatial task files share."""
+
+
 def common_keys(d: dict[str, Any], kw: dict[str, Any]) -> None:
-    """The keys planar and spatial task files share (bins, noise, goal, rewards, length,
-    reference, description, symmetry), checked into the task's keyword arguments ``kw``."""
+    """The keys planar and spatial task files share (bins, noise, :data:`SCALAR_KEYS`,
+    symmetry), checked into the task's keyword arguments ``kw``."""
     if "bins" in d:
         kw["discretizer"] = section("bins", bins_table, d["bins"])
     if "noise" in d:
-        t = section("noise", lambda v: table_keys(v, "[noise]", {"sigma_n", "sigma_p"}), d["noise"])
-        kw["noise"] = section("noise", lambda t: SensorNoise(**{k: number(v, f"noise.{k}") for k, v in t.items()}), t)
-    if "mu_goal" in d:
-        kw["mu_goal"] = number(d["mu_goal"], "mu_goal")
-    if "grasp_reward" in d:
-        kw["grasp_reward"] = number(d["grasp_reward"], "grasp_reward")
-    if "error_cost" in d:
-        kw["error_cost"] = number(d["error_cost"], "error_cost")
-    if "max_steps" in d:
-        m = d["max_steps"]
-        if isinstance(m, bool) or not isinstance(m, int):
-            raise CrmgraspError(f"max_steps must be an integer, got {shown(m)}")
-        kw["max_steps"] = m  # its bounds: Task's (MAX_STEPS)
-    if d.get("reference_mean_steps") is not None:
-        kw["reference_mean_steps"] = number(d["reference_mean_steps"], "reference_mean_steps")
-    if "description" in d:
-        if not isinstance(d["description"], str):
-            raise CrmgraspError(f"description must be a string, got {shown(d['description'])}")
-        kw["description"] = d["description"]
+        noise = section("noise", lambda t: read_fields(SensorNoise, t, "[noise]", "noise."), d["noise"])
+        kw["noise"] = section("noise", lambda kw: SensorNoise(**kw), noise)
+    hints = _hints(Task)
+    for key in SCALAR_KEYS:
+        if d.get(key) is not None:
+            kw[key] = _typed(d[key], hints[key], key)
     if d.get("symmetry") is not None:
         sym = d["symmetry"]
         if not isinstance(sym, list) or any(isinstance(i, bool) or not isinstance(i, int) for i in sym):
             raise CrmgraspError(f"symmetry must be a list of action indices, got {shown(sym)}")
         kw["symmetry"] = Symmetry(tuple(sym))
+
+
+def common_dict(task: Task, hand: Any) -> dict[str, Any]:
+    """What planar and spatial task files share, written from ``task`` (its ``hand``:
+    the planar or the spatial one): the inverse of :func:`common_keys` with the name,
+    the hand and the bins."""
+    doc: dict[str, Any] = {"name": task.name, **{k: getattr(task, k) for k in SCALAR_KEYS}}
+    if task.reference_mean_steps is None:
+        del doc["reference_mean_steps"]
+    doc["hand"] = write_fields(hand)
+    doc["bins"] = task.discretizer.to_dict()
+    doc["noise"] = write_fields(task.noise)
+    if task.symmetry is not None:
+        doc["symmetry"] = list(task.symmetry.actions)
+    return doc

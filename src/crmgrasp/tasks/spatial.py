@@ -17,11 +17,11 @@ Registered tasks: ``box-3d`` (``crmgrasp/Box3D-v0``) and ``cup-3d`` (``crmgrasp/
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, finite, tries
 from crmgrasp.model.hand import Error
 from crmgrasp.model.mesh import TriangleMesh
 from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable, SolidFamily
@@ -75,6 +75,14 @@ class SurfaceStarts:
 
     max_tries: int = 10_000
     up: float = 0.5
+    kind: ClassVar[str] = "surface"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "max_tries", tries(self.max_tries))
+        up = finite(self.up, "starts.up")
+        if not -1.0 <= up <= 1.0:
+            raise CrmgraspError(f"starts.up is a cosine and must be in [-1, 1], got {up:g}")
+        object.__setattr__(self, "up", up)
 
     def __call__(self, task: SpatialTask, rng: np.random.Generator, accept: Any = None) -> Config3D:
         """A start on ``task``'s object; ``accept`` (a compiled decision of one try's

@@ -38,38 +38,25 @@ from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable
 from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, box3d
 from crmgrasp.model.spatial import CRM3D, Hand3D
 from crmgrasp.tasks.schema import (
+    COMMON_SECTIONS,
     checked_name,
+    common_dict,
     common_keys,
     crm_tables,
     init_keys,
     number,
     numbers,
+    read_fields,
     section,
     table_keys,
+    write_fields,
 )
 from crmgrasp.tasks.spatial import SpatialTask, SurfaceStarts
 
 __all__ = ["spatial_from_dict", "spatial_to_dict", "SPATIAL_KEYS"]
 
-SPATIAL_KEYS = {
-    "name",
-    "model",
-    "description",
-    "mu_goal",
-    "max_steps",
-    "reference_mean_steps",
-    "grasp_reward",
-    "error_cost",
-    "hand",
-    "crm",
-    "bins",
-    "noise",
-    "solid",
-    "family",
-    "table",
-    "starts",
-    "symmetry",
-}
+SPATIAL_KEYS = {*COMMON_SECTIONS, "model", "solid", "table"}
+"""The keys of a spatial task file."""
 _FAMILIES3D: dict[str, type] = {"box3d": BoxOnTable, "cylinder": CylinderOnTable}
 
 
@@ -81,11 +68,7 @@ def _vector(value: Any, key: str, n: int) -> tuple[float, ...]:
 
 
 def _hand(table: Any) -> Hand3D:
-    t = table_keys(table, "[hand]", *init_keys(Hand3D))
-    kw: dict[str, Any] = {
-        k: _vector(v, f"hand.{k}", 3) if k in ("h", "g") else number(v, f"hand.{k}") for k, v in t.items()
-    }
-    return Hand3D(**kw)
+    return Hand3D(**read_fields(Hand3D, table, "[hand]", "hand."))
 
 
 def _crm(c: str, f: str, r: Any, where: str) -> CRM3D:
@@ -156,18 +139,11 @@ def _family(table: Any) -> Any:
 
 
 def _starts(table: Any) -> SurfaceStarts:
-    t = table_keys(table, "[starts]", {"kind", "up", "max_tries"}, {"kind"})
-    if t["kind"] != "surface":
-        raise CrmgraspError(f'a spatial task\'s starts kind is "surface", got {shown(t["kind"])}')
-    kw: dict[str, Any] = {}
-    if "up" in t:
-        kw["up"] = number(t["up"], "starts.up")
-    if "max_tries" in t:
-        m = t["max_tries"]
-        if isinstance(m, bool) or not isinstance(m, int) or not 1 <= m <= 1_000_000:
-            raise CrmgraspError(f"starts.max_tries must be an integer in [1, 1000000], got {shown(m)}")
-        kw["max_tries"] = m
-    return SurfaceStarts(**kw)
+    t = table_keys(table, "[starts]", {"kind", *init_keys(SurfaceStarts)[0]}, {"kind"})
+    if t["kind"] != SurfaceStarts.kind:
+        raise CrmgraspError(f'a spatial task\'s starts kind is "{SurfaceStarts.kind}", got {shown(t["kind"])}')
+    rest = {k: v for k, v in t.items() if k != "kind"}
+    return SurfaceStarts(**read_fields(SurfaceStarts, rest, "[starts]", "starts."))
 
 
 def spatial_from_dict(doc: Any) -> SpatialTask:
@@ -203,36 +179,17 @@ def _solid_dict(obj: Any) -> dict[str, Any]:
 
 def spatial_to_dict(task: SpatialTask) -> dict[str, Any]:
     """A spatial task as plain data in the schema above."""
-    h = task.hand3d
-    hand: dict[str, Any] = {"aperture": h.aperture, "palm_depth": h.palm_depth, "backoff": h.backoff}
-    hand.update(palm_normal_tol=h.palm_normal_tol, min_separation=h.min_separation, h=list(h.h), g=list(h.g))
-    if h.r_max is not None:
-        hand["r_max"] = h.r_max
     starts = task.starts
-    doc: dict[str, Any] = {
-        "name": task.name,
-        "model": "spatial",
-        "description": task.description,
-        "mu_goal": task.mu_goal,
-        "max_steps": task.max_steps,
-        "hand": hand,
-        "crm": [{"c": a.c, "f": a.f, "r": [*a.r]} for a in task.actions],  # type: ignore[misc]
-        "bins": task.discretizer.to_dict(),
-        "starts": {"kind": "surface", "up": starts.up, "max_tries": starts.max_tries}
-        if isinstance(starts, SurfaceStarts)
-        else {"kind": "custom"},
-        "grasp_reward": task.grasp_reward,
-        "error_cost": task.error_cost,
-        "noise": {"sigma_n": task.noise.sigma_n, "sigma_p": task.noise.sigma_p},
-    }
+    doc = common_dict(task, task.hand3d)
+    doc["model"] = "spatial"
+    doc["crm"] = [{"c": a.c, "f": a.f, "r": [*a.r]} for a in task.actions]  # type: ignore[misc]
+    doc["starts"] = (
+        {"kind": starts.kind, **write_fields(starts)} if type(starts) is SurfaceStarts else {"kind": "custom"}
+    )
     if task.table is not None:
         doc["table"] = task.table
     if task.family is None:
         doc["solid"] = _solid_dict(task.obj)
     else:
         doc["family"] = task.family.describe()
-    if task.reference_mean_steps is not None:
-        doc["reference_mean_steps"] = task.reference_mean_steps
-    if task.symmetry is not None:
-        doc["symmetry"] = list(task.symmetry.actions)
     return doc
