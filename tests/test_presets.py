@@ -14,8 +14,8 @@ from crmgrasp.cli import main
 from crmgrasp.envs import CRMGraspEnv, CRMGraspVectorEnv
 from crmgrasp.kernels import kernel_for
 from crmgrasp.tasks import paper_box, task_from_dict, task_to_dict
-from crmgrasp.tasks.core import acceptable
 from crmgrasp.tasks.presets import START_PRESETS, LongSideStarts, MixtureStarts, NearCornerStarts, with_reading
+from crmgrasp.tasks.starts import acceptable
 
 
 def _near(task, cfg, within=0.10):

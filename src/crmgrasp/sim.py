@@ -26,7 +26,6 @@ from numpy.typing import NDArray
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.contacts import Config
 from crmgrasp.model.hand import CRM, Error
-from crmgrasp.model.sensing import Observation
 from crmgrasp.tasks import Task, World
 
 __all__ = [
@@ -56,11 +55,12 @@ class SimState(NamedTuple):
 
 
 class Percept(NamedTuple):
-    """What a policy may use after a reset or a CRM: the sensed observation, the error
-    flag, the discretized observation, the sensed contact frames (what the next CRM's
-    goal line is built from), and the reward and episode end of the step."""
+    """What a policy may use after a reset or a CRM: the sensed observation (the contact
+    model's values, in its ``observation_names`` order), the error flag, the discretized
+    observation, the sensed contact frames (what the next CRM's goal line is built from),
+    and the reward and episode end of the step."""
 
-    observation: Observation
+    observation: tuple[float, ...]
     error: Error
     obs_index: int
     sensed: Config
@@ -78,7 +78,7 @@ class OneStep(NamedTuple):
     ``error`` is :class:`~crmgrasp.model.hand.Error` (an ``int``)."""
 
     state: SimState
-    observation: Observation
+    observation: tuple[float, ...]
     error: Error
     obs_index: int
     min_friction: float

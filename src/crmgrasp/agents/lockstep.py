@@ -30,7 +30,6 @@ from crmgrasp.agents.training import (
 from crmgrasp.kernels import kernel_for
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import KOrderEncoder
-from crmgrasp.model.sensing import Observation
 from crmgrasp.sim import Percept, reset, step_reward
 from crmgrasp.tasks import Task
 
@@ -141,7 +140,7 @@ def train_trials_lockstep(
             terminated = bool(done[i])
             truncated = tr.steps >= task.max_steps and not terminated
             percept = Percept(
-                Observation(*obs),
+                tuple(obs),
                 Error(errors[i]),
                 int(index[i]),
                 model.config_of(srow),

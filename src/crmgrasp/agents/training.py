@@ -25,7 +25,6 @@ from crmgrasp.kernels import kernel_for
 from crmgrasp.model.contacts import Config
 from crmgrasp.model.hand import Outcome
 from crmgrasp.model.history import KOrderEncoder
-from crmgrasp.model.sensing import Observation
 from crmgrasp.sim import Stepper
 from crmgrasp.sim import run_episode as sim_run_episode
 from crmgrasp.tasks import Task
@@ -398,10 +397,10 @@ class RolloutStep(NamedTuple):
     its outcome, and the observation after it."""
 
     config: Config
-    observation: Observation
+    observation: tuple[float, ...]
     action: int
     outcome: Outcome
-    next_observation: Observation
+    next_observation: tuple[float, ...]
     obs_index: int
     min_friction: float
 

@@ -28,7 +28,6 @@ from crmgrasp.experiments._policy import learned_policy
 from crmgrasp.experiments.figure4 import noisy_execution
 from crmgrasp.model.contacts import Config
 from crmgrasp.model.geometry import Polygon
-from crmgrasp.model.sensing import Observation
 from crmgrasp.plotting import cluster_figure
 from crmgrasp.tasks import Task, make_task
 
@@ -77,7 +76,7 @@ def thumb_far_start(task: Task, rng: np.random.Generator, lo: float, hi: float) 
     raise RuntimeError("no start found")  # pragma: no cover - the range is wide
 
 
-def _point(task: Task, obs: Observation, fingers: str) -> tuple[float, float]:
+def _point(task: Task, obs: tuple[float, ...], fingers: str) -> tuple[float, float]:
     """``(rho, |moment about the fingers|)`` of an observation."""
     return (obs[0], abs(obs[task.model.moment_index(fingers)]))
 

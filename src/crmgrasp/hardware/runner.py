@@ -26,7 +26,7 @@ from crmgrasp.agents.policy import GreedyPolicy
 from crmgrasp.hardware.contact_sensing import NoContact
 from crmgrasp.model.contacts import Config
 from crmgrasp.model.hand import CRM, Error
-from crmgrasp.model.sensing import Observation, SensorNoise
+from crmgrasp.model.sensing import SensorNoise
 from crmgrasp.model.spatial import CRM3D, Config3D
 from crmgrasp.sim import OneStep, Percept, SimState, run_episode
 from crmgrasp.tasks import Task
@@ -155,7 +155,7 @@ class _HandSteps:
         if isinstance(reading, NoContact):
             self.lost = reading.reason
             nan = float("nan")
-            lost = Observation(nan, nan, nan)
+            lost = (nan,) * len(t.model.observation_names)
             return OneStep(SimState(None, None, steps), lost, error, -1, nan, -1.0, False, True)  # type: ignore[arg-type]
         self.raws.append(getattr(self.hand, "raw_reading", dict)())
         obs = t.observe(reading)
@@ -198,7 +198,7 @@ class _Predicting:
 
     def __init__(self, policy: Any, rng: np.random.Generator) -> None:
         self.policy, self.rng = policy, rng
-        self.seen: list[tuple[float, float, float, int]] = []
+        self.seen: list[tuple[float, ...]] = []  # each: the observation, then the error flag
         self.taken: list[int] = []
 
     def begin(self, first: Percept) -> None:

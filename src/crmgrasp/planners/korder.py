@@ -53,7 +53,6 @@ from crmgrasp._validation import CrmgraspError, integer
 from crmgrasp.agents.policy import GreedyPolicy
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import KOrderEncoder
-from crmgrasp.model.sensing import Observation
 from crmgrasp.planners.references import BeliefPolicy, Start, State, _Model
 from crmgrasp.sim import Percept
 from crmgrasp.tasks import Task
@@ -129,7 +128,7 @@ def _projected(task: Task, starts: Sequence[Start], ep: _Episodes) -> tuple[dict
 
 def _percept(obs: int) -> Percept:
     """A percept carrying only what the belief policy reads: the discretized observation."""
-    return Percept(Observation(0.0, 0.0, 0.0), Error.NONE, obs, None)  # type: ignore[arg-type]
+    return Percept((), Error.NONE, obs, None)  # type: ignore[arg-type]
 
 
 FILL_LIMIT = 100_000

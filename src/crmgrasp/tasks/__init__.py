@@ -6,27 +6,21 @@ from TOML files and ``package.module:factory`` strings (:func:`resolve_task`, wh
 ``--task`` accepts) and writes them back as plain data.
 """
 
-from crmgrasp.tasks.core import (
+from crmgrasp.tasks.core import Symmetry, Task, World, make_task, paper_box, register_task, task_names
+from crmgrasp.tasks.families import FAMILY_TASKS, BoundaryStarts, default_crms, family_task, mirror_symmetry
+from crmgrasp.tasks.files import TEMPLATE, load_task_file, resolve_task, task_from_dict, task_to_dict
+from crmgrasp.tasks.spatial import SPATIAL_TASKS, SpatialTask, SurfaceStarts, spatial_crms
+from crmgrasp.tasks.starts import (
     CornerStarts,
     StartFilter,
     StartSampler,
-    Symmetry,
-    Task,
     UniformStarts,
-    World,
     accept_corner_candidates,
     acceptable,
     corner_boxes,
     corner_candidate,
     corner_proposal,
-    make_task,
-    paper_box,
-    register_task,
-    task_names,
 )
-from crmgrasp.tasks.families import FAMILY_TASKS, BoundaryStarts, default_crms, family_task, mirror_symmetry
-from crmgrasp.tasks.files import TEMPLATE, load_task_file, resolve_task, task_from_dict, task_to_dict
-from crmgrasp.tasks.spatial import SPATIAL_TASKS, SpatialTask, SurfaceStarts, spatial_crms
 
 __all__ = [
     "StartSampler",

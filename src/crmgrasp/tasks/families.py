@@ -48,18 +48,9 @@ from crmgrasp.model.families import (
 from crmgrasp.model.geometry import Disc, Polygon, Shape
 from crmgrasp.model.hand import CRM, Hand
 from crmgrasp.model.sensing import Discretizer
-from crmgrasp.tasks.core import (
-    PAPER_BINS,
-    PAPER_CRMS,
-    PAPER_HAND,
-    CornerStarts,
-    StartSampler,
-    Symmetry,
-    Task,
-    acceptable,
-    register_task,
-)
+from crmgrasp.tasks.core import PAPER_BINS, PAPER_CRMS, PAPER_HAND, Symmetry, Task, register_task
 from crmgrasp.tasks.presets import VertexStarts
+from crmgrasp.tasks.starts import CornerStarts, StartSampler, acceptable
 
 __all__ = [
     "BoundaryStarts",

@@ -26,7 +26,7 @@ from crmgrasp.model import families as fam
 from crmgrasp.model.geometry import Disc, Polygon
 from crmgrasp.model.hand import Hand
 from crmgrasp.model.sensing import Discretizer, SensorNoise
-from crmgrasp.tasks.core import CornerStarts, Task, UniformStarts, make_task, task_names
+from crmgrasp.tasks.core import Task, make_task, task_names
 from crmgrasp.tasks.families import BoundaryStarts
 from crmgrasp.tasks.presets import LongSideStarts, MixtureStarts, NearCornerStarts, VertexStarts, with_reading
 from crmgrasp.tasks.schema import (
@@ -45,6 +45,7 @@ from crmgrasp.tasks.schema import (
     table_keys,
     write_fields,
 )
+from crmgrasp.tasks.starts import CornerStarts, UniformStarts
 
 __all__ = [
     "TEMPLATE",

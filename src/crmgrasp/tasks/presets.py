@@ -1,7 +1,7 @@
 """Start presets and task readings: the choices the paper leaves open, as options.
 
 The paper's Figure 7 task is read here as "a random corner, one contact uniform on each
-side" (:class:`~crmgrasp.tasks.core.CornerStarts`). Its figures suggest other start
+side" (:class:`~crmgrasp.tasks.starts.CornerStarts`). Its figures suggest other start
 distributions, and its reward sentence ("-1 in all states") has two readings. These
 are first-class options, so that their effect can be measured
 (``crmgrasp reproduce figure7-sensitivity``):
@@ -17,7 +17,7 @@ are first-class options, so that their effect can be measured
 
 :func:`with_reading` applies them to a task. Every sampler draws only from the ``rng``
 it is given and accepts a start by the start rule
-(:func:`~crmgrasp.tasks.core.acceptable`: feasible and not already a grasp).
+(:func:`~crmgrasp.tasks.starts.acceptable`: feasible and not already a grasp).
 """
 
 from __future__ import annotations
@@ -33,14 +33,8 @@ from crmgrasp._validation import CrmgraspError, positive, tries
 from crmgrasp.model.contacts import Config, config_from_row
 from crmgrasp.model.geometry import Polygon, Shape
 from crmgrasp.model.hand import Hand
-from crmgrasp.tasks.core import (
-    CornerStarts,
-    StartFilter,
-    StartSampler,
-    Task,
-    acceptable,
-    corner_candidate,
-)
+from crmgrasp.tasks.core import Task
+from crmgrasp.tasks.starts import CornerStarts, StartFilter, StartSampler, acceptable, corner_candidate
 
 __all__ = [
     "NearCornerStarts",
