@@ -124,3 +124,15 @@ def test_starts_come_in_blocks_but_reseeding_restarts_them(task):
     again = [env.reset(seed=1)[1]["config"]] + [env.reset()[1]["config"] for _ in range(100)]
     assert first == again and len(set(first)) == len(first)
     assert all(task.hand.feasible(task.obj, c) == 0 and not task.is_success(c) for c in first)
+
+
+def test_the_history_wrapper_passes_check_env_and_is_recreated_from_its_spec():
+    """KOrderHistory records its ``k``: Gymnasium's checker can rebuild it from the spec."""
+    env = KOrderHistory(gym.make("crmgrasp/PaperBox-v0"), k=1)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_env(env)
+    assert all("different from the unwrapped version" in str(w.message) for w in caught)
+    again = env.spec.make()
+    assert isinstance(again, KOrderHistory) and again.encoder.k == 1
+    assert again.reset(seed=3)[0] == env.reset(seed=3)[0]

@@ -5,13 +5,15 @@ from __future__ import annotations
 import io
 import json
 import os
+import subprocess
+import sys
 
 import pytest
 
 from crmgrasp._progress import Progress, Quiet
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.cli import main
-from crmgrasp.experiments.runs import RunFolder, default_run_dir, read_status
+from crmgrasp.experiments.runs import RunFolder, default_run_dir, leftovers, read_status
 
 LEARN = ["learn", "--trials", "3", "--episodes", "40", "--eval-episodes", "10", "--quiet"]
 
@@ -52,6 +54,7 @@ def test_existing_folder_is_refused_then_overwritten_or_resumed(tmp_path, capsys
     assert "already holds a complete learn run" in capsys.readouterr().err
     assert (out / "curve.csv").read_bytes() == before
     assert main([*LEARN, "--out", str(out), "--resume"]) == 0
+    assert "is already complete; --resume reruns nothing" in capsys.readouterr().err
     assert (out / "curve.csv").read_bytes() == before
     (out / "stray.txt").write_text("x")
     assert main([*LEARN, "--out", str(out), "--overwrite"]) == 0
@@ -112,8 +115,50 @@ def test_a_killed_run_is_not_complete(tmp_path):
     (run.path / "run.json").write_text(json.dumps(rec))
     assert read_status(run.path) == "killed"
     assert main(["status", str(run.path)]) == 1
+    run._unlock()  # what the process's death does to its lock
     again = RunFolder(run.path, "learn", "paper-box", {"a": 1}, resume=True)
     assert again.resumed
+
+
+def test_a_folder_is_claimed_by_one_run_at_a_time(tmp_path):
+    first = RunFolder(tmp_path / "r", "learn", "paper-box", {"a": 1})
+    with pytest.raises(CrmgraspError, match="is in use by another crmgrasp run"):
+        RunFolder(tmp_path / "r", "learn", "paper-box", {"a": 1})
+    with pytest.raises(CrmgraspError, match="is in use by another crmgrasp run"):
+        RunFolder(tmp_path / "r", "learn", "paper-box", {"a": 1}, overwrite=True)
+    assert json.loads((tmp_path / "r" / "run.json").read_text())["pid"] == os.getpid()
+    first.finish("complete")  # finishing releases the folder
+    RunFolder(tmp_path / "r", "learn", "paper-box", {"a": 1}, overwrite=True).finish("complete")
+    with pytest.raises(CrmgraspError, match="holds no run to resume"):
+        RunFolder(tmp_path / "new", "learn", "paper-box", {}, resume=True)
+    assert not (tmp_path / "new").exists()  # a refused claim leaves no folder behind
+
+
+def test_two_learn_processes_into_one_folder_one_is_refused(tmp_path):
+    """Started together into one empty --out: one run completes, the other is refused in one line."""
+    out = tmp_path / "r"
+    out.mkdir()
+    cmd = [sys.executable, "-m", "crmgrasp", *LEARN, "--out", str(out)]
+    procs = [subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for _ in range(2)]
+    errors = [p.communicate(timeout=120)[1] for p in procs]  # communicate closes the pipes
+    results = [(p.returncode, err) for p, err in zip(procs, errors)]
+    codes = sorted(code for code, _ in results)
+    assert codes == [0, 2], results
+    refused = next(err for code, err in results if code == 2)
+    assert refused.count("\n") == 1 and ("in use by" in refused or "already holds a complete" in refused)
+    assert read_status(out) == "complete"
+
+
+def test_cut_short_writes_are_named_by_status_and_swept_by_resume(tmp_path, capsys):
+    run = RunFolder(tmp_path / "r", "learn", "paper-box", {"a": 1})
+    (run.path / "sub").mkdir()
+    (run.path / "sub" / ".crmgrasp-x1y2.tmp").write_text("half a file")
+    run.finish("interrupted")
+    assert leftovers(run.path) == ["sub/.crmgrasp-x1y2.tmp"]
+    assert main(["status", str(run.path)]) == 1
+    assert "1 temporary file(s) of cut-short writes: sub/.crmgrasp-x1y2.tmp" in capsys.readouterr().out
+    RunFolder(run.path, "learn", "paper-box", {"a": 1}, resume=True).finish("complete")
+    assert leftovers(run.path) == [] and (run.path / "sub").is_dir()
 
 
 def test_failed_run_says_why(tmp_path):

@@ -36,9 +36,16 @@ __all__ = [
     "write_json",
     "write_csv",
     "save_figure",
+    "temporaries",
 ]
 
 _TMP_PREFIX, _TMP_SUFFIX = ".crmgrasp-", ".tmp"  # short: a 255-byte file name still gets one
+
+
+def temporaries(folder: str | os.PathLike[str]) -> list[Path]:
+    """The temporary files of unfinished atomic writes under ``folder`` (a write killed
+    before its rename leaves one; nothing else is named ``.crmgrasp-*``), sorted."""
+    return sorted(p for p in Path(folder).rglob(f"{_TMP_PREFIX}*") if p.is_file() and not p.is_symlink())
 
 
 def check_output(path: str | os.PathLike[str], what: str = "output file") -> Path:

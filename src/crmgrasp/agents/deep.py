@@ -74,11 +74,12 @@ def bounds_of(task: Task) -> tuple[tuple[float, float], ...]:
     return tuple(task.model.observation_bounds().values())
 
 
-class ContinuousObservation(gym.ObservationWrapper):
+class ContinuousObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs):
     """Flattens :class:`~crmgrasp.envs.single.CRMGraspEnv`'s ``Dict`` observation into :func:`features`."""
 
     def __init__(self, env: gym.Env) -> None:
-        super().__init__(env)
+        gym.utils.RecordConstructorArgs.__init__(self)
+        gym.ObservationWrapper.__init__(self, env)
         task = env.unwrapped.task  # type: ignore[attr-defined]
         self.names, self.bounds = task.model.observation_names, bounds_of(task)
         self.observation_space = spaces.Box(-1.0, 1.0, (len(self.names) + N_ERRORS,), np.float32)

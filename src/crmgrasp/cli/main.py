@@ -359,10 +359,12 @@ def _cmd_task_template(args: argparse.Namespace) -> int:
 
 
 def _cmd_status(args: argparse.Namespace) -> int:
-    from crmgrasp.experiments.runs import read_status
+    from crmgrasp.experiments.runs import leftovers, read_status
 
     status = read_status(args.run)
-    print(f"{args.run}: {status}")
+    left = leftovers(args.run)
+    note = f" ({len(left)} temporary file(s) of cut-short writes: {', '.join(left[:3])}; --resume deletes them)"
+    print(f"{args.run}: {status}{note if left else ''}")
     return 0 if status == "complete" else 1
 
 

@@ -207,17 +207,19 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
 
 
-class KOrderHistory(gym.Wrapper[int, np.int64, dict[str, Any], np.int64]):
+class KOrderHistory(gym.Wrapper[int, np.int64, dict[str, Any], np.int64], gym.utils.RecordConstructorArgs):
     """Replace the observation by the k-order history state of docs/model.md section 6.
 
     The observation becomes ``Discrete(encoder.size)``: the integer code of
     ``(o_t, a_{t-1}, o_{t-1}, ..., a_{t-k})`` over the task's discretized
     observations (``info["obs_index"]``), padded at the episode start. ``k = 0``
-    is the current discretized observation alone.
+    is the current discretized observation alone. It records ``k``, so that a spec of the
+    wrapped environment recreates it (Gymnasium's ``check_env`` and ``env.spec.make``).
     """
 
     def __init__(self, env: gym.Env, k: int = 2) -> None:
-        super().__init__(env)
+        gym.utils.RecordConstructorArgs.__init__(self, k=k)
+        gym.Wrapper.__init__(self, env)
         task = env.unwrapped.task  # type: ignore[attr-defined]
         self.encoder = KOrderEncoder(task.discretizer.size, len(task.actions), k)
         self.observation_space = spaces.Discrete(self.encoder.size)  # type: ignore[assignment]

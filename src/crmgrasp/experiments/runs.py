@@ -18,6 +18,13 @@ on, so a run killed with SIGKILL still says ``running``; its ``pid`` and ``host`
 :func:`read_status` that nobody runs it (reported as ``killed``), and ``--resume``
 takes it up. Ctrl-C ends a run with ``interrupted``; an error with ``failed`` and the
 error's text.
+
+A run holds an exclusive lock on its folder (``flock`` on the folder itself, POSIX) from
+the moment it claims it until it finishes, and the claim checks the folder only once it
+holds the lock: of two runs started into one folder at once, the second is refused in one
+line, and a killed run's lock goes with its process. ``--resume`` says so when the run is complete
+already (it then reruns nothing) and deletes the temporary files of writes a kill cut short
+(:func:`~crmgrasp._io.temporaries`), which :func:`leftovers` lists for ``crmgrasp status``.
 """
 
 from __future__ import annotations
@@ -36,10 +43,10 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from crmgrasp._io import check_folder, read_bounded, write_json
+from crmgrasp._io import check_folder, read_bounded, temporaries, write_json
 from crmgrasp._validation import CrmgraspError, shown
 
-__all__ = ["RunFolder", "read_status", "default_run_dir", "STATUSES"]
+__all__ = ["RunFolder", "read_status", "leftovers", "default_run_dir", "STATUSES"]
 
 FORMAT = "crmgrasp-run"
 STATUSES = ("running", "complete", "interrupted", "failed")
@@ -127,6 +134,28 @@ def read_status(folder: str | Path) -> str:
     return str(doc["status"])
 
 
+def leftovers(folder: str | Path) -> list[str]:
+    """The temporary files that writes cut short left in a run folder (paths relative to
+    it): ``--resume`` and ``--overwrite`` delete them."""
+    return [str(p.relative_to(folder)) for p in temporaries(folder)]
+
+
+def _lock(folder: Path) -> int | None:
+    """An exclusive lock on ``folder`` (``flock`` on the folder's descriptor), or a one-line
+    error if another process holds it; ``None`` where the platform has no ``flock``."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX
+        return None
+    fd = os.open(folder, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(fd)
+        raise CrmgraspError(f"{str(folder)!r} is in use by another crmgrasp run") from None
+    return fd
+
+
 class RunFolder:
     """The folder and ``run.json`` of one run (a context manager that sets the final
     status).
@@ -157,7 +186,16 @@ class RunFolder:
         self.path = default_run_dir(command, task) if path is None else check_folder(path, "--out")
         self.config = json.loads(json.dumps(config))  # plain JSON data, as it will be read back
         self.resumed = False
-        previous = self._claim(command, overwrite, resume)
+        made = not self.path.exists()
+        self.path.mkdir(parents=True, exist_ok=True)
+        self._lock_fd = _lock(self.path)
+        try:
+            previous = self._claim(command, overwrite, resume)
+        except BaseException:
+            self._unlock()
+            if made:
+                shutil.rmtree(self.path, ignore_errors=True)
+            raise
         self.record: dict[str, Any] = {
             "format": FORMAT,
             "command": command,
@@ -180,8 +218,12 @@ class RunFolder:
         }
         if previous:
             self.record["resumed_from"] = {k: previous.get(k) for k in ("started", "ended", "status")}
-        self.path.mkdir(parents=True, exist_ok=True)
         self._save()
+
+    def _unlock(self) -> None:
+        if self._lock_fd is not None:
+            os.close(self._lock_fd)  # closing the descriptor releases the flock
+            self._lock_fd = None
 
     def _claim(self, command: str, overwrite: bool, resume: bool) -> dict[str, Any] | None:
         """Check what is in the folder already; empty it for ``overwrite``; return the
@@ -209,6 +251,8 @@ class RunFolder:
                 f"--out {str(p)!r} already holds a {doc['status']} {doc.get('command')} run; "
                 "use --resume to continue it, --overwrite to replace it, or another --out"
             )
+        if doc["status"] == "complete":
+            print(f"crmgrasp: the run in {str(p)!r} is already complete; --resume reruns nothing", file=sys.stderr)
         if doc.get("command") != command:
             raise CrmgraspError(f"--resume: {str(p)!r} holds a {shown(doc.get('command'))} run, not {command}")
         old = doc.get("config", {})
@@ -218,6 +262,8 @@ class RunFolder:
                     f"--resume: the run in {str(p)!r} has {key} = {shown(old.get(key))}, "
                     f"this command {shown(self.config.get(key))}; resume with the same settings"
                 )
+        for tmp in temporaries(p):  # writes a kill cut short: their files were never renamed into place
+            tmp.unlink()
         self.resumed = True
         return doc
 
@@ -243,6 +289,7 @@ class RunFolder:
             raise ValueError(status)
         self.record.update(status=status, error=error, ended=_now())
         self._save()
+        self._unlock()
 
     def __enter__(self) -> RunFolder:
         return self
