@@ -388,3 +388,31 @@ def test_public_functions_check_configurations(task):
         task.hand.contact(task.obj, (np.nan, 0.0), (0.0, -0.05))
     with pytest.raises(CrmgraspError, match="contact b"):
         task.hand.contact(task.obj, (0.0, 0.05), (1.0, 2.0, 3.0))
+
+
+@pytest.mark.parametrize(
+    ("family", "message"),
+    [
+        (
+            {"kind": "regular-polygon", "sides": [3, 1_000_000]},
+            "regular polygon sides range (3, 1000000) must end at 512",
+        ),
+        ({"kind": "star", "points": [4, 100_000]}, "star points range (4, 100000) must end at 256"),
+        (
+            {"kind": "convex-polygon", "vertices": [3, 100_000]},
+            "convex polygon vertices range (3, 100000) must end at 512",
+        ),
+        (
+            {"kind": "polygon", "vertices": [[i * 1e-6, (i % 2) * 1e-6] for i in range(1_000_000)]},
+            "a polygon may have at most 512 vertices, got 1000000",
+        ),
+    ],
+)
+def test_family_counts_are_bounded_with_the_limit_named(family, message):
+    """A hostile count is refused at once, in one line naming the limit (not a hang or MemoryError)."""
+    from crmgrasp.tasks import make_task, task_from_dict, task_to_dict
+
+    doc = {**task_to_dict(make_task("u-handle")), "family": family, "symmetry": None}
+    with pytest.raises(CrmgraspError) as err:
+        task_from_dict(doc)
+    assert message in str(err.value) and "\n" not in str(err.value)

@@ -45,7 +45,7 @@ from crmgrasp.model.family_base import (
     width,
 )
 from crmgrasp.model.geometry import Rectangle, regular_polygon
-from crmgrasp.model.polygon import Polygon
+from crmgrasp.model.polygon import MAX_VERTICES, Polygon
 from crmgrasp.model.shape import Shape
 
 __all__ = [
@@ -125,7 +125,8 @@ class RegularPolygonFamily(_Family):
     kind = "regular-polygon"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "sides", _range(self.sides, "regular polygon sides", low=3, integer=True))
+        sides = _range(self.sides, "regular polygon sides", low=3, integer=True, most=MAX_VERTICES)
+        object.__setattr__(self, "sides", sides)
         object.__setattr__(self, "radius", _range(self.radius, "regular polygon radius"))
 
     def _shape(self, rng: np.random.Generator) -> Shape:
@@ -154,7 +155,8 @@ class ConvexPolygonFamily(_Family):
     kind = "convex-polygon"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "vertices", _range(self.vertices, "convex polygon vertices", low=3, integer=True))
+        count = _range(self.vertices, "convex polygon vertices", low=3, integer=True, most=MAX_VERTICES)
+        object.__setattr__(self, "vertices", count)
         object.__setattr__(self, "radius", _range(self.radius, "convex polygon radius"))
         if self.vertices[0] > 12:
             raise CrmgraspError(f"convex polygon vertices range {self.vertices} must start at 12 or fewer")
@@ -297,7 +299,8 @@ class StarFamily(_Family):
     kind = "star"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "points", _range(self.points, "star points", low=3, integer=True))
+        points = _range(self.points, "star points", low=3, integer=True, most=MAX_VERTICES // 2)  # 2 vertices a point
+        object.__setattr__(self, "points", points)
         object.__setattr__(self, "outer", _range(self.outer, "star outer"))
         inner = _range(self.inner, "star inner")
         if inner[1] >= 1.0:

@@ -24,9 +24,11 @@ MAX_TRIES = 1000
 Range = tuple[float, float]
 
 
-def _range(value: Any, name: str, *, low: float = 0.0, integer: bool = False) -> tuple[Any, Any]:
+def _range(
+    value: Any, name: str, *, low: float = 0.0, integer: bool = False, most: float = math.inf
+) -> tuple[Any, Any]:
     """A checked ``(low, high)``: two finite numbers (integers if ``integer``),
-    ``low <= high``, both above ``low`` (or at least it, for integers)."""
+    ``low <= high``, both above ``low`` (or at least it, for integers) and at most ``most``."""
     try:
         lo, hi = value
     except (TypeError, ValueError):
@@ -42,6 +44,8 @@ def _range(value: Any, name: str, *, low: float = 0.0, integer: bool = False) ->
         raise CrmgraspError(f"{name} range ({lo}, {hi}) must start at {low} or more")
     if not integer and lo <= low:
         raise CrmgraspError(f"{name} range ({lo}, {hi}) must be above {low}")
+    if hi > most:
+        raise CrmgraspError(f"{name} range ({lo}, {hi}) must end at {most:g} or less")
     return (int(lo), int(hi)) if integer else (float(lo), float(hi))
 
 

@@ -10,12 +10,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from crmgrasp._validation import CrmgraspError, as_point, finite
+from crmgrasp._validation import CrmgraspError, as_point, finite, shown
 from crmgrasp.model.shape import EPS, LINE_TOL, S_TOL, Array, BoundaryPoint, Entry
 
-__all__ = ["Polygon", "Edges", "MAX_COORD", "inside", "first_entry", "convex_edge", "convex_entry"]
+__all__ = ["Polygon", "Edges", "MAX_COORD", "MAX_VERTICES", "inside", "first_entry", "convex_edge", "convex_entry"]
 
 MAX_COORD = 1e6
+
+MAX_VERTICES = 512
+"""The most vertices a polygon may have (the self-intersection test grows with their
+square; object families draw within it)."""
 """Largest vertex coordinate, metres: far beyond any hand, and far from where products of
 coordinates overflow."""
 
@@ -73,10 +77,15 @@ class Polygon:
         polygons, rigid motions of a checked polygon) skips the self-intersection test,
         the only check whose cost grows with the square of the vertices; every other
         check still runs."""
+        count = len(vertices) if hasattr(vertices, "__len__") else 0
+        if count > MAX_VERTICES:  # before any work on them
+            raise CrmgraspError(f"a polygon may have at most {MAX_VERTICES} vertices, got {count}")
         try:
             raw: list[Any] = list(vertices)  # type: ignore[call-overload, arg-type]
         except TypeError:
-            raise CrmgraspError(f"polygon vertices must be a sequence of (x, y), got {vertices!r}") from None
+            raise CrmgraspError(f"polygon vertices must be a sequence of (x, y), got {shown(vertices)}") from None
+        if len(raw) > MAX_VERTICES:
+            raise CrmgraspError(f"a polygon may have at most {MAX_VERTICES} vertices, got {len(raw)}")
         if len(raw) < 3:
             raise CrmgraspError(f"a polygon needs at least 3 vertices, got {len(raw)}")
         if _simple:  # the package's own (x, y) pairs: one bound check for all
