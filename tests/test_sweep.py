@@ -55,11 +55,35 @@ def test_grid_and_cells_are_expanded(tmp_path):
         ({"cell": [{"agent": "sarsa"}, {"agent": "sarsa"}]}, "the same"),
         ({"cell": [{"agent": "random", "alpha": 0.5}]}, "agent 'random' takes no alpha"),
         ({"cell": [{"agent": "nope"}]}, "unknown agent 'nope'"),
+        ({"grid": {"agent": ["sarsa"]}, "name": "x/../../../ESCAPED"}, "name must be 1-64 letters"),
+        ({"grid": {"agent": ["sarsa"]}, "name": "a\nb"}, "name must be 1-64 letters"),
+        ({"grid": {"agent": ["sarsa"]}, "seeds": ["0"]}, "seeds must be a non-empty list of integers"),
+        ({"grid": {"agent": ["sarsa"]}, "seeds": [True]}, "seeds must be a non-empty list of integers"),
+        ({"cell": [{"agent": "model-vi", "symmetric": "no"}]}, "symmetric must be true or false, got 'no'"),
+        ({"cell": [{"agent": "model-vi", "symmetric": 0.5}]}, "symmetric must be true or false, got 0.5"),
+        ({"cell": [{"agent": "sarsa", "k": 1.5}]}, "k must be an integer, got 1.5"),
+        ({"cell": [{"agent": "sarsa", "alpha": "0.3"}]}, "alpha must be a number, got '0.3'"),
+        ({"cell": [{"agent": "sarsa", "alpha": True}]}, "alpha must be a number, got True"),
+        ({"cell": [{"agent": "sarsa", "task": 3}]}, "task must be a string, got 3"),
     ],
 )
 def test_bad_studies_are_one_line(doc, message):
-    with pytest.raises(CrmgraspError, match=message.replace("[", r"\[")):
+    with pytest.raises(CrmgraspError, match=message.replace("[", r"\[")) as err:
         study_from_dict(doc)
+    assert "\n" not in str(err.value)
+
+
+def test_a_cells_relative_task_file_is_read_beside_the_study(tmp_path, monkeypatch):
+    from crmgrasp.tasks import TEMPLATE
+
+    (tmp_path / "studies").mkdir()
+    (tmp_path / "studies" / "my-u.toml").write_text(TEMPLATE)
+    study_file = tmp_path / "studies" / "s.toml"
+    study_file.write_text('name = "s"\n[[cell]]\ntask = "my-u.toml"\n[[cell]]\ntask = "paper-box"\n')
+    monkeypatch.chdir(tmp_path)  # the working directory holds no my-u.toml
+    study = load_study("studies/s.toml")
+    assert study.cells[0]["task"] == str((tmp_path / "studies" / "my-u.toml").resolve())
+    assert study.cells[1]["task"] == "paper-box"
 
 
 def test_sweep_runs_tables_report_and_resume(tmp_path, capsys, monkeypatch):
@@ -93,7 +117,7 @@ def test_sweep_cli_errors(tmp_path, capsys):
     assert main(["sweep", "report"]) == 2
     assert "needs the study's run folder" in capsys.readouterr().err
     assert main(["sweep", str(_write(tmp_path, "name = 3\n[grid]\nagent=['sarsa']"))]) == 2
-    assert "name must be a non-empty string" in capsys.readouterr().err
+    assert "name must be 1-64 letters, digits" in capsys.readouterr().err
     assert main(["sweep", "report", str(tmp_path)]) == 2
 
 

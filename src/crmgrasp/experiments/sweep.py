@@ -15,7 +15,8 @@ A study file is TOML::
     # agent = "q"
     # epsilon = 0.1
 
-Cell keys: ``task`` (a name, a .toml file or ``package.module:factory``),
+Cell keys: ``task`` (a name, a .toml file, read beside the study file when its path is
+relative, or ``package.module:factory``),
 ``start_preset``, ``grasp_reward``, ``agent``, ``k``, ``symmetric`` and the agents'
 parameters (``alpha``, ``gamma``, ``epsilon``, ``q0``, ``lam``, ``trace``,
 ``n_planning``, ``planning``, ``q_act``, ``unknown``). Each (cell, seed) is one
@@ -34,6 +35,7 @@ intervals over trials, interquartile means, a performance profile).
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import itertools
 import json
@@ -53,6 +55,7 @@ from crmgrasp.experiments.learning import LearnerSpec, learn
 from crmgrasp.experiments.parallel import run_parallel
 from crmgrasp.experiments.runs import RunFolder
 from crmgrasp.experiments.stats import bootstrap_ci, fmt, iqm
+from crmgrasp.tasks.schema import checked_name
 
 __all__ = ["Study", "load_study", "run_study", "report", "CELL_KEYS"]
 
@@ -100,20 +103,47 @@ def _scalar(key: str, value: Any, where: str) -> Any:
     return value
 
 
+_CELL_TYPES: dict[str, type] = {"task": str, "start_preset": str, "agent": str, "k": int, "symmetric": bool}
+_CELL_TYPES["grasp_reward"] = float
+"""The types of the cell keys that are not an agent's parameters (those take their
+constructor default's type)."""
+
+_TYPE_WORDS = {bool: "true or false", int: "an integer", float: "a number", str: "a string"}
+
+
+def _typed(key: str, value: Any, want: type | None, where: str) -> Any:
+    """``value`` if it has the type ``want`` (TOML's: a boolean is not a number, a string
+    not a number; an integer is a number); any scalar when ``want`` is None."""
+    ok = (
+        want is None
+        or (want is bool and isinstance(value, bool))
+        or (want is int and isinstance(value, int) and not isinstance(value, bool))
+        or (want is float and isinstance(value, (int, float)) and not isinstance(value, bool))
+        or (want is str and isinstance(value, str))
+    )
+    if not ok:
+        raise CrmgraspError(f"{where}: {key} must be {_TYPE_WORDS[want]}, got {shown(value)}")  # type: ignore[index]
+    return value
+
+
 def _cell(raw: dict[str, Any], where: str) -> dict[str, Any]:
-    from crmgrasp.agents.training import AGENTS, agent_parameters
+    from crmgrasp.agents.training import AGENTS, agent_parameters, parameter_defaults
 
     for key in raw:
         if key not in CELL_KEYS:
             raise CrmgraspError(f"{where}: unknown key {key!r}; cell keys: {', '.join(CELL_KEYS)}")
     cell = {**_DEFAULT_CELL, **{k: _scalar(k, v, where) for k, v in raw.items()}}
-    agent = cell["agent"]
+    agent = _typed("agent", cell["agent"], str, where)
     if agent not in AGENTS:
         raise CrmgraspError(f"{where}: unknown agent {shown(agent)}; known agents: {', '.join(AGENTS)}")
     extra = [k for k in AGENT_PARAMS if k in cell and k not in agent_parameters(agent)]
     if extra:
         takes = ", ".join(agent_parameters(agent)) or "none"
         raise CrmgraspError(f"{where}: agent {agent!r} takes no {', '.join(extra)} (it takes {takes})")
+    for key, value in cell.items():
+        default = parameter_defaults(key).get(agent) if key in AGENT_PARAMS else None
+        want = _CELL_TYPES.get(key) or (type(default) if type(default) in _TYPE_WORDS else None)
+        _typed(key, value, want, where)
     return cell
 
 
@@ -125,14 +155,12 @@ def study_from_dict(doc: Any) -> Study:
     for key in doc:
         if key not in known:
             raise CrmgraspError(f"unknown key {key!r}; study keys: {', '.join(sorted(known))}")
-    name = doc.get("name", "study")
-    if not isinstance(name, str) or not name:
-        raise CrmgraspError(f"name must be a non-empty string, got {shown(name)}")
+    name = checked_name(doc.get("name", "study"))  # it names the run folder: a task name's rule
     trials = integer(doc.get("trials", 20), "trials", 1, 100_000)
     episodes = integer(doc.get("episodes", 500), "episodes", 1, 10_000_000)
     eval_episodes = integer(doc.get("eval_episodes", 200), "eval_episodes", 0, 10_000_000)
     seeds = doc.get("seeds", [0])
-    if not isinstance(seeds, list) or not seeds:
+    if not isinstance(seeds, list) or not seeds or any(isinstance(s, bool) or not isinstance(s, int) for s in seeds):
         raise CrmgraspError(f"seeds must be a non-empty list of integers, got {shown(seeds)}")
     seeds = tuple(integer(s, "seed", 0, SEED_MAX) for s in seeds)
     if len(set(seeds)) != len(seeds):
@@ -165,15 +193,27 @@ def study_from_dict(doc: Any) -> Study:
 
 
 def load_study(path: str | Path) -> Study:
-    """Read a study file (1 MiB at most; one-line errors naming the file and the key)."""
+    """Read a study file (1 MiB at most; one-line errors naming the file and the key). A
+    cell's task given as a relative ``.toml`` path is the file beside the study file (not
+    in the working directory): it becomes that file's absolute path."""
     p = Path(path)
     data = read_bounded(p, 1 << 20, "study file")
     try:
-        return study_from_dict(tomllib.loads(data.decode("utf-8")))
+        study = study_from_dict(tomllib.loads(data.decode("utf-8")))
     except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         raise CrmgraspError(f"study file {str(p)!r} is not valid TOML ({exc})") from None
     except CrmgraspError as exc:
         raise CrmgraspError(f"study file {str(p)!r}: {exc}") from None
+    here = p.resolve().parent
+    cells = tuple({**c, "task": _beside(here, c["task"])} for c in study.cells)
+    return dataclasses.replace(study, cells=cells)
+
+
+def _beside(folder: Path, task: str) -> str:
+    """``task`` as the absolute path of the file beside the study file, for a relative
+    ``.toml`` path; unchanged otherwise (a task name, ``package.module:factory``, an
+    absolute path)."""
+    return str(folder / task) if task.endswith(".toml") and not Path(task).is_absolute() else task
 
 
 @dataclass(frozen=True)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sized
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
@@ -77,7 +78,7 @@ class Polygon:
         polygons, rigid motions of a checked polygon) skips the self-intersection test,
         the only check whose cost grows with the square of the vertices; every other
         check still runs."""
-        count = len(vertices) if hasattr(vertices, "__len__") else 0
+        count = len(vertices) if isinstance(vertices, Sized) else 0
         if count > MAX_VERTICES:  # before any work on them
             raise CrmgraspError(f"a polygon may have at most {MAX_VERTICES} vertices, got {count}")
         try:
