@@ -266,3 +266,11 @@ def test_learn_preset_fastest_and_a_family_prior(tmp_path, capsys):
     capsys.readouterr()
     assert main([*base, "--agent", "sarsa", "--prior-task", "box-family", "--out", str(tmp_path / "x")]) == 2
     assert "--prior-task does not apply to --agent sarsa" in capsys.readouterr().err
+
+
+def test_learn_says_when_no_interval_is_given(tmp_path, capsys):
+    """Fewer than 5 trials: the text says no interval is given (not 'n/a-n/a')."""
+    argv = ["learn", "--trials", "1", "--episodes", "20", "--eval-episodes", "10", "--quiet"]
+    assert main([*argv, "--out", str(tmp_path / "r")]) == 0
+    out = capsys.readouterr().out
+    assert "no interval: fewer than 5 trials" in out and "n/a" not in out

@@ -46,7 +46,7 @@ def test_controller_statistics(task):
 
 def test_compare_small(tmp_path):
     cfg = CompareConfig(
-        trials=2,
+        trials=5,  # intervals over trials need 5 (stats.MIN_TRIALS)
         episodes=40,
         eval_episodes=30,
         reference_starts=300,

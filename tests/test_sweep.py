@@ -118,6 +118,10 @@ def test_sweep_cli_errors(tmp_path, capsys):
     assert "needs the study's run folder" in capsys.readouterr().err
     assert main(["sweep", str(_write(tmp_path, "name = 3\n[grid]\nagent=['sarsa']"))]) == 2
     assert "name must be 1-64 letters, digits" in capsys.readouterr().err
+    study = _write(tmp_path)
+    assert main(["sweep", str(study), "--address", "127.0.0.1:1", "--out", str(tmp_path / "o")]) == 2
+    assert "--address names a Ray cluster: it needs --executor ray" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
     assert main(["sweep", "report", str(tmp_path)]) == 2
 
 

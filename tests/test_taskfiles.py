@@ -128,12 +128,14 @@ def test_factory_tasks(tmp_path, monkeypatch):
         "from crmgrasp.tasks import paper_box\nimport dataclasses\n"
         "def small():\n    return dataclasses.replace(paper_box(), name='small', symmetry=None)\n"
         "def broken():\n    raise ZeroDivisionError('oops')\n"
+        "def quits():\n    raise SystemExit(0)\n"
         "not_a_task = 3\n"
     )
     monkeypatch.syspath_prepend(str(tmp_path))
     assert resolve_task("mytasks:small").name == "small"
     for spec, message in (
         ("mytasks:broken", "the factory raised ZeroDivisionError: oops"),
+        ("mytasks:quits", r"the factory called exit\(0\) instead of returning a task"),
         ("mytasks:not_a_task", "gave a int, not a crmgrasp Task"),
         ("mytasks:absent", "has no 'absent'"),
         ("nosuchmodule_xyz:f", "cannot import 'nosuchmodule_xyz'"),

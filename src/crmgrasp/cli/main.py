@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import os
 import sys
 from collections.abc import Sequence
@@ -116,14 +117,14 @@ def _cmd_learn(args: argparse.Namespace) -> int:
             jobs=args.jobs,
         )
         paths = write_learn_outputs(task, run, folder.path)
-    from crmgrasp.experiments.stats import budget, fmt
+    from crmgrasp.experiments.stats import budget, ci_text, fmt
 
     s = run.summary
-    lo, hi = s["greedy_ci95_over_trials"]
+    lo, hi = (math.nan if v is None else v for v in s["greedy_ci95_over_trials"])
     print(f"{s['label']} on {task.name}: {budget(s['trials'], s['episodes'], s['seed'])}, {fmt(s['seconds'], 1)} s")
     print(f"  CRMs per episode, last 10 training episodes: {fmt(s['final_mean_steps'])}")
     print(
-        f"  greedy policy: {fmt(s['greedy_mean_steps'])} CRMs (95% CI over trials {fmt(lo)}-{fmt(hi)}, "
+        f"  greedy policy: {fmt(s['greedy_mean_steps'])} CRMs ({ci_text(lo, hi)}, "
         f"IQM {fmt(s['greedy_iqm_steps'])}), success {s['greedy_success_rate']:.1%}"
     )
     if s["reference_mean_steps"]:
@@ -325,6 +326,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         return 0
     if args.folder is not None:
         raise CrmgraspError(f"unexpected argument {str(args.folder)!r} (use --out for the run folder)")
+    if args.address is not None and args.executor != "ray":
+        raise CrmgraspError("--address names a Ray cluster: it needs --executor ray")
     study = load_study(args.target)
     with _run_folder(args, study.name, {"study": study.to_dict()}) as run:
         counts = run_study(

@@ -31,7 +31,7 @@ from crmgrasp.agents.deep import (
 from crmgrasp.agents.training import episodes_to_within
 from crmgrasp.experiments.learning import SYMMETRIC_DYNA_Q, LearnerSpec, learn, usable
 from crmgrasp.experiments.runs import RunFolder
-from crmgrasp.experiments.stats import bootstrap_ci, budget, fmt, iqm, normal_ci
+from crmgrasp.experiments.stats import MIN_TRIALS, bootstrap_ci, budget, fmt, iqm, normal_ci
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.planners.pomdp_task import POMDPAgent, build_task_pomdp
 from crmgrasp.planners.references import BeliefPolicy, belief_optimum, clairvoyant_bound, sample_starts
@@ -275,7 +275,8 @@ def _markdown(rows: list[list[Any]], config: CompareConfig) -> str:
         f"# {config.task}: method comparison ({budget(config.trials, config.episodes, config.seed)})",
         "",
         f"Learners: {budget(config.trials, config.episodes)}; greedy evaluation on {config.eval_episodes:,} "
-        "episodes per trial; 95% intervals by bootstrap over the trials (over the episodes for fixed policies "
+        f"episodes per trial; 95% intervals by bootstrap over the trials (n/a, none given, with fewer than "
+        f"{MIN_TRIALS}; over the episodes for fixed policies "
         f"and the single deep-RL run). References: exact, on {config.reference_starts:,} sampled starts, "
         "noise-free. `episodes_to_5pct`: first episode after which the 10-episode average stays within 5% of "
         'the belief-space optimum; "never" = not within the budget.',

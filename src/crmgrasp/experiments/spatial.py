@@ -25,7 +25,7 @@ from crmgrasp._progress import Progress
 from crmgrasp.agents.base import Agent, LearnerPolicy
 from crmgrasp.agents.training import encoder_for, train_trials
 from crmgrasp.experiments._episodes import greedy_records
-from crmgrasp.experiments.stats import normal_ci
+from crmgrasp.experiments.stats import bootstrap_ci
 from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts, ungraspable_fraction
 from crmgrasp.sim import run_episode
 from crmgrasp.tasks import Task, World, make_task
@@ -104,7 +104,7 @@ def spatial(
                 task, res.agents, worlds, cfg.seed, lambda t: np.random.default_rng(cfg.seed + t), k
             )
             means = np.array([np.mean([len(r.actions) for r in rs]) for rs in records])
-            _, lo, hi = normal_ci(means)
+            lo, hi = bootstrap_ci(means, cfg.seed)  # over trials: nan, none given, below MIN_TRIALS
             row["learners"][label] = {
                 "greedy_mean_crms": float(means.mean()),
                 "greedy_ci95": [lo, hi],

@@ -16,21 +16,28 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["bootstrap_ci", "normal_ci", "iqm", "fmt", "never", "budget"]
+__all__ = ["bootstrap_ci", "normal_ci", "iqm", "fmt", "never", "budget", "ci_text", "MIN_TRIALS"]
+
+MIN_TRIALS = 5
+"""The fewest independent trials an interval over trials is given for: below it a bootstrap
+of the mean has too few distinct resamples to mean anything, and no interval is reported."""
 
 
 def bootstrap_ci(values: Any, seed: int = 0, confidence: float = 0.95, resamples: int = 10_000) -> tuple[float, float]:
     """Percentile bootstrap interval of the mean of ``values`` (one value per trial);
-    ``(nan, nan)`` for fewer than two values, ``(v, v)`` when all are equal.
+    ``(nan, nan)``, no interval, for fewer than :data:`MIN_TRIALS` values; ``(v, v)``
+    when all are equal.
 
     Examples
     --------
-    >>> lo, hi = bootstrap_ci([1.0, 2.0, 3.0, 4.0], seed=0)
-    >>> 1.0 <= lo < 2.5 < hi <= 4.0
+    >>> lo, hi = bootstrap_ci([1.0, 2.0, 3.0, 4.0, 5.0], seed=0)
+    >>> 1.0 <= lo < 3.0 < hi <= 5.0
     True
+    >>> bootstrap_ci([1.0, 2.0])
+    (nan, nan)
     """
     x = np.asarray(values, dtype=np.float64).ravel()
-    if x.size < 2 or not np.all(np.isfinite(x)):
+    if x.size < MIN_TRIALS or not np.all(np.isfinite(x)):
         return (math.nan, math.nan)
     if np.all(x == x[0]):
         return (float(x[0]), float(x[0]))
@@ -60,6 +67,17 @@ def normal_ci(values: Any) -> tuple[float, float, float]:
     m = float(x.mean())
     half = 1.96 * float(x.std(ddof=1)) / math.sqrt(x.size) if x.size > 1 else 0.0
     return m, m - half, m + half
+
+
+def ci_text(lo: float, hi: float, over: str = "trials") -> str:
+    """An interval for reading: ``95% CI over trials 1.623-1.711``, or why none is given.
+
+    >>> ci_text(1.6234, 1.7111), ci_text(float("nan"), float("nan"))
+    ('95% CI over trials 1.623-1.711', 'no interval: fewer than 5 trials')
+    """
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        return f"no interval: fewer than {MIN_TRIALS} {over}"
+    return f"95% CI over {over} {fmt(lo)}-{fmt(hi)}"
 
 
 def iqm(values: Any) -> float:

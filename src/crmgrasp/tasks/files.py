@@ -398,6 +398,10 @@ def _from_factory(spec: str) -> Task:
             raise CrmgraspError(f"task {spec!r}: {exc}") from None
         except Exception as exc:  # the user's code failed: one line, naming it
             raise CrmgraspError(f"task {spec!r}: the factory raised {type(exc).__name__}: {exc}") from None
+        except SystemExit as exc:  # a factory must not end the program (exit 0 would say all went well)
+            raise CrmgraspError(
+                f"task {spec!r}: the factory called exit({exc.code!r}) instead of returning a task"
+            ) from None
     if not isinstance(made, Task):
         raise CrmgraspError(f"task {spec!r} gave a {type(made).__name__}, not a crmgrasp Task")
     return made
