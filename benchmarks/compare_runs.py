@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 TIMING = re.compile(
-    r"seconds|wall|time|rate_per|per_s\b|_s$|started|ended|finished|host|python|version|commit|argv|cwd|^pid$"
+    r"seconds|wall|time|rate_per|per_s\b|_s$|started|ended|finished|host|python|version|commit|source_sha|argv|cwd|^pid$"
 )
 """Names of fields that measure the run (clock, machine, provenance), not its result."""
 

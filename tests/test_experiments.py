@@ -112,12 +112,14 @@ def test_reproduce_index_and_cli(tmp_path, capsys):
     assert set(res) == {"figure4"}
     index = (tmp_path / "a" / "README.md").read_text()
     assert "figure4/figure4.png" in index and "| figure | quantity | ours | full run | paper |" in index
+    assert "Regenerate with `crmgrasp reproduce figure4 --quick --seed 0`." in index  # the experiments asked for
     assert main(["reproduce", "--quick", "--quiet", "--out", str(tmp_path / "b")]) == 0
     out = capsys.readouterr().out
     for name in ("figure4:", "figure7:", "figure8:", "figure9:", "index:"):
         assert name in out
     index = (tmp_path / "b" / "README.md").read_text()
     assert "figure9/figure9.png" in index and "1.8" in index
+    assert "Regenerate with `crmgrasp reproduce --quick --seed 0`." in index  # all of them
     assert "paper SARSA: greedy CRMs per episode | " in index and "(not converged at 5 trials x 300 episodes)" in index
     assert "None" not in index
     full = full_run_rows()["figure7 | paper SARSA: greedy CRMs per episode"]

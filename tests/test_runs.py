@@ -223,3 +223,14 @@ def test_ctrl_c_with_workers_is_one_line_and_interrupted(tmp_path):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130 and err.strip() == "crmgrasp learn: interrupted", err
     assert read_status(tmp_path / "r") == "interrupted"
+
+
+def test_the_record_names_the_code_it_ran_without_git(tmp_path):
+    """run.json holds a digest of the installed source, which pip-installed copies have too."""
+    from crmgrasp.experiments.runs import source_digest
+
+    run = RunFolder(tmp_path / "r", "learn", "paper-box", {})
+    run.finish("complete")
+    rec = json.loads((run.path / "run.json").read_text())
+    assert rec["source_sha256"] == source_digest() and len(rec["source_sha256"]) == 64
+    assert rec["version"] != "unknown"

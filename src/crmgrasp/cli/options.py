@@ -172,10 +172,18 @@ def _add_quiet(p: argparse.ArgumentParser) -> None:
 def _add_scene_args(p: argparse.ArgumentParser, crm_required: bool) -> None:
     _add_task(p)
     p.add_argument(
-        "--a", type=_point, required=True, metavar="X,Y", help="point projected onto the boundary for contact a (m)"
+        "--a",
+        type=_point,
+        required=True,
+        metavar="X,Y[,Z]",
+        help="point for contact a (m): X,Y on a planar task (projected onto the boundary), X,Y,Z on a spatial one",
     )
     p.add_argument(
-        "--b", type=_point, required=True, metavar="X,Y", help="point projected onto the boundary for contact b (m)"
+        "--b",
+        type=_point,
+        required=True,
+        metavar="X,Y[,Z]",
+        help="point for contact b (m): X,Y on a planar task (projected onto the boundary), X,Y,Z on a spatial one",
     )
     p.add_argument(
         "--crm",

@@ -141,6 +141,7 @@ def reproduce(
     if backend not in BACKENDS:
         raise CrmgraspError(f"unknown backend {backend!r}; choose one of {', '.join(BACKENDS)}")
     names, skipped = select(names)
+    which = "" if set(names) == set(select(None)[0]) else "".join(f" {n}" for n in names)  # if not all
     out = Path(out_dir)
     results: dict[str, dict[str, Any]] = {}
     ctx: dict[str, Any] = {"backend": backend, "progress": progress, "jobs": jobs}
@@ -149,7 +150,7 @@ def reproduce(
         "# crmgrasp reproduction",
         "",
         f"seed {seed}, {'quick budgets' if quick else 'full budgets'}. "
-        f"Regenerate with `crmgrasp reproduce{' --quick' if quick else ''} --seed {seed}`.",
+        f"Regenerate with `crmgrasp reproduce{which}{' --quick' if quick else ''} --seed {seed}`.",
         "",
     ]
     if quick:

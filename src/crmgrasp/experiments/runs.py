@@ -7,7 +7,8 @@ A run folder holds a command's files and ``run.json``::
      "config": {...},                  # what the results depend on (checked by --resume)
      "completed": {...},               # units of work done (trials, experiments)
      "argv": [...], "seed": 0, "started": "...Z", "ended": "...Z", "error": null,
-     "version": "0.1.0", "git_commit": "...", "python": "3.11.7", "platform": "...",
+     "version": "0.1.0", "git_commit": "...", "source_sha256": "...",
+     "python": "3.11.7", "platform": "...",
      "dependencies": {"numpy": "...", ...}, "host": "...", "pid": 1234}
 
 Rules: the default folder is ``runs/<command>-<task>-<UTC time>``; an existing
@@ -46,7 +47,7 @@ from typing import Any
 from crmgrasp._io import check_folder, read_bounded, temporaries, write_json
 from crmgrasp._validation import CrmgraspError, shown
 
-__all__ = ["RunFolder", "read_status", "leftovers", "default_run_dir", "STATUSES"]
+__all__ = ["RunFolder", "read_status", "leftovers", "default_run_dir", "source_digest", "STATUSES"]
 
 FORMAT = "crmgrasp-run"
 STATUSES = ("running", "complete", "interrupted", "failed")
@@ -79,6 +80,19 @@ def _git_commit() -> str | None:
     except (OSError, subprocess.SubprocessError):
         return None
     return out.stdout.strip() or None if out.returncode == 0 else None
+
+
+def source_digest() -> str:
+    """SHA-256 of the package's own source as installed (every ``.py`` file of
+    ``crmgrasp``, by relative path and content, in sorted order): which code a run ran,
+    also where there is no git checkout (``pip install .``)."""
+    import hashlib
+
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.sha256()
+    for path in sorted(root.rglob("*.py")):
+        h.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    return h.hexdigest()
 
 
 def _versions() -> dict[str, str]:
@@ -210,6 +224,7 @@ class RunFolder:
             "error": None,
             "version": _version(),
             "git_commit": _git_commit(),
+            "source_sha256": source_digest(),
             "python": platform.python_version(),
             "platform": platform.platform(),
             "dependencies": _versions(),
