@@ -299,20 +299,12 @@ def _cmd_pomdp(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    """Run ``benchmarks/bench_env.py`` of the source checkout this package runs from."""
-    import importlib.util
-    from pathlib import Path
+    """Run the speed benchmarks (:mod:`crmgrasp.experiments.bench`)."""
+    from crmgrasp.experiments.bench import main as bench
 
     if args.rounds < 1:
         raise CrmgraspError(f"--rounds must be >= 1, got {args.rounds}")
-    path = Path(__file__).resolve().parents[3] / "benchmarks" / "bench_env.py"
-    if not path.is_file():
-        raise CrmgraspError(f"crmgrasp bench runs benchmarks/bench_env.py from a source checkout; not found at {path}")
-    spec = importlib.util.spec_from_file_location("bench_env", path)
-    assert spec is not None and spec.loader is not None
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
-    bench.main((["--smoke"] if args.smoke else []) + ["--rounds", str(args.rounds), "--seed", str(args.seed)])
+    bench((["--smoke"] if args.smoke else []) + ["--rounds", str(args.rounds), "--seed", str(args.seed)])
     return 0
 
 
