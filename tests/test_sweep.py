@@ -4,6 +4,7 @@ resume, tables and the report."""
 from __future__ import annotations
 
 import csv
+import json
 
 import pytest
 
@@ -188,3 +189,36 @@ def test_the_example_study_loads():
 
     study = load_study(Path(__file__).resolve().parents[1] / "examples" / "sarsa-alpha-q0.toml")
     assert len(study.cells) == 8 and len(study.seeds) == 10
+
+
+def test_report_on_a_damaged_study_folder_is_one_line_and_reads_only_inside(tmp_path, capsys):
+    tiny = 'name = "tiny"\ntrials = 2\nepisodes = 10\neval_episodes = 5\nseeds = [0]\n[[cell]]\nagent = "sarsa"\n'
+    out = tmp_path / "s"
+    assert main(["sweep", str(_write(tmp_path, tiny)), "--quiet", "--out", str(out)]) == 0
+    capsys.readouterr()
+    record = json.loads((out / "run.json").read_text())
+    (unit,) = record["completed"]
+    good = (out / "units" / f"{unit.replace(' ', '_')}.json").read_text()
+
+    def damaged(change) -> str:
+        rec = json.loads(json.dumps(record))
+        change(rec)
+        (out / "run.json").write_text(json.dumps(rec))
+        assert main(["sweep", "report", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "internal error" not in err
+        return err
+
+    outside = tmp_path / "secret.json"
+    outside.write_text(good)  # a unit path in the record must not lead here
+    assert "holds no readable study" in damaged(lambda r: r["config"]["study"].pop("cells"))
+    assert "holds no readable study" in damaged(lambda r: r["config"]["study"].update(seeds="x"))
+    (out / "units" / f"{unit.replace(' ', '_')}.json").unlink()
+    assert "unit result" in damaged(lambda r: r["completed"][unit].update(file=str(outside)))
+    (out / "units" / f"{unit.replace(' ', '_')}.json").write_text('{"trials": 3}')
+    assert "is damaged" in damaged(lambda r: None)
+    (out / "units" / f"{unit.replace(' ', '_')}.json").write_text(good)
+    record["status"], record["pid"] = "running", 2**22 + 12345  # a study whose process is gone
+    (out / "run.json").write_text(json.dumps(record))
+    assert main(["sweep", "report", str(out)]) == 0
+    assert "Status: killed." in (out / "report.md").read_text()

@@ -289,7 +289,7 @@ def run_study(
     failed = [0]
 
     def record(name: str, result: dict[str, Any]) -> None:
-        file = f"units/{name.replace(' ', '_')}.json"
+        file = _unit_file(name)
         if result["status"] == "ok":
             write_json(store.path / file, result)
         store.complete(name, {"status": result["status"], "error": result.get("error"), "file": file})
@@ -324,7 +324,7 @@ def write_tables(study: Study, out: Path, completed: dict[str, Any]) -> dict[str
             if status != "ok":
                 cells.append([*settings, status, info.get("error"), None, None, None, None, None, None])
                 continue
-            doc = json.loads((out / info["file"]).read_text(encoding="utf-8"))
+            doc = _unit_doc(out, name)
             t = doc["trials"]
             for i, (g, ok, fin) in enumerate(
                 zip(t["greedy_mean_steps"], t["greedy_success_rate"], t["final_mean_steps"])
@@ -364,32 +364,71 @@ def _parquet(out: Path, names: Sequence[str]) -> None:
             pq.write_table(table, tmp)
 
 
+def _unit_file(name: str) -> str:
+    """Where a unit's result lives in the study folder: derived from its name, never read
+    from the record (a damaged record cannot point outside the folder)."""
+    return f"units/{name.replace(' ', '_')}.json"
+
+
+def _unit_doc(out: Path, name: str) -> dict[str, Any]:
+    """The result file of unit ``name`` in the study folder ``out``, checked (one-line
+    errors for a missing or damaged file)."""
+    path = out / _unit_file(name)
+    try:
+        doc = json.loads(read_bounded(path, 64 * 2**20, "unit result").decode("utf-8"))
+        trials, summary = doc["trials"], doc["summary"]
+        if not isinstance(summary, dict) or not all(isinstance(trials[k], list) for k in _TRIAL_KEYS):
+            raise TypeError("trials or summary of the wrong type")
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError, KeyError, TypeError) as exc:
+        raise CrmgraspError(f"unit result {str(path)!r} is damaged ({type(exc).__name__})") from None
+    return doc  # type: ignore[no-any-return]
+
+
+_TRIAL_KEYS = ("greedy_mean_steps", "greedy_success_rate", "final_mean_steps")
+
+
+def _recorded_study(rec: dict[str, Any], out: Path) -> Study:
+    """The study a sweep's run record holds, checked as a study file is."""
+    doc = rec["config"].get("study")
+    try:
+        keys = ("name", "trials", "episodes", "eval_episodes", "seeds", "cells")
+        name, trials, episodes, eval_episodes, seeds, cells = (doc[k] for k in keys)  # type: ignore[index]
+        again = study_from_dict(
+            {"name": name, "trials": trials, "episodes": episodes, "eval_episodes": eval_episodes, "seeds": seeds}
+            | {"cell": [{k: v for k, v in c.items() if k != "task"} for c in cells]}
+        )
+        tasks = [c["task"] for c in cells]
+        if not all(isinstance(t, str) for t in tasks):
+            raise TypeError("a cell's task is not a name")
+    except (KeyError, TypeError, AttributeError, CrmgraspError) as exc:
+        raise CrmgraspError(f"run record of {str(out)!r} holds no readable study ({exc})") from None
+    cells = tuple({**c, "task": t} for c, t in zip(again.cells, tasks, strict=True))
+    return dataclasses.replace(again, cells=cells)
+
+
 def report(folder: str | Path) -> Path:
     """``report.md``, ``profile.png`` and one ``param_<key>.png`` per swept key, from a
     study folder: per cell, the mean greedy CRMs per episode with a bootstrap 95%
     interval over all its trials (every seed), the interquartile mean, and a performance
-    profile (the share of a cell's trials whose greedy CRMs are at most tau)."""
-    from crmgrasp.experiments.runs import _read
+    profile (the share of a cell's trials whose greedy CRMs are at most tau). It reads
+    only inside the folder; a damaged record or unit file is a one-line error."""
+    from crmgrasp.experiments.runs import _read, read_status
 
     out = Path(folder)
     rec = _read(out)
     if rec.get("command") != "sweep":
         raise CrmgraspError(f"{str(out)!r} is not a study folder (command {shown(rec.get('command'))})")
-    doc = rec["config"].get("study")
-    if not isinstance(doc, dict):
-        raise CrmgraspError(f"run record of {str(out)!r} holds no study")
-    study = Study(
-        doc["name"], doc["trials"], doc["episodes"], doc["eval_episodes"], tuple(doc["seeds"]), tuple(doc["cells"])
-    )
+    study = _recorded_study(rec, out)
     per_cell: dict[str, np.ndarray] = {}
     to5: dict[str, list[Any]] = {}
     for c in study.cells:
         vals: list[float] = []
         for s in study.seeds:
-            info = rec["completed"].get(f"{cell_id(c)} seed {s}") or {}
-            if info.get("status") == "ok":
-                doc = json.loads((out / info["file"]).read_text())
-                vals += doc["trials"]["greedy_mean_steps"]
+            name = f"{cell_id(c)} seed {s}"
+            info = rec["completed"].get(name) or {}
+            if isinstance(info, dict) and info.get("status") == "ok":
+                doc = _unit_doc(out, name)
+                vals += [float(v) for v in doc["trials"]["greedy_mean_steps"]]
                 to5.setdefault(cell_id(c), []).append(doc["summary"].get("episodes_to_5pct"))
         per_cell[cell_id(c)] = np.asarray(vals, dtype=float)
     swept = [k for k in CELL_KEYS if len({json.dumps(c.get(k)) for c in study.cells}) > 1]
@@ -400,7 +439,7 @@ def report(folder: str | Path) -> Path:
         "mean over all trials of the cell with a percentile-bootstrap 95% interval over trials, and the "
         "interquartile mean; episodes to 5%: first training episode after which the 10-episode average "
         "stays within 5% of the task's optimum (median of the seeds' runs; never = beyond the budget). "
-        f"Status: {rec['status']}.",
+        f"Status: {read_status(out)}.",
         "",
         "| cell | " + " | ".join(swept) + " | trials | mean CRMs | 95% CI | IQM | episodes to 5% (median of seeds) |",
         "| --- | " + " | ".join("---" for _ in swept) + " | --- | --- | --- | --- | --- |",
@@ -413,12 +452,11 @@ def report(folder: str | Path) -> Path:
         mean = fmt(float(v.mean())) if v.size else "failed"
         settings = " | ".join(str(c.get(k)) for k in swept)
         middle = fmt(iqm(v)) if v.size else "-"
-        seeds_to5 = sorted(math.inf if x is None else x for x in to5.get(cell_id(c), []))
+        seeds_to5 = sorted(math.inf if not isinstance(x, (int, float)) else x for x in to5.get(cell_id(c), []))
         med = seeds_to5[len(seeds_to5) // 2] if seeds_to5 else None
         shown_to5 = "-" if med is None else ("never" if med == math.inf else f"{int(med):,}")
-        lines.append(
-            f"| {cell_id(c)} | {settings} | {v.size} | {mean} | {fmt(lo)}-{fmt(hi)} | {middle} | {shown_to5} |"
-        )
+        ci = f"{fmt(lo)}-{fmt(hi)}" if math.isfinite(lo) else "-"
+        lines.append(f"| {cell_id(c)} | {settings} | {v.size} | {mean} | {ci} | {middle} | {shown_to5} |")
     atomic_write_text(out / "report.md", "\n".join(lines) + "\n")
     _figures(out, study, per_cell, swept)
     return out / "report.md"
