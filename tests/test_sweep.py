@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import json
+from pathlib import Path
 
 import pytest
 
@@ -154,7 +155,9 @@ def test_ray_gives_the_local_results_on_one_and_two_nodes(tmp_path, capsys):
     assert (on_cluster / "results.csv").read_bytes() == (local / "results.csv").read_bytes()
 
 
-def test_ctrl_c_leaves_a_resumable_study(tmp_path):
+@pytest.mark.parametrize(("signame", "code", "word"), [("SIGINT", 130, "interrupted"), ("SIGTERM", 143, "terminated")])
+def test_ctrl_c_or_a_kill_leaves_a_resumable_study_and_no_workers(tmp_path, signame, code, word):
+    import os
     import signal
     import subprocess
     import sys
@@ -166,12 +169,35 @@ def test_ctrl_c_leaves_a_resumable_study(tmp_path):
     out = tmp_path / "run"
     argv = [sys.executable, "-m", "crmgrasp", "sweep", str(path), "--quiet", "--jobs", "2", "--out", str(out)]
     proc = subprocess.Popen(argv, stderr=subprocess.PIPE, text=True)
-    time.sleep(5)
-    proc.send_signal(signal.SIGINT)
+    children = Path(f"/proc/{proc.pid}/task/{proc.pid}/children")
+    workers: list[int] = []
+    for _ in range(100):  # until both workers run (at most 10 s)
+        time.sleep(0.1)
+        workers = [int(p) for p in children.read_text().split()] if children.exists() else []
+        if len(workers) >= 2:
+            break
+    time.sleep(1)
+    proc.send_signal(getattr(signal, signame))
     _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130 and err.strip().endswith("crmgrasp sweep: interrupted"), err
+    assert proc.returncode == code and err.strip().endswith(f"crmgrasp sweep: {word}"), err
     assert read_status(out) == "interrupted"
     assert not (out / "results.csv").exists()  # tables are written only when every unit has run
+    assert len(workers) >= 2
+    for _ in range(50):  # the workers were stopped with the parent (reaped by init once gone)
+        alive = [w for w in workers if Path(f"/proc/{w}").exists() and "Z" not in _state(w)]
+        if not alive:
+            break
+        time.sleep(0.1)
+    assert alive == [], f"workers outlived the parent: {alive}"
+    assert os.getpid() not in workers
+
+
+def _state(pid: int) -> str:
+    """A process's state letter from /proc (``Z`` for a zombie; empty once gone)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return "Z"
 
 
 def test_unreachable_ray_address_is_one_line(tmp_path, capsys):

@@ -10,6 +10,7 @@ import argparse
 import dataclasses
 import math
 import os
+import signal
 import sys
 from collections.abc import Sequence
 from typing import Any
@@ -385,8 +386,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         "pomdp": _cmd_pomdp,
         "run": _cmd_run,
     }
+    previous = _on_sigterm(_terminate)
     try:
         return handlers[args.command](args)
+    except Terminated:  # SIGTERM (kill, a scheduler's stop): as Ctrl-C, with the shell's status for it
+        print(f"crmgrasp {args.command}: terminated", file=sys.stderr)
+        return 143
     except CrmgraspError as exc:
         print(f"crmgrasp {args.command}: error: {exc}", file=sys.stderr)
         return 2
@@ -411,6 +416,28 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
+    finally:
+        _on_sigterm(previous)
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the command is: every path that stops on Ctrl-C (worker
+    processes stopped, the run folder marked ``interrupted``) stops on it too."""
+
+
+def _terminate(signum: int, frame: Any) -> None:
+    raise Terminated
+
+
+def _on_sigterm(handler: Any) -> Any:
+    """Install ``handler`` for SIGTERM and return the previous one (``None`` where no
+    handler can be set: not the main thread)."""
+    if handler is None:
+        return None
+    try:
+        return signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # signals are set from the main thread only
+        return None
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -4,7 +4,7 @@ Every caller's results depend only on what each call is given (its seeds include
 on which process runs it or in which order calls finish, so ``jobs`` changes the time
 and not the results. Workers are forked from the calling process where the platform
 allows (compiled kernels are inherited), else spawned; they ignore Ctrl-C, which the
-calling process turns into stopping them all.
+calling process turns into stopping them all (``crmgrasp`` turns SIGTERM into the same).
 """
 
 from __future__ import annotations
@@ -136,5 +136,7 @@ def _reachable(address: str) -> None:
 
 
 def _ignore_sigint() -> None:
-    """Workers leave Ctrl-C to the calling process."""
+    """Workers leave Ctrl-C to the calling process, and end at once on SIGTERM (the calling
+    process stops them with it, whatever handler they inherited)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
