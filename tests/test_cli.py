@@ -274,3 +274,32 @@ def test_learn_says_when_no_interval_is_given(tmp_path, capsys):
     assert main([*argv, "--out", str(tmp_path / "r")]) == 0
     out = capsys.readouterr().out
     assert "no interval: fewer than 5 trials" in out and "n/a" not in out
+
+
+HEXAGON = """name = "wide-hexagon"
+[object]
+polygon = [[0.2, 0.0], [0.1, 0.1732], [-0.1, 0.1732], [-0.2, 0.0], [-0.1, -0.1732], [0.1, -0.1732]]
+[hand]
+aperture = 0.16
+palm_depth = 0.12
+[[crm]]
+c = "a"
+f = "b"
+[[crm]]
+c = "b"
+f = "a"
+[starts]
+kind = "uniform"
+"""
+
+
+def test_learn_warns_before_training_an_ungraspable_task(tmp_path, capsys):
+    """A hexagon 0.35 m wide for a 0.16 m aperture: no start can be grasped, and learn says so first."""
+    task = tmp_path / "hex.toml"
+    task.write_text(HEXAGON)
+    argv = ["learn", "--trials", "1", "--episodes", "5", "--eval-episodes", "5", "--quiet"]
+    assert main([*argv, "--task", str(task), "--out", str(tmp_path / "a")]) == 0
+    err = capsys.readouterr().err
+    assert "warning: task 'wide-hexagon': none of 50 sampled starts can be grasped" in err
+    assert main([*argv, "--out", str(tmp_path / "b")]) == 0  # paper-box: no warning
+    assert "warning" not in capsys.readouterr().err

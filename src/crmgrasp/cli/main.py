@@ -22,7 +22,7 @@ from crmgrasp._validation import CrmgraspError
 from crmgrasp.cli.common import _print_result, _progress, _run_folder, _task
 from crmgrasp.cli.parser import _AGENT_FLAGS, build_parser
 from crmgrasp.cli.scene import _cmd_crm, _cmd_run, _cmd_show
-from crmgrasp.tasks import TEMPLATE, make_task, task_names, task_to_dict
+from crmgrasp.tasks import TEMPLATE, Task, make_task, task_names, task_to_dict
 
 __all__ = ["main", "build_parser"]
 
@@ -84,6 +84,16 @@ def _apply_preset(args: argparse.Namespace, task: Any) -> None:
     args.agent, args.k, args.symmetric, args.prior_task = choice
 
 
+def _warn_if_ungraspable(task: Task, seed: int) -> None:
+    """Say before training when a quick check finds no graspable start (the library's
+    :func:`~crmgrasp.planners.references.graspable_warning`)."""
+    from crmgrasp.planners.references import graspable_warning
+
+    warning = graspable_warning(task, seed=seed)
+    if warning:
+        print(f"crmgrasp: warning: {warning}", file=sys.stderr)
+
+
 def _cmd_learn(args: argparse.Namespace) -> int:
     from crmgrasp.agents.training import build_agent, check_budget, encoder_for
     from crmgrasp.experiments.learning import LearnerSpec, learn, write_learn_outputs
@@ -93,6 +103,7 @@ def _cmd_learn(args: argparse.Namespace) -> int:
     spec = LearnerSpec(args.agent, args.k, _learner_params(args))
     check_budget(args.trials, args.episodes, args.eval_episodes)
     build_agent(task, encoder_for(task, spec.k), spec.agent, spec.params)  # bad settings fail before any folder
+    _warn_if_ungraspable(task, args.seed)
     config = {
         "task": task_to_dict(task),
         "agent": spec.agent,
