@@ -117,6 +117,7 @@ def test_reproduce_index_and_cli(tmp_path, capsys):
     out = capsys.readouterr().out
     for name in ("figure4:", "figure7:", "figure8:", "figure9:", "index:"):
         assert name in out
+    assert "{'" not in out and "': " not in out  # tables for reading, not raw Python dicts
     index = (tmp_path / "b" / "README.md").read_text()
     assert "figure9/figure9.png" in index and "1.8" in index
     assert "Regenerate with `crmgrasp reproduce --quick --seed 0`." in index  # all of them

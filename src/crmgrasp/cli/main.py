@@ -44,14 +44,12 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
             progress=_progress(args),
             jobs=args.jobs,
         )
-    from crmgrasp.experiments.stats import fmt
+    from crmgrasp.experiments.stats import fmt, summary_lines
 
     root = run.path.resolve()
     for name, summary in results.items():
         print(f"{name}: {root / name} ({fmt(summary['seconds'], 1)} s)")
-        for key, value in summary.items():
-            if key != "seconds":
-                print(f"  {key}: {fmt(value) if not isinstance(value, (dict, list)) else value}")
+        print("\n".join(summary_lines(summary)))
     print(f"index: {root / 'README.md'}")
     return 0
 
@@ -254,7 +252,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 def _cmd_compare(args: argparse.Namespace) -> int:
     from crmgrasp.agents.deep import RecurrentPPOConfig
     from crmgrasp.experiments.compare import CompareConfig, compare
-    from crmgrasp.experiments.stats import fmt
+    from crmgrasp.experiments.stats import summary_lines
 
     task = _task(args)
     if task.model.kind != "planar":
@@ -276,8 +274,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
             run.path, cfg, backend=args.backend, progress=_progress(args), task=task, store=run, jobs=args.jobs
         )
     print((run.path / "compare.md").read_text(encoding="utf-8"))
-    for key, value in summary.items():
-        print(f"{key}: {fmt(value) if not isinstance(value, (dict, list)) else value}")
+    print("\n".join(summary_lines(summary, indent=0, skip=())))
     print(f"wrote {(run.path / 'compare.csv').resolve()}, compare.md, compare.png")
     return 0
 

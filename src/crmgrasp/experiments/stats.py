@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["bootstrap_ci", "normal_ci", "iqm", "fmt", "never", "budget", "ci_text", "MIN_TRIALS"]
+__all__ = ["bootstrap_ci", "normal_ci", "iqm", "fmt", "never", "budget", "ci_text", "summary_lines", "MIN_TRIALS"]
 
 MIN_TRIALS = 5
 """The fewest independent trials an interval over trials is given for: below it a bootstrap
@@ -78,6 +78,38 @@ def ci_text(lo: float, hi: float, over: str = "trials") -> str:
     if not (math.isfinite(lo) and math.isfinite(hi)):
         return f"no interval: fewer than {MIN_TRIALS} {over}"
     return f"95% CI over {over} {fmt(lo)}-{fmt(hi)}"
+
+
+def summary_lines(summary: dict[str, Any], indent: int = 2, skip: tuple[str, ...] = ("seconds",)) -> list[str]:
+    """A result's summary for the console: ``key: value`` per line, numbers rounded
+    (:func:`fmt`; ``None`` is ``none``), nested tables indented under their key, lists of
+    numbers inline (the first 8); files keep full precision.
+
+    >>> summary_lines({"mean": 1.23456, "tasks": {"cup": {"ok": 4}}, "seconds": 2.0, "xs": [0.5, None]})
+    ['  mean: 1.235', '  tasks:', '    cup:', '      ok: 4', '  xs: [0.500, none]']
+    """
+
+    def text(v: Any) -> str:
+        return "none" if v is None else fmt(v)
+
+    pad, out = " " * indent, []
+    for key, value in summary.items():
+        if key in skip:
+            continue
+        if isinstance(value, dict):
+            out += [f"{pad}{key}:", *summary_lines(value, indent + 2, ())]
+        elif isinstance(value, (list, tuple)) and any(isinstance(v, dict) for v in value):
+            out.append(f"{pad}{key}:")
+            for i, item in enumerate(value):
+                out += summary_lines(item if isinstance(item, dict) else {str(i): item}, indent + 2, ())
+        elif isinstance(value, (list, tuple)) and all(isinstance(v, str) for v in value):
+            out.append(f"{pad}{key}: {', '.join(value)}")
+        elif isinstance(value, (list, tuple)) and all(isinstance(v, (int, float)) or v is None for v in value):
+            more = f", ... ({len(value)} in all)" if len(value) > 8 else ""
+            out.append(f"{pad}{key}: [{', '.join(text(v) for v in value[:8])}{more}]")
+        else:
+            out.append(f"{pad}{key}: {text(value)}")
+    return out
 
 
 def iqm(values: Any) -> float:
