@@ -303,3 +303,25 @@ def test_learn_warns_before_training_an_ungraspable_task(tmp_path, capsys):
     assert "warning: task 'wide-hexagon': none of 50 sampled starts can be grasped" in err
     assert main([*argv, "--out", str(tmp_path / "b")]) == 0  # paper-box: no warning
     assert "warning" not in capsys.readouterr().err
+
+
+def test_episodes_to_5pct_lead_with_the_greedy_policy_and_flag_a_noise_bound_curve():
+    from crmgrasp.cli.main import _to_5pct_lines
+
+    s = {
+        "reference_mean_steps": 1.66,
+        "converged": True,
+        "trials": 20,
+        "episodes": 20_000,
+        "checkpoint_episodes": 100,
+        "greedy_episodes_to_5pct": 1500,
+        "episodes_to_5pct": 19_841,
+    }
+    greedy, curve = _to_5pct_lines(s)
+    assert greedy.endswith("within 5% of 1.66: from episode 1,500")
+    assert "19,841 (in the budget's last tenth: bound by the episodes' noise" in curve
+    s.update(episodes_to_5pct=1726, converged=True)
+    assert _to_5pct_lines(s)[1].endswith("from episode 1,726")
+    s.update(episodes_to_5pct=None, converged=False, greedy_episodes_to_5pct=None, checkpoint_episodes=0)
+    (only,) = _to_5pct_lines(s)
+    assert only.endswith("never (not converged at 20 trials x 20,000 episodes)")
