@@ -86,6 +86,15 @@ def test_site_builds_strictly(tmp_path):
     )
     assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-6000:]
     assert (tmp_path / "site" / "index.html").exists() and (tmp_path / "site" / "api" / "model" / "index.html").exists()
+    leftover = re.compile(r":(class|func|meth|mod|data|attr|exc|obj):`|\[`[^`\]]+`\]\[")
+    found = {
+        str(p.relative_to(tmp_path / "site")): m.group(0)
+        for p in (tmp_path / "site").rglob("*.html")
+        if (m := leftover.search(p.read_text(encoding="utf-8")))
+    }
+    assert found == {}, f"Sphinx roles or unrendered cross-references in the built pages: {found}"
+    api = (tmp_path / "site" / "api" / "tasks" / "index.html").read_text(encoding="utf-8")
+    assert api.count("autorefs-internal") > 20  # docstrings link to what they name
 
 
 def test_the_task_file_key_table_is_the_one_the_code_states(capsys):

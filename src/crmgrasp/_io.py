@@ -5,7 +5,7 @@ the previous file intact), goes only to regular files (a device node, a FIFO, a
 folder or a symlink to one of them is refused, never replaced), respects the umask,
 and names the user's path in every error. JSON is standard (no NaN or Infinity: a
 non-finite number is written as ``null``). Input of a file the user names is bounded
-(:func:`read_bounded`).
+([`read_bounded`][]).
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ def temporaries(folder: str | os.PathLike[str]) -> list[Path]:
 
 
 def check_output(path: str | os.PathLike[str], what: str = "output file") -> Path:
-    """``path`` as a :class:`Path` if a file can be written there: not empty, not an
+    """``path`` as a [`Path`][] if a file can be written there: not empty, not an
     existing non-regular file (device node, FIFO, socket, folder) or a symlink to one,
     and its folder exists (or can be made) and is writable. Call it before any long
     work, so that a bad path fails at once."""
@@ -74,7 +74,7 @@ def check_output(path: str | os.PathLike[str], what: str = "output file") -> Pat
 
 
 def check_folder(path: str | os.PathLike[str], what: str = "output folder") -> Path:
-    """``path`` as a :class:`Path` if it is, or can be made, a writable folder (checked
+    """``path`` as a [`Path`][] if it is, or can be made, a writable folder (checked
     before any long work)."""
     if str(path) == "":
         raise CrmgraspError(f"{what} path is empty")
@@ -168,7 +168,7 @@ def json_safe(obj: Any) -> Any:
 
 
 def dumps_json(obj: Any, indent: int | None = 2) -> str:
-    """Standard JSON text of ``obj`` (:func:`json_safe`; never NaN or Infinity)."""
+    """Standard JSON text of ``obj`` (`json_safe`; never NaN or Infinity)."""
     return json.dumps(json_safe(obj), indent=indent, allow_nan=False)
 
 

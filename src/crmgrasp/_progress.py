@@ -5,10 +5,10 @@ On a terminal a live line is redrawn in place at most ``refresh`` times a second
     learn sarsa k=2  [##########----------]  52%  10,400/20,000 episodes  0:41 < 0:38
 
 Elsewhere (a CI log, a file) one plain line is printed every ``interval`` seconds and
-once at the end, so a log shows the run is alive without flooding. :class:`Quiet`
+once at the end, so a log shows the run is alive without flooding. [`Quiet`][]
 shows nothing (``--quiet``). Long functions take a ``progress`` argument (never a
-global) and call :meth:`Progress.stage` once per unit of work, then
-:meth:`Progress.advance` as work is done; a stage nested in another one replaces its
+global) and call [`Progress.stage`][] once per unit of work, then
+[`Progress.advance`][] as work is done; a stage nested in another one replaces its
 line while it runs.
 """
 
@@ -143,5 +143,5 @@ class Quiet(Progress):
 
 
 def make_progress(quiet: bool = False) -> Progress:
-    """:class:`Quiet` or a :class:`Progress` on standard error."""
+    """[`Quiet`][] or a [`Progress`][] on standard error."""
     return Quiet() if quiet else Progress()

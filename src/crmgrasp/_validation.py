@@ -47,7 +47,7 @@ def shown(value: object, limit: int = 40) -> str:
 
 
 def finite(value: object, name: str) -> float:
-    """Return ``value`` as a finite float, or raise :class:`CrmgraspError`. Text must be
+    """Return ``value`` as a finite float, or raise `CrmgraspError`. Text must be
     plain ASCII (Python would also read other scripts' digits)."""
     if isinstance(value, str) and not value.isascii():
         raise CrmgraspError(f"{name} must be a number written with ASCII digits, got {shown(value)}")
@@ -61,7 +61,7 @@ def finite(value: object, name: str) -> float:
 
 
 def positive(value: object, name: str) -> float:
-    """Return ``value`` as a finite float > 0, or raise :class:`CrmgraspError`."""
+    """Return ``value`` as a finite float > 0, or raise `CrmgraspError`."""
     x = finite(value, name)
     if x <= 0.0:
         raise CrmgraspError(f"{name} must be > 0, got {x}")
@@ -69,7 +69,7 @@ def positive(value: object, name: str) -> float:
 
 
 def non_negative(value: object, name: str) -> float:
-    """Return ``value`` as a finite float >= 0, or raise :class:`CrmgraspError`."""
+    """Return ``value`` as a finite float >= 0, or raise `CrmgraspError`."""
     x = finite(value, name)
     if x < 0.0:
         raise CrmgraspError(f"{name} must be >= 0, got {x}")
@@ -77,7 +77,7 @@ def non_negative(value: object, name: str) -> float:
 
 
 def as_point(value: object, name: str) -> tuple[float, float]:
-    """Return ``value`` as a finite 2-tuple of floats, or raise :class:`CrmgraspError`."""
+    """Return ``value`` as a finite 2-tuple of floats, or raise `CrmgraspError`."""
     if isinstance(value, (str, bytes)):
         raise CrmgraspError(f"{name} must be a pair (x, y), got {shown(value)}")
     try:
@@ -90,7 +90,7 @@ def as_point(value: object, name: str) -> tuple[float, float]:
 
 
 def integer(value: object, name: str, low: int, high: int) -> int:
-    """Return ``value`` as an ``int`` in ``[low, high]``, or raise :class:`CrmgraspError`.
+    """Return ``value`` as an ``int`` in ``[low, high]``, or raise `CrmgraspError`.
 
     Accepts an ``int`` (not a ``bool``) or decimal ASCII text such as ``"12"``; refuses
     floats, other scripts' digits and overlong text before converting it.

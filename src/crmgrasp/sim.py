@@ -2,9 +2,9 @@
 
 ``begin``/``reset`` and ``step`` on an immutable state are the reference definition
 of an episode: the environments, training, evaluation, planners and controllers
-step through them, or through a kernel of :mod:`crmgrasp.kernels` that is tested
-equal to them bit for bit. :func:`run_episode` is the one loop that lets a
-:class:`Policy` (a learner, a planner or a controller) act in an episode.
+step through them, or through a kernel of [`crmgrasp.kernels`][] that is tested
+equal to them bit for bit. [`run_episode`][] is the one loop that lets a
+[`Policy`][] (a learner, a planner or a controller) act in an episode.
 
 Sensing: each configuration is read once. The observation ``o_t`` is computed from
 that reading, and the CRM executed at time ``t`` builds its goal line from the same
@@ -71,11 +71,11 @@ class Percept(NamedTuple):
 
 class OneStep(NamedTuple):
     """The state after a reset or a CRM and what is sensed there: the result type of
-    :func:`begin`, :func:`step` and every kernel's single step (the one step type;
-    :class:`Percept` is what a policy may see of it, and a kernel's
-    :class:`~crmgrasp.kernels.base.BatchStep` its batched form). ``observation`` is the
+    `begin`, [`step`][] and every kernel's single step (the one step type;
+    [`Percept`][] is what a policy may see of it, and a kernel's
+    [`BatchStep`][crmgrasp.kernels.base.BatchStep] its batched form). ``observation`` is the
     contact model's observation of the reading (its ``observation_names``, in order);
-    ``error`` is :class:`~crmgrasp.model.hand.Error` (an ``int``)."""
+    ``error`` is [`Error`][crmgrasp.model.hand.Error] (an ``int``)."""
 
     state: SimState
     observation: tuple[float, ...]
@@ -110,7 +110,7 @@ def begin(task: Task, config: Any, rng: np.random.Generator) -> OneStep:
 
 
 def reset(task: Task, rng: np.random.Generator) -> OneStep:
-    """Draw a start (the task's scalar sampler), then :func:`begin`."""
+    """Draw a start (the task's scalar sampler), then `begin`."""
     return begin(task, task.sample_start(rng), rng)
 
 
@@ -152,7 +152,7 @@ def episode_end(
 
 def episode_end(task: Task, mu: Any, steps: Any) -> tuple[Any, Any]:
     """``(terminated, truncated)`` after a CRM: terminated when the true configuration is
-    a grasp (:meth:`Task.grasped`), truncated when ``steps >= max_steps`` CRMs have been
+    a grasp (`Task.grasped`), truncated when ``steps >= max_steps`` CRMs have been
     executed without one. Works on numbers or, elementwise, on arrays."""
     terminated = task.grasped(mu)
     return terminated, (steps >= task.max_steps) > terminated  # a > b on booleans: a and not b
@@ -165,7 +165,7 @@ STEP_REWARD = -1.0
 def step_reward(task: Task, terminated: Any, error: Any = 0) -> Any:
     """The reward of a CRM: ``task.grasp_reward`` for the one that reaches a grasp
     (``-1`` in the paper's reading, ``0`` in the "-1 in every non-goal state" reading),
-    :data:`STEP_REWARD` for every other, less ``task.error_cost`` for one that ends in an
+    [`STEP_REWARD`][] for every other, less ``task.error_cost`` for one that ends in an
     error (aperture or palm; the cost of a failed attempt, 0 in the paper); elementwise
     on arrays of ``terminated`` and ``error`` codes."""
     if isinstance(terminated, np.ndarray):
@@ -176,11 +176,11 @@ def step_reward(task: Task, terminated: Any, error: Any = 0) -> Any:
 
 
 class Policy(Protocol):
-    """The one agent interface of :func:`run_episode`: learners (through
-    :class:`crmgrasp.agents.LearnerPolicy`), planners and controllers.
+    """The one agent interface of [`run_episode`][]: learners (through
+    `crmgrasp.agents.LearnerPolicy`), planners and controllers.
 
     ``begin`` receives the first percept of an episode, ``act`` returns an action
-    index of the task or a :class:`~crmgrasp.model.hand.CRM`, and ``tell`` the percept
+    index of the task or a [`CRM`][crmgrasp.model.hand.CRM], and ``tell`` the percept
     that action produced (a learner learns there).
     """
 
@@ -192,9 +192,9 @@ class Policy(Protocol):
 
 
 class Stepper(Protocol):
-    """What :func:`run_episode` steps through: a kernel of :mod:`crmgrasp.kernels` (its
-    ``sample_start``, ``begin`` and ``step_one`` equal :meth:`Task.sample_start`,
-    :func:`begin` and :func:`step` bit for bit)."""
+    """What [`run_episode`][] steps through: a kernel of [`crmgrasp.kernels`][] (its
+    ``sample_start``, ``begin`` and ``step_one`` equal `Task.sample_start`,
+    `begin` and [`step`][] bit for bit)."""
 
     def sample_start(self, rng: np.random.Generator) -> Config: ...
 
@@ -209,8 +209,8 @@ class Stepper(Protocol):
 
 
 class TaskSteps:
-    """The reference :class:`Stepper` of one task: :meth:`Task.sample_start`,
-    :func:`begin` and :func:`step`."""
+    """The reference [`Stepper`][] of one task: `Task.sample_start`,
+    `begin` and [`step`][]."""
 
     def __init__(self, task: Task) -> None:
         self.task = task
@@ -229,11 +229,11 @@ class TaskSteps:
 
 
 class FamilyStepper:
-    """A :class:`Stepper` for a task with an object family: :meth:`sample_start` draws
-    the episode's object (:meth:`Task.instance`), then a start on it; :meth:`begin` and
-    :meth:`step_one` step that object's task through ``make(instance)`` (the reference
-    :class:`TaskSteps`, or a kernel). :meth:`use` puts a given world's object in place
-    (an episode from a fixed :class:`~crmgrasp.tasks.World`)."""
+    """A [`Stepper`][] for a task with an object family: `sample_start` draws
+    the episode's object (`Task.instance`), then a start on it; `begin` and
+    `step_one` step that object's task through ``make(instance)`` (the reference
+    [`TaskSteps`][], or a kernel). [`use`][] puts a given world's object in place
+    (an episode from a fixed [`World`][crmgrasp.tasks.World])."""
 
     def __init__(self, task: Task, make: Callable[[Task], Stepper] = TaskSteps) -> None:
         self.task, self._make = task, make
@@ -284,9 +284,9 @@ def run_episode(
 ) -> Episode:
     """Run ``policy`` for one episode of ``task``: from a start drawn from ``rng`` (the
     task's scalar sampler, after the object for a family task) or from ``start`` (a
-    :class:`~crmgrasp.tasks.World` for a family task), one step per action until the
-    episode ends; starts and readings draw from ``rng``. Steps are :func:`begin`
-    and :func:`step` (of the episode's object), or the same steps of ``kernel``
+    [`World`][crmgrasp.tasks.World] for a family task), one step per action until the
+    episode ends; starts and readings draw from ``rng``. Steps are `begin`
+    and [`step`][] (of the episode's object), or the same steps of ``kernel``
     (faster, the same results)."""
     if kernel is None:
         kernel = FamilyStepper(task) if task.family is not None else TaskSteps(task)

@@ -1,4 +1,4 @@
-"""Learners and baselines sharing one interface (:class:`~crmgrasp.agents.base.Agent`)."""
+"""Learners and baselines sharing one interface ([`Agent`][crmgrasp.agents.base.Agent])."""
 
 from crmgrasp.agents.base import Agent, greedy_choice
 from crmgrasp.agents.baselines import FixedSequence, RandomAgent

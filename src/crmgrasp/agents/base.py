@@ -1,5 +1,5 @@
 """The learning interface shared by every learner and baseline, and its adapter to
-the episode loop's :class:`~crmgrasp.sim.Policy`.
+the episode loop's [`Policy`][crmgrasp.sim.Policy].
 
 An agent maps integer states (k-order history codes) to action indices:
 
@@ -9,9 +9,9 @@ An agent maps integer states (k-order history codes) to action indices:
   the action already chosen in ``s2`` by ``act`` (``None`` when ``terminal``);
 * ``greedy(state, rng) -> action``: the learned policy, for evaluation.
 
-All randomness comes from the ``rng`` passed in. :class:`LearnerPolicy` makes an
-agent a :class:`~crmgrasp.sim.Policy` over k-order histories, so that learners act
-through the same episode loop (:func:`crmgrasp.sim.run_episode`) as planners and
+All randomness comes from the ``rng`` passed in. `LearnerPolicy` makes an
+agent a [`Policy`][crmgrasp.sim.Policy] over k-order histories, so that learners act
+through the same episode loop ([`crmgrasp.sim.run_episode`][]) as planners and
 controllers.
 """
 
@@ -55,7 +55,7 @@ def greedy_choice(row: list[float], rng: np.random.Generator) -> int:
 
 
 class LearnerPolicy:
-    """An :class:`Agent` as a :class:`~crmgrasp.sim.Policy`: it keeps the k-order
+    """An [`Agent`][] as a [`Policy`][crmgrasp.sim.Policy]: it keeps the k-order
     history (docs/model.md section 6) of the discretized observations, acts on its code and,
     when ``learn``, updates after every step.
 

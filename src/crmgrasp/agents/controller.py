@@ -20,8 +20,8 @@ exactly when ``i`` lies on contact ``j``'s normal line, so the rule is:
 
 It reads sensed contact frames (what a CRM's goal line is built from anyway) and
 the error flag; it may issue any ``(c, f, r)`` with ``|r| <= r_max``, not only the
-task's four CRMs. It is a :class:`~crmgrasp.sim.Policy`: episodes run through
-:func:`crmgrasp.sim.run_episode`.
+task's four CRMs. It is a [`Policy`][crmgrasp.sim.Policy]: episodes run through
+[`crmgrasp.sim.run_episode`][].
 """
 
 from __future__ import annotations
@@ -59,7 +59,7 @@ class GraspController:
         self._last, self._last_error, self._sensed = None, Error.NONE, first.sensed
 
     def act(self) -> CRM:
-        """The next CRM (:meth:`choose` on the last sensed configuration)."""
+        """The next CRM ([`choose`][] on the last sensed configuration)."""
         assert self._sensed is not None, "begin() first"
         self._pending = self.choose(self._sensed)
         return self._pending

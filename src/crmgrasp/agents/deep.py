@@ -2,18 +2,18 @@
 
 Needs the optional extra ``crmgrasp[deep]`` (torch, stable-baselines3, sb3-contrib);
 this module imports them only when training or evaluating, and raises a one-line
-:class:`~crmgrasp._validation.CrmgraspError` naming the extra when they are missing.
+`CrmgraspError` naming the extra when they are missing.
 
 The policy sees what the tabular learners see before discretisation, as a float
 vector: each of the contact model's observation quantities scaled by its bound
 (``[rho / 4, m_a / (2A), m_b / (2A)]`` for two contacts, ``A`` the hand aperture, values
-clipped as in :class:`~crmgrasp.envs.single.CRMGraspEnv`), then the error flag one-hot; the LSTM
+clipped as in [`CRMGraspEnv`][crmgrasp.envs.single.CRMGraspEnv]), then the error flag one-hot; the LSTM
 carries the history that the k-order state spells out for the tabular learners.
 Training runs ``n_envs`` environments in a ``DummyVecEnv`` with one torch thread
 (deterministic for a seed on a given machine). The learning curve is the CRMs
 of every finished training episode in completion order; greedy (deterministic)
 checkpoints after each rollout use the same fixed starts as the tabular learners'
-checkpoints (:func:`~crmgrasp.agents.training.checkpoint_generators`).
+checkpoints ([`checkpoint_generators`][crmgrasp.agents.training.checkpoint_generators]).
 """
 
 from __future__ import annotations
@@ -70,12 +70,12 @@ def features(values: Sequence[float], error: int, bounds: Sequence[tuple[float, 
 
 def bounds_of(task: Task) -> tuple[tuple[float, float], ...]:
     """The ``(low, high)`` of each of the task's observation quantities, in order (the
-    model's :meth:`~crmgrasp.model.contact_model.ContactModel.observation_bounds`)."""
+    model's [`observation_bounds`][crmgrasp.model.contact_model.ContactModel.observation_bounds])."""
     return tuple(task.model.observation_bounds().values())
 
 
 class ContinuousObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs):
-    """Flattens :class:`~crmgrasp.envs.single.CRMGraspEnv`'s ``Dict`` observation into :func:`features`."""
+    """Flattens [`CRMGraspEnv`][crmgrasp.envs.single.CRMGraspEnv]'s ``Dict`` observation into [`features`][]."""
 
     def __init__(self, env: gym.Env) -> None:
         gym.utils.RecordConstructorArgs.__init__(self)

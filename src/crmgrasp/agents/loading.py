@@ -1,8 +1,8 @@
 """Loading a saved policy of any kind: the one entry point that knows every policy file.
 
-:func:`load_policy` looks at the file and hands it to the loader of its kind: a tabular
-:class:`~crmgrasp.agents.policy.GreedyPolicy` (JSON) or a deep
-:class:`~crmgrasp.agents.deep.RecurrentPolicy` (zip). It lives apart from both so that
+[`load_policy`][] looks at the file and hands it to the loader of its kind: a tabular
+[`GreedyPolicy`][crmgrasp.agents.policy.GreedyPolicy] (JSON) or a deep
+[`RecurrentPolicy`][crmgrasp.agents.deep.RecurrentPolicy] (zip). It lives apart from both so that
 neither policy module imports the other.
 """
 
@@ -31,8 +31,8 @@ def _is_zip(path: str | os.PathLike[str]) -> bool:
 
 
 def load_policy(path: str | os.PathLike[str], task: Task | None = None) -> Any:
-    """A saved policy of any kind: a tabular :class:`GreedyPolicy` (JSON) or a deep
-    :class:`~crmgrasp.agents.deep.RecurrentPolicy` (zip; needs the extra ``deep``)."""
+    """A saved policy of any kind: a tabular [`GreedyPolicy`][] (JSON) or a deep
+    [`RecurrentPolicy`][crmgrasp.agents.deep.RecurrentPolicy] (zip; needs the extra ``deep``)."""
     if _is_zip(path):
         from crmgrasp.agents.deep import RecurrentPolicy
 

@@ -1,13 +1,13 @@
 """Many independent trials in lockstep: one batched simulator call per step.
 
-:func:`train_trials_lockstep` gives exactly the results of
-:func:`~crmgrasp.agents.training.train_trials` for the same arguments (the tests
+[`train_trials_lockstep`][] gives exactly the results of
+[`train_trials`][crmgrasp.agents.training.train_trials] for the same arguments (the tests
 compare curves and Q tables): each trial keeps its own agent and its own three
 generators, and draws from them in the same order as the sequential loop; only
 the CRM executions of all trials that are mid-episode go through the task's
-kernel together (:meth:`crmgrasp.kernels.Kernel.execute` and
-:meth:`~crmgrasp.kernels.Kernel.observe`), which is bit-identical to
-:func:`crmgrasp.sim.step`.
+kernel together ([`crmgrasp.kernels.Kernel.execute`][] and
+[`observe`][crmgrasp.kernels.Kernel.observe]), which is bit-identical to
+[`crmgrasp.sim.step`][].
 """
 
 from __future__ import annotations
@@ -66,7 +66,7 @@ def train_trials_lockstep(
     first_trial: int = 0,
     progress: Progress | None = None,
 ) -> TrialResult:
-    """Lockstep version of :func:`~crmgrasp.agents.training.train_trials` (same
+    """Lockstep version of [`train_trials`][crmgrasp.agents.training.train_trials] (same
     arguments, same results); faster when ``trials`` is large (hundreds or more). Not for a
     family task: its trials' objects differ, and lockstep shares one batched kernel."""
     if task.family is not None:

@@ -1,8 +1,8 @@
 """A sample-efficient learner: certainty-equivalent planning with two value functions.
 
-:class:`ModelVI` keeps the maximum-likelihood model of the k-order MDP (per
+`ModelVI` keeps the maximum-likelihood model of the k-order MDP (per
 history-action pair, the count of each outcome ``(r, s', terminal)``, as
-:class:`~crmgrasp.agents.tabular.DynaQ` does) and after every real step solves it by
+[`DynaQ`][crmgrasp.agents.tabular.DynaQ] does) and after every real step solves it by
 value iteration, twice:
 
 * **acting values** ``Q_act``: every untried pair is worth ``q_act`` (a mild optimism:
@@ -11,20 +11,20 @@ value iteration, twice:
   exploits;
 * **greedy values** ``Q_greedy``: tried pairs only, and a history in which nothing
   was tried is worth ``unknown`` (pessimism, -10 = one full failed episode); the
-  greedy policy (what :meth:`greedy` and evaluation use) picks the best *tried*
+  greedy policy (what [`greedy`][] and evaluation use) picks the best *tried*
   action, so it never bets on a guess.
 
 Both are ``Q(s,a) = sum_o p(o|s,a) (r + gamma V(s'))`` with ``V(s') = 0`` at a
 terminal outcome, iterated in place from the previous solution until the largest
 change is below ``1e-6`` or ``sweeps`` sweeps (compiled by default,
-:func:`crmgrasp.kernels.planning.value_iteration`; ``compiled=False`` runs the readable
+[`crmgrasp.kernels.planning.value_iteration`][]; ``compiled=False`` runs the readable
 sweeps, the same values bit for bit). Optimism drives exploration, pessimism
 makes the reported policy safe: separating the two is what lets the greedy policy be
 near-optimal long before the acting policy stops exploring.
 
-A **prior** (:meth:`ModelVI.set_prior`) adds pseudo-counts, ``weight`` per pair
+A **prior** (`ModelVI.set_prior`) adds pseudo-counts, ``weight`` per pair
 spread over the pair's outcomes in a model learned elsewhere (e.g. on an object
-family with the same CRMs and bins: :func:`crmgrasp.agents.training.build_agent`
+family with the same CRMs and bins: [`crmgrasp.agents.training.build_agent`][]
 with ``prior_task``); the agent's own counts outweigh it after a few visits.
 """
 
@@ -93,7 +93,7 @@ class ModelVI(TabularAgent):
 
     @property
     def greedy_table(self) -> dict[int, list[float]]:
-        """The greedy values (tried pairs; the acting values are :attr:`q`)."""
+        """The greedy values (tried pairs; the acting values are [`q`][])."""
         return self.q_greedy
 
     def set_prior(self, prior: Model, weight: float = 1.0) -> None:
@@ -138,7 +138,7 @@ class ModelVI(TabularAgent):
     # ----------------------------------------------------------------- planning
     def _plan(self) -> None:
         """Value iteration of both value functions on the current model, in place: the
-        compiled sweeps (:mod:`crmgrasp.kernels._vi_jit`) or, with ``compiled=False``, the
+        compiled sweeps (`crmgrasp.kernels._vi_jit`) or, with ``compiled=False``, the
         readable ones below; the same values bit for bit."""
         n = self.n_actions
         for s, _ in self.model:

@@ -13,17 +13,17 @@ File layout (``format`` ``"crmgrasp-policy"``, ``version`` 2)::
       "sha256": "<hex digest of the rest of the document>"
     }
 
-``task_spec`` (:func:`crmgrasp.tasks.task_to_dict`) makes the file stand alone: it
+``task_spec`` ([`crmgrasp.tasks.task_to_dict`][]) makes the file stand alone: it
 loads without naming a task, also for a task from a TOML file; given a task, the
 file is refused unless the task is the one it was made for (the first differing key is
 named). Files without ``task_spec`` (written before it existed) name a registered task.
 
-A state code is the k-order history code of :mod:`crmgrasp.model.history`, written
+A state code is the k-order history code of [`crmgrasp.model.history`][], written
 in canonical decimal; its ``"greedy"`` entry lists the actions tied for the best value
 (usually one). In a state the file does not list, the policy picks uniformly among
 all actions. ``sha256`` is the digest of the document without it, serialised with
 sorted keys and no spaces, so an edited file (a changed ``k``, table or header) is
-refused. Loading reads at most :data:`MAX_BYTES` from a regular file, parses strict
+refused. Loading reads at most [`MAX_BYTES`][] from a regular file, parses strict
 standard JSON (no duplicate keys, no NaN, integers of at most 20 digits, bounded
 nesting), checks every field and refuses a policy made for another task, history
 order, CRM set or bins.
@@ -282,7 +282,7 @@ class GreedyPolicy:
 
     @classmethod
     def load(cls, path: str | os.PathLike[str], task: Task | None = None) -> GreedyPolicy:
-        """Read (:func:`read_policy_document`) and validate a policy file for ``task``
+        """Read ([`read_policy_document`][]) and validate a policy file for ``task``
         (default: the registered task the file names)."""
         doc = read_policy_document(path)
         if task is None:

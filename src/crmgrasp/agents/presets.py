@@ -4,8 +4,8 @@ rule that fills what the user did not give.
 A preset names an agent, a history order, whether to learn on the mirror quotient where
 the task declares a symmetry (tabular learners), and the tasks on which its agent also
 learns a prior first (a family task with the same CRMs and bins of which the task's
-object is one member). :func:`apply_preset` is the one place that combines a preset with
-the user's choices; the command line lists :data:`PRESETS` and their descriptions.
+object is one member). [`apply_preset`][] is the one place that combines a preset with
+the user's choices; the command line lists [`PRESETS`][] and their descriptions.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ class LearnerPreset:
     Parameters
     ----------
     agent
-        A registered agent (:data:`crmgrasp.agents.training.AGENTS`).
+        A registered agent ([`crmgrasp.agents.training.AGENTS`][]).
     k
         History order.
     symmetric

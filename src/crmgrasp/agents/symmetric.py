@@ -1,10 +1,10 @@
 """Learning on the quotient of the k-order MDP by a task's mirror symmetry.
 
-If a task declares a :class:`~crmgrasp.tasks.Symmetry` ``sigma``, the history
+If a task declares a [`Symmetry`][crmgrasp.tasks.Symmetry] ``sigma``, the history
 ``h = (o_t, a_{t-1}, ..., a_{t-k})`` and its mirror ``sigma(h)`` (each observation's
 ``m_a`` and ``m_b`` bins swapped, each action mapped by ``sigma``) are the same
 situation seen in a mirror: ``Q(h, a) = Q(sigma(h), sigma(a))`` for the optimal
-values. :class:`SymmetricAgent` keeps one table entry per pair ``{h, sigma(h)}``
+values. `SymmetricAgent` keeps one table entry per pair ``{h, sigma(h)}``
 (the smaller code is the representative): in a non-representative state it
 mirrors the state before asking the inner learner and mirrors the chosen action
 back, and it mirrors transitions before updating. Every real transition thus
@@ -101,7 +101,7 @@ class SymmetricAgent:
 
     @property
     def greedy_table(self) -> dict[int, list[float]]:
-        """The inner learner's greedy values, mirrored like :attr:`q`."""
+        """The inner learner's greedy values, mirrored like [`q`][]."""
         return self._mirrored(self.inner.greedy_table)
 
     def _mirrored(self, table: dict[int, list[float]]) -> dict[int, list[float]]:
@@ -115,7 +115,7 @@ class SymmetricAgent:
 
     @property
     def tried(self) -> dict[int, set[int]]:
-        """Tried actions, mirrored like :attr:`q`."""
+        """Tried actions, mirrored like [`q`][]."""
         out = {}
         for s, acts in self.inner.tried.items():
             out[s] = set(acts)

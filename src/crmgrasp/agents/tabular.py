@@ -78,7 +78,7 @@ class TabularAgent:
     def greedy(self, state: int, rng: np.random.Generator) -> int:
         """The learned policy: the best action among those tried in ``state`` (random
         tie-breaking); every action if none was tried. Untried actions keep their
-        optimistic ``q0``, which drives exploration in :meth:`act` but is no estimate."""
+        optimistic ``q0``, which drives exploration in [`act`][] but is no estimate."""
         tried = self.tried.get(state)
         row = self.value(state)
         if not tried or len(tried) == self.n_actions:

@@ -1,6 +1,6 @@
-"""Training and evaluation loops on the pure task dynamics (:mod:`crmgrasp.sim`).
+"""Training and evaluation loops on the pure task dynamics ([`crmgrasp.sim`][]).
 
-Seeding: a run's seed feeds a :class:`numpy.random.SeedSequence`; trial ``i`` gets
+Seeding: a run's seed feeds a `numpy.random.SeedSequence`; trial ``i`` gets
 child ``i``, which spawns three generators: the environment's (starts and sensing),
 the agent's (tie-breaking, exploration, planning) and the evaluation's. With the
 environment stream separate, every learner sees the same start sequence for the
@@ -97,7 +97,7 @@ def agent_parameters(name: str) -> tuple[str, ...]:
 def parameter_defaults(param: str) -> dict[str, object]:
     """The default of keyword parameter ``param`` of every registered agent that takes it
     (agent name -> default), read from the constructors; the prior's keys
-    (:data:`PRIOR_KEYS`) are ``model-vi``'s, with :data:`PRIOR_DEFAULTS`."""
+    ([`PRIOR_KEYS`][]) are ``model-vi``'s, with [`PRIOR_DEFAULTS`][]."""
     import inspect
 
     if param in PRIOR_DEFAULTS:
@@ -116,14 +116,14 @@ def parameter_defaults(param: str) -> dict[str, object]:
 
 
 def build_agent(task: Task, encoder: KOrderEncoder, name: str, params: dict[str, object] | None = None) -> Agent:
-    """:func:`make_agent`, wrapped in a :class:`~crmgrasp.agents.symmetric.SymmetricAgent`
+    """[`make_agent`][], wrapped in a `SymmetricAgent`
     when ``params`` has ``symmetric=True`` (the task must declare a symmetry).
 
     ``prior_task`` (a task name, file or factory with the same CRMs and bins, e.g. an
     object family) gives a ``model-vi`` agent a prior: the model one agent with the
     same settings learns there in ``prior_episodes`` episodes (seed ``prior_seed``), added
-    as ``prior_weight`` pseudo-counts per pair (defaults: :data:`PRIOR_DEFAULTS`)
-    (:meth:`~crmgrasp.agents.model_based.ModelVI.set_prior`). The prior is computed once
+    as ``prior_weight`` pseudo-counts per pair (defaults: [`PRIOR_DEFAULTS`][])
+    (`set_prior`). The prior is computed once
     per setting and reused by every trial."""
     p = dict(params or {})
     symmetric = p.pop("symmetric", False)
@@ -144,7 +144,7 @@ def build_agent(task: Task, encoder: KOrderEncoder, name: str, params: dict[str,
 
 
 PRIOR_KEYS = ("prior_task", "prior_episodes", "prior_weight", "prior_seed")
-"""The parameters of :func:`build_agent` that give a ``model-vi`` agent a prior."""
+"""The parameters of [`build_agent`][] that give a ``model-vi`` agent a prior."""
 
 PRIOR_DEFAULTS: dict[str, object] = {"prior_task": None, "prior_episodes": 500, "prior_weight": 1.0, "prior_seed": 0}
 """The prior's settings when not given (``prior_task`` None: no prior)."""
@@ -199,8 +199,8 @@ def run_episode(
     learn: bool = True,
     kernel: Stepper | None = None,
 ) -> tuple[int, bool]:
-    """One episode of ``agent`` (:func:`crmgrasp.sim.run_episode` with a
-    :class:`~crmgrasp.agents.base.LearnerPolicy`, stepping through ``kernel`` if
+    """One episode of ``agent`` ([`crmgrasp.sim.run_episode`][] with a
+    [`LearnerPolicy`][crmgrasp.agents.base.LearnerPolicy], stepping through ``kernel`` if
     given); returns (CRMs executed, success). ``learn=False`` acts greedily and does
     not update."""
     ep = sim_run_episode(task, LearnerPolicy(agent, encoder, agent_rng, learn=learn), env_rng, kernel=kernel)
@@ -228,7 +228,7 @@ def evaluate(
 
 
 DEFAULT_CHECKPOINTS = (5, 10, 15, 20, 30, 40, 50, 60, 80, 100, 150, 200, 300, 500, 1000, 1500, 2000)
-"""Training episodes after which :func:`train_trials` evaluates the greedy policy."""
+"""Training episodes after which [`train_trials`][] evaluates the greedy policy."""
 
 _CHECKPOINT_KEY = 2**31  # spawn key of the checkpoint streams; trial streams use 0 .. trials-1
 
@@ -313,15 +313,15 @@ def train_trials(
     """Train ``trials`` independent agents for ``episodes`` each, then evaluate each
     greedily on ``eval_episodes`` fresh episodes.
 
-    The trials are numbers ``first_trial ..`` of the run (:func:`trial_generators`), so
+    The trials are numbers ``first_trial ..`` of the run ([`trial_generators`][]), so
     a run split into groups of trials gives the results of one call. ``progress``
     advances by the training episodes done.
 
     After each training episode listed in ``checkpoints`` the greedy policy is also
     evaluated on ``checkpoint_episodes`` episodes whose starts are the same at every
-    checkpoint (:func:`checkpoint_generators`): a learning curve of the policy itself,
+    checkpoint ([`checkpoint_generators`][]): a learning curve of the policy itself,
     free of exploration and of start-to-start noise. Episodes step through the task's
-    kernel on ``backend`` (:func:`crmgrasp.kernels.kernel_for`; every backend gives
+    kernel on ``backend`` ([`crmgrasp.kernels.kernel_for`][]; every backend gives
     the same results)."""
     check_budget(trials, episodes, eval_episodes)
     encoder = encoder_for(task, k)

@@ -62,6 +62,7 @@ def _to_5pct_lines(s: dict[str, Any]) -> list[str]:
 
     ref, lines = fmt(s["reference_mean_steps"], 2), []
     mark = "" if s["converged"] else f" (not converged at {budget(s['trials'], s['episodes'])})"
+
     def when(e: int | None) -> str:
         return "never" if e is None else f"from episode {e:,}"
 
@@ -94,7 +95,7 @@ def _learner_params(args: argparse.Namespace) -> dict[str, Any]:
 
 def _apply_preset(args: argparse.Namespace, task: Any) -> None:
     """Fill ``--agent``, ``--k``, ``--symmetric`` and ``--prior-task`` from ``--preset``
-    where not given (:func:`crmgrasp.agents.presets.apply_preset`)."""
+    where not given ([`crmgrasp.agents.presets.apply_preset`][])."""
     from crmgrasp.agents.presets import apply_preset
 
     choice = apply_preset(
@@ -105,7 +106,7 @@ def _apply_preset(args: argparse.Namespace, task: Any) -> None:
 
 def _warn_if_ungraspable(task: Task, seed: int) -> None:
     """Say before training when a quick check finds no graspable start (the library's
-    :func:`~crmgrasp.planners.references.graspable_warning`)."""
+    [`graspable_warning`][crmgrasp.planners.references.graspable_warning])."""
     from crmgrasp.planners.references import graspable_warning
 
     warning = graspable_warning(task, seed=seed)
@@ -328,7 +329,7 @@ def _cmd_pomdp(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    """Run the speed benchmarks (:mod:`crmgrasp.experiments.bench`)."""
+    """Run the speed benchmarks ([`crmgrasp.experiments.bench`][])."""
     from crmgrasp.experiments.bench import main as bench
 
     if args.rounds < 1:

@@ -1,5 +1,5 @@
-"""Argument parser of the ``crmgrasp`` command: one builder per command (:data:`COMMANDS`), on
-the shared option groups of :mod:`crmgrasp.cli.options`."""
+"""Argument parser of the ``crmgrasp`` command: one builder per command ([`COMMANDS`][]), on
+the shared option groups of [`crmgrasp.cli.options`][]."""
 
 from __future__ import annotations
 
@@ -365,7 +365,7 @@ COMMANDS: tuple[Callable[[Any], None], ...] = (
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``crmgrasp`` command: one sub-parser per command
-    (:data:`COMMANDS`)."""
+    ([`COMMANDS`][])."""
     parser = _Parser(prog="crmgrasp", description="Grasp strategies composed of contact relative motions (Platt).")
     parser.add_argument("--version", action="version", version=f"crmgrasp {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)

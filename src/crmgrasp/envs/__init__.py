@@ -1,5 +1,5 @@
-"""Gymnasium environments over a task's kernel: :class:`CRMGraspEnv` (one episode),
-:class:`CRMGraspVectorEnv` (N episodes batched) and the :class:`KOrderHistory`
+"""Gymnasium environments over a task's kernel: [`CRMGraspEnv`][] (one episode),
+[`CRMGraspVectorEnv`][] (N episodes batched) and the [`KOrderHistory`][]
 wrapper. Importing this package registers ``crmgrasp/PaperBox-v0``."""
 
 from crmgrasp.envs.single import ENV_ID, CRMGraspEnv, KOrderHistory

@@ -1,6 +1,6 @@
 """Gymnasium environments: ``CRMGraspEnv`` for any task, and the k-order history wrapper.
 
-``crmgrasp/PaperBox-v0`` is registered with :func:`gymnasium.register` when
+``crmgrasp/PaperBox-v0`` is registered with `gymnasium.register` when
 ``crmgrasp`` is imported.
 """
 
@@ -78,9 +78,9 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
     mu_goal``, 0.05 for paper-box); ``truncated`` after ``task.max_steps`` CRMs (10).
 
     ## Arguments
-    ``task``: a :class:`~crmgrasp.tasks.Task` or a registered task name;
+    ``task``: a [`Task`][crmgrasp.tasks.Task] or a registered task name;
     ``render_mode``: ``None`` or ``"rgb_array"``; ``backend``: ``"auto"``,
-    ``"numba"`` or ``"reference"`` (:func:`crmgrasp.kernels.kernel_for`; every
+    ``"numba"`` or ``"reference"`` ([`crmgrasp.kernels.kernel_for`][]; every
     backend gives the same episodes).
 
     ## Version History
@@ -146,8 +146,8 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         return self._emit(self.kernel.begin(cfg, self.np_random))
 
     def step(self, action: Any) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
-        """Execute the CRM ``task.actions[action]`` (:meth:`crmgrasp.kernels.Kernel.step_one`,
-        the kernel's form of :func:`crmgrasp.sim.step`)."""
+        """Execute the CRM ``task.actions[action]`` ([`crmgrasp.kernels.Kernel.step_one`][],
+        the kernel's form of [`crmgrasp.sim.step`][])."""
         if self._state is None:
             raise CrmgraspError("call reset() before step()")
         if type(action) is not int:
@@ -253,7 +253,7 @@ FAMILY_ENVS = {
 
 
 def register() -> None:
-    """Register ``crmgrasp/PaperBox-v0``, the :data:`FAMILY_ENVS` and the :data:`SPATIAL_ENVS` (idempotent)."""
+    """Register ``crmgrasp/PaperBox-v0``, the [`FAMILY_ENVS`][] and the [`SPATIAL_ENVS`][] (idempotent)."""
     if ENV_ID not in gym.registry:
         gym.register(
             id=ENV_ID,

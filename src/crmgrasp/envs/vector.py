@@ -1,5 +1,5 @@
 """A Gymnasium vector environment of N independent CRM grasping episodes, stepped
-by the task's kernel (:meth:`crmgrasp.kernels.Kernel.step_batch`).
+by the task's kernel ([`crmgrasp.kernels.Kernel.step_batch`][]).
 
 ``gymnasium.make_vec("crmgrasp/PaperBox-v0", num_envs=1024,
 vectorization_mode="vector_entry_point")`` builds it. Observations are the single
@@ -12,7 +12,7 @@ Autoreset is ``NEXT_STEP`` (Gymnasium's default): the step after an episode ends
 resets that sub-environment, ignores its action and returns the new start's
 observation with reward 0, ``terminated`` and ``truncated`` false. Starts are
 drawn in blocks of 2,048 with the kernel's vectorised sampler from
-``self.np_random``: the same distribution as :class:`~crmgrasp.envs.single.CRMGraspEnv`,
+``self.np_random``: the same distribution as [`CRMGraspEnv`][crmgrasp.envs.single.CRMGraspEnv],
 not the same stream. With sensing noise each step takes one reading per
 sub-environment, after the resets. Every backend gives the same outputs bit for
 bit (tested).
@@ -141,9 +141,9 @@ class CRMGraspVectorEnv(VectorEnv):
 
 class FamilyVectorEnv(CRMGraspVectorEnv):
     """``num_envs`` episodes of a family task, each on its own object: the rows step one
-    at a time through one :class:`~crmgrasp.kernels.family.FamilyKernel` each (a family
+    at a time through one [`FamilyKernel`][crmgrasp.kernels.family.FamilyKernel] each (a family
     draws the object of every episode, so rows cannot share a batched kernel). The
-    interface, spaces and autoreset are those of :class:`CRMGraspVectorEnv`; all draws
+    interface, spaces and autoreset are those of [`CRMGraspVectorEnv`][]; all draws
     come from ``self.np_random``, row by row."""
 
     def __init__(self, num_envs: int = 1, task: Task | str = "box-family", **kwargs: Any) -> None:

@@ -1,8 +1,8 @@
 """The paper's experiments, one function per figure, and the ``reproduce`` driver.
 
 Each experiment writes its data (CSV), figure (PNG) and the configuration it ran
-with (JSON) into its own folder; :func:`reproduce` (:mod:`crmgrasp.experiments.reproduce`)
-runs the experiments of :mod:`crmgrasp.experiments.registry` into one output folder
+with (JSON) into its own folder; [`reproduce`][] ([`crmgrasp.experiments.reproduce`][])
+runs the experiments of [`crmgrasp.experiments.registry`][] into one output folder
 and writes an index ``README.md`` that shows every figure and compares our numbers
 with the paper's.
 """

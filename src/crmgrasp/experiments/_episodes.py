@@ -20,7 +20,7 @@ from crmgrasp.tasks import Task
 __all__ = ["EpisodeRecord", "episode_records", "train_fastest", "greedy_records", "FASTEST_LABEL"]
 
 FASTEST_LABEL = "model-vi k=1 (mirror quotient)"
-"""How the experiments name the learner of :func:`train_fastest`."""
+"""How the experiments name the learner of [`train_fastest`][]."""
 
 
 @dataclass(frozen=True)

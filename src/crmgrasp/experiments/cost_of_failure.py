@@ -3,17 +3,17 @@
 The paper predicts: if one CRM sequence grasps most instances and failure is cheap,
 the agent tries it first everywhere and falls back when it fails; if failures are
 expensive, it first takes steps to tell the situations apart. Here an errored CRM
-(aperture or palm) costs ``1 + c`` instead of 1 (:attr:`crmgrasp.tasks.Task.error_cost`),
-for ``c`` in :data:`COSTS`, and for each ``c`` two policies are measured on the same
+(aperture or palm) costs ``1 + c`` instead of 1 ([`crmgrasp.tasks.Task.error_cost`][]),
+for ``c`` in [`COSTS`][], and for each ``c`` two policies are measured on the same
 held-out worlds: the exact belief-space optimum of the cost (over sampled worlds,
-:class:`~crmgrasp.planners.references.BeliefPolicy`) and a learner's greedy policy.
+[`BeliefPolicy`][crmgrasp.planners.references.BeliefPolicy]) and a learner's greedy policy.
 
 Two tasks: ``notch-or-box``, designed so that the prediction can show (two objects
 alike at the touched corner, a CRM that grasps the common one and errs on the rare
 one, and an error-free slide whose outcome tells them apart), and ``box-family``
 (where no error-free CRM tells the situations apart).
 
-**Classification of an episode** by its first CRM (:func:`classify`):
+**Classification of an episode** by its first CRM ([`classify`][]):
 
 * ``try-first``: the first CRM grasps or ends in an error: an attempt, which
   either works or fails and is fallen back from;

@@ -6,7 +6,7 @@ one of them uniformly, with a fresh start), then its greedy policy runs on:
 
 * the training objects, fresh starts: ``learner_mean_crms`` (in distribution);
 * ``heldout`` new objects from the same family: ``heldout_mean_crms``;
-* objects with sizes outside the training ranges (:data:`OUT_OF_RANGE`):
+* objects with sizes outside the training ranges ([`OUT_OF_RANGE`][]):
   ``out_of_range_mean_crms``;
 
 beside the family's references on the held-out worlds (``belief_optimum``,
@@ -14,7 +14,7 @@ beside the family's references on the held-out worlds (``belief_optimum``,
 (``per_instance_mean_crms``, against the family policy on the same object,
 ``family_policy_on_instance_mean_crms``) and, where the CRMs and bins agree, the
 paper-box policy applied unchanged (``paper_box_policy_mean_crms``), and the
-belief-space planner's k = 1 policy (:func:`~crmgrasp.planners.korder.korder_search` on
+belief-space planner's k = 1 policy ([`korder_search`][crmgrasp.planners.korder.korder_search] on
 ``planner_worlds`` worlds of the whole family) on the same held-out worlds
 (``planner_heldout_mean_crms``, ``planner_gap_to_optimum``; on the worlds it planned
 on: ``planner_planned_mean_crms`` against their optimum ``planner_planned_optimum``).

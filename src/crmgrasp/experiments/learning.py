@@ -197,7 +197,7 @@ def learn(
     jobs: int = 1,
 ) -> LearnRun:
     """Train ``trials`` independent agents and summarise them. Episodes step through the
-    task's kernel on ``backend`` (:func:`crmgrasp.kernels.kernel_for`), one trial after
+    task's kernel on ``backend`` ([`crmgrasp.kernels.kernel_for`][]), one trial after
     another or, with ``lockstep``, many trials together. Every choice gives the same
     results.
 

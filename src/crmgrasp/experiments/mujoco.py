@@ -1,12 +1,12 @@
 """The paper's hardware experiments on the MuJoCo stand-in (extra ``crmgrasp[mujoco]``).
 
-* :func:`figure_9_mujoco`: the policy learned in the kinematic simulator runs
+* [`figure_9_mujoco`][]: the policy learned in the kinematic simulator runs
   11 times on the MuJoCo hand from starts like the paper's Robonaut trials; the
   same starts also run on the kinematic hand (sensing noise of Figure 9) through
-  the same :class:`~crmgrasp.hardware.runner.PolicyRunner`, so the CRM counts compare
+  the same [`PolicyRunner`][crmgrasp.hardware.runner.PolicyRunner], so the CRM counts compare
   one to one. Points are plotted from the *sensed* readings, as in Figure 9;
   success and the final ``min_friction`` come from MuJoCo's true contacts.
-* :func:`figure_4_mujoco`: 30 opposition CRMs on the MuJoCo hand, histogram of
+* [`figure_4_mujoco`][]: 30 opposition CRMs on the MuJoCo hand, histogram of
   the true final ``min_friction``; and the accuracy of intrinsic contact
   sensing against MuJoCo's contact list over every reading taken, plus
   ``extra_starts`` random task starts (two readings each: after the grasp is
@@ -47,9 +47,10 @@ __all__ = ["MujocoFigure9Config", "MujocoFigure4Config", "figure_9_mujoco", "fig
 
 @dataclass(frozen=True)
 class MujocoFigure9Config(Figure9Config):
-    """Figure 9 on the MuJoCo stand-in; the fields of :class:`~crmgrasp.experiments.Figure9Config`
+    """Figure 9 on the MuJoCo stand-in; the fields of [`Figure9Config`][crmgrasp.experiments.Figure9Config]
     keep their meaning, ``sigma_n_deg`` and ``sigma_p`` being the sensing noise of the kinematic
-    comparison runs (the MuJoCo hand has its own sensors, :class:`~crmgrasp.hardware.mujoco.model.PhysicsParams`)."""
+    comparison runs (the MuJoCo hand has its own sensors,
+    [`PhysicsParams`][crmgrasp.hardware.mujoco.model.PhysicsParams])."""
 
     animate: bool = True
     """Also render trial 0 to ``figure9_mujoco.gif`` (needs headless OpenGL)."""
@@ -57,7 +58,7 @@ class MujocoFigure9Config(Figure9Config):
 
 @dataclass(frozen=True)
 class MujocoFigure4Config:
-    """Parameters of Figure 4 on the MuJoCo stand-in (see :class:`~crmgrasp.experiments.Figure4Config`)."""
+    """Parameters of Figure 4 on the MuJoCo stand-in (see [`Figure4Config`][crmgrasp.experiments.Figure4Config])."""
 
     task: str = "paper-box"
     trials: int = 30

@@ -1,11 +1,11 @@
 """Spatial CRM policies on the MuJoCo stand-in in 3-D (extra ``crmgrasp[mujoco]``).
 
-:func:`spatial_mujoco`: for each spatial task (``cup-3d``, ``box-3d``), the fastest
+[`spatial_mujoco`][]: for each spatial task (``cup-3d``, ``box-3d``), the fastest
 learner's policy (``model-vi``, k = 1) is trained in the kinematic model (or loaded), then
 runs from ``trials`` worlds drawn from the task (a solid of the family and a surface start
-on it) on the MuJoCo hand (:class:`~crmgrasp.hardware.mujoco.spatial.MujocoHand3D`) and,
+on it) on the MuJoCo hand ([`MujocoHand3D`][crmgrasp.hardware.mujoco.spatial.MujocoHand3D]) and,
 from the same worlds, on the kinematic hand, both through the one
-:class:`~crmgrasp.hardware.runner.PolicyRunner`. A run stops when the *sensed*
+[`PolicyRunner`][crmgrasp.hardware.runner.PolicyRunner]. A run stops when the *sensed*
 configuration is a grasp; it counts as a success when the true contacts (MuJoCo's contact
 list) have ``min_friction_3d <= mu_goal``. Also recorded: the wall time of every CRM, the
 accuracy of 3-D intrinsic contact sensing against MuJoCo's contacts, and, from
@@ -64,7 +64,7 @@ class SpatialMujocoConfig:
     policies: tuple[str, ...] = ()
     """Saved policy files, one per task in order, instead of training (empty: train)."""
     palm_tolerance_deg: float = 10.0
-    """The fingertip palm tolerance (:func:`~crmgrasp.hardware.mujoco.hardware_task`)."""
+    """The fingertip palm tolerance ([`hardware_task`][crmgrasp.hardware.mujoco.hardware_task])."""
     random_crms: int = 60
     """Worlds per task where one random CRM runs on both hands, to compare error flags."""
     animate: bool = True

@@ -35,7 +35,7 @@ __all__ = ["NonConvexConfig", "non_convex", "INNER_EDGES", "inside"]
 
 INNER_EDGES = (3, 4, 5)
 """The U's edges that face its opening (vertex order of
-:class:`~crmgrasp.model.families.UHandleFamily`, kept by the pose)."""
+[`UHandleFamily`][crmgrasp.model.families.UHandleFamily], kept by the pose)."""
 
 
 def inside(obj: Polygon, config: Config) -> bool:

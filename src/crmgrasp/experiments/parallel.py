@@ -37,7 +37,7 @@ def usable_jobs(jobs: int) -> int:
 
 
 EXECUTORS = ("local", "ray")
-"""Where :func:`run_parallel` runs calls: worker processes on this machine, or Ray."""
+"""Where [`run_parallel`][] runs calls: worker processes on this machine, or Ray."""
 
 
 def run_parallel(
@@ -48,7 +48,7 @@ def run_parallel(
     usable core); with ``executor="ray"``, as Ray tasks (one per call) on the cluster at
     ``address`` (``"auto"``, ``"HOST:PORT"``) or, without one, on a local Ray instance of
     ``jobs`` CPUs. The calls must be picklable (module-level functions, frozen
-    dataclasses, :func:`functools.partial`)."""
+    dataclasses, `functools.partial`)."""
     if executor not in EXECUTORS:
         raise CrmgraspError(f"unknown executor {executor!r}; choose one of {', '.join(EXECUTORS)}")
     if executor == "ray":
@@ -81,7 +81,7 @@ def _call(call: Callable[[], T]) -> T:
 
 
 def _run_ray(calls: Sequence[tuple[K, Callable[[], T]]], jobs: int, address: str | None) -> Iterator[tuple[K, T]]:
-    """:func:`run_parallel` on Ray (extra ``crmgrasp[ray]``)."""
+    """[`run_parallel`][] on Ray (extra ``crmgrasp[ray]``)."""
     try:
         import ray
     except ImportError:

@@ -1,12 +1,12 @@
 """A k-order policy planned on sampled worlds, measured on held-out ones (``crmgrasp plan``).
 
-:func:`plan_korder` runs :func:`~crmgrasp.planners.korder.korder_search` (from the
+[`plan_korder`][] runs [`korder_search`][crmgrasp.planners.korder.korder_search] (from the
 belief-optimal policy, or blank: a learner from episodes) on ``worlds`` sampled starts
 (a family task: worlds, an object and a start each), then evaluates the policy it
 returns through the learners' own greedy evaluation
-(:func:`~crmgrasp.experiments._episodes.greedy_records`) on ``heldout`` other worlds,
+([`greedy_records`][crmgrasp.experiments._episodes.greedy_records]) on ``heldout`` other worlds,
 against the belief-space optimum and the clairvoyant bound of those worlds. The policy is
-a :class:`~crmgrasp.agents.policy.GreedyPolicy` (``policy.json``): ``evaluate``, ``run``
+a [`GreedyPolicy`][crmgrasp.agents.policy.GreedyPolicy] (``policy.json``): ``evaluate``, ``run``
 and the environments take it like a learned one.
 """
 

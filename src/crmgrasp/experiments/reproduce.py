@@ -22,7 +22,7 @@ __all__ = ["reproduce", "select"]
 
 
 def _cell(value: object) -> str:
-    """Markdown table cell: numbers rounded (:func:`~crmgrasp.experiments.stats.fmt`),
+    """Markdown table cell: numbers rounded ([`fmt`][crmgrasp.experiments.stats.fmt]),
     pipes escaped."""
     return fmt(value).replace("|", "\\|")
 
@@ -42,7 +42,7 @@ def full_run_rows() -> dict[str, str]:
 
 
 def record_full_run(run_dir: str | Path) -> Path:
-    """Update :data:`FULL_RUN` with the rows of a complete full-budget reproduce run folder
+    """Update [`FULL_RUN`][] with the rows of a complete full-budget reproduce run folder
     (rows of experiments it did not run are kept)."""
     from crmgrasp.experiments.runs import _read
 
@@ -84,7 +84,7 @@ def select(names: list[str] | None) -> tuple[list[str], list[str]]:
 
 
 def _groups(names: list[str]) -> list[tuple[str, ...]]:
-    """``names`` in groups that must run in one process, in order (:data:`GROUPS`: an
+    """``names`` in groups that must run in one process, in order (`GROUPS`: an
     experiment using another's result runs after it), longest expected first."""
     out: list[tuple[str, ...]] = []
     for group in GROUPS:
@@ -135,9 +135,9 @@ def reproduce(
     With a run folder ``store``, each finished experiment is recorded there, and one
     recorded already (a resumed run) is not run again. ``progress`` shows the
     experiments and the training inside them. With ``jobs`` > 1 the experiments run in
-    worker processes, in groups (:data:`~crmgrasp.experiments.registry.GROUPS`) whose
+    worker processes, in groups (`GROUPS`) whose
     members depend on each other; with one group left, its learners' trials use the
-    workers (:func:`~crmgrasp.experiments.learning.learn`). The results are the same."""
+    workers ([`learn`][crmgrasp.experiments.learning.learn]). The results are the same."""
     if backend not in BACKENDS:
         raise CrmgraspError(f"unknown backend {backend!r}; choose one of {', '.join(BACKENDS)}")
     names, skipped = select(names)

@@ -16,7 +16,7 @@ non-empty folder is refused unless ``overwrite`` (it must then be a run folder, 
 is emptied) or ``resume`` (it must be a run folder of the same command and config,
 not complete and not still running). ``status`` is ``running`` while the work goes
 on, so a run killed with SIGKILL still says ``running``; its ``pid`` and ``host`` tell
-:func:`read_status` that nobody runs it (reported as ``killed``), and ``--resume``
+[`read_status`][] that nobody runs it (reported as ``killed``), and ``--resume``
 takes it up. Ctrl-C ends a run with ``interrupted``; an error with ``failed`` and the
 error's text.
 
@@ -25,7 +25,7 @@ the moment it claims it until it finishes, and the claim checks the folder only 
 holds the lock: of two runs started into one folder at once, the second is refused in one
 line, and a killed run's lock goes with its process. ``--resume`` says so when the run is complete
 already (it then reruns nothing) and deletes the temporary files of writes a kill cut short
-(:func:`~crmgrasp._io.temporaries`), which :func:`leftovers` lists for ``crmgrasp status``.
+(`temporaries`), which [`leftovers`][] lists for ``crmgrasp status``.
 """
 
 from __future__ import annotations
@@ -140,7 +140,7 @@ def _read(folder: Path) -> dict[str, Any]:
 
 
 def read_status(folder: str | Path) -> str:
-    """The status of a run folder: one of :data:`STATUSES`, or ``killed`` for a run
+    """The status of a run folder: one of `STATUSES`, or ``killed`` for a run
     that says ``running`` but whose process is gone."""
     doc = _read(Path(folder))
     if doc["status"] == "running" and not _alive(doc.get("pid"), doc.get("host")):
@@ -176,11 +176,16 @@ class RunFolder:
 
     Parameters
     ----------
-    path : the folder; ``None`` for :func:`default_run_dir`.
-    command, task : names of the command and its task.
-    config : what the results depend on (JSON data); ``--resume`` requires it equal.
-    argv, seed : recorded as given.
-    overwrite, resume : what to do with an existing non-empty folder (see the module).
+    path
+        The folder; ``None`` for [`default_run_dir`][].
+    command, task
+        Names of the command and its task.
+    config
+        What the results depend on (JSON data); ``--resume`` requires it equal.
+    argv, seed
+        Recorded as given.
+    overwrite, resume
+        What to do with an existing non-empty folder (see the module).
     """
 
     def __init__(
@@ -284,7 +289,7 @@ class RunFolder:
 
     # --- units of work -------------------------------------------------------------------
     def done(self, unit: str) -> Any:
-        """What :meth:`complete` recorded for ``unit`` (``None`` if not done)."""
+        """What [`complete`][] recorded for ``unit`` (``None`` if not done)."""
         return self.record["completed"].get(unit)
 
     def complete(self, unit: str, info: Any = True) -> None:
@@ -329,7 +334,7 @@ def _version() -> str:
 
 
 class _Part:
-    """A named part of a run (see :meth:`RunFolder.sub`)."""
+    """A named part of a run (see [`RunFolder.sub`][])."""
 
     def __init__(self, run: RunFolder, name: str) -> None:
         self.run, self.name = run, name

@@ -1,14 +1,14 @@
 """Figure 7 under the readings the paper leaves open: why its SARSA learns in ~60 episodes.
 
 The paper's plain SARSA (alpha 0.3, gamma 0.9, reward -1, Q0 = 0, k = 2) reached "an
-optimal grasp strategy within about 60 episodes", near 1.8 CRMs. Each :class:`Reading`
+optimal grasp strategy within about 60 episodes", near 1.8 CRMs. Each [`Reading`][]
 below is a paper-consistent choice of the start distribution, the reward of the
 grasping CRM, the history order or the initial value; for each, ``trials`` SARSA agents
 learn from each of several seeds, and we report
 
 * the plateau: the mean CRMs per episode over the last 20% of training;
 * the belief-space optimum of that reading (the best any observation-based policy does,
-  :func:`~crmgrasp.planners.references.belief_optimum`);
+  [`belief_optimum`][crmgrasp.planners.references.belief_optimum]);
 * the episodes until the 10-episode average of the trial mean stays within 5% of its own
   plateau, and until it stays at or below 1.89 (5% above the paper's 1.8);
 * the history states visited by episode 60 and the CRMs per episode that end in an
@@ -112,7 +112,7 @@ def trace_trials(
     progress: Progress | None = None,
 ) -> TraceResult:
     """Train SARSA (alpha 0.3, gamma 0.9, ``reading.q0``, ``reading.k``) like
-    :func:`~crmgrasp.agents.training.train_trials` (the same streams, so the same CRMs per
+    [`train_trials`][crmgrasp.agents.training.train_trials] (the same streams, so the same CRMs per
     episode) while counting each episode's error CRMs and the states visited after
     ``probe`` episodes."""
     encoder = encoder_for(task, reading.k)
@@ -230,7 +230,7 @@ def figure_7_sensitivity(
 def _traces(
     base: Task, config: SensitivityConfig, backend: str, stage: Progress | None, jobs: int
 ) -> dict[tuple[str, int], TraceResult]:
-    """:func:`trace_trials` of every (reading, seed), in worker processes when ``jobs`` > 1."""
+    """[`trace_trials`][] of every (reading, seed), in worker processes when ``jobs`` > 1."""
     cells = [(r, seed) for r in config.readings for seed in config.seeds]
     kw: dict[str, Any] = dict(trials=config.trials, episodes=config.episodes, backend=backend)
     if usable_jobs(jobs) <= 1:

@@ -3,8 +3,8 @@
 A learner's score varies with its training seed; the variation that matters is
 between trials, not between the episodes of one trial. So every interval of a
 learned result is a bootstrap interval of the mean over per-trial values
-(:func:`bootstrap_ci`, percentile method, 10,000 resamples, seeded), and the
-interquartile mean (:func:`iqm`, the mean of the middle 50%) is given beside the
+([`bootstrap_ci`][], percentile method, 10,000 resamples, seeded), and the
+interquartile mean ([`iqm`][], the mean of the middle 50%) is given beside the
 mean. Text shows rounded numbers and ``never`` for a threshold not reached; CSV
 and JSON files keep full precision and ``null``.
 """
@@ -25,7 +25,7 @@ of the mean has too few distinct resamples to mean anything, and no interval is 
 
 def bootstrap_ci(values: Any, seed: int = 0, confidence: float = 0.95, resamples: int = 10_000) -> tuple[float, float]:
     """Percentile bootstrap interval of the mean of ``values`` (one value per trial);
-    ``(nan, nan)``, no interval, for fewer than :data:`MIN_TRIALS` values; ``(v, v)``
+    ``(nan, nan)``, no interval, for fewer than [`MIN_TRIALS`][] values; ``(v, v)``
     when all are equal.
 
     Examples
@@ -82,7 +82,7 @@ def ci_text(lo: float, hi: float, over: str = "trials") -> str:
 
 def summary_lines(summary: dict[str, Any], indent: int = 2, skip: tuple[str, ...] = ("seconds",)) -> list[str]:
     """A result's summary for the console: ``key: value`` per line, numbers rounded
-    (:func:`fmt`; ``None`` is ``none``), nested tables indented under their key, lists of
+    ([`fmt`][]; ``None`` is ``none``), nested tables indented under their key, lists of
     numbers inline (the first 8); files keep full precision.
 
     >>> summary_lines({"mean": 1.23456, "tasks": {"cup": {"ok": 4}}, "seconds": 2.0, "xs": [0.5, None]})

@@ -20,7 +20,7 @@ relative, or ``package.module:factory``),
 ``start_preset``, ``grasp_reward``, ``agent``, ``k``, ``symmetric`` and the agents'
 parameters (``alpha``, ``gamma``, ``epsilon``, ``q0``, ``lam``, ``trace``,
 ``n_planning``, ``planning``, ``q_act``, ``unknown``). Each (cell, seed) is one
-:func:`~crmgrasp.experiments.learning.learn` run; its results depend only on the cell and
+[`learn`][crmgrasp.experiments.learning.learn] run; its results depend only on the cell and
 the seed, so any number of worker processes gives the same table. A cell that fails
 (a parameter its agent does not take, say) is recorded with its error; the others go
 on. The run folder holds ``run.json`` (the study, the status of every (cell, seed)),
@@ -28,8 +28,8 @@ on. The run folder holds ``run.json`` (the study, the status of every (cell, see
 row per cell, seed and trial: the cell's settings and the trial's greedy CRMs per
 episode, success rate and CRMs per episode over the last 10 training episodes),
 ``cells.csv`` (one row per cell and seed: the summary) and, when ``pyarrow`` is
-installed, the same tables as Parquet. :func:`report` turns a study folder into
-``report.md`` and figures (:mod:`crmgrasp.experiments.stats` conventions: bootstrap
+installed, the same tables as Parquet. [`report`][] turns a study folder into
+``report.md`` and figures ([`crmgrasp.experiments.stats`][] conventions: bootstrap
 intervals over trials, interquartile means, a performance profile).
 """
 
@@ -148,7 +148,7 @@ def _cell(raw: dict[str, Any], where: str) -> dict[str, Any]:
 
 
 def study_from_dict(doc: Any) -> Study:
-    """The :class:`Study` a parsed study file states (one-line errors naming the key)."""
+    """The [`Study`][] a parsed study file states (one-line errors naming the key)."""
     if not isinstance(doc, dict):
         raise CrmgraspError("a study must be a table")
     known = {"name", "trials", "episodes", "eval_episodes", "seeds", "grid", "cell"}
@@ -274,7 +274,7 @@ def run_study(
     address: str | None = None,
 ) -> dict[str, int]:
     """Run every (cell, seed) not yet recorded in ``store`` (``jobs`` at once, in local
-    worker processes or as Ray tasks: :func:`~crmgrasp.experiments.parallel.run_parallel`),
+    worker processes or as Ray tasks: [`run_parallel`][crmgrasp.experiments.parallel.run_parallel]),
     then write the tables. Returns the number of units ok and failed."""
     units = [
         (f"{cell_id(c)} seed {s}", _Unit(c, s, study.trials, study.episodes, study.eval_episodes, backend))

@@ -11,14 +11,14 @@ surface normal at the contact is the fingertip's outward normal there. Readings
 with ``|f|`` below a threshold are "no contact".
 
 Planar case (vectors in the sensor's x-y plane, torque about z): the line is
-``x(l) = m_z (f_y, -f_x) / |f|^2 + l f``. Fingertips: :class:`Circle` (a sphere in
-the plane) or :class:`Flat` (a pad ``{x : n . x = d}`` with outward unit normal
-``n``); :class:`Sphere` for the spatial case.
+``x(l) = m_z (f_y, -f_x) / |f|^2 + l f``. Fingertips: [`Circle`][] (a sphere in
+the plane) or [`Flat`][] (a pad ``{x : n . x = d}`` with outward unit normal
+``n``); [`Sphere`][] for the spatial case.
 
 The paper's strain gauges drifted with temperature, so forces were high-pass
 filtered and contact was detected on the filtered change in force:
-:class:`HighPass` (first order, ``y_k = a (y_{k-1} + x_k - x_{k-1})``,
-``a = tau / (tau + dt)``) and :class:`ContactDetector`.
+[`HighPass`][] (first order, ``y_k = a (y_{k-1} + x_k - x_{k-1})``,
+``a = tau / (tau + dt)``) and [`ContactDetector`][].
 """
 
 from __future__ import annotations

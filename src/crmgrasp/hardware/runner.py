@@ -1,10 +1,10 @@
 """Run a saved policy on a hand: the kinematic simulator or a real (or physics) hand.
 
-A hand implements :class:`HandInterface`: ``sense()`` returns the sensed contact
-configuration (or :class:`~crmgrasp.hardware.contact_sensing.NoContact`), ``execute(crm)``
-performs a CRM and returns its error flag. :class:`KinematicHand` is the
+A hand implements [`HandInterface`][]: ``sense()`` returns the sensed contact
+configuration (or [`NoContact`][crmgrasp.hardware.contact_sensing.NoContact]), ``execute(crm)``
+performs a CRM and returns its error flag. [`KinematicHand`][] is the
 simulator behind that interface, in the plane or in space (it steps the task's own
-rules: ``task.execute``, ``task.read``). :class:`PolicyRunner` senses, discretizes,
+rules: ``task.execute``, ``task.read``). [`PolicyRunner`][] senses, discretizes,
 builds the k-order history, picks the policy's action, executes it, and logs every
 step (readings, observation, action, error) to a CSV file. It stops when the
 *sensed* configuration is a grasp (``min_friction(sensed) <= mu_goal``: all a real
@@ -42,7 +42,7 @@ def log_columns(task: Task) -> list[str]:
     """The step-log columns of a run on ``task``: ``step``, the reading's contacts in the
     contact model's row order (``ax, ay, anx, any, ...`` in the plane; ``ax, ay, az, anx,
     any, anz, ...`` in space), the model's observation (``rho, m_a, m_b``), then
-    :data:`RUN_COLUMNS`."""
+    [`RUN_COLUMNS`][]."""
     return ["step", *task.model.columns, *task.model.observation_names, *RUN_COLUMNS]
 
 
@@ -53,8 +53,8 @@ class HandInterface(Protocol):
     def sense(self) -> Config | Config3D | NoContact: ...
 
     def execute(self, crm: Any) -> Error:
-        """Perform ``crm`` (a :class:`~crmgrasp.model.hand.CRM`, or a
-        :class:`~crmgrasp.model.spatial.CRM3D` on a spatial hand); return its error flag."""
+        """Perform ``crm`` (a [`CRM`][crmgrasp.model.hand.CRM], or a
+        [`CRM3D`][crmgrasp.model.spatial.CRM3D] on a spatial hand); return its error flag."""
         ...
 
 
@@ -97,9 +97,9 @@ class RunResult:
 
 
 class PolicyRunner:
-    """Drives a saved policy (a tabular :class:`~crmgrasp.agents.policy.GreedyPolicy` or a
-    deep :class:`~crmgrasp.agents.deep.RecurrentPolicy`: anything with ``task`` and
-    ``predict(observations, actions, rng)``) on a :class:`HandInterface`."""
+    """Drives a saved policy (a tabular [`GreedyPolicy`][crmgrasp.agents.policy.GreedyPolicy] or a
+    deep [`RecurrentPolicy`][crmgrasp.agents.deep.RecurrentPolicy]: anything with ``task`` and
+    ``predict(observations, actions, rng)``) on a [`HandInterface`][]."""
 
     def __init__(self, policy: GreedyPolicy | Any, task: Task | None = None) -> None:
         """``task`` (default: the policy's) may be a variant, e.g. with noise or another
@@ -113,7 +113,7 @@ class PolicyRunner:
     def run(
         self, hand: HandInterface, rng: np.random.Generator, log: str | os.PathLike[str] | None = None
     ) -> RunResult:
-        """Run one episode through the one episode loop (:func:`crmgrasp.sim.run_episode`,
+        """Run one episode through the one episode loop ([`crmgrasp.sim.run_episode`][],
         with the hand as its stepper); write the step log to ``log`` (CSV) if given."""
         t = self.task
         steps = _HandSteps(t, hand)
@@ -194,7 +194,7 @@ class _HandSteps:
 
 class _Predicting:
     """A saved policy (``predict(observations, actions, rng)``) as the episode loop's
-    :class:`~crmgrasp.sim.Policy`: it keeps the history of readings and actions."""
+    [`Policy`][crmgrasp.sim.Policy]: it keeps the history of readings and actions."""
 
     def __init__(self, policy: Any, rng: np.random.Generator) -> None:
         self.policy, self.rng = policy, rng

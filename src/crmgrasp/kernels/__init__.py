@@ -1,6 +1,6 @@
 """Kernels: the one seam between the model's rules and their fast evaluation.
 
-:func:`kernel_for` is the only place that chooses a path, from the backend asked
+[`kernel_for`][] is the only place that chooses a path, from the backend asked
 for, the shape of the task's object and its sensing noise:
 
 ===========================  ==========================  ===============================
@@ -17,14 +17,14 @@ backend                      object                      kernel
 any                          a family (one per episode)  ``FamilyKernel`` over the above
 ===========================  ==========================  ===============================
 
-A family task (:attr:`crmgrasp.tasks.Task.family`) gets a
-:class:`~crmgrasp.kernels.family.FamilyKernel`, which builds the kernel of each
+A family task (`crmgrasp.tasks.Task.family`) gets a
+[`FamilyKernel`][crmgrasp.kernels.family.FamilyKernel], which builds the kernel of each
 episode's object by this same rule (``"numba"`` with a disc family is an error on
 the first disc).
 
 Every kernel gives the reference kernel's results bit for bit (the tests check
-each path). The compiled kernels (:mod:`crmgrasp.kernels.polygon`) import numba
-when first chosen, not when :mod:`crmgrasp` is imported.
+each path). The compiled kernels ([`crmgrasp.kernels.polygon`][]) import numba
+when first chosen, not when `crmgrasp` is imported.
 """
 
 from __future__ import annotations
@@ -66,7 +66,7 @@ BACKENDS: tuple[str, ...] = ("auto", "numba", "reference")
 
 def kernel_for(task: Task, backend: str = "auto") -> Kernel:
     """The kernel that steps ``task`` on ``backend`` (see the module docstring): a family's
-    kernel over per-object kernels, else the path :data:`PATHS` lists for the task's
+    kernel over per-object kernels, else the path [`PATHS`][] lists for the task's
     contact model (``task.model.kind``)."""
     if backend not in BACKENDS:
         raise CrmgraspError(f"unknown backend {backend!r}; choose one of {', '.join(BACKENDS)}")
@@ -143,7 +143,7 @@ def execute_batch(
     ``c`` and ``f`` are contact indices (0 = a, 1 = b) and ``r`` offsets in metres,
     per row or broadcast; ``sensed`` (same layout as ``configs``) supplies the goal
     lines' frames and defaults to ``configs``. Rows whose CRM fails keep their
-    configuration (:func:`crmgrasp.model.hand.execute_crm`).
+    configuration ([`crmgrasp.model.hand.execute_crm`][]).
     """
     task = Task(name="execute_batch", obj=obj, hand=hand, actions=(CRM("a", "b", 0.0),))
     cfg = _rows(configs, "configs", task.model)

@@ -2,14 +2,14 @@
 
 Each function evaluates exactly the floating-point expressions of the model's
 reference rules in the same order: the inside test and first entry
-(:mod:`crmgrasp.model.polygon`), feasibility and the CRM transition
-(:mod:`crmgrasp.model.hand`), the observation and bins (:mod:`crmgrasp.model.sensing`), min
-friction (:mod:`crmgrasp.model.quality`) and the start rule (:mod:`crmgrasp.tasks`).
+(`crmgrasp.model.polygon`), feasibility and the CRM transition
+([`crmgrasp.model.hand`][]), the observation and bins ([`crmgrasp.model.sensing`][]), min
+friction ([`crmgrasp.model.quality`][]) and the start rule ([`crmgrasp.tasks`][]).
 numba compiles without ``fastmath``, so LLVM neither reassociates nor fuses them,
 and the results equal the reference bit for bit (the tests check it).
 
 No constant of the model is written here: every tolerance and parameter arrives
-in the array ``p`` (layout below, built by :func:`crmgrasp.kernels.polygon.params`
+in the array ``p`` (layout below, built by [`crmgrasp.kernels.polygon.params`][]
 from the model's modules at each kernel's construction), so the on-disk cache can
 never hold a stale copy of one. No random draws happen here.
 
@@ -40,7 +40,7 @@ def _unpack(p, q):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _inside(px, py, e, convex, eps):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.model.polygon.inside`."""
+    """`crmgrasp.model.polygon.inside`."""
     n = e.shape[0]
     if convex:
         for i in range(n):
@@ -66,7 +66,7 @@ def _inside(px, py, e, convex, eps):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _feasible(c, j, e, p, q):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.model.hand.feasible` of row ``j`` of ``c``: 0 none, 1 aperture, 2 palm."""
+    """[`crmgrasp.model.hand.feasible`][] of row ``j`` of ``c``: 0 none, 1 aperture, 2 palm."""
     dx, dy = c[j, 4] - c[j, 0], c[j, 5] - c[j, 1]
     dist = np.sqrt(dx * dx + dy * dy)
     if dist > p[APERTURE]:
@@ -90,7 +90,7 @@ def _side(c, tol):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _convex_edge(ox, oy, dx, dy, e, line_tol):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.model.polygon.convex_edge` (-1 if none)."""
+    """[`crmgrasp.model.polygon.convex_edge`][] (-1 if none)."""
     n = e.shape[0]
     tol = line_tol * (abs(dx) + abs(dy))
     s0 = _side(dx * (e[0, 1] - oy) - dy * (e[0, 0] - ox), tol)
@@ -105,7 +105,7 @@ def _convex_edge(ox, oy, dx, dy, e, line_tol):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _entry(ox, oy, dx, dy, u_max, e, convex, p):  # type: ignore[no-untyped-def]
-    """:meth:`crmgrasp.model.polygon.Polygon.ray_entry`: ``(entered, x, y, nx, ny)``."""
+    """[`crmgrasp.model.polygon.Polygon.ray_entry`][]: ``(entered, x, y, nx, ny)``."""
     eps = p[EPS]
     if convex:
         k = _convex_edge(ox, oy, dx, dy, e, p[LINE_TOL])
@@ -141,7 +141,7 @@ def _entry(ox, oy, dx, dy, u_max, e, convex, p):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _crm(cfg, sen, j, c_is_b, f_is_b, r, e, p, q, new, jn):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.model.hand.execute_crm` on row ``j`` of ``cfg`` (true) and ``sen``
+    """[`crmgrasp.model.hand.execute_crm`][] on row ``j`` of ``cfg`` (true) and ``sen``
     (sensed): writes the resulting configuration into row ``jn`` of ``new``; returns
     the error code. (Rows by index, not views: a view costs reference counting.)"""
     for k in range(8):
@@ -181,7 +181,7 @@ def _crm(cfg, sen, j, c_is_b, f_is_b, r, e, p, q, new, jn):  # type: ignore[no-u
 
 @njit(cache=True)
 def _tan(x, y, nx, ny, ox, oy, antipodal_tol):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.model.quality.tan_term`."""
+    """[`crmgrasp.model.quality.tan_term`][]."""
     dx, dy = ox - x, oy - y
     dot = nx * dx + ny * dy
     if dot <= 0.0:
@@ -192,7 +192,7 @@ def _tan(x, y, nx, ny, ox, oy, antipodal_tol):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _mu(c, j, antipodal_tol):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.model.quality.min_friction` of row ``j`` of ``c``."""
+    """[`crmgrasp.model.quality.min_friction`][] of row ``j`` of ``c``."""
     ta = _tan(c[j, 0], c[j, 1], c[j, 2], c[j, 3], c[j, 4], c[j, 5], antipodal_tol)
     tb = _tan(c[j, 4], c[j, 5], c[j, 6], c[j, 7], c[j, 0], c[j, 1], antipodal_tol)
     return max(ta, tb)
@@ -200,7 +200,7 @@ def _mu(c, j, antipodal_tol):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _observe(s, j):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.model.sensing.observe` of row ``j`` of the sensed rows ``s``:
+    """[`crmgrasp.model.sensing.observe`][] of row ``j`` of the sensed rows ``s``:
     ``(rho, m_a, m_b)``."""
     sx, sy = s[j, 2] + s[j, 6], s[j, 3] + s[j, 7]
     dx, dy = s[j, 4] - s[j, 0], s[j, 5] - s[j, 1]
@@ -209,7 +209,7 @@ def _observe(s, j):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _bin(v, t):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.model.sensing._bin`: how many thresholds ``v`` reaches."""
+    """[`crmgrasp.model.sensing._bin`][]: how many thresholds ``v`` reaches."""
     k = 0
     for i in range(t.shape[0]):
         if v >= t[i]:
@@ -219,7 +219,7 @@ def _bin(v, t):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def bin_index(rho, m_a, m_b, code, th, na, nb, abs_m):  # type: ignore[no-untyped-def]
-    """:meth:`crmgrasp.model.sensing.Discretizer.index_of` (``na``, ``nb``: the moment bin
+    """`crmgrasp.model.sensing.Discretizer.index_of` (``na``, ``nb``: the moment bin
     counts; ``abs_m``: moments binned by magnitude)."""
     if abs_m:
         m_a, m_b = abs(m_a), abs(m_b)
@@ -228,7 +228,7 @@ def bin_index(rho, m_a, m_b, code, th, na, nb, abs_m):  # type: ignore[no-untype
 
 @njit(cache=True)
 def _index(rho, m_a, m_b, code, th, q):  # type: ignore[no-untyped-def]
-    """:func:`bin_index` with the bin counts of ``q``."""
+    """[`bin_index`][] with the bin counts of ``q``."""
     return bin_index(rho, m_a, m_b, code, th, q[NA], q[NB], q[ABS_M])
 
 
@@ -269,7 +269,7 @@ def begin_one(v, th, p, q, out):  # type: ignore[no-untyped-def]
     """The observation of the configuration in the first 8 columns of ``v`` (one row,
     noise-free) into
     ``out[0, 8:11]`` and its min friction into ``out[0, 11]``; returns its bin index
-    (error none), as :func:`crmgrasp.sim.begin`."""
+    (error none), as [`crmgrasp.sim.begin`][]."""
     p, q = _unpack(p, q)
     o0, o1, o2 = _observe(v, 0)
     out[0, 8], out[0, 9], out[0, 10] = o0, o1, o2
@@ -313,7 +313,7 @@ def step_rows(cfg, actions, acts, reset, starts, e, th, p, q, new, rho, m_a, m_b
 
 @njit(cache=True)
 def corner_rows(u, e, p, q, out):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.tasks.accept_corner_candidates`: the accepted corner-start
+    """[`crmgrasp.tasks.accept_corner_candidates`][]: the accepted corner-start
     candidates of the uniforms ``u`` (``(4, m)``) into ``out[:count]``; returns count."""
     p, q = _unpack(p, q)
     nv = e.shape[0]

@@ -2,16 +2,16 @@
 closed cylinder on a table.
 
 Each function evaluates exactly the floating-point expressions of the reference rules in
-the same order: :mod:`crmgrasp.model.solids` (inside test, first entry, radial
-projection), :mod:`crmgrasp.model.spatial` (tangent frame, feasibility with the table,
-the CRM transition, the observation), :func:`crmgrasp.model.quality3d.min_friction_3d`,
-the bins of :mod:`crmgrasp.model.sensing` and the start rule of
-:class:`crmgrasp.tasks.spatial.SurfaceStarts`. numba compiles without ``fastmath``, so
+the same order: [`crmgrasp.model.solids`][] (inside test, first entry, radial
+projection), [`crmgrasp.model.spatial`][] (tangent frame, feasibility with the table,
+the CRM transition, the observation), [`crmgrasp.model.quality3d.min_friction_3d`][],
+the bins of [`crmgrasp.model.sensing`][] and the start rule of
+[`crmgrasp.tasks.spatial.SurfaceStarts`][]. numba compiles without ``fastmath``, so
 the results equal the reference bit for bit (the tests check it). Python's ``min`` and
 ``max`` are written out as they decide (``min(a, b)`` is ``b if b < a else a``).
 
 No constant of the model is written here: tolerances and parameters arrive in ``p``
-and ``q`` (built by :func:`crmgrasp.kernels.spatial.spatial_params`). Layouts: a state
+and ``q`` (built by [`crmgrasp.kernels.spatial.spatial_params`][]). Layouts: a state
 ``v`` is one row ``[x_a, n_a, x_b, n_b]`` (12 columns); ``planes`` the polyhedron's
 ``(m, 4)`` faces ``(a, b)``; ``cyl`` the cylinder's ``[o, e, R, H]`` (8); ``acts`` the
 ``(A, 4)`` CRMs ``(c is b, f is b, r_1, r_2)``; ``th`` the padded bin thresholds.
@@ -62,7 +62,7 @@ def _norm(x, y, z):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _local(x, y, z, cyl):  # type: ignore[no-untyped-def]
-    """:meth:`Cylinder._local`: axial coordinate and radial vector."""
+    """[`Cylinder._local`][]: axial coordinate and radial vector."""
     rx, ry, rz = x - cyl[0], y - cyl[1], z - cyl[2]
     s = _dot(rx, ry, rz, cyl[3], cyl[4], cyl[5])
     return s, rx - s * cyl[3], ry - s * cyl[4], rz - s * cyl[5]
@@ -176,7 +176,7 @@ def _on_table(z, p, q):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _feasible(c, planes, cyl, p, q):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.model.spatial.feasible3d` of the row ``c``: 0 none, 1 aperture, 2 palm."""
+    """[`crmgrasp.model.spatial.feasible3d`][] of the row ``c``: 0 none, 1 aperture, 2 palm."""
     dx, dy, dz = c[6] - c[0], c[7] - c[1], c[8] - c[2]
     dist = _norm(dx, dy, dz)
     if dist > p[APERTURE]:
@@ -198,7 +198,7 @@ def _feasible(c, planes, cyl, p, q):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _crm(v, c_is_b, f_is_b, r1, r2, planes, cyl, p, q, out):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.model.spatial.execute_crm3d` (noise-free: the goal line from the
+    """[`crmgrasp.model.spatial.execute_crm3d`][] (noise-free: the goal line from the
     true frame) from the row ``v`` into the row ``out``; returns the error code."""
     for i in range(12):
         out[i] = v[i]
@@ -248,7 +248,7 @@ def _crm(v, c_is_b, f_is_b, r1, r2, planes, cyl, p, q, out):  # type: ignore[no-
 
 @njit(cache=True)
 def _observe(c):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.model.spatial.observe3d`: ``rho``, ``|m_a|``, ``|m_b|``."""
+    """[`crmgrasp.model.spatial.observe3d`][]: ``rho``, ``|m_a|``, ``|m_b|``."""
     sx, sy, sz = c[3] + c[9], c[4] + c[10], c[5] + c[11]
     ma = _cross(c[6] - c[0], c[7] - c[1], c[8] - c[2], c[9], c[10], c[11])
     mb = _cross(c[0] - c[6], c[1] - c[7], c[2] - c[8], c[3], c[4], c[5])
@@ -257,7 +257,7 @@ def _observe(c):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _mu(c, antipodal_tol):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.model.quality3d.min_friction_3d` of the row ``c``."""
+    """[`crmgrasp.model.quality3d.min_friction_3d`][] of the row ``c``."""
     worst = 0.0
     for i in (0, 6):
         j = 6 - i
@@ -277,7 +277,7 @@ def _mu(c, antipodal_tol):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _index(rho, m_a, m_b, code, th, q):  # type: ignore[no-untyped-def]
-    """:meth:`crmgrasp.model.sensing.Discretizer.index_of`."""
+    """`crmgrasp.model.sensing.Discretizer.index_of`."""
     return bin_index(rho, m_a, m_b, code, th, q[NA], q[NB], q[ABS_M])
 
 
@@ -306,7 +306,7 @@ def begin_one(v, th, p, q, out):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _project(d, planes, cyl, p, q, out, at):  # type: ignore[no-untyped-def]
-    """:func:`crmgrasp.model.solids.surface_point` of the direction ``d`` into ``out[at:at + 6]``."""
+    """[`crmgrasp.model.solids.surface_point`][] of the direction ``d`` into ``out[at:at + 6]``."""
     n = _norm(d[0], d[1], d[2])
     ux, uy, uz = d[0] / n, d[1] / n, d[2] / n
     far = p[FAR]
@@ -318,7 +318,7 @@ def _project(d, planes, cyl, p, q, out, at):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def accept_start(d, planes, cyl, p, q, out):  # type: ignore[no-untyped-def]
-    """:class:`crmgrasp.tasks.spatial.SurfaceStarts`' decision on one try's directions
+    """[`crmgrasp.tasks.spatial.SurfaceStarts`][]' decision on one try's directions
     ``d`` (2 x 3): the candidate into ``out`` (12); True when it is a start."""
     if _norm(d[0, 0], d[0, 1], d[0, 2]) == 0.0 or _norm(d[1, 0], d[1, 1], d[1, 2]) == 0.0:
         return False

@@ -1,6 +1,6 @@
-"""Compiled value-iteration sweeps of :class:`crmgrasp.agents.model_based.ModelVI`.
+"""Compiled value-iteration sweeps of `crmgrasp.agents.model_based.ModelVI`.
 
-:func:`sweeps` evaluates exactly the expressions of ``ModelVI._sweeps_reference`` in the
+[`sweeps`][] evaluates exactly the expressions of ``ModelVI._sweeps_reference`` in the
 same order (Gauss-Seidel, pairs in the model's insertion order, outcomes in each pair's
 insertion order, Python's ``max`` keeping the first of equal values), so the values are
 equal bit for bit (the tests check whole training runs). No constant of the learner is

@@ -2,11 +2,11 @@
 
 A kernel evaluates the model's rules (CRM transition, observation, bins, min
 friction, start acceptance) on rows of the task's contact model
-(:attr:`crmgrasp.tasks.Task.model`: ``(N, 8)`` rows ``[ax, ay, anx, any, bx, by, bnx,
+(`crmgrasp.tasks.Task.model`: ``(N, 8)`` rows ``[ax, ay, anx, any, bx, by, bnx,
 bny]`` in the plane, ``(N, 12)`` in space); the row width, the CRMs' parameters and the
 observation's names and bounds all come from the model. The composite steps
-(:meth:`Kernel.begin`, :meth:`Kernel.step_one`, :meth:`Kernel.step_batch`) are
-written here once from those rules and :mod:`crmgrasp.sim`; a compiled kernel may
+([`Kernel.begin`][], [`Kernel.step_one`][], [`Kernel.step_batch`][]) are
+written here once from those rules and [`crmgrasp.sim`][]; a compiled kernel may
 override a composite with a fused version that the tests hold equal to this one
 bit for bit.
 """
@@ -66,10 +66,10 @@ def _action_table(key: tuple[Any, ...], actions: Any, labels: tuple[str, ...]) -
 
 
 class Kernel(ABC):
-    """A task's rules over rows. Subclasses implement :meth:`execute_crms` and
-    :meth:`observe`, and may set :attr:`start_filter` (a compiled
-    :data:`crmgrasp.tasks.StartFilter` that the task's sampler uses where it can); build
-    one with :func:`crmgrasp.kernels.kernel_for`."""
+    """A task's rules over rows. Subclasses implement [`execute_crms`][] and
+    [`observe`][], and may set `start_filter` (a compiled
+    [`crmgrasp.tasks.StartFilter`][] that the task's sampler uses where it can); build
+    one with [`crmgrasp.kernels.kernel_for`][]."""
 
     name: ClassVar[str] = "abstract"
 
@@ -131,29 +131,29 @@ class Kernel(ABC):
 
     # ------------------------------------------------------------ composites
     def execute(self, cfg: F64, sen: F64, actions: I64) -> tuple[F64, NDArray[np.int8]]:
-        """:meth:`execute_crms` of the task's actions ``actions`` (indices; the offsets are
+        """[`execute_crms`][] of the task's actions ``actions`` (indices; the offsets are
         ``(N,)`` for a scalar offset, ``(N, offset_dim)`` otherwise)."""
         a = self.acts[actions]
         r = np.ascontiguousarray(a[:, 2]) if self.model.offset_dim == 1 else a[:, 2:]
         return self.execute_crms(cfg, sen, a[:, 0].astype(np.int64), a[:, 1].astype(np.int64), r)
 
     def sample_start(self, rng: np.random.Generator) -> Any:
-        """One start (:meth:`crmgrasp.tasks.Task.sample_start`, with :attr:`start_filter`):
+        """One start (`crmgrasp.tasks.Task.sample_start`, with `start_filter`):
         the task's scalar stream."""
         return self.task.sample_start(rng, self.start_filter)
 
     def sample_starts(self, rng: np.random.Generator, n: int) -> F64:
-        """``n`` starts as rows (:meth:`crmgrasp.tasks.Task.sample_starts`, with
-        :attr:`start_filter`)."""
+        """``n`` starts as rows (`crmgrasp.tasks.Task.sample_starts`, with
+        `start_filter`)."""
         return self.task.sample_starts(rng, n, self.start_filter)
 
     def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
-        """An episode starting at ``config`` (:func:`crmgrasp.sim.begin`)."""
+        """An episode starting at ``config`` ([`crmgrasp.sim.begin`][])."""
         return begin(self.task, config, rng)
 
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
         """The CRM ``task.actions[action]`` (or the CRM ``action``) from ``state``
-        (:func:`crmgrasp.sim.step`)."""
+        ([`crmgrasp.sim.step`][])."""
         return step(self.task, state, action, rng)
 
     def step_batch(

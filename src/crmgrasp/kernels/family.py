@@ -1,12 +1,12 @@
 """The kernel of a task with an object family: a fresh kernel per episode's object.
 
-A family task draws its object per episode (:meth:`crmgrasp.tasks.Task.instance`), so
-the rows of a batch would each need their own object. :class:`FamilyKernel` therefore
-steps one episode at a time: :meth:`sample_start` draws the object and gives it a
-kernel, the one :func:`crmgrasp.kernels.kernel_for` picks for the first object of that
+A family task draws its object per episode (`crmgrasp.tasks.Task.instance`), so
+the rows of a batch would each need their own object. [`FamilyKernel`][] therefore
+steps one episode at a time: `sample_start` draws the object and gives it a
+kernel, the one [`crmgrasp.kernels.kernel_for`][] picks for the first object of that
 type (compiled for polygons, the reference for discs) rebound to the new object
-(:meth:`~crmgrasp.kernels.base.Kernel.rebind`), and every step goes to that kernel. Batched steps over rows
-(:meth:`step_batch`, :meth:`sample_starts`) are refused with the reason.
+([`rebind`][crmgrasp.kernels.base.Kernel.rebind]), and every step goes to that kernel. Batched steps over rows
+(`step_batch`, `sample_starts`) are refused with the reason.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ class FamilyKernel(Kernel):
 
     def _kernel(self, instance: Task) -> Kernel:
         """The kernel of one episode's object: ``make(instance)`` for the first object of its
-        type, then that kernel rebound to each new object (:meth:`Kernel.rebind`: the same
+        type, then that kernel rebound to each new object ([`Kernel.rebind`][]: the same
         path, as ``make`` chooses by the object's type, and the same results)."""
         template = self._templates.get(type(instance.obj))
         if template is None:
@@ -58,7 +58,7 @@ class FamilyKernel(Kernel):
         return self.stepper.instance
 
     def use(self, instance: Task) -> None:
-        """Step ``instance`` from now on (:meth:`crmgrasp.sim.FamilyStepper.use`)."""
+        """Step ``instance`` from now on ([`crmgrasp.sim.FamilyStepper.use`][])."""
         self.stepper.use(instance)
 
     def execute_crms(self, cfg: F64, sen: F64, c: I64, f: I64, r: F64) -> tuple[F64, NDArray[np.int8]]:

@@ -1,6 +1,6 @@
-"""The fast path of model-based planning: :func:`value_iteration` runs
-:class:`~crmgrasp.agents.model_based.ModelVI`'s sweeps in compiled code
-(:mod:`crmgrasp.kernels._vi_jit`) on arrays built from the agent's model and values,
+"""The fast path of model-based planning: [`value_iteration`][] runs
+`ModelVI`'s sweeps in compiled code
+(`crmgrasp.kernels._vi_jit`) on arrays built from the agent's model and values,
 then writes the values back; the agent's readable sweeps are the definition."""
 
 from __future__ import annotations

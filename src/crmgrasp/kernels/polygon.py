@@ -1,9 +1,9 @@
 """Compiled kernels for polygonal objects (numba): the one fast implementation of
-each rule, wrapped in the :class:`~crmgrasp.kernels.base.Kernel` interface.
+each rule, wrapped in the [`Kernel`][crmgrasp.kernels.base.Kernel] interface.
 
-:func:`params` gathers every constant the compiled code needs from the model's
+[`params`][] gathers every constant the compiled code needs from the model's
 own modules when a kernel is built, so the compiled functions
-(:mod:`crmgrasp.kernels._polygon_jit`) hold no constant of their own.
+(`crmgrasp.kernels._polygon_jit`) hold no constant of their own.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ _ERRORS = tuple(Error)  # code -> Error, faster than Error(code)
 
 def params(task: Task) -> tuple[F64, NDArray[np.int64], F64]:
     """``(p, q, th)`` for the compiled functions: the float parameters and tolerances
-    (read from :mod:`crmgrasp.model.geometry`, :mod:`crmgrasp.model.hand`, :mod:`crmgrasp.model.quality`
+    (read from [`crmgrasp.model.geometry`][], [`crmgrasp.model.hand`][], [`crmgrasp.model.quality`][]
     and the task now), the integer ones, and the bin thresholds padded with ``+inf``."""
     obj, hand, d = task.obj, task.hand, task.discretizer
     assert isinstance(obj, Polygon)
@@ -64,7 +64,7 @@ class PolygonKernel(Kernel):
     def rebind(self, instance: Task) -> PolygonKernel:
         """The kernel of ``instance`` (the same hand, CRMs, bins and goal on another
         polygon): the parameters shared, the object's edges and convexity its own (what
-        :func:`params` would give, without recomputing the rest)."""
+        [`params`][] would give, without recomputing the rest)."""
         obj = instance.obj
         assert isinstance(obj, Polygon)
         new = copy.copy(self)
@@ -120,14 +120,14 @@ class PolygonKernel(Kernel):
         return rho, m_a, m_b, index, mu
 
     def _accept(self, obj: Any, hand: Any, mu_goal: float, u: np.ndarray) -> F64:
-        """:func:`crmgrasp.tasks.accept_corner_candidates`, compiled."""
+        """[`crmgrasp.tasks.accept_corner_candidates`][], compiled."""
         out = np.empty((u.shape[1], 8))
         count = jit.corner_rows(np.ascontiguousarray(u), self.e, self.p, self.q, out)
         return out[:count]
 
 
 class FusedPolygonKernel(PolygonKernel):
-    """:class:`PolygonKernel` for noise-free tasks, whose single and batched steps are
+    """[`PolygonKernel`][] for noise-free tasks, whose single and batched steps are
     each one compiled call."""
 
     name = "numba-polygon-fused"

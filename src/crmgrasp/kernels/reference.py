@@ -18,10 +18,10 @@ __all__ = ["ReferenceKernel"]
 
 
 class ReferenceKernel(Kernel):
-    """The task's own rules (:meth:`~crmgrasp.tasks.Task.execute`, ``observe``, ``quality``:
-    :func:`crmgrasp.model.hand.execute_crm`, :func:`crmgrasp.model.sensing.observe`,
-    :func:`crmgrasp.model.quality.min_friction` on a planar task) and
-    :meth:`crmgrasp.model.sensing.Discretizer.index_of`, row by row."""
+    """The task's own rules (`execute`, ``observe``, ``quality``:
+    [`crmgrasp.model.hand.execute_crm`][], [`crmgrasp.model.sensing.observe`][],
+    [`crmgrasp.model.quality.min_friction`][] on a planar task) and
+    `crmgrasp.model.sensing.Discretizer.index_of`, row by row."""
 
     name = "reference"
 

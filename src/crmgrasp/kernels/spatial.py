@@ -1,10 +1,10 @@
 """The spatial kernel: the spatial model's rules row by row.
 
 Rows are ``(N, 12)``: ``[x_a, n_a, x_b, n_b]`` (metres; inward unit normals). Each rule
-is the task's (:class:`crmgrasp.tasks.spatial.SpatialTask`, which calls
-:mod:`crmgrasp.model.spatial`): :class:`SpatialKernel` is the definition (any sensing noise);
-:class:`FusedSpatialKernel` steps a noise-free task in compiled code
-(:mod:`crmgrasp.kernels._spatial_jit`) with the same results bit for bit.
+is the task's ([`crmgrasp.tasks.spatial.SpatialTask`][], which calls
+[`crmgrasp.model.spatial`][]): [`SpatialKernel`][] is the definition (any sensing noise);
+[`FusedSpatialKernel`][] steps a noise-free task in compiled code
+(`crmgrasp.kernels._spatial_jit`) with the same results bit for bit.
 """
 
 from __future__ import annotations
@@ -32,15 +32,15 @@ _ERRORS = tuple(Error)
 
 class SpatialKernel(ReferenceKernel):
     """The reference kernel on a spatial task's 12-rows (the rows, CRMs and readings come
-    from the task's :class:`~crmgrasp.model.spatial_model.SpatialModel`)."""
+    from the task's [`SpatialModel`][crmgrasp.model.spatial_model.SpatialModel])."""
 
     name = "spatial"
 
 
 def spatial_params(task: Any) -> tuple[F64, NDArray[np.int64], F64, F64, F64]:
-    """``(p, q, th, planes, cyl)`` for :mod:`crmgrasp.kernels._spatial_jit`: every
+    """``(p, q, th, planes, cyl)`` for `crmgrasp.kernels._spatial_jit`: every
     parameter and tolerance read from the model's modules and the task now (the solid's
-    own entries by :func:`solid_params`)."""
+    own entries by [`solid_params`][])."""
     import crmgrasp.kernels._spatial_jit as jit
     from crmgrasp.model import quality, solids, spatial
 
@@ -77,7 +77,7 @@ def solid_params(solid: Any, p: F64, q: NDArray[np.int64]) -> tuple[F64, F64]:
 
 class FusedSpatialKernel(SpatialKernel):
     """The noise-free spatial step, begin and start decision, each one compiled call
-    (:mod:`crmgrasp.kernels._spatial_jit`); batched rows go through :class:`SpatialKernel`."""
+    (`crmgrasp.kernels._spatial_jit`); batched rows go through [`SpatialKernel`][]."""
 
     name = "numba-spatial-fused"
 
@@ -98,7 +98,7 @@ class FusedSpatialKernel(SpatialKernel):
     def rebind(self, instance: Any) -> FusedSpatialKernel:
         """The kernel of ``instance`` (the same hand, CRMs, bins and table on another solid
         of the same kind): the parameters shared, the solid's entries its own
-        (:func:`solid_params`, as :func:`spatial_params` would write them)."""
+        ([`solid_params`][], as [`spatial_params`][] would write them)."""
         new = copy.copy(self)
         new.task, new.p, new.q = instance, self.p.copy(), self.q.copy()
         new.planes, new.cyl = solid_params(instance.solid, new.p, new.q)
@@ -146,7 +146,7 @@ class FusedSpatialKernel(SpatialKernel):
         )
 
     def _accept(self, d: F64) -> Config3D | None:
-        """:class:`~crmgrasp.tasks.spatial.SurfaceStarts`' decision on one try, compiled."""
+        """[`SurfaceStarts`][crmgrasp.tasks.spatial.SurfaceStarts]' decision on one try, compiled."""
         out = np.empty(12)
         ok = self._jit.accept_start(np.ascontiguousarray(d), self.planes, self.cyl, self.p, self.q, out)
         return self.model.config_of(out.tolist()) if ok else None

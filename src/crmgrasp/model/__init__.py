@@ -2,18 +2,18 @@
 
 One module per concept, each rule written once in readable Python:
 
-* :mod:`~crmgrasp.model.shape`: tolerances, the :class:`Shape` protocol;
-  :mod:`~crmgrasp.model.polygon`, :mod:`~crmgrasp.model.disc` and
-  :mod:`~crmgrasp.model.geometry`: objects, their boundary, inside test and first entry;
-* :mod:`~crmgrasp.model.contacts`: contacts and configurations;
-* :mod:`~crmgrasp.model.hand`: the hand, feasibility (aperture and palm), the CRM
+* [`shape`][crmgrasp.model.shape]: tolerances, the [`Shape`][] protocol;
+  `polygon`, [`disc`][crmgrasp.model.disc] and
+  [`geometry`][crmgrasp.model.geometry]: objects, their boundary, inside test and first entry;
+* [`contacts`][crmgrasp.model.contacts]: contacts and configurations;
+* [`hand`][crmgrasp.model.hand]: the hand, feasibility (aperture and palm), the CRM
   transition and its error flags;
-* :mod:`~crmgrasp.model.sensing`: observations, sensing noise, observation bins;
-* :mod:`~crmgrasp.model.quality`: min friction and force closure;
-* :mod:`~crmgrasp.model.history`: the k-order history state.
+* [`sensing`][crmgrasp.model.sensing]: observations, sensing noise, observation bins;
+* [`quality`][crmgrasp.model.quality]: min friction and force closure;
+* [`history`][crmgrasp.model.history]: the k-order history state.
 
 The model imports no kernel, numba or matplotlib (a test keeps it so); fast
-evaluations of these rules live in :mod:`crmgrasp.kernels`.
+evaluations of these rules live in [`crmgrasp.kernels`][].
 """
 
 from crmgrasp.model.contacts import Config, Contact

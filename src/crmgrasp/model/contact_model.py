@@ -7,16 +7,16 @@ contacts, the batched row layout, the action parameterization and the observatio
 names and bounds from it, and applies the model's rules through it. Nothing above the
 model writes a contact count, a row width or an observation name of its own.
 
-:class:`ContactModel` is the protocol. Two models implement it from the rules that live
+`ContactModel` is the protocol. Two models implement it from the rules that live
 in their own modules:
 
-* :class:`~crmgrasp.model.planar_model.PlanarModel`: two contacts in the plane
-  (:mod:`crmgrasp.model.hand`, :mod:`crmgrasp.model.sensing`, :mod:`crmgrasp.model.quality`);
-* :class:`~crmgrasp.model.spatial_model.SpatialModel`: two contacts on a solid on a
-  table (:mod:`crmgrasp.model.spatial`, :mod:`crmgrasp.model.quality3d`).
+* [`PlanarModel`][crmgrasp.model.planar_model.PlanarModel]: two contacts in the plane
+  ([`crmgrasp.model.hand`][], [`crmgrasp.model.sensing`][], [`crmgrasp.model.quality`][]);
+* [`SpatialModel`][crmgrasp.model.spatial_model.SpatialModel]: two contacts on a solid on a
+  table ([`crmgrasp.model.spatial`][], [`crmgrasp.model.quality3d`][]).
 
 A new model (three contacts, say) is one new module implementing this protocol and, for
-speed, one kernel behind :func:`crmgrasp.kernels.kernel_for`'s table.
+speed, one kernel behind [`crmgrasp.kernels.kernel_for`][]'s table.
 
 Layout
 ------
@@ -97,7 +97,7 @@ class ContactModel(Protocol):
 
     @property
     def observation_names(self) -> tuple[str, ...]:
-        """The continuous observation's names, in order (:data:`OBSERVATION_NAMES`)."""
+        """The continuous observation's names, in order ([`OBSERVATION_NAMES`][])."""
         ...
 
     @property
@@ -107,7 +107,7 @@ class ContactModel(Protocol):
 
     @property
     def noise(self) -> SensorNoise:
-        """The sensing noise of every reading (:class:`~crmgrasp.model.sensing.SensorNoise`)."""
+        """The sensing noise of every reading ([`SensorNoise`][crmgrasp.model.sensing.SensorNoise])."""
         ...
 
     @property
@@ -117,12 +117,12 @@ class ContactModel(Protocol):
 
     @property
     def row_width(self) -> int:
-        """Floats in one configuration row (:func:`row_width`)."""
+        """Floats in one configuration row ([`row_width`][])."""
         ...
 
     @property
     def columns(self) -> tuple[str, ...]:
-        """The names of a row's columns (:func:`contact_columns`)."""
+        """The names of a row's columns ([`contact_columns`][])."""
         ...
 
     def observation_bounds(self) -> dict[str, tuple[float, float]]:
@@ -187,7 +187,7 @@ class ContactModel(Protocol):
         ...
 
     def read_rows(self, rows: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.float64]:
-        """One sensed reading per row, as :meth:`read` row after row."""
+        """One sensed reading per row, as [`read`][] row after row."""
         ...
 
     def observe(self, sensed: Any) -> Observation:

@@ -1,7 +1,7 @@
 """Contact configurations of the two-contact planar hand (docs/model.md section 2).
 
-A :class:`Contact` is a position and the object's inward unit normal there; a
-:class:`Config` is the pair of contacts labelled ``a`` and ``b``. Both are
+A [`Contact`][] is a position and the object's inward unit normal there; a
+[`Config`][] is the pair of contacts labelled ``a`` and ``b``. Both are
 immutable, hashable named tuples of plain floats. The batched layout of a
 configuration is one row of 8 floats, ``[ax, ay, anx, any, bx, by, bnx, bny]``
 (``np.asarray(config).reshape(8)``).
@@ -120,7 +120,7 @@ def config_from_row(row: Sequence[float]) -> Config:
 
 
 ROW_WIDTH = 4 * len(LABELS)
-"""Floats in the batched row of a :class:`Config`: per contact ``x, y, nx, ny`` (8)."""
+"""Floats in the batched row of a [`Config`][]: per contact ``x, y, nx, ny`` (8)."""
 
 
 def configs_to_array(configs: Sequence[Config]) -> NDArray[np.float64]:
@@ -129,7 +129,7 @@ def configs_to_array(configs: Sequence[Config]) -> NDArray[np.float64]:
 
 
 def array_to_configs(arr: ArrayLike) -> list[Config]:
-    """Inverse of :func:`configs_to_array`."""
+    """Inverse of [`configs_to_array`][]."""
     a = np.asarray(arr, dtype=np.float64)
     if a.ndim != 2 or a.shape[1] != ROW_WIDTH:
         raise CrmgraspError(f"configuration array must have shape (N, {ROW_WIDTH}), got {a.shape}")
@@ -137,16 +137,16 @@ def array_to_configs(arr: ArrayLike) -> list[Config]:
 
 
 UNIT_TOL = 1e-6
-"""How far a contact normal's length may be from 1 before :func:`check_contacts` refuses it."""
+"""How far a contact normal's length may be from 1 before [`check_contacts`][] refuses it."""
 
 
 _NORM2_TOL = 2.0 * UNIT_TOL  # on the squared length
 
 
 def check_contacts(config: object, name: str = "configuration") -> Config:
-    """``config`` if it is a :class:`Config` of two :class:`Contact` with finite
-    coordinates and unit normals (within :data:`UNIT_TOL`); else a one-line
-    :class:`~crmgrasp._validation.CrmgraspError`. The public functions taking a
+    """``config`` if it is a [`Config`][] of two [`Contact`][] with finite
+    coordinates and unit normals (within [`UNIT_TOL`][]); else a one-line
+    `CrmgraspError`. The public functions taking a
     configuration call it; the compiled kernels do not (their inputs come from the model).
 
     Examples

@@ -1,4 +1,4 @@
-"""Exact discs (see :mod:`crmgrasp.model.geometry` for the conventions)."""
+"""Exact discs (see [`crmgrasp.model.geometry`][] for the conventions)."""
 
 from __future__ import annotations
 
@@ -81,7 +81,7 @@ class Disc:
         return abs(math.sqrt(vx * vx + vy * vy) - self.radius)
 
     def contains(self, p: ArrayLike) -> bool:
-        """True if ``p`` is strictly inside (deeper than :data:`EPS`)."""
+        """True if ``p`` is strictly inside (deeper than [`EPS`][])."""
         px, py = (p[0], p[1]) if isinstance(p, tuple) else as_point(p, "point")
         vx, vy = px - self.center[0], py - self.center[1]
         return math.sqrt(vx * vx + vy * vy) < self.radius - EPS

@@ -2,7 +2,7 @@
 
 A family draws an object anew for each episode: its size and shape from ranges, then
 a pose (a rotation about the origin by an angle, then a translation) from the
-family's :class:`Pose`. The hand model has no world-fixed direction (docs/model.md:
+family's [`Pose`][]. The hand model has no world-fixed direction (docs/model.md:
 every rule is written in the contacts' own frames), so the pose changes where the
 object lies, not what any CRM does to it; families draw it anyway, so that scenes
 look like the world and the invariance is tested, not assumed.
@@ -16,7 +16,7 @@ the hand's aperture) and ``describe()`` (its parameters as plain data).
 
 Ranges are ``(low, high)`` with ``low <= high`` (equal: a fixed value); bad ranges,
 and parameters that would give non-simple polygons, are refused with one line
-naming the parameter. Rejection loops are bounded by :data:`MAX_TRIES`.
+naming the parameter. Rejection loops are bounded by [`MAX_TRIES`][].
 """
 
 from __future__ import annotations
@@ -333,7 +333,7 @@ class StarFamily(_Family):
 class FixedShape(_Family):
     """One polygon of given ``vertices`` ((x, y) in metres), centred on their bounding
     box, posed anew each episode: a family that does not vary in shape (alone, or as a
-    member of a :class:`MixedFamily`). Vertex ``i`` of the object is vertex ``i`` of
+    member of a [`MixedFamily`][]). Vertex ``i`` of the object is vertex ``i`` of
     ``vertices`` when they are counter-clockwise (clockwise ones are reversed)."""
 
     vertices: tuple[tuple[float, float], ...]
@@ -408,7 +408,7 @@ class MixedFamily:
 class SamplerFamily(_Family):
     """A user's family: ``sampler(rng) -> Shape`` draws the unposed shape, then the
     pose is drawn. ``nominal_shape`` is what scenes show; ``smallest_width`` the
-    :meth:`min_width` (default: the nominal shape's width)."""
+    `min_width` (default: the nominal shape's width)."""
 
     sampler: Callable[[np.random.Generator], Shape]
     nominal_shape: Shape

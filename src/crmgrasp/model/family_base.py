@@ -1,6 +1,6 @@
 """The parts every object family shares: ranges and their draws, the pose, the
 family protocol and base class, widths and plain-data descriptions
-(:mod:`crmgrasp.model.families` builds the families on them; docs/families.md)."""
+([`crmgrasp.model.families`][] builds the families on them; docs/families.md)."""
 
 from __future__ import annotations
 

@@ -6,15 +6,15 @@ Conventions (docs/model.md section 1)
 * Polygon vertices are stored counter-clockwise (clockwise input is reversed).
 * Every boundary point has an inward unit normal ``n``. For a CCW edge with
   direction ``e`` the inward normal is ``n = (-e_y, e_x)``.
-* "Inside" means strictly inside: a point within :data:`EPS` of the boundary is
+* "Inside" means strictly inside: a point within [`EPS`][] of the boundary is
   *not* inside.
 * Arclength ``s`` runs counter-clockwise from vertex 0 (polygons) or from the
   point at angle 0 (discs), in ``[0, perimeter)``.
 
 The inside test and the first-entry rule are defined here once, on plain Python
-floats (:meth:`Polygon.contains`, :meth:`Polygon.ray_entry` and the functions of
-:mod:`crmgrasp.model.polygon`; :meth:`Disc.contains`, :meth:`Disc.ray_entry`). Batched
-and compiled evaluations live in :mod:`crmgrasp.kernels` and are tested equal to
+floats ([`Polygon.contains`][], [`Polygon.ray_entry`][] and the functions of
+`crmgrasp.model.polygon`; [`Disc.contains`][], [`Disc.ray_entry`][]). Batched
+and compiled evaluations live in [`crmgrasp.kernels`][] and are tested equal to
 these bit for bit.
 """
 

@@ -47,8 +47,8 @@ from crmgrasp.model.geometry import Shape
 
 
 class Sensor(Protocol):
-    """What :meth:`Hand.execute` reads the goal line's frame through: a sensor model such as
-    :class:`~crmgrasp.model.sensing.SensorNoise` (written as a protocol so that the hand,
+    """What [`Hand.execute`][] reads the goal line's frame through: a sensor model such as
+    [`SensorNoise`][crmgrasp.model.sensing.SensorNoise] (written as a protocol so that the hand,
     whose error flags the sensing module bins, does not import that module)."""
 
     @property
@@ -216,7 +216,7 @@ class Hand:
         object.__setattr__(self, "min_separation", sep)
 
     def check_crm(self, crm: CRM) -> CRM:
-        """Return ``crm`` if ``|r| <= r_max``, else raise :class:`CrmgraspError`."""
+        """Return ``crm`` if ``|r| <= r_max``, else raise `CrmgraspError`."""
         if not isinstance(crm, CRM):
             raise CrmgraspError(f"expected a CRM, got {crm!r}")
         assert self.r_max is not None
@@ -236,7 +236,7 @@ class Hand:
 
     def feasible(self, obj: Shape, config: Config) -> Error:
         """``Error.NONE`` if ``config`` is feasible, else the violated constraint;
-        ``config`` is checked first (:func:`check_config`: finite, unit normals, on ``obj``)."""
+        ``config`` is checked first ([`check_config`][]: finite, unit normals, on ``obj``)."""
         return feasible(obj, self, check_config(obj, config))
 
     def execute(
@@ -253,8 +253,8 @@ class Hand:
 
         The goal line is computed from ``sensed`` if given; otherwise from a fresh
         reading through ``noise`` (which then needs ``rng``); otherwise from the
-        true configuration. ``config`` is checked (:func:`check_config`); the pure
-        transition :func:`execute_crm` checks nothing.
+        true configuration. ``config`` is checked ([`check_config`][]); the pure
+        transition [`execute_crm`][] checks nothing.
         """
         self.check_crm(crm)
         check_config(obj, config)
@@ -269,13 +269,13 @@ class Hand:
 
 CONTACT_TOL = 1e-6
 """How far (m) a given contact may lie from the object's boundary, and its normal's
-length from 1, before :func:`check_config` refuses it."""
+length from 1, before [`check_config`][] refuses it."""
 
 
 def check_config(obj: Shape, config: object, name: str = "configuration") -> Config:
-    """``config`` if it is a :class:`~crmgrasp.model.contacts.Config` of two contacts with
+    """``config`` if it is a [`Config`][crmgrasp.model.contacts.Config] of two contacts with
     finite coordinates, unit normals and points on the boundary of ``obj`` (both within
-    :data:`CONTACT_TOL`); else a one-line :class:`CrmgraspError`."""
+    [`CONTACT_TOL`][]); else a one-line `CrmgraspError`."""
     if not isinstance(config, Config) or not all(isinstance(c, Contact) for c in config):
         raise CrmgraspError(f"{name} must be a Config of two Contacts, got {shown(config)}")
     for label, c in zip("ab", config):
@@ -322,10 +322,10 @@ def faces_palm(config: Config, tol: float) -> bool:
 
 
 def feasible(obj: Shape, hand: Hand, config: Config) -> Error:
-    """Feasibility of a configuration (docs/model.md section 2), as an :class:`Error`: APERTURE
+    """Feasibility of a configuration (docs/model.md section 2), as an [`Error`][]: APERTURE
     if ``|x_a - x_b| > A``; PALM if the contacts collide (``|x_a - x_b| <=
     min_separation``, coincident by default), a contact faces the palm side
-    (:func:`faces_palm`) or the palm point (:func:`palm_point`) is inside."""
+    ([`faces_palm`][]) or the palm point ([`palm_point`][]) is inside."""
     dist, ux, uy = palm_axis(config)
     if dist > hand.aperture:
         return Error.APERTURE

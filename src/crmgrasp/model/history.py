@@ -103,7 +103,7 @@ class KOrderEncoder:
         return code
 
     def decode(self, code: int) -> History:
-        """Inverse of :meth:`encode`."""
+        """Inverse of [`encode`][]."""
         if not 0 <= code < self.size:
             raise CrmgraspError(f"history code {code} is outside [0, {self.size})")
         out = []

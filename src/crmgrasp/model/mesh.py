@@ -1,16 +1,16 @@
 """Closed triangle meshes: spatial objects that need not be convex (docs/model-3d.md section 1).
 
-A :class:`TriangleMesh` is a list of corners and of triangles (corner indices, counter-
+A [`TriangleMesh`][] is a list of corners and of triangles (corner indices, counter-
 clockwise seen from outside). It is checked on construction, one line per problem: at
 least four triangles, finite corners, no degenerate triangle, every edge shared by
 exactly two triangles (a closed, manifold surface) traversed once in each direction (a
 consistent orientation), and a positive enclosed volume (faces pointing outward).
 
 It answers what the spatial CRM transition asks of any solid: strictly inside
-(:meth:`contains`: an odd number of crossings of a ray, and farther than
-:data:`~crmgrasp.model.solids.SURFACE` from every triangle), the first entry of a ray
-with the inward normal there (:meth:`ray_entry`: the nearest triangle the ray crosses
-while entering, lowest index among those within :data:`~crmgrasp.model.solids.TIE`), and
+(`contains`: an odd number of crossings of a ray, and farther than
+[`SURFACE`][crmgrasp.model.solids.SURFACE] from every triangle), the first entry of a ray
+with the inward normal there (`ray_entry`: the nearest triangle the ray crosses
+while entering, lowest index among those within [`TIE`][crmgrasp.model.solids.TIE]), and
 for placing and drawing it, its centre (of volume), support, ``gap`` and rigid motion.
 Meshes run on the readable rules only (the compiled spatial kernel takes polyhedra and
 cylinders).
@@ -147,7 +147,7 @@ class TriangleMesh:
 
     def contains(self, p: ArrayLike) -> bool:
         """Strictly inside: an odd number of crossings of a ray from ``p``, and more than
-        :data:`SURFACE` from the surface."""
+        [`SURFACE`][] from the surface."""
         x = np.asarray(p, dtype=np.float64)
         return self._odd(x) and self.distance(x) > SURFACE
 
@@ -163,9 +163,9 @@ class TriangleMesh:
         return -d if self._odd(x) and d > SURFACE else d
 
     def ray_entry(self, origin: ArrayLike, direction: ArrayLike, u_max: float) -> tuple[F64, F64] | None:
-        """Where ``origin + u direction`` (``0 <= u <= u_max``, within :data:`SURFACE`) first
+        """Where ``origin + u direction`` (``0 <= u <= u_max``, within [`SURFACE`][]) first
         crosses a triangle it enters (outward normal against the ray), with the inward normal;
-        among entries within :data:`TIE` of the nearest, the lowest triangle index."""
+        among entries within [`TIE`][] of the nearest, the lowest triangle index."""
         o, d = np.asarray(origin, dtype=np.float64), np.asarray(direction, dtype=np.float64)
         best_t, best = math.inf, -1
         for k in range(len(self.faces)):

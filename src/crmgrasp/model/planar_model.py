@@ -1,9 +1,9 @@
-"""The planar two-contact model (docs/model.md sections 2-5) as a :class:`ContactModel`.
+"""The planar two-contact model (docs/model.md sections 2-5) as a `ContactModel`.
 
-:class:`PlanarModel` holds the hand and the sensing noise and applies the rules that live
-in their own modules: the CRM transition and feasibility (:mod:`crmgrasp.model.hand`),
-readings and observations (:mod:`crmgrasp.model.sensing`), min friction
-(:mod:`crmgrasp.model.quality`). It adds no rule of its own.
+[`PlanarModel`][] holds the hand and the sensing noise and applies the rules that live
+in their own modules: the CRM transition and feasibility ([`crmgrasp.model.hand`][]),
+readings and observations ([`crmgrasp.model.sensing`][]), min friction
+([`crmgrasp.model.quality`][]). It adds no rule of its own.
 """
 
 from __future__ import annotations
@@ -87,36 +87,36 @@ class PlanarModel(TwoContacts):
 
     # -- the rules
     def execute(self, obj: Any, config: Config, crm: CRM, sensed: Config | None) -> Outcome:
-        """:func:`~crmgrasp.model.hand.execute_crm`."""
+        """[`execute_crm`][crmgrasp.model.hand.execute_crm]."""
         return execute_crm(obj, self.hand, config, crm, sensed)
 
     def read(self, config: Config, rng: np.random.Generator) -> Config:
-        """:meth:`~crmgrasp.model.sensing.SensorNoise.sense`."""
+        """[`sense`][crmgrasp.model.sensing.SensorNoise.sense]."""
         return self.noise.sense(config, rng)
 
     def read_rows(self, rows: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.float64]:
-        """:meth:`~crmgrasp.model.sensing.SensorNoise.sense_batch`."""
+        """[`sense_batch`][crmgrasp.model.sensing.SensorNoise.sense_batch]."""
         return self.noise.sense_batch(rows, rng)
 
     def observe(self, sensed: Config) -> Observation:
-        """:func:`~crmgrasp.model.sensing.observe`."""
+        """[`observe`][crmgrasp.model.sensing.observe]."""
         return observe(sensed)
 
     def quality(self, config: Config) -> float:
-        """:func:`~crmgrasp.model.quality.min_friction`."""
+        """[`min_friction`][crmgrasp.model.quality.min_friction]."""
         return min_friction(config)
 
     def feasible(self, obj: Any, config: Config) -> Error:
-        """:func:`~crmgrasp.model.hand.feasible`."""
+        """[`feasible`][crmgrasp.model.hand.feasible]."""
         return feasible(obj, self.hand, config)
 
     def check_config(self, obj: Any, config: object, name: str = "configuration") -> Config:
-        """:func:`~crmgrasp.model.hand.check_config`."""
+        """[`check_config`][crmgrasp.model.hand.check_config]."""
         return check_config(obj, config, name)
 
     def place(self, obj: Any, points: Sequence[ArrayLike]) -> Config:
         """Each contact at the boundary point nearest its point (finite ``(x, y)``, metres;
-        :meth:`~crmgrasp.model.hand.Hand.contact`)."""
+        [`contact`][crmgrasp.model.hand.Hand.contact])."""
         if len(points) != self.n_contacts:
             raise CrmgraspError(f"the planar model takes {self.n_contacts} points, got {len(points)}")
         return self.hand.contact(obj, points[0], points[1])

@@ -1,4 +1,4 @@
-"""Simple polygons, convex or not (see :mod:`crmgrasp.model.geometry` for the conventions)."""
+"""Simple polygons, convex or not (see [`crmgrasp.model.geometry`][] for the conventions)."""
 
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ coordinates overflow."""
 
 Edges = tuple[tuple[float, float, float, float, float, float, float], ...]
 """Per edge ``(ax, ay, ex, ey, l2, nx, ny)``: start, edge vector, squared length,
-inward unit normal (:attr:`Polygon.edges`)."""
+inward unit normal ([`Polygon.edges`][])."""
 
 
 def _segments_cross(p: tuple, q: tuple, r: tuple, s: tuple) -> bool:
@@ -150,7 +150,7 @@ class Polygon:
 
     @cached_property
     def edge_array(self) -> Array:
-        """:attr:`edges` as a read-only ``(E, 7)`` float array (for the compiled kernels)."""
+        """[`edges`][] as a read-only ``(E, 7)`` float array (for the compiled kernels)."""
         arr = np.array(self.edges, dtype=np.float64)
         arr.flags.writeable = False
         return arr
@@ -250,8 +250,8 @@ class Polygon:
 
     # --------------------------------------------------------------- inside
     def contains(self, p: ArrayLike) -> bool:
-        """True if ``p`` is strictly inside (farther than :data:`EPS` from the boundary):
-        :func:`inside` on this polygon's edges."""
+        """True if ``p`` is strictly inside (farther than [`EPS`][] from the boundary):
+        `inside` on this polygon's edges."""
         px, py = (p[0], p[1]) if isinstance(p, tuple) else as_point(p, "point")
         return inside(px, py, self.edges, self.convex)
 
@@ -262,10 +262,10 @@ class Polygon:
 
         ``direction`` need not be unit length; ``u`` is in its units. Returns
         ``None`` if the segment never enters the object. A convex polygon uses
-        :func:`convex_entry` (the entry edge from the vertices' sides of the line: a
+        `convex_entry` (the entry edge from the vertices' sides of the line: a
         line through a vertex, along an edge, or passing a vertex closer than
-        :data:`LINE_TOL` enters at that vertex, by the lower-index edge of those that
-        qualify); any other polygon :func:`first_entry` (the smallest ``u`` over the
+        [`LINE_TOL`][] enters at that vertex, by the lower-index edge of those that
+        qualify); any other polygon `first_entry` (the smallest ``u`` over the
         edges; ties, a ray through a vertex, go to the lower edge index).
         """
         entry = convex_entry if self.convex else first_entry
@@ -275,7 +275,7 @@ class Polygon:
 
 def _check_simple(pts: list[tuple[float, float]]) -> None:
     """Refuse repeated vertices, edges folding back onto the previous one, and edges that
-    touch or cross (:func:`_segments_cross`), reporting the first such pair ``(i, j)``
+    touch or cross ([`_segments_cross`][]), reporting the first such pair ``(i, j)``
     in order. Only pairs whose bounding boxes share a cell of a uniform grid (about
     ``n`` cells) are tested: every touching pair does, so the answer is that of testing
     all pairs, in near-linear time for ordinary polygons."""
@@ -392,7 +392,7 @@ def convex_edge(ox: float, oy: float, dx: float, dy: float, edges: Edges) -> int
     1``) is crossed inward when its start is not on the right, its end not on the
     left, and not both are on the line; the first such edge is returned. A line
     through a vertex, or along an edge, or missing a corner by less than
-    ``LINE_TOL``, thus enters at that vertex, as :func:`first_entry`'s slack does.
+    ``LINE_TOL``, thus enters at that vertex, as `first_entry`'s slack does.
     """
     tol = LINE_TOL * (abs(dx) + abs(dy))
     ntol = -tol
@@ -414,10 +414,10 @@ def convex_edge(ox: float, oy: float, dx: float, dy: float, edges: Edges) -> int
 def convex_entry(
     ox: float, oy: float, dx: float, dy: float, u_max: float, edges: Edges
 ) -> tuple[float, float, float, float, float] | None:
-    """:func:`first_entry` for a convex polygon: the entry edge from the vertices'
-    sides of the line (:func:`convex_edge`), then ``u = ((a_i - o) . n_i) / (d . n_i)``,
+    """`first_entry` for a convex polygon: the entry edge from the vertices'
+    sides of the line ([`convex_edge`][]), then ``u = ((a_i - o) . n_i) / (d . n_i)``,
     accepted when ``d . n_i > 0`` and ``-EPS <= u <= u_max + EPS``. Away from
-    vertices this is :func:`first_entry`'s edge and ``u``, bit for bit."""
+    vertices this is `first_entry`'s edge and ``u``, bit for bit."""
     i = convex_edge(ox, oy, dx, dy, edges)
     if i < 0:
         return None

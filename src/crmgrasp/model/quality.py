@@ -12,7 +12,7 @@ floating-point rounding of an antipodal pair still gives exactly 0); ``inf`` mea
 
 Any number of contacts
 ----------------------
-:func:`force_closure` tests whether the primitive wrenches
+[`force_closure`][] tests whether the primitive wrenches
 ``w = (f_x, f_y, (x - c) x f)`` of the friction-cone edges ``f = n +- mu tau``
 positively span the planar wrench space R^3: the origin must be strictly inside
 their convex hull. This is the linear program
@@ -53,7 +53,7 @@ ANTIPODAL_TOL = 1e-12
 def tan_term(x: float, y: float, nx: float, ny: float, ox: float, oy: float) -> float:
     """``tan`` of the angle between the inward normal ``n`` at ``(x, y)`` and the
     direction ``d`` to ``(ox, oy)``: ``|n x d| / (n . d)``; ``inf`` when ``n . d <= 0``
-    (90 degrees or more), 0 below :data:`ANTIPODAL_TOL`."""
+    (90 degrees or more), 0 below [`ANTIPODAL_TOL`][]."""
     dx, dy = ox - x, oy - y
     dot = nx * dx + ny * dy
     if dot <= 0.0:
@@ -78,7 +78,7 @@ def min_friction(config: Config) -> float:
     inf
 
     A configuration with a non-finite coordinate or a normal that is not a unit vector is
-    refused (:func:`~crmgrasp.model.contacts.check_contacts`).
+    refused ([`check_contacts`][crmgrasp.model.contacts.check_contacts]).
     """
     a, b = check_contacts(config, "min_friction")
     return max(tan_term(a.x, a.y, a.nx, a.ny, b.x, b.y), tan_term(b.x, b.y, b.nx, b.ny, a.x, a.y))
@@ -129,7 +129,7 @@ def positively_spans(wrenches: np.ndarray) -> bool:
     strictly inside their convex hull. Linear program
     ``max d  s.t.  W lambda = 0, sum lambda = 1, lambda_j >= d``; true iff
     ``rank W = k`` and ``d* > LP_TOL``. The one force-closure test of the planar
-    (:func:`force_closure`) and the spatial (:mod:`crmgrasp.model.quality3d`) models."""
+    ([`force_closure`][]) and the spatial ([`crmgrasp.model.quality3d`][]) models."""
     from scipy.optimize import linprog  # heavy: imported where used
 
     k, m = wrenches.shape

@@ -3,7 +3,7 @@
 Conventions: points in metres, shape ``(n, 3)``; inward unit normals, shape ``(n, 3)``
 (unit within 1e-6; a normal points from the contact into the object).
 
-* :func:`min_friction_3d`, two contacts: ``max_i tan(theta_i)``, ``theta_i`` the angle
+* [`min_friction_3d`][], two contacts: ``max_i tan(theta_i)``, ``theta_i`` the angle
   between ``n_i`` and the unit vector from ``x_i`` to the other contact; the friction
   the squeeze between them needs (0 for an antipodal pair; ``inf`` when an angle
   reaches 90 degrees). Two point contacts never make a spatial grasp force closure:
@@ -11,17 +11,17 @@ Conventions: points in metres, shape ``(n, 3)``; inward unit normals, shape ``(n
   about it is unresisted (a soft finger's torsional friction would be needed). The
   two-contact success rule of the spatial model is therefore ``min_friction_3d <=
   mu_goal``, as in the plane.
-* :func:`primitive_wrenches`: each contact's friction cone ``{f : |f_t| <= mu f_n}``
+* [`primitive_wrenches`][]: each contact's friction cone ``{f : |f_t| <= mu f_n}``
   is replaced by the inscribed polyhedral cone of ``edges`` edges
   ``f_ij = n_i + mu (cos phi_j t1_i + sin phi_j t2_i)``, ``phi_j = 2 pi j / edges``,
   scaled to unit length; the wrench of edge ``j`` of contact ``i`` is
   ``(f_ij, (x_i - c) x f_ij / rho)`` with ``c`` the contacts' centroid and ``rho`` the
   largest ``|x_i - c|`` (so that torques are in force units).
-* :func:`force_closure_3d`: the primitive wrenches positively span R^6
-  (:func:`crmgrasp.model.quality.positively_spans`, the same linear program as the
+* [`force_closure_3d`][]: the primitive wrenches positively span R^6
+  ([`crmgrasp.model.quality.positively_spans`][], the same linear program as the
   planar test). The polyhedral cone is inside the circular one, so a grasp closed
   here is closed with the true cones; ``edges`` (8 by default) sets the resolution.
-* :func:`ferrari_canny`: the L1 epsilon metric, the radius of the largest ball about
+* [`ferrari_canny`][]: the L1 epsilon metric, the radius of the largest ball about
   the origin inside the convex hull of the primitive wrenches (0 when the origin is
   not strictly inside: not force closure). Computed from the hull's facets (Qhull).
 """
@@ -116,7 +116,7 @@ def primitive_wrenches(points: ArrayLike, normals: ArrayLike, mu: float, edges: 
 
 def force_closure_3d(points: ArrayLike, normals: ArrayLike, mu: float, edges: int = 8) -> bool:
     """Spatial force closure of ``n`` frictional point contacts (polyhedral cones of
-    ``edges`` edges), by the linear program of :func:`~crmgrasp.model.quality.positively_spans`.
+    ``edges`` edges), by the linear program of [`positively_spans`][crmgrasp.model.quality.positively_spans].
 
     Examples
     --------

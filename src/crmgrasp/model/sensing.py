@@ -59,7 +59,7 @@ def observe(config: Config) -> Observation:
     [2.0, 0.05, -0.03]
 
     A configuration with a non-finite coordinate or a normal that is not a unit vector is
-    refused (:func:`~crmgrasp.model.contacts.check_contacts`).
+    refused ([`check_contacts`][crmgrasp.model.contacts.check_contacts]).
     """
     a, b = check_contacts(config, "observe")
     sx, sy = a.nx + b.nx, a.ny + b.ny
@@ -126,7 +126,7 @@ class SensorNoise:
         )
 
     def sense_batch(self, configs: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.float64]:
-        """:meth:`sense` of each row of ``(N, 8)`` configurations: one
+        """[`sense`][] of each row of ``(N, 8)`` configurations: one
         ``standard_normal((N, 6))`` draw (the stream of ``N`` scalar readings), each row
         perturbed by the scalar rule. Returns ``configs`` itself when inactive."""
         if not self.active:
@@ -163,9 +163,9 @@ class Discretizer:
 
     The quantities are a contact model's observation, in its order: the squared force
     residual first (``rho``), then one frictionless moment per contact (``m_a``,
-    ``m_b``, ... for the two-contact models: :class:`Observation`'s names, the default).
+    ``m_b``, ... for the two-contact models: [`Observation`][]'s names, the default).
     Thresholds are given per name as keywords; a name left out takes its default
-    (:data:`DEFAULT_RHO` for the first, :data:`DEFAULT_MOMENT` for the moments).
+    ([`DEFAULT_RHO`][] for the first, [`DEFAULT_MOMENT`][] for the moments).
 
     A value ``v`` falls in bin ``k`` = the number of thresholds ``t`` with
     ``v >= t`` (so each quantity has ``len(thresholds) + 1`` bins). Moments are
@@ -195,7 +195,7 @@ class Discretizer:
     names: tuple[str, ...]
     """The quantities binned, in the index's order (the model's observation names)."""
     thresholds: tuple[tuple[float, ...], ...]
-    """Each quantity's thresholds, strictly increasing, in the order of :attr:`names`."""
+    """Each quantity's thresholds, strictly increasing, in the order of [`names`][]."""
     abs_moments: bool
     """Whether the moments (every quantity but the first) are binned by magnitude."""
     _strides: tuple[int, ...] = field(repr=False, compare=False)
@@ -226,7 +226,7 @@ class Discretizer:
 
     @property
     def sizes(self) -> tuple[int, ...]:
-        """Bins per quantity, in the order of :attr:`names`."""
+        """Bins per quantity, in the order of [`names`][]."""
         return tuple(len(t) + 1 for t in self.thresholds)
 
     @property
@@ -235,7 +235,7 @@ class Discretizer:
         return self._strides[0] * (len(self.thresholds[0]) + 1)
 
     def bins(self, values: Sequence[float]) -> tuple[int, ...]:
-        """Bin of each quantity (an :class:`Observation`, or its values in order): the
+        """Bin of each quantity (an [`Observation`][], or its values in order): the
         number of thresholds ``t`` with ``value >= t`` (NaN is in bin 0)."""
         absolute = self.abs_moments
         return tuple(_bin(abs(v) if absolute and i else v, t) for i, (v, t) in enumerate(zip(values, self.thresholds)))
@@ -246,11 +246,11 @@ class Discretizer:
 
     def compose(self, bins: Sequence[int], error: int) -> int:
         """The index of the bins and error flag (mixed radix, error fastest); inverse of
-        :meth:`decode`."""
+        [`decode`][]."""
         return sum(b * s for b, s in zip(bins, self._strides)) + int(error)
 
     def decode(self, index: int) -> tuple[tuple[int, ...], Error]:
-        """Inverse of :meth:`index`: the bins of the quantities, and the error flag."""
+        """Inverse of [`index`][]: the bins of the quantities, and the error flag."""
         if not 0 <= int(index) < self.size:
             raise CrmgraspError(f"observation index {index} is outside [0, {self.size})")
         rest, err = divmod(int(index), len(Error))

@@ -1,8 +1,8 @@
 """Shared geometric primitives: tolerances, result types, the Shape protocol.
 
-See :mod:`crmgrasp.model.geometry` for the conventions. The tolerances below are the
+See [`crmgrasp.model.geometry`][] for the conventions. The tolerances below are the
 only definitions of these numbers: the compiled kernels receive them as
-arguments at every call (:mod:`crmgrasp.kernels`), so a changed value can never
+arguments at every call ([`crmgrasp.kernels`][]), so a changed value can never
 meet stale compiled code.
 """
 

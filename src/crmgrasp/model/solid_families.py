@@ -1,14 +1,14 @@
 """Families of spatial objects on a table: one solid per episode (docs/model-3d.md section 6).
 
 The table is the plane ``z = 0``; every object rests on it. A family draws the object's
-dimensions from ranges, then a pose from a :class:`~crmgrasp.model.families.Pose`: a
+dimensions from ranges, then a pose from a [`Pose`][crmgrasp.model.families.Pose]: a
 rotation about the vertical axis by the pose's angle (a yaw) and a horizontal
 translation. Ranges are checked as for the planar families (one line naming the
 parameter).
 
-* :class:`BoxOnTable`: a box of random length, width and height resting on a face with
+* [`BoxOnTable`][]: a box of random length, width and height resting on a face with
   a random yaw (drawing all three dimensions covers which face is down): ``Box3D``.
-* :class:`CylinderOnTable`: a closed cylinder of random radius and height, upright
+* [`CylinderOnTable`][]: a closed cylinder of random radius and height, upright
   (axis vertical) with probability ``upright``, else lying on its side: ``Cup3D``.
 
 Each has ``sample(rng)``, ``nominal()`` (the middle of every range, unposed),

@@ -1,10 +1,10 @@
 """Spatial solids: convex polyhedra and closed cylinders (docs/model-3d.md section 1).
 
 Each solid answers the three questions the spatial CRM transition asks: is a point
-strictly inside (:meth:`contains`), where does a ray first enter and with which inward
-normal (:meth:`ray_entry`), and, for placing and drawing it, its centre, its support
-``min_x d . x`` (:meth:`support`) and its pose after a rigid motion (:meth:`moved`).
-:func:`surface_point` is the radial projection of a direction onto the surface, the
+strictly inside (`contains`), where does a ray first enter and with which inward
+normal (`ray_entry`), and, for placing and drawing it, its centre, its support
+``min_x d . x`` (`support`) and its pose after a rigid motion (`moved`).
+[`surface_point`][] is the radial projection of a direction onto the surface, the
 one way the spatial starts put a contact on any solid.
 """
 
@@ -39,11 +39,11 @@ __all__ = [
 F64 = NDArray[np.float64]
 SURFACE = EPS
 """Metres: a point within this of the surface is on it, not inside (the planar model's
-:data:`~crmgrasp.model.shape.EPS`)."""
+[`EPS`][crmgrasp.model.shape.EPS])."""
 
 TIE = 1e-12
 """Metres along a ray: surfaces it enters within this of each other are entered together
-(an edge or a vertex); :meth:`ConvexPolyhedron.ray_entry` and :meth:`Cylinder.ray_entry`
+(an edge or a vertex); [`ConvexPolyhedron.ray_entry`][] and [`Cylinder.ray_entry`][]
 then choose by a stated rule."""
 
 
@@ -91,7 +91,7 @@ def _unit(v: ArrayLike, name: str) -> F64:
 class ConvexPolyhedron:
     """``{x : a_k . x <= b_k}`` for unit outward normals ``a_k`` (rows of ``planes``:
     ``(a_x, a_y, a_z, b)``); bounded and with an interior (checked on construction by
-    the caller's vertices being inside, see :func:`box3d`)."""
+    the caller's vertices being inside, see [`box3d`][])."""
 
     planes: tuple[tuple[float, float, float, float], ...]
 
@@ -107,7 +107,7 @@ class ConvexPolyhedron:
         object.__setattr__(self, "planes", tuple(map(tuple, (rows / norms[:, None]).tolist())))
 
     def contains(self, p: ArrayLike) -> bool:
-        """Strictly inside: more than :data:`SURFACE` inside every face."""
+        """Strictly inside: more than [`SURFACE`][] inside every face."""
         x = np.asarray(p, dtype=np.float64)
         return all(a0 * x[0] + a1 * x[1] + a2 * x[2] - b < -SURFACE for a0, a1, a2, b in self.planes)
 
@@ -227,7 +227,7 @@ class Cylinder:
         return s, rel - s * e
 
     def contains(self, p: ArrayLike) -> bool:
-        """Strictly inside: more than :data:`SURFACE` inside the side and both caps."""
+        """Strictly inside: more than [`SURFACE`][] inside the side and both caps."""
         s, radial = self._local(np.asarray(p, dtype=np.float64))
         return SURFACE < s < self.height - SURFACE and norm(radial) < self.radius - SURFACE
 

@@ -1,12 +1,12 @@
 """The spatial model's objects, hand and CRM transition (docs/model-3d.md sections 1-4).
 
-The two-contact hand (:class:`Hand3D`: aperture, palm depth, back-off, the vertical and
-forward axes ``h`` and ``g``), the palm point (:func:`palm_point3d`), feasibility with
-an optional table (:func:`feasible3d`), the CRM transition (:func:`execute_crm3d`,
-offsets ``r = (r_1, r_2)`` in the tangent frame of :func:`tangent_frame`), the
-observation (:func:`observe3d`: ``rho``, ``|m_a|``, ``|m_b|``) and sensing noise
-(:func:`sense3d`), on any solid of :mod:`crmgrasp.model.solids` or
-:mod:`crmgrasp.model.mesh`. Written on plain floats and small numpy vectors, readably;
+The two-contact hand ([`Hand3D`][]: aperture, palm depth, back-off, the vertical and
+forward axes ``h`` and ``g``), the palm point ([`palm_point3d`][]), feasibility with
+an optional table ([`feasible3d`][]), the CRM transition ([`execute_crm3d`][],
+offsets ``r = (r_1, r_2)`` in the tangent frame of [`tangent_frame`][]), the
+observation ([`observe3d`][]: ``rho``, ``|m_a|``, ``|m_b|``) and sensing noise
+([`sense3d`][]), on any solid of [`crmgrasp.model.solids`][] or
+`crmgrasp.model.mesh`. Written on plain floats and small numpy vectors, readably;
 it is the definition the compiled spatial kernel is tested against.
 """
 
@@ -98,8 +98,8 @@ class Hand3D:
         return self.aperture if self.r_max is None else self.r_max
 
     def check_crm(self, crm: object) -> CRM3D:
-        """``crm`` if it is a :class:`CRM3D` with labels ``a``/``b`` and a finite offset of
-        length at most :attr:`reach`; else a one-line :class:`CrmgraspError`."""
+        """``crm`` if it is a [`CRM3D`][] with labels ``a``/``b`` and a finite offset of
+        length at most [`reach`][]; else a one-line `CrmgraspError`."""
         if not isinstance(crm, CRM3D):
             raise CrmgraspError(f"expected a CRM3D, got {crm!r}")
         if crm.c not in ("a", "b") or crm.f not in ("a", "b"):
@@ -152,7 +152,7 @@ def _palm_axis(cfg: Config3D, hand: Hand3D) -> tuple[float, F64]:
 
 
 def on_table(z: float, table: float | None) -> bool:
-    """A height at or below the table plane (within :data:`SURFACE`): where no finger or
+    """A height at or below the table plane (within [`SURFACE`][]): where no finger or
     palm can be (``table=None``: no table)."""
     return table is not None and z <= table + SURFACE
 
@@ -171,7 +171,7 @@ def _faces(cfg: Config3D, hand: Hand3D, u: F64) -> bool:
 
 def feasible3d(obj: Solid, hand: Hand3D, cfg: Config3D, table: float | None = None) -> Error:
     """Section 2: APERTURE beyond the aperture; PALM for colliding contacts, a surface
-    facing the palm (:func:`faces_palm3d`), the palm point inside the object, or (with a
+    facing the palm ([`faces_palm3d`][]), the palm point inside the object, or (with a
     table at height ``table``) a contact or the palm point on or below the table."""
     dist, u = _palm_axis(cfg, hand)
     if dist > hand.aperture:

@@ -1,8 +1,8 @@
-"""The spatial two-contact model (docs/model-3d.md) as a :class:`ContactModel`.
+"""The spatial two-contact model (docs/model-3d.md) as a `ContactModel`.
 
-:class:`SpatialModel` holds the 3-D hand, the sensing noise and the table, and applies
-the rules of :mod:`crmgrasp.model.spatial` (CRM transition, feasibility with the table,
-readings, observation) and :mod:`crmgrasp.model.quality3d` (min friction). What the agent
+[`SpatialModel`][] holds the 3-D hand, the sensing noise and the table, and applies
+the rules of [`crmgrasp.model.spatial`][] (CRM transition, feasibility with the table,
+readings, observation) and [`crmgrasp.model.quality3d`][] (min friction). What the agent
 sees is the planar model's observation: ``rho``, ``|m_a|``, ``|m_b|``.
 """
 
@@ -38,11 +38,11 @@ __all__ = ["SpatialModel", "contact3d"]
 
 SURFACE_TOL = 1e-6
 """How far (m) a given contact may lie from the solid's surface, and its normal's length
-from 1, before :meth:`SpatialModel.check_config` refuses it."""
+from 1, before [`SpatialModel.check_config`][] refuses it."""
 
 
 def contact3d(point: ArrayLike, normal: ArrayLike) -> Contact3D:
-    """A :class:`~crmgrasp.model.spatial.Contact3D` of plain floats."""
+    """A [`Contact3D`][crmgrasp.model.spatial.Contact3D] of plain floats."""
     return Contact3D(tuple(np.asarray(point).tolist()), tuple(np.asarray(normal).tolist()))  # type: ignore[arg-type]
 
 
@@ -57,7 +57,7 @@ class SpatialModel(TwoContacts):
     hand
         The 3-D hand (aperture, palm, axes, reach).
     noise
-        Sensing noise of every reading (:func:`~crmgrasp.model.spatial.sense3d`).
+        Sensing noise of every reading ([`sense3d`][crmgrasp.model.spatial.sense3d]).
     table
         Height of the table plane, metres (``None``: no table).
     """
@@ -109,34 +109,34 @@ class SpatialModel(TwoContacts):
 
     # -- the rules
     def execute(self, obj: Any, config: Config3D, crm: CRM3D, sensed: Config3D | None) -> Outcome3D:
-        """:func:`~crmgrasp.model.spatial.execute_crm3d` with the table."""
+        """[`execute_crm3d`][crmgrasp.model.spatial.execute_crm3d] with the table."""
         return execute_crm3d(obj, self.hand, config, crm, sensed, self.table)
 
     def read(self, config: Config3D, rng: np.random.Generator) -> Config3D:
-        """:func:`~crmgrasp.model.spatial.sense3d`."""
+        """[`sense3d`][crmgrasp.model.spatial.sense3d]."""
         return sense3d(config, self.noise.sigma_n, self.noise.sigma_p, rng, self.hand)
 
     def read_rows(self, rows: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.float64]:
-        """:meth:`read` row after row (the same draws in the same order)."""
+        """[`read`][] row after row (the same draws in the same order)."""
         if not self.noise.active:
             return rows.copy()
         return self.rows_of([self.read(self.config_of(r), rng) for r in rows.tolist()])
 
     def observe(self, sensed: Config3D) -> Observation:
-        """:func:`~crmgrasp.model.spatial.observe3d`."""
+        """[`observe3d`][crmgrasp.model.spatial.observe3d]."""
         return Observation(*observe3d(sensed))
 
     def quality(self, config: Config3D) -> float:
-        """:func:`~crmgrasp.model.quality3d.min_friction_3d` of the two contacts."""
+        """[`min_friction_3d`][crmgrasp.model.quality3d.min_friction_3d] of the two contacts."""
         return min_friction_3d([config.a.x, config.b.x], [config.a.n, config.b.n])
 
     def feasible(self, obj: Any, config: Config3D) -> Error:
-        """:func:`~crmgrasp.model.spatial.feasible3d` with the table."""
+        """[`feasible3d`][crmgrasp.model.spatial.feasible3d] with the table."""
         return feasible3d(obj, self.hand, config, self.table)
 
     def check_config(self, obj: Any, config: object, name: str = "configuration") -> Config3D:
-        """``config`` if it is a :class:`Config3D` of finite contacts with unit normals on
-        the solid's surface (within :data:`SURFACE_TOL`), else a one-line error."""
+        """``config`` if it is a [`Config3D`][] of finite contacts with unit normals on
+        the solid's surface (within [`SURFACE_TOL`][]), else a one-line error."""
         if not isinstance(config, Config3D) or not all(isinstance(c, Contact3D) for c in config):
             raise CrmgraspError(f"{name} must be a Config3D of two Contact3D, got {config!r}")
         for label, c in zip(self.labels, config):

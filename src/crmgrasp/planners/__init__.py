@@ -1,5 +1,5 @@
 """Planners that know the model: exact references over sampled starts (the clairvoyant
-bound, the belief-space optimum and its policy, :mod:`crmgrasp.planners.references`),
-explicit POMDPs (:mod:`crmgrasp.planners.pomdp`) and a POMDP built from a task and
-solved by point-based value iteration (:mod:`crmgrasp.planners.pomdp_task`). Their
-policies act through :func:`crmgrasp.sim.run_episode` like every learner."""
+bound, the belief-space optimum and its policy, [`crmgrasp.planners.references`][]),
+explicit POMDPs ([`crmgrasp.planners.pomdp`][]) and a POMDP built from a task and
+solved by point-based value iteration ([`crmgrasp.planners.pomdp_task`][]). Their
+policies act through [`crmgrasp.sim.run_episode`][] like every learner."""

@@ -6,8 +6,8 @@ what episodes return).
 
 A learner on the k-order MDP can at best find the best *k-order policy*: a table from
 k-order histories ``(o_t, a_{t-1}, o_{t-1}, ..., a_{t-k})`` (docs/model.md section 6) to
-CRMs. The belief-space optimum (:func:`~crmgrasp.planners.references.belief_optimum`)
-may need more memory than that. :func:`korder_search` finds a good k-order policy on a
+CRMs. The belief-space optimum ([`belief_optimum`][crmgrasp.planners.references.belief_optimum])
+may need more memory than that. [`korder_search`][] finds a good k-order policy on a
 set of sampled starts (or worlds) with the same noise-free dynamics and cost as the
 belief optimum, so the two compare directly:
 
@@ -26,7 +26,7 @@ of an episode of a given policy from it (CRMs, errors flagged in the observation
 grasp ending the episode), which a simulator reset to that world returns; the hidden
 states only memoise the noise-free steps (a step from the same state with the same CRM
 is the same), so re-running an episode costs no new simulation. Its budget is the
-number of episodes run (:attr:`KOrderResult.episodes`), about 10**5 to 10**6 for 10**3
+number of episodes run ([`KOrderResult.episodes`][]), about 10**5 to 10**6 for 10**3
 to 10**4 worlds: a simulator's learner, not a robot's.
 
 The result is an achievable k-order policy, so its mean cost is an *upper* bound on the
@@ -37,9 +37,9 @@ learner's remaining gap is the learner's; when it cannot, memory is the likely l
 with the same current observation (a back-off to k = 0), both during the search (the
 back-off of the pass's start, CRM 0 where no visited history has that observation; a
 history a kept change makes visited joins the table with that action) and in the
-returned :class:`~crmgrasp.agents.policy.GreedyPolicy` (where it is left unlisted, and
+returned [`GreedyPolicy`][crmgrasp.agents.policy.GreedyPolicy] (where it is left unlisted, and
 draws uniformly, if no visited history has its observation or the encoder has more than
-:data:`FILL_LIMIT` codes), so the policy runs, saves and evaluates like a learned one,
+[`FILL_LIMIT`][] codes), so the policy runs, saves and evaluates like a learned one,
 and on the starts searched it does what the search measured.
 """
 
@@ -132,7 +132,7 @@ def _percept(obs: int) -> Percept:
 
 
 FILL_LIMIT = 100_000
-"""Most history codes an encoder may have for :func:`_policy` to list every one (k <= 2 on
+"""Most history codes an encoder may have for [`_policy`][] to list every one (k <= 2 on
 the registered tasks); beyond it only visited histories are listed."""
 
 
@@ -147,8 +147,8 @@ def _backoff(enc: KOrderEncoder, table: dict[int, int], visits: Counter[int]) ->
 
 def _policy(task: Task, enc: KOrderEncoder, table: dict[int, int], visits: Counter[int], name: str) -> GreedyPolicy:
     """The table as a policy over every history code, unvisited ones backed off
-    (:func:`_backoff`; only visited ones when the encoder has more than
-    :data:`FILL_LIMIT` codes: the policy file would be too large)."""
+    ([`_backoff`][]; only visited ones when the encoder has more than
+    [`FILL_LIMIT`][] codes: the policy file would be too large)."""
     by_obs = _backoff(enc, table, visits)
     full: dict[int, tuple[int, ...]] = {}
     for code in range(enc.size) if enc.size <= FILL_LIMIT else sorted(visits):
@@ -160,7 +160,7 @@ def _policy(task: Task, enc: KOrderEncoder, table: dict[int, int], visits: Count
 
 
 INITS = ("belief", "blank")
-"""Where :func:`korder_search` starts: the projected belief-optimal policy (a planner),
+"""Where [`korder_search`][] starts: the projected belief-optimal policy (a planner),
 or CRM 0 everywhere (a learner from episodes)."""
 
 
@@ -224,7 +224,7 @@ def _descend(task: Task, ep: _Episodes, table: dict[int, int], runs: list[Run]) 
 
 def _adopt(enc: KOrderEncoder, table: dict[int, int], runs: list[Run], backoff: dict[int, int]) -> None:
     """Give every history the ``runs`` visit that ``table`` lacks the action it took there
-    (the back-off's, :meth:`_Episodes.run`)."""
+    (the back-off's, [`_Episodes.run`][])."""
     for _, codes in runs:
         for code in codes:
             if code not in table:

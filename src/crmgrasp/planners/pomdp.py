@@ -1,6 +1,6 @@
 """Explicit discrete POMDPs: belief update, point-based value iteration, Cassandra files.
 
-A :class:`POMDP` has states ``S``, actions ``A``, observations ``O``, sparse
+A [`POMDP`][] has states ``S``, actions ``A``, observations ``O``, sparse
 transitions ``T[a][s, s'] = Pr(s' | s, a)``, observations
 ``Z[a][s', o] = Pr(o | s', a)``, a start belief ``b0`` and a set of absorbing goal
 states. Every action costs 1 in a non-goal state and 0 in a goal state (reward
@@ -8,12 +8,12 @@ states. Every action costs 1 in a non-goal state and 0 in a goal state (reward
 
 Belief update (pomdp_py's notation): ``b'(s') = eta Z(o | s', a) sum_s T(s' | s, a) b(s)``.
 
-:func:`solve_pbvi` runs finite-horizon point-based value iteration (Pineau, Gordon
+[`solve_pbvi`][] runs finite-horizon point-based value iteration (Pineau, Gordon
 and Thrun 2003) over a set of reachable beliefs: ``Gamma_t`` holds one alpha vector
 per belief point, with its action; ``alpha_{a}(s) = r_a(s) + sum_o argmax_{alpha in
 Gamma_{t-1}} b . g_{a,o}^alpha``, ``g_{a,o}^alpha = T_a (Z_a[:, o] * alpha)``.
 
-:func:`write_cassandra` and :func:`read_cassandra` handle Tony Cassandra's
+[`write_cassandra`][] and [`read_cassandra`][] handle Tony Cassandra's
 ``.pomdp`` format (the subset written here: explicit ``T``, ``O`` entries, ``R``
 with wildcards), so external solvers (pomdp-solve, SARSOP) can cross-check.
 """
@@ -171,7 +171,7 @@ def write_cassandra(m: POMDP, path: str | os.PathLike[str]) -> Path:
 
 
 def read_cassandra(path: str | os.PathLike[str]) -> POMDP:
-    """Read a file written by :func:`write_cassandra` (that subset of the format)."""
+    """Read a file written by [`write_cassandra`][] (that subset of the format)."""
     head: dict[str, str] = {}
     t_rows: list[tuple[int, int, int, float]] = []
     o_rows: list[tuple[int, int, int, float]] = []

@@ -9,7 +9,7 @@ next cells (or the goal) and of discretized observations give ``T`` and ``Z``
 (maximum-likelihood estimates; the counts are reported in ``model.counts``). The
 goal emits its own observation (index ``n_obs - 1``).
 
-:class:`POMDPAgent` runs the point-based policy in the real simulator by belief
+[`POMDPAgent`][] runs the point-based policy in the real simulator by belief
 tracking; when an observation has probability 0 under the model, the belief falls
 back to the prediction without that observation.
 """
@@ -169,7 +169,7 @@ def build_task_pomdp(
 
 
 class POMDPAgent:
-    """Executes a PBVI policy of a :class:`TaskPOMDP` in the simulator."""
+    """Executes a PBVI policy of a [`TaskPOMDP`][] in the simulator."""
 
     def __init__(self, tp: TaskPOMDP, n_beliefs: int = 300, seed: int = 0) -> None:
         self.tp = tp
@@ -221,7 +221,7 @@ class POMDPAgent:
         self._left -= 1
 
     def run(self, config: Config) -> tuple[int, bool]:
-        """Execute from ``config`` (noise-free; :func:`crmgrasp.sim.run_episode`); return
+        """Execute from ``config`` (noise-free; [`crmgrasp.sim.run_episode`][]); return
         (CRMs, success)."""
         ep = run_episode(self.tp.task, self, np.random.default_rng(0), start=config)
         return ep.steps, ep.success

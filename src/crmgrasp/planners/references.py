@@ -5,10 +5,10 @@ states (on a family task, sampled worlds: each an object and a start on it), wit
 noise-free (deterministic) dynamics, and count CRMs per episode as
 the learners do (success ends an episode; ``task.max_steps`` truncates it).
 
-* :func:`clairvoyant_steps`: an agent that sees the true configuration needs the
+* [`clairvoyant_steps`][]: an agent that sees the true configuration needs the
   fewest CRMs that reach a grasp, found by breadth-first search over CRM
   sequences. Its mean over the starts is a bound no policy can beat.
-* :func:`belief_optimum`: the best any policy can do knowing the task model but
+* [`belief_optimum`][]: the best any policy can do knowing the task model but
   seeing only the discretized observations: the belief is the set of starts
   consistent with the history so far (each start's configuration after that
   history is determined), and
@@ -52,7 +52,7 @@ Step = tuple[State, int, bool]  # next state, observation index, grasped
 class _Model:
     """Cached deterministic transitions of a task (noise ignored) over hidden states
     ``(object, configuration)``: object 0 is the task's own; each
-    :class:`~crmgrasp.tasks.World` adds its object."""
+    [`World`][crmgrasp.tasks.World] adds its object."""
 
     def __init__(self, task: Task) -> None:
         self.task = task
@@ -109,7 +109,7 @@ class _Model:
 
     def _bfs(self, start: State, horizon: int) -> int | None:
         """Breadth-first search over CRM sequences. Configurations are visited once up
-        to :data:`SAME`: one reached again within rounding (a slide and its reverse)
+        to [`SAME`][]: one reached again within rounding (a slide and its reverse)
         is the same place, and searching it again cannot find a shorter sequence."""
         seen = {_key(start)}
         frontier = deque([(start, 0)])
@@ -159,7 +159,7 @@ def clairvoyant_steps(task: Task, config: Start, horizon: int | None = None) -> 
 
 
 def clairvoyant_bound(task: Task, starts: Sequence[Start], horizon: int | None = None) -> float:
-    """Mean of :func:`clairvoyant_steps` over ``starts``."""
+    """Mean of [`clairvoyant_steps`][] over ``starts``."""
     model = _Model(task)
     h = horizon or task.max_steps
     return float(np.mean([model.clairvoyant(model.state(c), h) for c in starts]))
@@ -283,7 +283,7 @@ class BeliefPolicy:
         self._groups = _first_groups(self._model, starts)
 
     def optimum(self) -> float:
-        """The belief-space optimum over the policy's starts (:func:`belief_optimum`'s
+        """The belief-space optimum over the policy's starts ([`belief_optimum`][]'s
         value, from the policy's own memo)."""
         h = self.task.max_steps
         groups = self._groups.values()
@@ -320,7 +320,7 @@ class BeliefPolicy:
         self._left -= 1
 
     def run(self, config: Start, rng: np.random.Generator | None = None) -> tuple[int, bool]:
-        """Execute the policy from ``config`` or a world (:func:`crmgrasp.sim.run_episode`; ``rng``
+        """Execute the policy from ``config`` or a world ([`crmgrasp.sim.run_episode`][]; ``rng``
         is drawn from only if the task has sensing noise); return (CRMs, success)."""
         ep = run_episode(self.task, self, rng if rng is not None else np.random.default_rng(0), start=config)
         return ep.steps, ep.success

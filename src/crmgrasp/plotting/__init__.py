@@ -1,6 +1,6 @@
 """Figures: the hand-object scene and the experiment plots.
 
-Built on :class:`matplotlib.figure.Figure` directly (no pyplot state), so drawing
+Built on `matplotlib.figure.Figure` directly (no pyplot state), so drawing
 works headless and in threads.
 """
 
@@ -118,7 +118,7 @@ def _draw_config(ax: Axes, hand: Hand, config: Config, scale: float, *, alpha: f
 def scene_figure(
     obj: Shape, hand: Hand, config: Config, outcome: Outcome | None = None, title: str | None = None
 ) -> Figure:
-    """A one-panel figure of :func:`draw_scene` (of :func:`crmgrasp.plotting.spatial.scene_figure3d`
+    """A one-panel figure of [`draw_scene`][] (of [`crmgrasp.plotting.spatial.scene_figure3d`][]
     for a solid: ``outcome`` then gives the configuration after the CRM)."""
     if not isinstance(obj, (Polygon, Disc)) and not hasattr(obj, "perimeter"):
         from crmgrasp.plotting.spatial import scene_figure3d
@@ -209,7 +209,7 @@ def learning_curve_figure(
     ylabel: str = "CRMs per episode",
 ) -> Figure:
     """Mean CRMs per episode vs episode, one line per learner (its fixed colour,
-    :func:`learner_color`) with a standard-error band, at most ``per_panel`` bands per
+    [`learner_color`][]) with a standard-error band, at most ``per_panel`` bands per
     panel (more learners: more panels, side by side, the same axes), the task's
     reference optimum dashed and the paper's (episode, CRMs) point. A curve equal to an
     earlier one is drawn dashed and named in the legend ("= SARSA ..."). Curves and bands

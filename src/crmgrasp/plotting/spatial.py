@@ -1,6 +1,6 @@
 """Figures of the spatial model: a solid on the table, the two contacts and the palm.
 
-Matplotlib's 3-D axes on a :class:`~matplotlib.figure.Figure` (no pyplot state). A
+Matplotlib's 3-D axes on a `Figure` (no pyplot state). A
 scene shows the solid (faces shaded), the table plane, each contact with its inward
 normal, the palm point, and, after a CRM, the configuration before it faded.
 """
@@ -127,7 +127,7 @@ def draw_scene3d(
 def scene_figure3d(
     solid: Solid, hand: Hand3D, config: Config3D, after: Config3D | None = None, title: str | None = None
 ) -> Figure:
-    """A one-panel figure of :func:`draw_scene3d`."""
+    """A one-panel figure of [`draw_scene3d`][]."""
     fig = Figure(figsize=(6, 5.2), layout="constrained")
     draw_scene3d(fig.add_subplot(projection="3d"), solid, hand, config, after, title=title)
     return fig
@@ -135,7 +135,7 @@ def scene_figure3d(
 
 def rollout_panels3d(hand: Hand3D, rows: Sequence[tuple[str, Solid, Sequence[Any]]]) -> Figure:
     """One row per rollout (``label``, its solid, its steps), one panel per CRM: each step
-    (``config``, ``after``, ``title``) drawn by :func:`draw_scene3d` (the 3-D Figure 8)."""
+    (``config``, ``after``, ``title``) drawn by [`draw_scene3d`][] (the 3-D Figure 8)."""
     ncols = max(len(steps) for _, _, steps in rows)
     fig = Figure(figsize=(3.6 * ncols, 3.6 * len(rows)), layout="constrained")
     for r, (label, solid, steps) in enumerate(rows):

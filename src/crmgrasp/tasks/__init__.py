@@ -1,8 +1,8 @@
 """Grasping tasks: object, hand, CRM set, observation bins, starts, goal.
 
-:mod:`crmgrasp.tasks.core` defines :class:`Task`, the start samplers and the registry
-(``"paper-box"`` is the paper's box task); :mod:`crmgrasp.tasks.files` reads tasks
-from TOML files and ``package.module:factory`` strings (:func:`resolve_task`, what
+[`crmgrasp.tasks.core`][] defines [`Task`][], the start samplers and the registry
+(``"paper-box"`` is the paper's box task); [`crmgrasp.tasks.files`][] reads tasks
+from TOML files and ``package.module:factory`` strings ([`resolve_task`][], what
 ``--task`` accepts) and writes them back as plain data.
 """
 

@@ -1,9 +1,9 @@
 """Named grasping tasks: object, hand, CRM set, observation bins, starts, goal.
 
-A :class:`Task` bundles everything an environment or experiment needs. Tasks are
-looked up by name with :func:`make_task` (``"paper-box"`` is docs/model.md section 7);
-users build their own by constructing :class:`Task` directly and may register a
-factory under a new name with :func:`register_task`.
+A [`Task`][] bundles everything an environment or experiment needs. Tasks are
+looked up by name with [`make_task`][] (``"paper-box"`` is docs/model.md section 7);
+users build their own by constructing [`Task`][] directly and may register a
+factory under a new name with [`register_task`][].
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ class Symmetry:
     the palm back on the right). Then CRM ``(c, f, r)`` corresponds to
     ``(c', f', -r)`` (primes: swapped labels), ``rho`` and the error flag are
     unchanged and ``(m_a, m_b)`` becomes ``(-m_b, -m_a)``. ``actions[i]`` is the index
-    of the CRM that corresponds to CRM ``i``; :class:`Task` checks it against that
+    of the CRM that corresponds to CRM ``i``; [`Task`][] checks it against that
     rule and the observation bins (moments binned by magnitude, the same thresholds
     for both). Learners may use it to pool experience (``symmetric=True``).
     """
@@ -84,7 +84,7 @@ class Task:
     name
         Registry name, e.g. ``"paper-box"``.
     obj
-        The object (:class:`~crmgrasp.model.geometry.Polygon`, :class:`~crmgrasp.model.geometry.Disc`, ...).
+        The object ([`Polygon`][crmgrasp.model.geometry.Polygon], [`Disc`][crmgrasp.model.geometry.Disc], ...).
     hand
         The two-contact hand.
     actions
@@ -96,14 +96,14 @@ class Task:
     mu_goal
         Success when ``min_friction(true config) <= mu_goal`` (unitless, >= 0).
     max_steps
-        Episode truncation, in CRMs (1 to :data:`MAX_STEPS`).
+        Episode truncation, in CRMs (1 to [`MAX_STEPS`][]).
     noise
         Sensing noise applied during the task (off by default).
     reference_mean_steps
         Best achievable mean CRMs per episode for a learner on this task (the
         belief-space optimum where known), used to report ``episodes_to_5pct``.
     symmetry
-        A declared mirror symmetry (:class:`Symmetry`), or None.
+        A declared mirror symmetry ([`Symmetry`][]), or None.
     grasp_reward
         Reward of the CRM that reaches a grasp (every other CRM: -1). The paper's "-1
         in all states" read literally gives -1 (the default); read as "in all non-goal
@@ -113,8 +113,8 @@ class Task:
         ``-1 - error_cost`` (0 in the paper). Makes failed attempts expensive, the
         Discussion's "infrequent failures [that] come with a high cost".
     family
-        An object family (:mod:`crmgrasp.model.families`), or None. With a family, each
-        episode draws its object (:meth:`instance`) and ``obj`` is only the shape
+        An object family ([`crmgrasp.model.families`][]), or None. With a family, each
+        episode draws its object (`instance`) and ``obj`` is only the shape
         scenes show (the family's nominal one); the smallest object the family can
         draw must fit the hand's aperture.
     """
@@ -260,22 +260,22 @@ class Task:
             )
 
     def sample_world(self, rng: np.random.Generator, accept: StartFilter | None = None) -> World:
-        """An episode's hidden world: :meth:`instance`, then a start on it."""
+        """An episode's hidden world: `instance`, then a start on it."""
         inst = self.instance(rng)
         return World(inst, inst.sample_start(rng, accept))
 
     def sample_start(self, rng: np.random.Generator, accept: StartFilter | None = None) -> Config:
         """A start configuration drawn from ``rng``. ``accept``: a compiled start filter,
-        used by samplers built on corner candidates (:class:`CornerStarts` and the presets
-        of :mod:`crmgrasp.tasks.presets`; the same start either way), ignored by others."""
+        used by samplers built on corner candidates ([`CornerStarts`][] and the presets
+        of `crmgrasp.tasks.presets`; the same start either way), ignored by others."""
         self._one_object()
         if accept is not None and getattr(self.starts, "takes_corner_filter", False):
             return self.starts(self.obj, self.hand, self.mu_goal, rng, accept)  # type: ignore[call-arg]
         return self.starts(self.obj, self.hand, self.mu_goal, rng)
 
     def sample_starts(self, rng: np.random.Generator, n: int, accept: StartFilter | None = None) -> np.ndarray:
-        """``n`` starts as rows of the model's layout: :meth:`CornerStarts.batch` (another stream than
-        :meth:`sample_start`'s, the same distribution; ``accept`` as there), or ``n``
+        """``n`` starts as rows of the model's layout: [`CornerStarts.batch`][] (another stream than
+        `sample_start`'s, the same distribution; ``accept`` as there), or ``n``
         scalar draws for other samplers."""
         self._one_object()
         if isinstance(self.starts, CornerStarts):
@@ -294,7 +294,7 @@ class Task:
         return mu <= self.mu_goal
 
     def is_success(self, config: Any) -> bool:
-        """docs/model.md section 5: :meth:`grasped` of :meth:`quality`."""
+        """docs/model.md section 5: `grasped` of [`quality`][]."""
         return self.grasped(self.quality(config))
 
     def action_names(self) -> tuple[str, ...]:

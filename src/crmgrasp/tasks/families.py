@@ -1,14 +1,14 @@
 """Tasks on object families: starts for any shape, a default CRM set, the registry.
 
-* :class:`BoundaryStarts`: the general start sampler. Contact one uniform in arclength
+* [`BoundaryStarts`][]: the general start sampler. Contact one uniform in arclength
   on the boundary (or on the part of it within ``near_vertex`` of a vertex), contact
   two uniform in arclength on the boundary points within the hand's aperture of it
   (the same region), a fair coin for which is ``a``; redrawn until the start rule
   holds (feasible and not already a grasp), at most ``max_tries`` times. Vertices
   themselves (no normal) are never drawn.
-* :func:`default_crms`: oppose either contact, and slide either contact by each
+* [`default_crms`][]: oppose either contact, and slide either contact by each
   offset in both directions: ``2 + 4 len(offsets)`` CRMs.
-* :func:`mirror_symmetry`: the action permutation of a CRM set under the mirror
+* [`mirror_symmetry`][]: the action permutation of a CRM set under the mirror
   (``(c, f, r) -> (c', f', -r)``), for families whose distribution of objects and
   starts is mirror-invariant (every family here: each draws reflection-invariant
   shapes, or shapes whose mirror images are drawn with the same density).
@@ -18,7 +18,7 @@
   ``mixed`` (boxes, discs, polygons, U handles and L shapes), and ``notch-or-box``
   (two objects alike at the touched corner: the cost-of-failure task). Success is the paper's
   ``mu_goal = 0.05`` except where shapes without parallel sides occur
-  (``polygon-family``, ``star``, ``mixed``): :data:`RUBBER`.
+  (``polygon-family``, ``star``, ``mixed``): [`RUBBER`][].
 """
 
 from __future__ import annotations
@@ -188,7 +188,7 @@ def default_crms(offsets: Sequence[float] = (0.04, 0.08)) -> tuple[CRM, ...]:
 
 
 def mirror_symmetry(actions: Sequence[CRM]) -> Symmetry:
-    """The :class:`Symmetry` mapping each CRM to its mirror ``(c', f', -r)`` in ``actions``;
+    """The [`Symmetry`][] mapping each CRM to its mirror ``(c', f', -r)`` in ``actions``;
     an error if some CRM's mirror is not in the set."""
     swap = {"a": "b", "b": "a"}
     index = {(a.c, a.f, a.r): i for i, a in enumerate(actions)}
@@ -219,7 +219,7 @@ def family_task(
     **kwargs: object,
 ) -> Task:
     """A task on ``family`` with the paper's hand and bins by default, the
-    :func:`default_crms`, :class:`BoundaryStarts` and the mirror symmetry."""
+    [`default_crms`][], [`BoundaryStarts`][] and the mirror symmetry."""
     acts = tuple(actions) if actions is not None else default_crms()
     return Task(
         name=name,

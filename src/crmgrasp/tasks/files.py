@@ -1,14 +1,14 @@
 """Tasks from files, from code, and back to plain data.
 
-A task file is TOML (:data:`TEMPLATE` is a commented example; ``crmgrasp
+A task file is TOML (`TEMPLATE` is a commented example; ``crmgrasp
 task-template`` prints it). Every key is checked: an unknown key, a missing one, a
 value of the wrong type or out of range gets a one-line error naming the file and the
-key. :func:`task_to_dict` writes a task in the same schema (as plain data, which is
-how a policy file carries its task), and :func:`task_from_dict` reads it back, so
+key. [`task_to_dict`][] writes a task in the same schema (as plain data, which is
+how a policy file carries its task), and [`task_from_dict`][] reads it back, so
 ``task_from_dict(task_to_dict(t))`` equals ``t`` for every task the schema can state.
 
-:func:`resolve_task` is what ``--task`` accepts: a registered name, a ``.toml`` file,
-or ``package.module:factory`` (a callable returning a :class:`Task`, or a Task).
+[`resolve_task`][] is what ``--task`` accepts: a registered name, a ``.toml`` file,
+or ``package.module:factory`` (a callable returning a [`Task`][], or a Task).
 """
 
 from __future__ import annotations
@@ -227,7 +227,7 @@ def _starts(table: Any, where: str = "[starts]") -> Any:
 
 def starts_dict(starts: Any) -> dict[str, Any]:
     """A start sampler in the task-file schema: its ``kind`` and its fields
-    (:func:`~crmgrasp.tasks.schema.write_fields`); ``{"kind": "custom"}`` for a sampler
+    ([`write_fields`][crmgrasp.tasks.schema.write_fields]); ``{"kind": "custom"}`` for a sampler
     written in Python, which does not travel."""
     kind = getattr(type(starts), "kind", "")
     if STARTS.get(kind) is not type(starts):
@@ -275,8 +275,8 @@ def _fields(cls: type) -> tuple[str, ...]:
 
 
 def task_from_dict(doc: Any) -> Task:
-    """The :class:`Task` a task document (parsed TOML, or :func:`task_to_dict`) states;
-    ``model = "spatial"`` states a spatial task (:mod:`crmgrasp.tasks.spatial_files`)."""
+    """The [`Task`][] a task document (parsed TOML, or [`task_to_dict`][]) states;
+    ``model = "spatial"`` states a spatial task (`crmgrasp.tasks.spatial_files`)."""
     model = doc.get("model", "planar") if isinstance(doc, dict) else "planar"
     if model not in ("planar", "spatial"):
         raise CrmgraspError(f'model must be "planar" or "spatial", got {shown(model)}')
@@ -318,7 +318,7 @@ def task_to_dict(task: Task) -> dict[str, Any]:
     """The task as plain data in the task-file schema.
 
     A start sampler other than the built-in kinds is written as ``{"kind": "custom"}``
-    (Python code does not travel); :func:`task_from_dict` refuses it."""
+    (Python code does not travel); [`task_from_dict`][] refuses it."""
     from crmgrasp.tasks.spatial import SpatialTask
 
     if isinstance(task, SpatialTask):
@@ -337,7 +337,7 @@ def task_to_dict(task: Task) -> dict[str, Any]:
 
 def key_reference() -> str:
     """Every key a task file takes, as a Markdown table read from the classes that own
-    them (:class:`~crmgrasp.tasks.core.Task`, the hands, the noise, the bins and each
+    them ([`Task`][crmgrasp.tasks.core.Task], the hands, the noise, the bins and each
     start sampler): key, type and default. ``crmgrasp task-template --keys`` prints it."""
     from crmgrasp.model.spatial import Hand3D
     from crmgrasp.tasks.spatial import SurfaceStarts
@@ -408,7 +408,7 @@ def _from_factory(spec: str) -> Task:
 
 
 def resolve_task(spec: str | Path | Task) -> Task:
-    """The task ``spec`` names: a :class:`Task` itself, a registered name, a ``.toml``
+    """The task ``spec`` names: a [`Task`][] itself, a registered name, a ``.toml``
     file, or ``package.module:factory``."""
     if isinstance(spec, Task):
         return spec
@@ -426,7 +426,7 @@ def resolve_task(spec: str | Path | Task) -> Task:
 
 
 def resolve_reading(spec: str | Task, *, starts: str | None = None, grasp_reward: float | None = None) -> Task:
-    """:func:`~crmgrasp.tasks.presets.with_reading` of the task ``spec`` names
-    (:func:`resolve_task`): what ``--task``, ``--start-preset`` and ``--grasp-reward``
+    """`with_reading` of the task ``spec`` names
+    ([`resolve_task`][]): what ``--task``, ``--start-preset`` and ``--grasp-reward``
     (or a study cell) state."""
     return with_reading(resolve_task(spec), starts=starts, grasp_reward=grasp_reward)

@@ -1,23 +1,23 @@
 """Start presets and task readings: the choices the paper leaves open, as options.
 
 The paper's Figure 7 task is read here as "a random corner, one contact uniform on each
-side" (:class:`~crmgrasp.tasks.starts.CornerStarts`). Its figures suggest other start
+side" ([`CornerStarts`][crmgrasp.tasks.starts.CornerStarts]). Its figures suggest other start
 distributions, and its reward sentence ("-1 in all states") has two readings. These
 are first-class options, so that their effect can be measured
 (``crmgrasp reproduce figure7-sensitivity``):
 
-* :class:`NearCornerStarts`: both contacts within ``within`` (0.10 m) of the same
+* [`NearCornerStarts`][]: both contacts within ``within`` (0.10 m) of the same
   corner, like the aliased starts of the paper's Figure 8(a);
-* :class:`VertexStarts`: both contacts near one given vertex, the labels fixed (a
+* [`VertexStarts`][]: both contacts near one given vertex, the labels fixed (a
   hand of fixed handedness);
-* :class:`LongSideStarts`: corner starts whose contact on the longer side is
+* [`LongSideStarts`][]: corner starts whose contact on the longer side is
   ``lo..hi`` from the corner, like the Robonaut trials of Figure 9;
-* :class:`MixtureStarts`: a weighted mixture of samplers;
-* ``grasp_reward`` (:class:`~crmgrasp.tasks.core.Task`): -1 or 0 for the grasping CRM.
+* [`MixtureStarts`][]: a weighted mixture of samplers;
+* ``grasp_reward`` ([`Task`][crmgrasp.tasks.core.Task]): -1 or 0 for the grasping CRM.
 
-:func:`with_reading` applies them to a task. Every sampler draws only from the ``rng``
+`with_reading` applies them to a task. Every sampler draws only from the ``rng``
 it is given and accepts a start by the start rule
-(:func:`~crmgrasp.tasks.starts.acceptable`: feasible and not already a grasp).
+([`acceptable`][crmgrasp.tasks.starts.acceptable]: feasible and not already a grasp).
 """
 
 from __future__ import annotations
@@ -226,7 +226,7 @@ _SYMMETRIC = ("corners", "near-corner")  # presets that map onto themselves unde
 
 
 def with_reading(task: Task, *, starts: str | None = None, grasp_reward: float | None = None) -> Task:
-    """``task`` with a start preset (:data:`START_PRESETS`) and/or a grasp reward. A
+    """``task`` with a start preset ([`START_PRESETS`][]) and/or a grasp reward. A
     declared symmetry is kept only for presets that are mirror-symmetric by construction."""
     changes: dict[str, object] = {}
     if starts is not None:

@@ -2,10 +2,10 @@
 
 Each reader checks one kind of value (a table's keys, a finite number, a list of numbers,
 the ``[[crm]]`` tables, the bins, a task name) and answers bad input with a one-line
-:class:`~crmgrasp._validation.CrmgraspError` that names the key. :func:`common_keys`
+`CrmgraspError` that names the key. [`common_keys`][]
 reads the keys both task-file models take (bins, noise, goal, rewards, length,
-reference, description, symmetry). :mod:`crmgrasp.tasks.files` (planar) and
-:mod:`crmgrasp.tasks.spatial_files` (spatial) build on them; neither imports the other's
+reference, description, symmetry). [`crmgrasp.tasks.files`][] (planar) and
+`crmgrasp.tasks.spatial_files` (spatial) build on them; neither imports the other's
 readers.
 """
 
@@ -87,7 +87,7 @@ def read_fields(cls: type, table: Any, where: str, prefix: str, skip: Collection
     """The keyword arguments that ``table`` states for the dataclass ``cls``.
 
     Its keys are the class's constructor fields (less ``skip``); each value is checked
-    against the field's type (:func:`_typed`; errors name the key as ``prefix + key``); a
+    against the field's type (`_typed`; errors name the key as ``prefix + key``); a
     key left out takes the class's default, and the class itself checks the bounds. The
     class owns its schema: defaults, types and bounds are stated once, there."""
     allowed, required = init_keys(cls)
@@ -97,7 +97,7 @@ def read_fields(cls: type, table: Any, where: str, prefix: str, skip: Collection
 
 
 def write_fields(obj: Any, skip: Collection[str] = ()) -> dict[str, Any]:
-    """A dataclass as the table :func:`read_fields` reads back: every constructor field
+    """A dataclass as the table [`read_fields`][] reads back: every constructor field
     (less ``skip``) in declaration order, tuples as lists; a field that is ``None`` or
     infinite is left out, which reads back as its default (``None`` or infinity)."""
     out: dict[str, Any] = {}
@@ -186,7 +186,7 @@ def crm_tables(value: Any, make: Callable[[str, str, Any, str], Any] | None = No
 
 def bins_table(table: Any, names: tuple[str, ...] = Discretizer().names) -> Discretizer:
     """The ``[bins]`` table: thresholds per observation name of the model (``names``;
-    each a list of numbers, its default :class:`~crmgrasp.model.sensing.Discretizer`'s when
+    each a list of numbers, its default [`Discretizer`][crmgrasp.model.sensing.Discretizer]'s when
     left out) and ``abs_moments``."""
     t = table_keys(table, "[bins]", {*names, "abs_moments"})
     abs_m = t.get("abs_moments", True)
@@ -217,7 +217,7 @@ def checked_name(name: Any) -> str:
 
 
 SCALAR_KEYS = ("description", "mu_goal", "max_steps", "grasp_reward", "error_cost", "reference_mean_steps")
-"""The top-level keys of every task file that are fields of :class:`~crmgrasp.tasks.core.Task`
+"""The top-level keys of every task file that are fields of [`Task`][crmgrasp.tasks.core.Task]
 itself: read by their field types, bounded by the Task."""
 
 COMMON_SECTIONS = ("name", "hand", "crm", "bins", "starts", "noise", "family", "symmetry", *SCALAR_KEYS)
@@ -225,7 +225,7 @@ COMMON_SECTIONS = ("name", "hand", "crm", "bins", "starts", "noise", "family", "
 
 
 def common_keys(d: dict[str, Any], kw: dict[str, Any]) -> None:
-    """The keys planar and spatial task files share (bins, noise, :data:`SCALAR_KEYS`,
+    """The keys planar and spatial task files share (bins, noise, [`SCALAR_KEYS`][],
     symmetry), checked into the task's keyword arguments ``kw``."""
     if "bins" in d:
         kw["discretizer"] = section("bins", bins_table, d["bins"])
@@ -245,7 +245,7 @@ def common_keys(d: dict[str, Any], kw: dict[str, Any]) -> None:
 
 def common_dict(task: Task, hand: Any) -> dict[str, Any]:
     """What planar and spatial task files share, written from ``task`` (its ``hand``:
-    the planar or the spatial one): the inverse of :func:`common_keys` with the name,
+    the planar or the spatial one): the inverse of [`common_keys`][] with the name,
     the hand and the bins."""
     doc: dict[str, Any] = {"name": task.name, **{k: getattr(task, k) for k in SCALAR_KEYS}}
     if task.reference_mean_steps is None:

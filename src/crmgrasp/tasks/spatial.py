@@ -1,13 +1,13 @@
 """Spatial tasks: the hand grasping a solid on a table by 3-D CRMs (docs/model-3d.md).
 
-A :class:`SpatialTask` is a :class:`~crmgrasp.tasks.Task` whose world is the spatial
-model's: a solid (:mod:`crmgrasp.model.solids`) or a family of solids on the table
-(:mod:`crmgrasp.model.solid_families`), the :class:`~crmgrasp.model.spatial.Hand3D`,
-:class:`~crmgrasp.model.spatial.CRM3D` actions and :class:`~crmgrasp.model.spatial.Config3D`
+A [`SpatialTask`][] is a [`Task`][crmgrasp.tasks.Task] whose world is the spatial
+model's: a solid ([`crmgrasp.model.solids`][]) or a family of solids on the table
+([`crmgrasp.model.solid_families`][]), the [`Hand3D`][crmgrasp.model.spatial.Hand3D],
+[`CRM3D`][crmgrasp.model.spatial.CRM3D] actions and [`Config3D`][crmgrasp.model.spatial.Config3D]
 configurations. It holds the spatial contact model
-(:class:`~crmgrasp.model.spatial_model.SpatialModel`), through which the task's rule
+([`SpatialModel`][crmgrasp.model.spatial_model.SpatialModel]), through which the task's rule
 methods (``crm``, ``execute``, ``read``, ``observe``, ``quality``, ``check_config``) run, so
-the one episode loop (:mod:`crmgrasp.sim`), the learners, the references and the environments
+the one episode loop ([`crmgrasp.sim`][]), the learners, the references and the environments
 step it unchanged. What the agent sees is the planar model's: ``rho``, ``|m_a|``,
 ``|m_b|`` in the same bins (24 discretized observations) and the error flag.
 
@@ -64,7 +64,7 @@ def spatial_crms(step: float = 0.05) -> tuple[CRM3D, ...]:
 
 @dataclass(frozen=True)
 class SurfaceStarts:
-    """Spatial starts: each contact is the radial projection (:func:`~crmgrasp.model.solids.surface_point`)
+    """Spatial starts: each contact is the radial projection ([`surface_point`][crmgrasp.model.solids.surface_point])
     of a direction drawn uniformly on the sphere (three standard normals, normalised),
     contact ``a`` first; the pair is resampled until feasible (within the aperture, palm
     clear, neither contact on the table), not already a grasp, and not both on surfaces
@@ -109,10 +109,10 @@ class SurfaceStarts:
 
 @dataclass(frozen=True)
 class SpatialTask(Task):
-    """A task in the spatial model. Fields as :class:`~crmgrasp.tasks.Task`, with ``obj`` a
-    solid (:data:`~crmgrasp.model.solids.Solid`), ``hand`` a :class:`Hand3D`, ``actions``
-    :class:`CRM3D`, ``starts`` a :class:`SurfaceStarts`, ``family`` a
-    :class:`~crmgrasp.model.solid_families.SolidFamily`, and ``table`` the height of the
+    """A task in the spatial model. Fields as [`Task`][crmgrasp.tasks.Task], with ``obj`` a
+    solid ([`Solid`][crmgrasp.model.solids.Solid]), ``hand`` a [`Hand3D`][], ``actions``
+    [`CRM3D`][], ``starts`` a [`SurfaceStarts`][], ``family`` a
+    [`SolidFamily`][crmgrasp.model.solid_families.SolidFamily], and ``table`` the height of the
     table plane (metres; ``None``: no table). Success: ``min_friction_3d <= mu_goal``
     (two point contacts never close a spatial grasp; the squeeze is what they hold)."""
 
@@ -140,7 +140,7 @@ class SpatialTask(Task):
 
     @property
     def hand3d(self) -> Hand3D:
-        """The hand (typed as a :class:`Hand3D`)."""
+        """The hand (typed as a [`Hand3D`][])."""
         return self.hand  # type: ignore[return-value]
 
     def acceptable(self, config: Config3D) -> bool:
@@ -148,7 +148,7 @@ class SpatialTask(Task):
         return self.feasible(config) is Error.NONE and not self.is_success(config)
 
     def sample_start(self, rng: np.random.Generator, accept: Any = None) -> Any:
-        """A start on the object (:class:`SurfaceStarts`; ``accept``: a kernel's compiled
+        """A start on the object ([`SurfaceStarts`][]; ``accept``: a kernel's compiled
         decision, the same start either way)."""
         self._one_object()
         return self.starts(self, rng, accept)
@@ -161,7 +161,7 @@ class SpatialTask(Task):
 
 def spatial_symmetry(actions: tuple[CRM3D, ...]) -> Symmetry:
     """The mirror symmetry of a spatial CRM set closed under
-    :meth:`~crmgrasp.model.spatial_model.SpatialModel.mirror_crm`.
+    [`mirror_crm`][crmgrasp.model.spatial_model.SpatialModel.mirror_crm].
 
     A reflection ``M`` in a vertical plane that contains the hand's forward axis ``g``
     (``y -> -y`` for the default axes) maps each tangent frame's ``t_1`` to ``-M t_1`` and

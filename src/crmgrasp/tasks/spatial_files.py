@@ -1,6 +1,6 @@
 """Spatial tasks in task files: ``model = "spatial"`` (docs/model-3d.md section 6).
 
-The schema follows the planar one (:mod:`crmgrasp.tasks.files`) with spatial parts::
+The schema follows the planar one ([`crmgrasp.tasks.files`][]) with spatial parts::
 
     name = "my-cup"
     model = "spatial"
@@ -147,7 +147,7 @@ def _starts(table: Any) -> SurfaceStarts:
 
 
 def spatial_from_dict(doc: Any) -> SpatialTask:
-    """The :class:`SpatialTask` of a task document with ``model = "spatial"``."""
+    """The [`SpatialTask`][] of a task document with ``model = "spatial"``."""
     d = table_keys(doc, "the task file", SPATIAL_KEYS, {"name", "hand", "crm"})
     name = checked_name(d["name"])
     if ("solid" in d) == ("family" in d):

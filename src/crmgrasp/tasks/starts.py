@@ -1,13 +1,13 @@
 """Start samplers: where an episode's contacts are placed before the first CRM.
 
 A sampler draws a start configuration from the generator it is given and accepts it by
-the start rule (:func:`acceptable`: feasible, docs/model.md section 2, and not already a
-grasp). :class:`CornerStarts` is the paper's (docs/model.md section 7): a random polygon
-corner and one contact on each side meeting there; :class:`UniformStarts` places both
+the start rule ([`acceptable`][]: feasible, docs/model.md section 2, and not already a
+grasp). [`CornerStarts`][] is the paper's (docs/model.md section 7): a random polygon
+corner and one contact on each side meeting there; [`UniformStarts`][] places both
 contacts anywhere on the boundary. Each sampler class states its task-file ``kind`` and
-checks its own parameters (:mod:`crmgrasp.tasks.files` reads and writes them from its
-fields); more samplers live in :mod:`crmgrasp.tasks.presets`,
-:mod:`crmgrasp.tasks.families` and :mod:`crmgrasp.tasks.spatial`.
+checks its own parameters ([`crmgrasp.tasks.files`][] reads and writes them from its
+fields); more samplers live in `crmgrasp.tasks.presets`,
+[`crmgrasp.tasks.families`][] and [`crmgrasp.tasks.spatial`][].
 """
 
 from __future__ import annotations
@@ -47,9 +47,9 @@ class StartSampler(Protocol):
 
 StartFilter = Callable[[Shape, Hand, float, np.ndarray], np.ndarray]
 """``(obj, hand, mu_goal, u) -> starts``: the accepted corner-start candidates of the
-uniforms ``u`` (``(4, m)``, see :func:`corner_candidate`), in order, as rows of the
-planar layout (:func:`~crmgrasp.model.contacts.configs_to_array`).
-:func:`accept_corner_candidates` is the reference; :mod:`crmgrasp.kernels` supplies a
+uniforms ``u`` (``(4, m)``, see [`corner_candidate`][]), in order, as rows of the
+planar layout ([`configs_to_array`][crmgrasp.model.contacts.configs_to_array]).
+[`accept_corner_candidates`][] is the reference; [`crmgrasp.kernels`][] supplies a
 compiled one that makes the same decisions."""
 
 
@@ -79,7 +79,7 @@ def corner_candidate(obj: Polygon, u_corner: float, u_in: float, u_out: float, u
 
 
 def accept_corner_candidates(obj: Shape, hand: Hand, mu_goal: float, u: np.ndarray) -> np.ndarray:
-    """Reference :data:`StartFilter`: :func:`corner_candidate` and :func:`acceptable` per
+    """Reference [`StartFilter`][]: [`corner_candidate`][] and [`acceptable`][] per
     column of ``u``."""
     assert isinstance(obj, Polygon)
     rows = []
@@ -120,7 +120,7 @@ def corner_boxes(obj: Polygon, aperture: float) -> tuple[np.ndarray, np.ndarray,
 
 
 def corner_proposal(w: np.ndarray, cum: np.ndarray, c_in: np.ndarray, c_out: np.ndarray) -> np.ndarray:
-    """Uniforms ``w`` (``(4, m)``) to candidates in :func:`corner_candidate`'s
+    """Uniforms ``w`` (``(4, m)``) to candidates in [`corner_candidate`][]'s
     parametrisation: corner ``k`` with probability ``cum[k] - cum[k - 1]``, a contact
     uniform within ``c_in[k]`` of the corner on the incoming side and within
     ``c_out[k]`` on the outgoing side (a draw of exactly 0, the corner itself, is
@@ -146,8 +146,8 @@ class CornerStarts:
     Each attempt draws four uniforms in one call: corner (``floor(u n)``), fraction
     along the incoming side, fraction along the outgoing side, coin (a is the
     incoming-side contact when ``u < 0.5``). A fraction of exactly 0 (a vertex) is
-    rejected. ``accept`` (a compiled :data:`StartFilter`, given by a kernel) decides
-    each candidate as :func:`acceptable` does, so the stream is the same with or
+    rejected. ``accept`` (a compiled [`StartFilter`][], given by a kernel) decides
+    each candidate as [`acceptable`][] does, so the stream is the same with or
     without it.
     """
 
@@ -186,8 +186,8 @@ class CornerStarts:
     ) -> np.ndarray:
         """``n`` starts as rows of the planar layout (``(n, 8)``), drawn in rounds of candidates.
 
-        Same distribution as :meth:`__call__`, not the same stream: candidates come
-        from a tighter proposal (:func:`corner_proposal`) and pass :func:`acceptable`
+        Same distribution as `__call__`, not the same stream: candidates come
+        from a tighter proposal ([`corner_proposal`][]) and pass [`acceptable`][]
         through ``accept`` (the reference filter, or a compiled one making the same
         decisions, so the stream does not depend on which).
         """

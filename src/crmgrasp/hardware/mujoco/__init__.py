@@ -2,7 +2,7 @@
 
 Needs the optional extra ``crmgrasp[mujoco]`` (``mujoco>=3.2,<5``). The modules
 import MuJoCo lazily, so ``import crmgrasp.hardware.mujoco`` works without it and the
-first use raises a one-line :class:`~crmgrasp._validation.CrmgraspError`.
+first use raises a one-line `CrmgraspError`.
 Rendering is headless: ``MUJOCO_GL`` defaults to ``egl`` here (set it to
 ``osmesa`` where EGL is missing).
 """

@@ -1,13 +1,13 @@
 """A MuJoCo-simulated two-fingertip hand that executes CRMs as real motions.
 
-:class:`MujocoHand` implements :class:`~crmgrasp.hardware.runner.HandInterface`. It knows
+[`MujocoHand`][] implements [`HandInterface`][crmgrasp.hardware.runner.HandInterface]. It knows
 its own kinematics (fingertip sensor poses) but not the object: ``sense()`` reads
 the two fingertip force/torque sensors (with white noise and a slow linear drift
 per channel), subtracts each sensor's tare (taken whenever that fingertip is
 free), averages ``sense_ticks`` control ticks, and turns each wrench into a
-contact by intrinsic contact sensing (:func:`~crmgrasp.hardware.contact_sensing.contact_from_wrench`
-on a :class:`~crmgrasp.hardware.contact_sensing.Circle` of the tip radius). MuJoCo's
-contact list is used only by :meth:`MujocoHand.true_config`, for evaluation.
+contact by intrinsic contact sensing ([`contact_from_wrench`][crmgrasp.hardware.contact_sensing.contact_from_wrench]
+on a [`Circle`][crmgrasp.hardware.contact_sensing.Circle] of the tip radius). MuJoCo's
+contact list is used only by [`MujocoHand.true_config`][], for evaluation.
 
 A CRM ``(c, f, r)`` runs as (docs/model.md section 3 made physical):
 

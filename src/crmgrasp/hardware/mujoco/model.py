@@ -64,7 +64,7 @@ class PhysicsParams:
     filter_tau: float = 0.5
     """High-pass filter time constant, s."""
     contact_threshold: float = 0.2
-    """Smallest tared force that :meth:`MujocoHand.sense` accepts as contact, N."""
+    """Smallest tared force that [`MujocoHand.sense`][] accepts as contact, N."""
     force_noise: float = 0.01
     """Standard deviation of each force channel's white noise, N."""
     torque_noise: float = 2e-5
@@ -78,7 +78,7 @@ class PhysicsParams:
     torque_drift: float = 1e-5
     """Standard deviation of each torque channel's drift rate, N m/s."""
     sense_ticks: int = 5
-    """Control ticks averaged by one :meth:`MujocoHand.sense`."""
+    """Control ticks averaged by one [`MujocoHand.sense`][]."""
     settle_ticks: int = 20
     """Ticks a fingertip holds after contact before the CRM ends."""
 

@@ -1,7 +1,7 @@
 """Headless rendering of the MuJoCo stand-in to PNG and GIF.
 
 MuJoCo picks its OpenGL backend when it is first imported, from ``MUJOCO_GL``;
-:func:`~crmgrasp.hardware.mujoco.require_mujoco` sets it to ``egl`` unless the user set
+[`require_mujoco`][crmgrasp.hardware.mujoco.require_mujoco] sets it to ``egl`` unless the user set
 it. Where EGL is missing, ``crmgrasp show --hand mujoco`` retries once in a
 child process with ``MUJOCO_GL=osmesa``.
 """
@@ -51,7 +51,7 @@ def render(hand: MujocoHand, width: int = 480, height: int = 320) -> np.ndarray:
 
 
 class Recorder:
-    """Collects a frame every ``every`` control ticks of ``hand`` (install with :meth:`attach`)."""
+    """Collects a frame every ``every`` control ticks of ``hand`` (install with [`attach`][])."""
 
     def __init__(self, hand: MujocoHand, every: int = 10, width: int = 360, height: int = 240) -> None:
         self.camera = _Camera(hand, width, height)
@@ -99,7 +99,7 @@ def save_gif(frames: list[np.ndarray], path: str | os.PathLike[str], fps: float 
 def show(task: Task, start: Any, crm: Any, out: str | os.PathLike[str], rng: np.random.Generator) -> str:
     """Render the MuJoCo scene from ``start`` (and the motion of ``crm``) to ``out``:
     a ``.png`` of the final scene or a ``.gif`` of the whole motion (a planar or a spatial
-    task: :func:`~crmgrasp.hardware.mujoco.spatial.mujoco_hand`). Returns a summary line."""
+    task: [`mujoco_hand`][crmgrasp.hardware.mujoco.spatial.mujoco_hand]). Returns a summary line."""
     path = Path(out)
     if path.suffix.lower() not in {".png", ".gif"}:
         raise CrmgraspError(f"--out must end in .png or .gif with the mujoco backend, got {path.name!r}")

@@ -1,15 +1,15 @@
 """The MuJoCo stand-in in space: a solid free on a frictional table, two spherical
 fingertips with force/torque sensors, 3-D CRMs as real motions.
 
-:class:`MujocoHand3D` implements :class:`~crmgrasp.hardware.runner.HandInterface` for
-spatial tasks (:class:`~crmgrasp.tasks.spatial.SpatialTask`): ``sense()`` returns a
-:class:`~crmgrasp.model.spatial.Config3D` from the fingertip wrenches alone (intrinsic
-contact sensing on a :class:`~crmgrasp.hardware.contact_sensing.Sphere`), ``execute``
-runs a :class:`~crmgrasp.model.spatial.CRM3D`. It shares the planar hand's servos,
+[`MujocoHand3D`][] implements [`HandInterface`][crmgrasp.hardware.runner.HandInterface] for
+spatial tasks ([`SpatialTask`][crmgrasp.tasks.spatial.SpatialTask]): ``sense()`` returns a
+[`Config3D`][crmgrasp.model.spatial.Config3D] from the fingertip wrenches alone (intrinsic
+contact sensing on a [`Sphere`][crmgrasp.hardware.contact_sensing.Sphere]), ``execute``
+runs a [`CRM3D`][crmgrasp.model.spatial.CRM3D]. It shares the planar hand's servos,
 sensor model (bias, drift, white noise, tare, averaging) and contact detector
-(:class:`~crmgrasp.hardware.mujoco.hand.MujocoHand`); what differs is the geometry.
+([`MujocoHand`][crmgrasp.hardware.mujoco.hand.MujocoHand]); what differs is the geometry.
 
-Scene (:func:`spatial_mjcf`, world frame = the task's: z up, the table plane z =
+Scene ([`spatial_mjcf`][], world frame = the task's: z up, the table plane z =
 ``task.table``): the solid (a convex polyhedron as a MuJoCo mesh, a cylinder as a
 cylinder) on a free joint resting on the table (friction ``floor_friction``, mass
 ``object_mass``; between them alone MuJoCo's rolling friction, ``rolling_friction``, so
@@ -24,8 +24,8 @@ the table, as in the kinematic model) nor with each other.
 A CRM ``(c, f, r)`` runs as (docs/model-3d.md section 3 made physical):
 
 1. the chord of the goal line from the *sensed* configuration
-   (:func:`~crmgrasp.model.spatial.goal_chord3d`; none: aperture error, no motion), its
-   start moved up to the table plane by :func:`~crmgrasp.model.spatial.table_lift`
+   ([`goal_chord3d`][crmgrasp.model.spatial.goal_chord3d]; none: aperture error, no motion), its
+   start moved up to the table plane by [`table_lift`][crmgrasp.model.spatial.table_lift]
    (never above the table before the chord ends: palm error, no motion);
 2. the moving fingertip backs off by ``hand.backoff`` along its sensed outward normal
    and tares its sensor (the other keeps pressing);
@@ -38,7 +38,7 @@ A CRM ``(c, f, r)`` runs as (docs/model-3d.md section 3 made physical):
    rises by ``contact_on`` (contact), the palm collides (palm error) or the chord ends
    (aperture error);
 5. press with ``hold_force``, settle, sense; a sensed surface facing the palm side
-   (:func:`~crmgrasp.model.spatial.faces_palm3d`, the hand's tolerance) is a palm error;
+   ([`faces_palm3d`][crmgrasp.model.spatial.faces_palm3d], the hand's tolerance) is a palm error;
 6. on any error the fingertip goes back to its back-off point (collisions off) and
    re-approaches along its old normal.
 """
@@ -125,9 +125,9 @@ def spatial_mjcf(task: SpatialTask, params: PhysicsParams | None = None) -> str:
 
 
 def mujoco_hand(task: Task, start: Any, rng: np.random.Generator, params: PhysicsParams | None = None) -> MujocoHand:
-    """The MuJoCo stand-in for ``task`` by its contact model (:data:`HANDS`):
-    :class:`MujocoHand3D` on a spatial task (a family task on its nominal solid), the
-    planar :class:`~crmgrasp.hardware.mujoco.hand.MujocoHand` on a planar one."""
+    """The MuJoCo stand-in for ``task`` by its contact model ([`HANDS`][]):
+    [`MujocoHand3D`][] on a spatial task (a family task on its nominal solid), the
+    planar [`MujocoHand`][crmgrasp.hardware.mujoco.hand.MujocoHand] on a planar one."""
     try:
         hand = HANDS[task.model.kind]
     except KeyError:
@@ -145,14 +145,14 @@ class MujocoHand3D(MujocoHand):
     task
         A spatial task on one solid (``task.sample_world(rng).task``); its hand's
         ``palm_normal_tol`` applies to the sensed surfaces
-        (:func:`~crmgrasp.hardware.mujoco.hardware_task`).
+        ([`hardware_task`][crmgrasp.hardware.mujoco.hardware_task]).
     start
         The true starting contacts; each fingertip is placed just outside its contact
         and approaches along the inward normal until contact is felt.
     rng
         Source of all sensor noise and drift.
     params
-        Physical and controller parameters (:class:`~crmgrasp.hardware.mujoco.model.PhysicsParams`).
+        Physical and controller parameters ([`PhysicsParams`][crmgrasp.hardware.mujoco.model.PhysicsParams]).
     """
 
     camera = "view"
