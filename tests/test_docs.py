@@ -93,6 +93,9 @@ def test_site_builds_strictly(tmp_path):
         if (m := leftover.search(p.read_text(encoding="utf-8")))
     }
     assert found == {}, f"Sphinx roles or unrendered cross-references in the built pages: {found}"
+    tutorial = (tmp_path / "site" / "tutorial" / "index.html").read_text(encoding="utf-8")
+    assert "stylesheets/extra.css" in tutorial  # long commands wrap (docs/stylesheets/extra.css)
+    assert "pre-wrap" in (tmp_path / "site" / "stylesheets" / "extra.css").read_text()
     api = (tmp_path / "site" / "api" / "tasks" / "index.html").read_text(encoding="utf-8")
     assert api.count("autorefs-internal") > 20  # docstrings link to what they name
 
