@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -110,7 +111,8 @@ def test_sweep_runs_tables_report_and_resume(tmp_path, capsys, monkeypatch):
     assert calls == []  # every unit was recorded: nothing runs again
     assert main(["sweep", "report", str(one)]) == 0
     report = (one / "report.md").read_text()
-    assert "| cell | task | agent | alpha |" in report and "failed" in report
+    assert "| task | cell | agent | alpha | trials | mean CRMs | vs optimum |" in report and "failed" in report
+    assert re.search(r"\| paper-box \| sarsa-k2-\w+ \| sarsa \| 0\.\d \| 6 \| [\d.]+ \| \+\d+\.\d% \|", report)
     for name in ("profile.png", "param_agent.png", "param_alpha.png"):
         assert (one / name).exists()
 

@@ -263,16 +263,18 @@ def _figure(path: Path, s: dict[str, Any]) -> None:
         ("search_heldout_mean_crms", "held-out: k = 1 policy search from episodes", "tab:purple"),
         ("planner_heldout_mean_crms", "held-out: k = 1 policy planned on sampled worlds", "tab:green"),
     ]
+    import textwrap
+
     names = list(s["families"])
-    fig, ax = plt.subplots(figsize=(2.2 + 1.8 * len(names), 3.8))
+    fig, ax = plt.subplots(figsize=(max(6.4, 2.2 + 1.8 * len(names)), 5.0), layout="constrained")
     width = 0.8 / len(bars)
     for i, (key, label, color) in enumerate(bars):
         vals = [s["families"][n].get(key, np.nan) for n in names]
         ax.bar(np.arange(len(names)) + (i - (len(bars) - 1) / 2) * width, vals, width, label=label, color=color)
     ax.set_xticks(np.arange(len(names)), names)
     ax.set_ylabel("CRMs per episode")
-    ax.legend(fontsize=8, ncols=2)
-    ax.set_title(f"One policy per family ({s['budget']})", fontsize=9)
-    fig.tight_layout()
+    fig.legend(fontsize=8, ncols=2, loc="outside lower center")  # below the axes: it covers no bar
+    title = f"One policy per family ({s['budget']})"
+    ax.set_title("\n".join(textwrap.wrap(title, 90)), fontsize=9)  # wrapped: never clipped
     save_figure(fig, path)
     plt.close(fig)

@@ -279,16 +279,16 @@ def _markdown(summary: dict[str, Any], config: SensitivityConfig) -> str:
 def _mechanism_figure(mechanism: dict[str, tuple[np.ndarray, np.ndarray]], config: SensitivityConfig) -> Any:
     from matplotlib.figure import Figure
 
-    from crmgrasp.plotting import learner_color
+    from crmgrasp.plotting import learner_colors
 
-    shown = list(mechanism)[:4]
+    shown, colors = list(mechanism)[:4], learner_colors(list(mechanism))
     fig = Figure(figsize=(5.0 * len(shown), 4.0), layout="constrained")
     axes = fig.subplots(1, len(shown), squeeze=False, sharey=True)[0]
     for ax, label in zip(axes, shown):
         err, ok = mechanism[label]
         ep = np.arange(1, len(err) + 1)
         ax.plot(ep, err, color="tab:red", label="CRMs ending in an error")
-        ax.plot(ep, ok, color=learner_color(label), label="CRMs without an error")
+        ax.plot(ep, ok, color=colors[label], label="CRMs without an error")
         ax.set_title(label, fontsize=9)
         ax.set_xlabel("training episode")
         ax.grid(alpha=0.3)

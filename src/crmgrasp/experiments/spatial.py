@@ -130,6 +130,7 @@ def spatial(
 
 def _figure(out: Path, summary: dict[str, Any], curves: list[list[Any]], cfg: SpatialConfig) -> None:
     from matplotlib.figure import Figure
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter
 
     from crmgrasp.plotting import learner_color
 
@@ -143,11 +144,18 @@ def _figure(out: Path, summary: dict[str, Any], curves: list[list[Any]], cfg: Sp
         ax.axhline(row["belief_optimum"], color="k", ls="--", lw=1, label="belief-space optimum")
         ax.axhline(row["clairvoyant_bound"], color="0.5", ls=":", lw=1, label="clairvoyant bound")
         ax.set_xscale("log")
+        ax.xaxis.set_major_locator(FixedLocator(sorted({e for t, _, e, _ in curves if t == name})))
+        ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:,.0f}"))  # the checkpoints, plainly
+        ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_xlabel("training episode")
         ax.set_ylabel(f"greedy CRMs per episode ({cfg.checkpoint_episodes} evaluation starts)")
         ax.set_title(f"{name}: {cfg.trials} trials x {row['episodes']} episodes", fontsize=10)
         ax.legend(fontsize=7)
-    fig.suptitle(f"Spatial CRMs, seed {cfg.seed}; references on {', '.join(map(str, cfg.heldout))} worlds", fontsize=9)
+    fig.suptitle(
+        f"Spatial CRMs, seed {cfg.seed}: greedy checkpoints on {cfg.checkpoint_episodes} fixed starts (the summary's "
+        f"learned numbers are on the held-out worlds); references on {', '.join(map(str, cfg.heldout))} worlds",
+        fontsize=9,
+    )
     save_figure(fig, out / "spatial.png")
 
 

@@ -40,6 +40,7 @@ import hashlib
 import itertools
 import json
 import math
+import textwrap
 import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -391,19 +392,11 @@ def _recorded_study(rec: dict[str, Any], out: Path) -> Study:
     """The study a sweep's run record holds, checked as a study file is."""
     doc = rec["config"].get("study")
     try:
-        keys = ("name", "trials", "episodes", "eval_episodes", "seeds", "cells")
-        name, trials, episodes, eval_episodes, seeds, cells = (doc[k] for k in keys)  # type: ignore[index]
-        again = study_from_dict(
-            {"name": name, "trials": trials, "episodes": episodes, "eval_episodes": eval_episodes, "seeds": seeds}
-            | {"cell": [{k: v for k, v in c.items() if k != "task"} for c in cells]}
-        )
-        tasks = [c["task"] for c in cells]
-        if not all(isinstance(t, str) for t in tasks):
-            raise TypeError("a cell's task is not a name")
+        keys = ("name", "trials", "episodes", "eval_episodes", "seeds")
+        top = {k: doc[k] for k in keys}  # type: ignore[index]
+        return study_from_dict({**top, "cell": list(doc["cells"])})  # type: ignore[index]
     except (KeyError, TypeError, AttributeError, CrmgraspError) as exc:
         raise CrmgraspError(f"run record of {str(out)!r} holds no readable study ({exc})") from None
-    cells = tuple({**c, "task": t} for c, t in zip(again.cells, tasks, strict=True))
-    return dataclasses.replace(again, cells=cells)
 
 
 def report(folder: str | Path) -> Path:
@@ -421,6 +414,7 @@ def report(folder: str | Path) -> Path:
     study = _recorded_study(rec, out)
     per_cell: dict[str, np.ndarray] = {}
     to5: dict[str, list[Any]] = {}
+    optimum: dict[str, float] = {}  # a cell's task's optimum, as its runs recorded it (reference_mean_steps)
     for c in study.cells:
         vals: list[float] = []
         for s in study.seeds:
@@ -430,8 +424,11 @@ def report(folder: str | Path) -> Path:
                 doc = _unit_doc(out, name)
                 vals += [float(v) for v in doc["trials"]["greedy_mean_steps"]]
                 to5.setdefault(cell_id(c), []).append(doc["summary"].get("episodes_to_5pct"))
+                ref = doc["summary"].get("reference_mean_steps")
+                if isinstance(ref, (int, float)) and ref > 0:
+                    optimum[cell_id(c)] = float(ref)
         per_cell[cell_id(c)] = np.asarray(vals, dtype=float)
-    swept = [k for k in CELL_KEYS if len({json.dumps(c.get(k)) for c in study.cells}) > 1]
+    swept = [k for k in CELL_KEYS if k != "task" and len({json.dumps(c.get(k)) for c in study.cells}) > 1]
     lines = [
         f"# Study {study.name}: {len(study.cells)} cells x {len(study.seeds)} seeds x {study.trials} trials",
         "",
@@ -439,14 +436,20 @@ def report(folder: str | Path) -> Path:
         "mean over all trials of the cell with a percentile-bootstrap 95% interval over trials, and the "
         "interquartile mean; episodes to 5%: first training episode after which the 10-episode average "
         "stays within 5% of the task's optimum (median of the seeds' runs; never = beyond the budget). "
+        "Cells are grouped by task (CRMs of different tasks do not compare); *vs optimum* is the mean over the "
+        "task's belief-space optimum as its runs recorded it (`reference_mean_steps`; - where the task states none). "
         f"Status: {read_status(out)}.",
         "",
-        "| cell | " + " | ".join(swept) + " | trials | mean CRMs | 95% CI | IQM | episodes to 5% (median of seeds) |",
-        "| --- | " + " | ".join("---" for _ in swept) + " | --- | --- | --- | --- | --- |",
+        "| task | cell | " + " | ".join(swept) + " | trials | mean CRMs | vs optimum | 95% CI | IQM | episodes to 5% "
+        "(median of seeds) |",
+        "| --- | --- | " + " | ".join("---" for _ in swept) + " | --- | --- | --- | --- | --- | --- |",
     ]
-    for c in sorted(
-        study.cells, key=lambda c: float(np.mean(per_cell[cell_id(c)])) if per_cell[cell_id(c)].size else math.inf
-    ):
+
+    def order(c: dict[str, Any]) -> tuple[str, float]:
+        v = per_cell[cell_id(c)]
+        return str(c.get("task")), float(np.mean(v)) if v.size else math.inf
+
+    for c in sorted(study.cells, key=order):
         v = per_cell[cell_id(c)]
         lo, hi = bootstrap_ci(v, 0)
         mean = fmt(float(v.mean())) if v.size else "failed"
@@ -456,10 +459,22 @@ def report(folder: str | Path) -> Path:
         med = seeds_to5[len(seeds_to5) // 2] if seeds_to5 else None
         shown_to5 = "-" if med is None else ("never" if med == math.inf else f"{int(med):,}")
         ci = f"{fmt(lo)}-{fmt(hi)}" if math.isfinite(lo) else "-"
-        lines.append(f"| {cell_id(c)} | {settings} | {v.size} | {mean} | {ci} | {middle} | {shown_to5} |")
+        ref = optimum.get(cell_id(c))
+        gap = f"{float(v.mean()) / ref - 1.0:+.1%}" if ref and v.size else "-"
+        row = (
+            f"| {c.get('task')} | {cell_id(c)} | {settings}{' | ' if swept else ''}{v.size} | {mean} | {gap} | {ci} | "
+        )
+        lines.append(f"{row}{middle} | {shown_to5} |")
     atomic_write_text(out / "report.md", "\n".join(lines) + "\n")
     _figures(out, study, per_cell, swept)
     return out / "report.md"
+
+
+def _cell_label(cell: dict[str, Any], swept: list[str]) -> str:
+    """A cell by its settings (``agent=sarsa, alpha=0.3``), its id when nothing is swept."""
+    return ", ".join(f"{k}={cell.get(k)}" for k in ["task", *swept] if k in cell and (k != "task" or swept)) or (
+        cell_id(cell)
+    )
 
 
 def _figures(out: Path, study: Study, per_cell: dict[str, np.ndarray], swept: list[str]) -> None:
@@ -473,10 +488,12 @@ def _figures(out: Path, study: Study, per_cell: dict[str, np.ndarray], swept: li
         for c in study.cells:
             v = per_cell[cell_id(c)]
             if v.size:
-                ax.plot(taus, [(v <= t).mean() for t in taus], label=cell_id(c), lw=1.2)
+                ax.plot(taus, [(v <= t).mean() for t in taus], label=_cell_label(c, swept), lw=1.2)
     ax.set_xlabel("tau: greedy CRMs per episode")
     ax.set_ylabel("share of trials at or below tau")
-    ax.set_title(f"Performance profile, study {study.name}", fontsize=10)
+    tasks = sorted({str(c.get("task")) for c in study.cells})
+    note = f" (tasks differ: {', '.join(tasks)}; see report.md by task)" if len(tasks) > 1 else f" on {tasks[0]}"
+    ax.set_title("\n".join(textwrap.wrap(f"Performance profile, study {study.name}{note}", 80)), fontsize=9)
     ax.grid(alpha=0.3)
     if len(study.cells) <= 12:
         ax.legend(fontsize=6)
@@ -497,5 +514,7 @@ def _figures(out: Path, study: Study, per_cell: dict[str, np.ndarray], swept: li
         ax.set_xticks(range(len(xs)), [json.loads(x) if json.loads(x) is not None else "-" for x in xs])
         ax.set_xlabel(key)
         ax.set_ylabel("greedy CRMs per episode (all cells with this value)")
-        ax.set_title(f"{study.name}: by {key} (mean, 95% bootstrap CI)", fontsize=9)
+        others = [k for k in swept if k != key] + (["task"] if len(tasks) > 1 else [])
+        pooled = f"; pooled over {', '.join(others)}" if others else ""
+        ax.set_title(f"{study.name}: by {key} (mean, 95% bootstrap CI{pooled})", fontsize=9)
         save_figure(fig, out / f"param_{key}.png", dpi=110)

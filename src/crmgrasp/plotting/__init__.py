@@ -28,6 +28,7 @@ __all__ = [
     "learning_curve_figure",
     "checkpoint_figure",
     "learner_color",
+    "learner_colors",
     "rollout_panels",
     "rollout_animation",
     "cluster_figure",
@@ -174,6 +175,26 @@ def learner_color(name: str) -> str:
     return _SPARE[sum(name.encode()) % len(_SPARE)]
 
 
+def learner_colors(names: Sequence[str]) -> dict[str, str]:
+    """One colour per learner of one figure: [`learner_color`][] where no earlier learner
+    of the figure has it, else the next spare colour not yet used in the figure (two
+    readings whose names hash alike are never drawn alike).
+
+    >>> c = learner_colors(["pessimistic Q0 = -10", "near-corner starts (Fig. 8a), grasp reward 0"])
+    >>> len(set(c.values()))
+    2
+    """
+    out: dict[str, str] = {}
+    for name in names:
+        color = learner_color(name)
+        if color in out.values() and name not in LEARNER_COLORS:
+            free = [c for c in _SPARE if c not in out.values()]
+            start = _SPARE.index(color) if color in _SPARE else 0
+            color = min(free, key=lambda c: (_SPARE.index(c) - start) % len(_SPARE)) if free else color
+        out[name] = color
+    return out
+
+
 def _smoothed(mean: np.ndarray, sem: np.ndarray, smooth: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Moving averages plotted at each window's last episode (1-based)."""
     n = len(mean)
@@ -220,10 +241,11 @@ def learning_curve_figure(
     groups = [banded[i : i + per_panel] for i in range(0, max(len(banded), 1), per_panel)] or [[]]
     fig = Figure(figsize=(6.0 * len(groups) + 1.5, 4.6), layout="constrained")
     axes = fig.subplots(1, len(groups), squeeze=False, sharey=True)[0]
+    colors = learner_colors(list(curves))
     for ax, group in zip(axes, groups):
         for name in group + [t for t in twins if twins[t] in group]:
             ep, mean, sem = _smoothed(*curves[name], smooth)
-            color = learner_color(name)
+            color = colors[name]
             if name in twins:
                 ax.plot(ep, mean, lw=1.4, ls=(0, (4, 3)), color=color, zorder=5, label=f"{name} (= {twins[name]})")
                 continue
