@@ -234,3 +234,22 @@ def test_the_record_names_the_code_it_ran_without_git(tmp_path):
     rec = json.loads((run.path / "run.json").read_text())
     assert rec["source_sha256"] == source_digest() and len(rec["source_sha256"]) == 64
     assert rec["version"] != "unknown"
+
+
+def test_more_jobs_than_calls_start_one_worker_per_call(monkeypatch):
+    """--jobs beyond the number of units starts only as many workers as there are units."""
+    import functools
+
+    from crmgrasp.experiments import parallel
+
+    started = []
+    real = parallel.ProcessPoolExecutor
+
+    def recording(*args, max_workers, **kwargs):
+        started.append(max_workers)
+        return real(*args, max_workers=max_workers, **kwargs)
+
+    monkeypatch.setattr(parallel, "ProcessPoolExecutor", recording)
+    calls = [(i, functools.partial(abs, -i)) for i in range(3)]
+    assert dict(parallel.run_parallel(calls, jobs=16)) == {0: 0, 1: 1, 2: 2}
+    assert started == [3]

@@ -318,11 +318,10 @@ def write_learn_outputs(task: Task, run: LearnRun, out_dir: str | Path) -> list[
     policy = best_policy(task, run)
     if policy is not None:
         paths.append(policy.save(out / "policy.json"))
-    fig = learning_curve_figure(
-        {run.spec.name: (res.curve, res.sem)},
-        task.reference_mean_steps,
-        f"{run.spec.name} on {task.name}, " + budget(*(run.summary[k] for k in ("trials", "episodes", "seed"))),
-    )
+    title = f"{run.spec.name} on {task.name}, " + budget(*(run.summary[k] for k in ("trials", "episodes", "seed")))
+    if task.reference_mean_steps is None:  # say why no optimum is drawn, and how to get one
+        title += "\nno optimum line: the task states no reference_mean_steps (crmgrasp references computes it)"
+    fig = learning_curve_figure({run.spec.name: (res.curve, res.sem)}, task.reference_mean_steps, title)
     paths.append(save_figure(fig, out / "learning_curve.png", dpi=120))
     return paths
 

@@ -54,8 +54,8 @@ def run_parallel(
     if executor == "ray":
         yield from _run_ray(calls, jobs, address)
         return
-    workers = usable_jobs(jobs)
-    if workers <= 1 or len(calls) <= 1:
+    workers = min(usable_jobs(jobs), len(calls))  # more workers than calls would only idle
+    if workers <= 1:
         for key, call in calls:
             yield key, call()
         return
