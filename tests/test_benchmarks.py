@@ -56,3 +56,11 @@ def test_bench_spatial_smoke():
     spec.loader.exec_module(mod)
     res = mod.main(steps=200, rounds=1, reference=True)
     assert res["box3d_step_over_cartpole"] > 0 and res["cup3d_reference_step_us"] > res["cup3d_step_us"]
+
+
+def test_journal_benchmark_smoke():
+    spec = importlib.util.spec_from_file_location("bench_journal", BENCH.parent / "bench_journal.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    res = mod.main(200)
+    assert res["units"] == 200 and all(r > 0 for r in res["journal_units_per_s_first_last"])

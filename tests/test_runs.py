@@ -253,3 +253,44 @@ def test_more_jobs_than_calls_start_one_worker_per_call(monkeypatch):
     calls = [(i, functools.partial(abs, -i)) for i in range(3)]
     assert dict(parallel.run_parallel(calls, jobs=16)) == {0: 0, 1: 1, 2: 2}
     assert started == [3]
+
+
+def test_units_go_to_an_append_only_journal_folded_in_at_the_end(tmp_path):
+    """A unit done appends one line; run.json is written at the start and the end only, and
+    a killed run's journal (its last line cut short by the kill) still says what was done."""
+    from crmgrasp.experiments.runs import JOURNAL
+
+    run = RunFolder(tmp_path / "r", "sweep", "t", {})
+    before = (run.path / "run.json").read_bytes()
+    for i in range(50):
+        run.complete(f"unit {i}", {"status": "ok", "value": float("nan") if i == 3 else i})
+    assert (run.path / "run.json").read_bytes() == before  # not rewritten per unit
+    assert len((run.path / JOURNAL).read_text().splitlines()) == 50
+    with open(run.path / JOURNAL, "a") as fh:
+        fh.write('{"unit": "unit 50", "info": {"sta')  # the append a kill cut short
+    from crmgrasp.experiments.runs import _read
+
+    rec = _read(run.path)
+    assert len(rec["completed"]) == 50 and rec["completed"]["unit 3"]["value"] is None
+    run._unlock()  # the kill: its lock goes, and its pid with it
+    killed = json.loads((run.path / "run.json").read_text())
+    (run.path / "run.json").write_text(json.dumps({**killed, "pid": 2**22 + 12345}))
+    again = RunFolder(run.path, "sweep", "t", {}, resume=True)
+    assert again.done("unit 49") == {"status": "ok", "value": 49} and again.done("unit 50") is None
+    assert not (run.path / JOURNAL).exists()  # folded into run.json when the resumed run started
+    again.complete("unit 50", "ok")
+    again.finish("complete")
+    assert not (run.path / JOURNAL).exists()
+    assert len(json.loads((run.path / "run.json").read_text())["completed"]) == 51
+
+
+def test_a_journal_damaged_before_its_last_line_is_one_line(tmp_path, capsys):
+    from crmgrasp.experiments.runs import JOURNAL
+
+    run = RunFolder(tmp_path / "r", "learn", "paper-box", {})
+    run.complete("a")
+    run.finish("interrupted")
+    (run.path / JOURNAL).write_text('{"unit": "a", "info": true}\nnot json\n{"unit": "b", "info": true}\n')
+    assert main(["status", str(run.path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "run journal" in err and "is damaged (line 2)" in err

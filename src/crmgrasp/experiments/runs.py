@@ -44,10 +44,10 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from crmgrasp._io import check_folder, read_bounded, temporaries, write_json
+from crmgrasp._io import check_folder, dumps_json, read_bounded, temporaries, write_json
 from crmgrasp._validation import CrmgraspError, shown
 
-__all__ = ["RunFolder", "read_status", "leftovers", "default_run_dir", "source_digest", "STATUSES"]
+__all__ = ["RunFolder", "read_status", "leftovers", "default_run_dir", "source_digest", "STATUSES", "JOURNAL"]
 
 FORMAT = "crmgrasp-run"
 STATUSES = ("running", "complete", "interrupted", "failed")
@@ -126,6 +126,13 @@ def _alive(pid: object, host: object) -> bool:
         return True
 
 
+JOURNAL = "journal.jsonl"
+"""The units a running run has completed since ``run.json`` was last written: one JSON line
+``{"unit": ..., "info": ...}`` each, appended (a run of many units does not rewrite its record
+after each; ``run.json`` is written whole when the run starts and ends, and the journal is
+folded into it then)."""
+
+
 def _read(folder: Path) -> dict[str, Any]:
     path = folder / "run.json"
     try:
@@ -136,7 +143,29 @@ def _read(folder: Path) -> dict[str, Any]:
         raise CrmgraspError(f"{str(path)!r} is not a crmgrasp run record")
     if not isinstance(doc.get("completed", {}), dict) or not isinstance(doc.get("config", {}), dict):
         raise CrmgraspError(f"run record {str(path)!r} is damaged (bad completed or config)")
+    doc.setdefault("completed", {}).update(_journal(folder))
     return doc
+
+
+def _journal(folder: Path) -> dict[str, Any]:
+    """The units the journal records; a last line cut short by a kill is ignored (its unit
+    was not recorded done, so it runs again), any other damage is a one-line error."""
+    path = folder / JOURNAL
+    if not path.is_file():
+        return {}
+    lines = read_bounded(path, 256 * 2**20, "run journal").decode("utf-8", "replace").split("\n")
+    out: dict[str, Any] = {}
+    for i, line in enumerate(lines):
+        if not line:
+            continue
+        try:
+            entry = json.loads(line)
+            out[entry["unit"]] = entry["info"]
+        except (json.JSONDecodeError, KeyError, TypeError):
+            if i == len(lines) - 1:  # no newline after it: the append a kill cut short
+                break
+            raise CrmgraspError(f"run journal {str(path)!r} is damaged (line {i + 1})") from None
+    return out
 
 
 def read_status(folder: str | Path) -> str:
@@ -293,9 +322,12 @@ class RunFolder:
         return self.record["completed"].get(unit)
 
     def complete(self, unit: str, info: Any = True) -> None:
-        """Record ``unit`` as done (``info``: JSON data kept for a resumed run)."""
+        """Record ``unit`` as done (``info``: JSON data kept for a resumed run): one line
+        appended to the journal (:data:`JOURNAL`), whatever the number of units done."""
         self.record["completed"][unit] = info
-        self._save()
+        line = dumps_json({"unit": unit, "info": info}, indent=None) + "\n"  # standard JSON, one line
+        with open(self.path / JOURNAL, "a", encoding="utf-8") as fh:  # one write: a line is whole or cut
+            fh.write(line)
 
     def sub(self, name: str) -> RunFolder:
         """A view of this run for one part of it (``name``): its units are recorded here
@@ -323,7 +355,10 @@ class RunFolder:
             self.finish("failed", f"{kind.__name__}: {exc}" if not isinstance(exc, CrmgraspError) else str(exc))
 
     def _save(self) -> None:
+        """``run.json`` with every unit done, then the journal it now holds removed (a kill
+        between the two leaves entries that are in both: reading merges them alike)."""
         write_json(self.path / "run.json", self.record)
+        (self.path / JOURNAL).unlink(missing_ok=True)
 
 
 def _version() -> str:
