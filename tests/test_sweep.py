@@ -250,3 +250,40 @@ def test_report_on_a_damaged_study_folder_is_one_line_and_reads_only_inside(tmp_
     (out / "run.json").write_text(json.dumps(record))
     assert main(["sweep", "report", str(out)]) == 0
     assert "Status: killed." in (out / "report.md").read_text()
+
+
+def test_a_ray_address_that_accepts_but_speaks_no_ray_is_bounded(tmp_path):
+    """A loopback port that accepts TCP and never answers: one line within the bound, no hang."""
+    pytest.importorskip("ray", reason="needs the extra: pip install 'crmgrasp[ray]'")
+    import socket
+    import subprocess
+    import sys
+    import threading
+    import time
+
+    server = socket.create_server(("127.0.0.1", 0))
+    port, held = server.getsockname()[1], []
+
+    def accept() -> None:
+        server.settimeout(0.5)
+        end = time.monotonic() + 60
+        while time.monotonic() < end:
+            try:
+                held.append(server.accept()[0])  # accept, never speak
+            except OSError:
+                if server.fileno() == -1:
+                    return
+
+    threading.Thread(target=accept, daemon=True).start()
+    code = (
+        "import functools, crmgrasp.experiments.parallel as p\n"
+        "p.RAY_TIMEOUT = 3.0\n"
+        f"list(p.run_parallel([(0, functools.partial(abs, -1))], 1, 'ray', '127.0.0.1:{port}'))\n"
+    )
+    t0 = time.monotonic()
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    server.close()
+    for conn in held:
+        conn.close()
+    assert res.returncode != 0 and time.monotonic() - t0 < 60
+    assert f"Ray at 127.0.0.1:{port} did not answer within 3 s" in res.stderr

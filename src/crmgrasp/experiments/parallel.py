@@ -121,18 +121,37 @@ def _run_ray(calls: Sequence[tuple[K, Callable[[], T]]], jobs: int, address: str
             ray.shutdown()
 
 
+RAY_TIMEOUT = 10.0
+"""Seconds a Ray address (``HOST:PORT``) has to answer as a Ray head does before the command
+gives up in one line: an address that accepts connections but speaks no Ray would hang
+``ray.init`` for minutes."""
+
+_HTTP2_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + bytes([0, 0, 0, 4, 0, 0, 0, 0, 0])
+"""The HTTP/2 client preface and an empty SETTINGS frame: a gRPC server (Ray's head, its GCS)
+answers it with a frame of its own at once."""
+
+
 def _reachable(address: str) -> None:
-    """A one-line error within 5 s for a ``HOST:PORT`` that accepts no connection (Ray
-    itself retries for minutes)."""
+    """A one-line error within :data:`RAY_TIMEOUT` seconds for a ``HOST:PORT`` that accepts no
+    connection, or accepts one but does not answer as a Ray head does (Ray itself retries
+    for minutes): the HTTP/2 preface must bring an answer."""
     import socket
 
     host, _, port = address.rpartition(":")
     if not host or not port.isdigit():
         raise CrmgraspError(f"Ray address must be auto or HOST:PORT, got {address!r}")
     try:
-        socket.create_connection((host, int(port)), timeout=5).close()
+        with socket.create_connection((host, int(port)), timeout=RAY_TIMEOUT) as conn:
+            conn.sendall(_HTTP2_PREFACE)
+            answered = bool(conn.recv(1))
+    except TimeoutError:
+        answered = False
     except OSError as exc:
         raise CrmgraspError(f"Ray address {address} is unreachable ({exc.strerror or exc})") from None
+    if not answered:
+        raise CrmgraspError(
+            f"Ray at {address} did not answer within {RAY_TIMEOUT:g} s (is it a Ray cluster's address?)"
+        )
 
 
 def _ignore_sigint() -> None:
