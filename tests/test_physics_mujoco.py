@@ -164,6 +164,13 @@ def test_headless_render(task, tmp_path):
     assert frame.shape == (120, 160, 3) and frame.dtype == np.uint8 and frame.std() > 5
     msg = _render_or_skip(lambda: show(task, NEAR, task.actions[0], tmp_path / "c1.gif", np.random.default_rng(0)))
     assert "-> none" in msg and (tmp_path / "c1.gif").stat().st_size > 1000
+    msg = _render_or_skip(lambda: show(task, NEAR, task.actions[0], tmp_path / "c1.png", np.random.default_rng(0)))
+    import matplotlib.image as mpimg
+
+    picture = mpimg.imread(tmp_path / "c1.png")
+    assert picture.shape[0] == 320 + 26  # the render and its caption band above it
+    band = picture[:26]
+    assert band.max() == 1.0 and band.min() < 0.5  # a white band with dark text (the label)
 
 
 def test_show_retries_with_osmesa_when_egl_fails(monkeypatch, tmp_path):

@@ -108,10 +108,26 @@ def show(task: Task, start: Any, crm: Any, out: str | os.PathLike[str], rng: np.
     hand = mujoco_hand(task, start, rng)
     rec = Recorder(hand, every=6).attach() if path.suffix.lower() == ".gif" else None
     error = hand.execute(crm) if crm is not None else None
+    what = f"CRM {crm} -> {error.name.lower()}" if error is not None else "scene"
+    key = "a red, b green, palm orange"  # the stand-in's colours (hardware.mujoco.model)
     if rec is not None:
         rec.close()
-        save_gif(rec.frames, path, fps=15)
+        band = caption(f"{task.name} on MuJoCo: {what}; {key}", rec.frames[0].shape[1])
+        save_gif([np.vstack([band, f]) for f in rec.frames], path, fps=15)
     else:
-        save_png(render(hand), path)
-    what = f"CRM {crm} -> {error.name.lower()}" if error is not None else "scene"
+        frame = render(hand)
+        save_png(np.vstack([caption(f"{task.name} on MuJoCo: {what}; {key}", frame.shape[1]), frame]), path)
     return f"{task.name} on MuJoCo: {what}; wrote {path.resolve()}"
+
+
+def caption(text: str, width: int, height: int = 26) -> np.ndarray:
+    """A white band ``width`` pixels wide holding ``text`` (an image's label), as RGB uint8
+    rows to stack above a rendered frame."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width / 100, height / 100), dpi=100)
+    fig.text(0.01, 0.5, text, va="center", ha="left", fontsize=8)
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    return np.asarray(canvas.buffer_rgba())[:height, :width, :3].copy()
