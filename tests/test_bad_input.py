@@ -21,6 +21,8 @@ from crmgrasp.cli.main import main
 from crmgrasp.envs import CRMGraspEnv
 from crmgrasp.model.history import KOrderEncoder
 
+from .signals import default_sigint
+
 NEAR = ["--a", "-0.15,-0.02", "--b", "-0.10,-0.05"]
 HUGE = "9" * 5000  # longer than Python's integer conversion limit
 
@@ -99,6 +101,7 @@ def test_sigint_ends_a_run_with_one_line_and_status_130(tmp_path):
         ],
         stderr=subprocess.PIPE,
         text=True,
+        preexec_fn=default_sigint,
     )
     time.sleep(3)  # past the imports, inside training
     proc.send_signal(signal.SIGINT)

@@ -15,6 +15,8 @@ from crmgrasp._validation import CrmgraspError
 from crmgrasp.cli import main
 from crmgrasp.experiments.runs import RunFolder, default_run_dir, leftovers, read_status
 
+from .signals import default_sigint
+
 LEARN = ["learn", "--trials", "3", "--episodes", "40", "--eval-episodes", "10", "--quiet"]
 
 
@@ -217,7 +219,9 @@ def test_ctrl_c_with_workers_is_one_line_and_interrupted(tmp_path):
     import time
 
     argv = ["learn", "--trials", "8", "--episodes", "200000", "--jobs", "2", "--quiet", "--out", str(tmp_path / "r")]
-    proc = subprocess.Popen([sys.executable, "-m", "crmgrasp", *argv], stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "crmgrasp", *argv], stderr=subprocess.PIPE, text=True, preexec_fn=default_sigint
+    )
     time.sleep(4)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)

@@ -16,6 +16,8 @@ from crmgrasp.experiments import sweep as sweep_mod
 from crmgrasp.experiments.runs import read_status
 from crmgrasp.experiments.sweep import cell_id, load_study, study_from_dict
 
+from .signals import default_sigint
+
 STUDY = """
 name = "tiny"
 trials = 3
@@ -170,7 +172,7 @@ def test_ctrl_c_or_a_kill_leaves_a_resumable_study_and_no_workers(tmp_path, sign
     )
     out = tmp_path / "run"
     argv = [sys.executable, "-m", "crmgrasp", "sweep", str(path), "--quiet", "--jobs", "2", "--out", str(out)]
-    proc = subprocess.Popen(argv, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(argv, stderr=subprocess.PIPE, text=True, preexec_fn=default_sigint)
     children = Path(f"/proc/{proc.pid}/task/{proc.pid}/children")
     workers: list[int] = []
     for _ in range(100):  # until both workers run (at most 10 s)
