@@ -179,6 +179,10 @@ def test_bins_over_any_observation_names():
         seen.add(i)
     assert seen == set(range(d.size))
     assert d.index((2.0, 0.0, -0.3, -0.1), Error.PALM) == d.compose((1, 0, 1, 1), 2)
+    rng = np.random.default_rng(0)
+    for values in rng.normal(0.0, 0.3, (200, 4)).tolist() + [[float("nan"), 0.1, -0.1, 0.2]]:
+        for flag in Error:
+            assert d.index(values, flag) == d.compose(d.bins(values), flag)  # the hot loop is the rule
     assert d.to_dict() == {"rho": [1.0], "m_a": [0.1], "m_b": [0.1], "m_c": [0.05, 0.2], "abs_moments": True}
     assert Discretizer(names=d.names, **{k: v for k, v in d.to_dict().items()}) == d
     assert repr(Discretizer()) == "Discretizer(rho=(1.0,), m_a=(0.1,), m_b=(0.1,), abs_moments=True)"
