@@ -180,7 +180,7 @@ def test_bins_over_any_observation_names():
     assert seen == set(range(d.size))
     assert d.index((2.0, 0.0, -0.3, -0.1), Error.PALM) == d.compose((1, 0, 1, 1), 2)
     rng = np.random.default_rng(0)
-    for values in rng.normal(0.0, 0.3, (200, 4)).tolist() + [[float("nan"), 0.1, -0.1, 0.2]]:
+    for values in [*rng.normal(0.0, 0.3, (200, 4)).tolist(), [float("nan"), 0.1, -0.1, 0.2]]:
         for flag in Error:
             assert d.index(values, flag) == d.compose(d.bins(values), flag)  # the hot loop is the rule
     assert d.to_dict() == {"rho": [1.0], "m_a": [0.1], "m_b": [0.1], "m_c": [0.05, 0.2], "abs_moments": True}
