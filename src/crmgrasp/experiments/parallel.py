@@ -132,7 +132,7 @@ answers it with a frame of its own at once."""
 
 
 def _reachable(address: str) -> None:
-    """A one-line error within :data:`RAY_TIMEOUT` seconds for a ``HOST:PORT`` that accepts no
+    """A one-line error within `RAY_TIMEOUT` seconds for a ``HOST:PORT`` that accepts no
     connection, or accepts one but does not answer as a Ray head does (Ray itself retries
     for minutes): the HTTP/2 preface must bring an answer."""
     import socket

@@ -323,7 +323,7 @@ class RunFolder:
 
     def complete(self, unit: str, info: Any = True) -> None:
         """Record ``unit`` as done (``info``: JSON data kept for a resumed run): one line
-        appended to the journal (:data:`JOURNAL`), whatever the number of units done."""
+        appended to the journal ([`JOURNAL`][crmgrasp.experiments.runs.JOURNAL]), whatever the number of units done."""
         self.record["completed"][unit] = info
         line = dumps_json({"unit": unit, "info": info}, indent=None) + "\n"  # standard JSON, one line
         with open(self.path / JOURNAL, "a", encoding="utf-8") as fh:  # one write: a line is whole or cut
