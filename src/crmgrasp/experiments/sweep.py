@@ -104,8 +104,14 @@ def _scalar(key: str, value: Any, where: str) -> Any:
     return value
 
 
-_CELL_TYPES: dict[str, type] = {"task": str, "start_preset": str, "agent": str, "k": int, "symmetric": bool}
-_CELL_TYPES["grasp_reward"] = float
+_CELL_TYPES: dict[str, type] = {
+    "task": str,
+    "start_preset": str,
+    "grasp_reward": float,
+    "agent": str,
+    "k": int,
+    "symmetric": bool,
+}
 """The types of the cell keys that are not an agent's parameters (those take their
 constructor default's type)."""
 
