@@ -37,7 +37,8 @@ def test_crm_with_noise_is_seeded(capsys):
 @pytest.mark.parametrize(
     "argv, msg",
     [
-        (["crm", *NEAR, "--crm", "a,c,0"], "unknown contact label 'c'"),
+        (["crm", *NEAR, "--crm", "a,c,0"], "names contact 'c', but the hand has contacts a, b"),
+        (["crm", *NEAR, "--crm", "a,q,0"], "unknown contact label 'q'"),
         (["crm", *NEAR, "--crm", "a,a,0.5"], "beyond r_max"),
         (["crm", *NEAR, "--crm", "C9"], "C1..C4"),
         (["crm", *NEAR, "--crm", "a,b"], "c,f,r"),

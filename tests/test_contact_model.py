@@ -13,7 +13,8 @@ import pytest
 from crmgrasp import kernels
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.kernels import PATHS, ReferenceKernel, kernel_for
-from crmgrasp.model.contact_model import ContactModel, contact_columns, row_width
+from crmgrasp.model.contact_model import ContactModel, contact_columns, observation_names, row_width
+from crmgrasp.model.contacts import ALL_LABELS
 from crmgrasp.model.planar_model import PlanarModel
 from crmgrasp.model.spatial_model import SpatialModel
 from crmgrasp.tasks import make_task, task_names
@@ -114,7 +115,7 @@ def test_the_isinstance_finder_finds_one(tmp_path):
     assert _task_isinstance(f) == [2]
 
 
-OBSERVATION_NAMES = set(PlanarModel.observation_names) | set(SpatialModel.observation_names)
+OBSERVATION_NAMES = set(observation_names(ALL_LABELS))
 
 
 def _named_observations(path: Path) -> list[int]:

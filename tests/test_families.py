@@ -203,7 +203,7 @@ def test_family_envs_pass_check_env_and_vectorise(env_id: str) -> None:
         check_env(env.unwrapped)
     vec = gym.make_vec(env_id, num_envs=3, vectorization_mode="vector_entry_point")
     obs, info = vec.reset(seed=0)
-    assert obs["rho"].shape == (3, 1) and info["config"].shape == (3, 8)
+    assert obs["rho"].shape == (3, 1) and info["config"].shape == (3, env.unwrapped.task.model.row_width)
     ended = 0
     for _ in range(25):
         obs, reward, term, trunc, info = vec.step(vec.action_space.sample())

@@ -144,8 +144,12 @@ def test_u_approach_line_misses():
 
 # ------------------------------------------------------------ bad input
 def test_bad_crm_and_hand_inputs(task, near):
-    with pytest.raises(CrmgraspError, match="unknown contact label 'c'"):
-        CRM("c", "a", 0.0)
+    with pytest.raises(CrmgraspError, match="unknown contact label 'e'"):
+        CRM("e", "a", 0.0)
+    with pytest.raises(CrmgraspError, match="names contact 'c', but the hand has contacts a, b"):
+        task.hand.execute(task.obj, near, CRM("c", "a", 0.0))
+    with pytest.raises(CrmgraspError, match="a hand has 2 to 4 contacts, got 1"):
+        Hand(aperture=0.1, palm_depth=0.1, contacts=1)
     with pytest.raises(CrmgraspError, match="finite"):
         CRM("a", "b", float("nan"))
     with pytest.raises(CrmgraspError, match="beyond r_max"):

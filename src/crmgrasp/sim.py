@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.model.contacts import Config
+from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import CRM, Error
 from crmgrasp.tasks import Task, World
 
@@ -49,8 +49,8 @@ __all__ = [
 class SimState(NamedTuple):
     """True configuration, its sensed reading, and CRMs executed so far."""
 
-    config: Config
-    sensed: Config
+    config: Config | Grip
+    sensed: Config | Grip
     steps: int
 
 
@@ -63,7 +63,7 @@ class Percept(NamedTuple):
     observation: tuple[float, ...]
     error: Error
     obs_index: int
-    sensed: Config
+    sensed: Config | Grip
     reward: float = 0.0
     terminated: bool = False
     truncated: bool = False
@@ -196,9 +196,9 @@ class Stepper(Protocol):
     ``sample_start``, ``begin`` and ``step_one`` equal `Task.sample_start`,
     `begin` and [`step`][] bit for bit)."""
 
-    def sample_start(self, rng: np.random.Generator) -> Config: ...
+    def sample_start(self, rng: np.random.Generator) -> Config | Grip: ...
 
-    def begin(self, config: Config, rng: np.random.Generator) -> OneStep: ...
+    def begin(self, config: Config | Grip, rng: np.random.Generator) -> OneStep: ...
 
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep: ...
 
@@ -215,10 +215,10 @@ class TaskSteps:
     def __init__(self, task: Task) -> None:
         self.task = task
 
-    def sample_start(self, rng: np.random.Generator) -> Config:
+    def sample_start(self, rng: np.random.Generator) -> Config | Grip:
         return self.task.sample_start(rng)
 
-    def begin(self, config: Config, rng: np.random.Generator) -> OneStep:
+    def begin(self, config: Config | Grip, rng: np.random.Generator) -> OneStep:
         return begin(self.task, config, rng)
 
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
@@ -245,12 +245,12 @@ class FamilyStepper:
         """Step ``instance`` (a task on one object) from now on."""
         self.instance, self.current = instance, self._make(instance)
 
-    def sample_start(self, rng: np.random.Generator) -> Config:
+    def sample_start(self, rng: np.random.Generator) -> Config | Grip:
         """Draw the episode's object, then a start on it."""
         self.use(self.task.instance(rng))
         return self.current.sample_start(rng)
 
-    def begin(self, config: Config, rng: np.random.Generator) -> OneStep:
+    def begin(self, config: Config | Grip, rng: np.random.Generator) -> OneStep:
         return self.current.begin(config, rng)
 
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
@@ -278,7 +278,7 @@ def run_episode(
     policy: Policy,
     rng: np.random.Generator,
     *,
-    start: Config | World | None = None,
+    start: Config | Grip | World | None = None,
     trace: bool = False,
     kernel: Stepper | None = None,
 ) -> Episode:

@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.model.contacts import Config
+from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import CRM, Error
 from crmgrasp.sim import Percept, run_episode
 from crmgrasp.tasks import Task
@@ -43,15 +43,15 @@ class GraspController:
     name = "grasp-controller"
 
     def __init__(self, task: Task, r_step: float | None = None) -> None:
-        if task.model.kind != "planar":
-            kind = task.model.kind
+        if task.model.kind != "planar" or task.model.n_contacts != 2:
+            kind = f"{task.model.kind} with {task.model.n_contacts} contacts"
             raise CrmgraspError(f"the grasp controller drives two contacts in the plane; {task.name!r} is {kind}")
         self.task = task
         own = [abs(a.r) for a in task.actions if a.c == a.f]
         self.r_step = r_step if r_step is not None else (max(own) if own else 0.5 * task.hand.aperture)
         self._last: CRM | None = None
         self._last_error = Error.NONE
-        self._sensed: Config | None = None
+        self._sensed: Config | Grip | None = None
         self._pending = CRM("a", "b", 0.0)
 
     def begin(self, first: Percept) -> None:
@@ -69,7 +69,7 @@ class GraspController:
         self.observe(self._pending, percept.error)
         self._sensed = percept.sensed
 
-    def choose(self, sensed: Config) -> CRM:
+    def choose(self, sensed: Config | Grip) -> CRM:
         """The next CRM, given the sensed configuration and the last CRM's outcome."""
         _, *moments = self.task.observe(sensed)
         m = dict(zip(self.task.model.labels, moments, strict=True))  # the moment about each contact
@@ -78,8 +78,8 @@ class GraspController:
             c = "a" if abs(m["a"]) >= abs(m["b"]) else "b"
             return CRM(c, "b" if c == "a" else "a", 0.0)
         if last.opposition:
-            m_c = m[last.c]
-            r = float(np.clip(-m_c, -self.r_step, self.r_step))
+            moment = m[last.c]
+            r = float(np.clip(-moment, -self.r_step, self.r_step))
             if abs(r) >= 1e-3:
                 return CRM(last.f, last.f, r)
         # the slide failed, or would be too short to matter: oppose with the other contact

@@ -36,7 +36,7 @@ from gymnasium import spaces
 
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents.training import checkpoint_generators, checkpoints_to_within
-from crmgrasp.model.contacts import Config
+from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import Error
 from crmgrasp.sim import SimState, step
 from crmgrasp.tasks import Task, World
@@ -262,7 +262,7 @@ def deep_available() -> bool:
 
 
 def evaluate_recurrent(
-    model: Any, task: Task, starts: Sequence[Config | World], rng: np.random.Generator
+    model: Any, task: Task, starts: Sequence[Config | Grip | World], rng: np.random.Generator
 ) -> tuple[np.ndarray, np.ndarray]:
     """Run the deterministic LSTM policy from every start (a configuration, or a world of
     a family task: its object and configuration), all episodes batched.

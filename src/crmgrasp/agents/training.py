@@ -22,7 +22,7 @@ from crmgrasp.agents.baselines import FixedSequence, RandomAgent
 from crmgrasp.agents.model_based import ModelVI
 from crmgrasp.agents.tabular import DynaQ, QLearning, Sarsa, SarsaLambda
 from crmgrasp.kernels import kernel_for
-from crmgrasp.model.contacts import Config
+from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import Outcome
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.sim import Stepper
@@ -396,7 +396,7 @@ class RolloutStep(NamedTuple):
     """One CRM of a rollout: the configuration and observation before it, the action,
     its outcome, and the observation after it."""
 
-    config: Config
+    config: Config | Grip
     observation: tuple[float, ...]
     action: int
     outcome: Outcome
@@ -406,7 +406,7 @@ class RolloutStep(NamedTuple):
 
 
 def rollout(
-    task: Task, agent: Agent, encoder: KOrderEncoder, start: Config, rng: np.random.Generator
+    task: Task, agent: Agent, encoder: KOrderEncoder, start: Config | Grip, rng: np.random.Generator
 ) -> tuple[list[RolloutStep], bool]:
     """Run the agent's greedy policy from ``start``; returns the steps and success."""
     ep = sim_run_episode(task, LearnerPolicy(agent, encoder, rng, learn=False), rng, start=start, trace=True)

@@ -371,7 +371,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
 def _cmd_tasks(args: argparse.Namespace) -> int:
     for name in task_names():
-        print(f"{name}: {make_task(name).description}")
+        print(f"{name}: {make_task(name).headline()}")
     print("(any command's --task also takes a .toml task file or package.module:factory; see `crmgrasp task-template`)")
     return 0
 

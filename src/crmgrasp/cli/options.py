@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from crmgrasp._validation import SEED_MAX, CrmgraspError, as_point, finite, integer, shown
+from crmgrasp.model.contacts import ALL_LABELS, LABELS
 from crmgrasp.tasks import Task
 from crmgrasp.tasks.presets import START_PRESETS
 
@@ -169,22 +170,23 @@ def _add_quiet(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress display")
 
 
+def _add_points(p: argparse.ArgumentParser, what: str) -> None:
+    """``--a``, ``--b`` (required) and ``--c``, ``--d`` (a hand with that many fingers): one
+    point per contact (the task's model says how many it takes)."""
+    for label in ALL_LABELS:
+        more = "" if label in LABELS else "; a hand with that many fingers only"
+        p.add_argument(
+            f"--{label}",
+            type=_point,
+            required=label in LABELS,
+            metavar="X,Y[,Z]",
+            help=f"{what} for contact {label} (m){more}",
+        )
+
+
 def _add_scene_args(p: argparse.ArgumentParser, crm_required: bool) -> None:
     _add_task(p)
-    p.add_argument(
-        "--a",
-        type=_point,
-        required=True,
-        metavar="X,Y[,Z]",
-        help="point for contact a (m): X,Y on a planar task (projected onto the boundary), X,Y,Z on a spatial one",
-    )
-    p.add_argument(
-        "--b",
-        type=_point,
-        required=True,
-        metavar="X,Y[,Z]",
-        help="point for contact b (m): X,Y on a planar task (projected onto the boundary), X,Y,Z on a spatial one",
-    )
+    _add_points(p, "point (X,Y on a planar task, projected onto the boundary; X,Y,Z on a spatial one)")
     p.add_argument(
         "--crm",
         required=crm_required,

@@ -20,6 +20,7 @@ from crmgrasp.cli.options import (
     _add_jobs,
     _add_kernel_backend,
     _add_noise,
+    _add_points,
     _add_quiet,
     _add_run,
     _add_scene_args,
@@ -28,7 +29,6 @@ from crmgrasp.cli.options import (
     _number,
     _Parser,
     _path,
-    _point,
 )
 from crmgrasp.experiments.registry import EXPERIMENTS
 from crmgrasp.model.history import MAX_K
@@ -281,8 +281,7 @@ def _parser_run(sub: Any) -> None:
     p.add_argument(
         "--policy", type=_path, required=True, help="a saved policy: policy.json or recurrent_ppo.zip (deep)"
     )
-    p.add_argument("--a", type=_point, required=True, metavar="X,Y[,Z]", help="start point for contact a (m)")
-    p.add_argument("--b", type=_point, required=True, metavar="X,Y[,Z]", help="start point for contact b (m)")
+    _add_points(p, "start point")
     p.add_argument("--log", type=_path, required=True, help="CSV step log to write")
     _add_noise(p)
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")

@@ -19,6 +19,7 @@ from crmgrasp._io import check_output, dumps_json, save_figure
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.cli.common import _task
 from crmgrasp.cli.options import _resolve_crm
+from crmgrasp.model.contacts import ALL_LABELS
 from crmgrasp.model.hand import Error
 from crmgrasp.model.quality import min_friction
 from crmgrasp.model.sensing import SensorNoise, observe
@@ -35,13 +36,20 @@ def _scene(args: argparse.Namespace) -> tuple[Task, Any, Any, SensorNoise, np.ra
 
 
 def _place(task: Task, args: argparse.Namespace) -> Any:
-    """The configuration of --a and --b on ``task``'s object (its nominal one for a family):
-    one point of the contact model's dimension per contact."""
-    dim = task.model.dim
-    if len(args.a) != dim or len(args.b) != dim:
+    """The configuration of --a, --b, ... on ``task``'s object (its nominal one for a family):
+    one point of the contact model's dimension per contact of the model."""
+    labels, dim = task.model.labels, task.model.dim
+    flags = [f"--{lab}" for lab in labels]
+    given = [f"--{lab}" for lab in ALL_LABELS if getattr(args, lab, None) is not None]
+    if given != flags:
+        raise CrmgraspError(
+            f"task {task.name!r} has {len(labels)} fingers: give {' '.join(flags)} (got {' '.join(given)})"
+        )
+    points = [getattr(args, lab) for lab in labels]
+    if any(len(p) != dim for p in points):
         axes = ",".join("XYZ"[:dim])
-        raise CrmgraspError(f"--a and --b take {axes} on the {task.model.kind} task {task.name!r}")
-    return task.place(args.a, args.b)
+        raise CrmgraspError(f"{', '.join(flags)} take {axes} on the {task.model.kind} task {task.name!r}")
+    return task.place(*points)
 
 
 def _noise(args: argparse.Namespace) -> SensorNoise:

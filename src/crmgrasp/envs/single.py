@@ -248,8 +248,13 @@ FAMILY_ENVS = {
     "crmgrasp/UHandle-v0": "u-handle",
     "crmgrasp/LShape-v0": "l-shape",
     "crmgrasp/Mixed-v0": "mixed",
+    "crmgrasp/Triangles-v0": "triangles",
+    "crmgrasp/Triangles3F-v0": "triangles-3f",
+    "crmgrasp/OddPolygons-v0": "odd-polygons",
+    "crmgrasp/OddPolygons3F-v0": "odd-polygons-3f",
 }
-"""Registered family environments: id -> task name (each episode draws its object)."""
+"""Registered family environments: id -> task name (each episode draws its object; the
+``3F`` ones with a three-finger hand)."""
 
 
 def register() -> None:

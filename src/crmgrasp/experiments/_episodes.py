@@ -13,7 +13,7 @@ import numpy as np
 from crmgrasp.agents.base import Agent, LearnerPolicy
 from crmgrasp.agents.training import encoder_for, train_trials
 from crmgrasp.kernels import kernel_for
-from crmgrasp.model.contacts import Config
+from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.sim import Policy, run_episode
 from crmgrasp.tasks import Task
 
@@ -33,7 +33,7 @@ class EpisodeRecord:
     observations: tuple[int, ...]
     errors: tuple[bool, ...]
     success: bool
-    final: Config | None = None
+    final: Config | Grip | None = None
 
 
 def episode_records(

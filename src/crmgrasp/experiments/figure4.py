@@ -21,7 +21,7 @@ import numpy as np
 
 from crmgrasp._io import save_figure, write_csv, write_json
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.model.contacts import Config
+from crmgrasp.model.contacts import Config, two_contacts
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.model.hand import CRM, Error
 from crmgrasp.model.quality import min_friction
@@ -84,7 +84,7 @@ def long_side_start(
     ``max_corner_distance`` from the nearest vertex; returns the configuration and
     that contact's label."""
     for _ in range(10_000):
-        cfg = task.sample_start(rng)
+        cfg = two_contacts(task.sample_start(rng), "Figure 4")
         lab = _long_side_contact(task, cfg)
         if lab is None:
             continue
@@ -115,12 +115,10 @@ def figure_4_opposition_quality(out_dir: str | Path, config: Figure4Config = Fig
         rows.append(
             [
                 trial,
-                *start.a.point,
-                *start.b.point,
+                *(v for c in start for v in c.point),
                 str(crm),
                 outcome.error.name.lower(),
-                *outcome.config.a.point,
-                *outcome.config.b.point,
+                *(v for c in outcome.config for v in c.point),
                 mu,
             ]
         )

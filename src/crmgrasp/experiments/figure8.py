@@ -72,10 +72,8 @@ def figure_8_strategies(
                     i + 1,
                     names[s.action],
                     s.outcome.error.name.lower(),
-                    *s.config.a.point,
-                    *s.config.b.point,
-                    *s.outcome.config.a.point,
-                    *s.outcome.config.b.point,
+                    *(v for c in s.config for v in c.point),
+                    *(v for c in s.outcome.config for v in c.point),
                     s.min_friction,
                 ]
             )

@@ -26,7 +26,7 @@ from crmgrasp._io import save_figure, write_csv, write_json
 from crmgrasp.agents.training import rollout
 from crmgrasp.experiments._policy import learned_policy
 from crmgrasp.experiments.figure4 import noisy_execution
-from crmgrasp.model.contacts import Config
+from crmgrasp.model.contacts import Config, two_contacts
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.plotting import cluster_figure
 from crmgrasp.tasks import Task, make_task
@@ -67,7 +67,7 @@ def thumb_far_start(task: Task, rng: np.random.Generator, lo: float, hi: float) 
     returns it and the label of the short-side contact (the fingers)."""
     assert isinstance(task.obj, Polygon)
     for _ in range(100_000):
-        cfg = task.sample_start(rng)
+        cfg = two_contacts(task.sample_start(rng), "Figure 9")
         (la, da), (lb, db) = _corner_distances(task.obj, cfg)
         if la != lb:
             thumb_dist = da if la > lb else db

@@ -35,7 +35,7 @@ from crmgrasp.hardware.mujoco import hardware_task
 from crmgrasp.hardware.mujoco.hand import MujocoHand
 from crmgrasp.hardware.mujoco.model import PhysicsParams
 from crmgrasp.hardware.runner import KinematicHand, PolicyRunner, log_columns
-from crmgrasp.model.contacts import Config
+from crmgrasp.model.contacts import Config, two_contacts
 from crmgrasp.model.hand import CRM, Error, execute_crm
 from crmgrasp.model.quality import min_friction
 from crmgrasp.model.spatial import Config3D
@@ -232,7 +232,7 @@ def figure_4_mujoco(out_dir: str | Path, config: MujocoFigure4Config = MujocoFig
         rows.append([trial, *start.a.point, *start.b.point, str(crm), error.name.lower(), mu, x, y, yaw])
     agree = 0
     for _ in range(c.extra_starts):
-        start = task.sample_start(rng)
+        start = two_contacts(task.sample_start(rng), "the MuJoCo stand-in")
         hand = MujocoHand(task, start, rng)
         errors.add(hand.sense(), hand.true_config())
         crm = task.actions[int(rng.integers(len(task.actions)))]

@@ -24,7 +24,7 @@ from crmgrasp._io import dumps_json, write_csv
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents.policy import GreedyPolicy
 from crmgrasp.hardware.contact_sensing import NoContact
-from crmgrasp.model.contacts import Config
+from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import CRM, Error
 from crmgrasp.model.sensing import SensorNoise
 from crmgrasp.model.spatial import CRM3D, Config3D
@@ -63,7 +63,7 @@ class KinematicHand:
     readings through ``noise`` (default: the task's)."""
 
     def __init__(
-        self, task: Task, start: Config | Config3D, rng: np.random.Generator, noise: SensorNoise | None = None
+        self, task: Task, start: Config | Grip | Config3D, rng: np.random.Generator, noise: SensorNoise | None = None
     ):
         self.task = task if noise is None else dataclasses.replace(task, noise=noise)
         self.config, self.rng = task.check_config(start, "start"), rng

@@ -10,6 +10,7 @@ backend                      object                      kernel
 ``"auto"``                   a shape without a kernel    ``ReferenceKernel``
 ``"auto"``, ``"numba"``      polygon, sensing noise      ``PolygonKernel``
 ``"auto"``, ``"numba"``      polygon, noise-free         ``FusedPolygonKernel``
+``"auto"``                   three or more contacts      ``ReferenceKernel``
 ``"reference"``              a solid (spatial task)      ``SpatialKernel``
 ``"auto"``, ``"numba"``      a solid, noise-free         ``FusedSpatialKernel``
 ``"auto"``                   a solid, sensing noise      ``SpatialKernel``
@@ -39,6 +40,7 @@ from crmgrasp._validation import CrmgraspError
 from crmgrasp.kernels.base import BatchStep, Kernel
 from crmgrasp.kernels.reference import ReferenceKernel
 from crmgrasp.model.contact_model import ContactModel
+from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.geometry import Polygon, Shape
 from crmgrasp.model.hand import CRM, Hand
 from crmgrasp.model.mesh import TriangleMesh
@@ -82,11 +84,15 @@ def kernel_for(task: Task, backend: str = "auto") -> Kernel:
 
 
 def _planar(task: Task, backend: str) -> Kernel:
-    """Planar two-contact model: compiled on a polygon (fused when noise-free), else the
+    """Planar model: two contacts on a polygon compiled (fused when noise-free), else the
     reference rules."""
-    compiled = isinstance(task.obj, Polygon)
+    compiled = isinstance(task.obj, Polygon) and task.model.n_contacts == 2
     if backend == "reference" or (backend == "auto" and not compiled):
         return ReferenceKernel(task)
+    if task.model.n_contacts != 2:
+        raise CrmgraspError(
+            f"no compiled kernel for {task.model.n_contacts} contacts yet; use backend 'auto' or 'reference'"
+        )
     if not compiled:
         raise CrmgraspError(f"no compiled kernel for a {type(task.obj).__name__}; use backend 'auto' or 'reference'")
     from crmgrasp.kernels.polygon import FusedPolygonKernel, PolygonKernel
@@ -114,7 +120,7 @@ and the noise. A new contact model adds one row."""
 
 
 def _rows(configs: ArrayLike, name: str, model: ContactModel) -> NDArray[np.float64]:
-    if isinstance(configs, (list, tuple)) and configs and hasattr(configs[0], "a"):
+    if isinstance(configs, (list, tuple)) and configs and isinstance(configs[0], (Config, Grip)):
         arr = model.rows_of(list(configs))
     else:
         arr = np.asarray(configs, dtype=np.float64)
@@ -137,10 +143,10 @@ def execute_batch(
     *,
     backend: str = "auto",
 ) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
-    """Execute one CRM per row of a planar hand: new configurations ``(N, 8)`` and error
-    codes ``(N,)``.
+    """Execute one CRM per row of a planar hand: new configurations ``(N, 4 n)`` (``n`` the
+    hand's contacts) and error codes ``(N,)``.
 
-    ``c`` and ``f`` are contact indices (0 = a, 1 = b) and ``r`` offsets in metres,
+    ``c`` and ``f`` are contact indices (0 = a, 1 = b, ...) and ``r`` offsets in metres,
     per row or broadcast; ``sensed`` (same layout as ``configs``) supplies the goal
     lines' frames and defaults to ``configs``. Rows whose CRM fails keep their
     configuration ([`crmgrasp.model.hand.execute_crm`][]).
@@ -154,8 +160,9 @@ def execute_batch(
     ci = np.broadcast_to(np.asarray(c, dtype=np.int64), (n,))
     fi = np.broadcast_to(np.asarray(f, dtype=np.int64), (n,))
     rr = np.broadcast_to(np.asarray(r, dtype=np.float64), (n,))
-    if np.any((ci < 0) | (ci > 1) | (fi < 0) | (fi > 1)):
-        raise CrmgraspError("contact indices c and f must be 0 (a) or 1 (b)")
+    last = hand.contacts - 1
+    if np.any((ci < 0) | (ci > last) | (fi < 0) | (fi > last)):
+        raise CrmgraspError(f"contact indices c and f must be in [0, {last}] (the hand's contacts)")
     if not np.all(np.isfinite(rr)) or np.any(np.abs(rr) > hand.r_max):  # type: ignore[operator]
         raise CrmgraspError(f"CRM offsets r must be finite and within r_max = {hand.r_max:g}")
     return kernel_for(task, backend).execute_crms(cfg, sen, ci, fi, rr)

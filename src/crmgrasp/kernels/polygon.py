@@ -18,7 +18,7 @@ import crmgrasp.kernels._polygon_jit as jit
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.kernels.base import F64, I64, BatchStep, Kernel, bin_thresholds
 from crmgrasp.model import quality, shape
-from crmgrasp.model.contacts import Config, config_from_row
+from crmgrasp.model.contacts import Config, Grip, config_from_row
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.model.hand import CRM, Error
 from crmgrasp.model.sensing import Observation
@@ -140,7 +140,7 @@ class FusedPolygonKernel(PolygonKernel):
         # the configuration stepped from (columns 0-7) and the step's output (0-7: the new
         # configuration, 8-11: rho, m_a, m_b, min friction); swapped after a move
         self._v, self._out = np.empty((1, 12)), np.empty((1, 12))
-        self._v_of: Config | None = None
+        self._v_of: Config | Grip | None = None
 
     def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
         self._v[0, :8] = config.a + config.b
@@ -156,7 +156,7 @@ class FusedPolygonKernel(PolygonKernel):
             raise CrmgraspError(f"action must be an integer in [0, {len(self.acts)}), got {action!r}")
         config = state.config
         if config is not self._v_of:
-            self._v[0, :8] = config.a + config.b
+            self._v[0, :8] = config[0] + config[1]
             self._v_of = config
         code, index = jit.step_one(self._v, action, self.acts, self.e, self.th, self.p, self.q, self._out)
         o = self._out[0].tolist()

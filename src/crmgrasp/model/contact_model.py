@@ -10,13 +10,15 @@ model writes a contact count, a row width or an observation name of its own.
 `ContactModel` is the protocol. Two models implement it from the rules that live
 in their own modules:
 
-* [`PlanarModel`][crmgrasp.model.planar_model.PlanarModel]: two contacts in the plane
+* [`PlanarModel`][crmgrasp.model.planar_model.PlanarModel]: two or more contacts in the plane
   ([`crmgrasp.model.hand`][], [`crmgrasp.model.sensing`][], [`crmgrasp.model.quality`][]);
 * [`SpatialModel`][crmgrasp.model.spatial_model.SpatialModel]: two contacts on a solid on a
   table ([`crmgrasp.model.spatial`][], [`crmgrasp.model.quality3d`][]).
 
-A new model (three contacts, say) is one new module implementing this protocol and, for
-speed, one kernel behind [`crmgrasp.kernels.kernel_for`][]'s table.
+A new model is one new module implementing this protocol and, for speed, one kernel
+behind [`crmgrasp.kernels.kernel_for`][]'s table. The number of contacts is the hand's
+(``Hand.contacts``): the planar rules are written for any number, so a three-finger hand
+is the planar model with ``contacts = 3``.
 
 Layout
 ------
@@ -35,18 +37,31 @@ from typing import Any, ClassVar, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from crmgrasp.model.contacts import LABELS
 from crmgrasp.model.hand import Error
 from crmgrasp.model.sensing import Observation, SensorNoise
 
-__all__ = ["ContactModel", "TwoContacts", "OBSERVATION_NAMES", "RHO_MAX", "row_width", "contact_columns"]
+__all__ = [
+    "ContactModel",
+    "LabelledContacts",
+    "OBSERVATION_NAMES",
+    "observation_names",
+    "row_width",
+    "contact_columns",
+]
 
 OBSERVATION_NAMES: tuple[str, ...] = Observation._fields
 """The continuous observation of a two-contact model, in order: the squared frictionless
 force residual and the two frictionless moments (docs/model.md section 4)."""
 
-RHO_MAX = 4.0
-"""The largest squared force residual of two unit normals, ``|n_a + n_b|^2 <= 4``."""
+
+def observation_names(labels: Sequence[str]) -> tuple[str, ...]:
+    """The observation of contacts ``labels``: ``rho``, then the moment ``m_<label>`` about
+    each contact in label order.
+
+    >>> observation_names("abc")
+    ('rho', 'm_a', 'm_b', 'm_c')
+    """
+    return ("rho", *(f"m_{lab}" for lab in labels))
 
 
 def row_width(n_contacts: int, dim: int) -> int:
@@ -97,7 +112,7 @@ class ContactModel(Protocol):
 
     @property
     def observation_names(self) -> tuple[str, ...]:
-        """The continuous observation's names, in order ([`OBSERVATION_NAMES`][])."""
+        """The continuous observation's names, in order ([`observation_names`][])."""
         ...
 
     @property
@@ -190,8 +205,8 @@ class ContactModel(Protocol):
         """One sensed reading per row, as [`read`][] row after row."""
         ...
 
-    def observe(self, sensed: Any) -> Observation:
-        """The observation of a reading."""
+    def observe(self, sensed: Any) -> tuple[float, ...]:
+        """The observation of a reading (its values in the order of ``observation_names``)."""
         ...
 
     def quality(self, config: Any) -> float:
@@ -215,17 +230,31 @@ class ContactModel(Protocol):
         ...
 
 
-class TwoContacts:
-    """What the two-contact models share: labels ``a`` and ``b``, the observation
-    ``(rho, m_a, m_b)`` and its bounds, and the row layout over the model's ``axes``."""
+class LabelledContacts:
+    """What the contact models share, from their contacts' ``labels``: the observation
+    ``(rho, m_a, m_b, ...)`` and its bounds, the mirror, and the row layout over the
+    model's ``axes``. A model states ``labels`` (a class constant, or its hand's)."""
 
-    labels: ClassVar[tuple[str, ...]] = LABELS
-    observation_names: ClassVar[tuple[str, ...]] = OBSERVATION_NAMES
-    mirror_axes: ClassVar[tuple[int, ...]] = (0, 2, 1)
-    """A mirror swaps the labels: ``rho`` stays, ``(m_a, m_b)`` becomes ``(-m_b, -m_a)``."""
+    labels: tuple[str, ...]
     axes: ClassVar[str]
     """The names of a position's coordinates (``"xy"``, ``"xyz"``)."""
     hand: Any
+
+    @property
+    def observation_names(self) -> tuple[str, ...]:
+        return observation_names(self.labels)
+
+    @property
+    def mirror_axes(self) -> tuple[int, ...]:
+        """A mirror reverses the labels (``a <-> z``): ``rho`` stays and the moment about
+        contact ``j`` becomes minus the moment about its mirror contact; for two contacts
+        ``(m_a, m_b)`` becomes ``(-m_b, -m_a)``: ``(0, 2, 1)``."""
+        n = len(self.labels)
+        return (0, *(n - i for i in range(n)))
+
+    def mirror_label(self, label: str) -> str:
+        """The label a mirror gives contact ``label`` (the labels reversed)."""
+        return self.labels[len(self.labels) - 1 - self.labels.index(label)]
 
     @property
     def dim(self) -> int:
@@ -245,11 +274,14 @@ class TwoContacts:
 
     def moment_index(self, label: str) -> int:
         """The observation is ``rho`` then the moment about each contact in label order:
-        ``m_a`` is quantity 1, ``m_b`` quantity 2."""
+        ``m_a`` is quantity 1, ``m_b`` quantity 2, ..."""
         return 1 + self.labels.index(label)
 
     def observation_bounds(self) -> dict[str, tuple[float, float]]:
-        """``rho`` in ``[0, 4]``; each moment within ``2 A`` (two contacts at most ``A`` apart,
-        metres; ``A`` the aperture, doubled to leave room for sensing noise)."""
-        b = 2.0 * self.hand.aperture
-        return {"rho": (0.0, RHO_MAX), "m_a": (-b, b), "m_b": (-b, b)}
+        """``rho = |sum_i n_i|^2`` in ``[0, n^2]``; each moment, a sum of ``n - 1`` terms of at
+        most ``A`` (contacts at most ``A`` apart, metres), within ``2 (n - 1) A`` (doubled to
+        leave room for sensing noise). For two contacts: ``[0, 4]`` and ``2 A``."""
+        n = len(self.labels)
+        b = 2.0 * (n - 1) * self.hand.aperture
+        names = self.observation_names
+        return {names[0]: (0.0, float(n * n)), **{m: (-b, b) for m in names[1:]}}

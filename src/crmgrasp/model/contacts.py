@@ -1,30 +1,40 @@
-"""Contact configurations of the two-contact planar hand (docs/model.md section 2).
+"""Contact configurations of the planar hand (docs/model.md section 2).
 
 A [`Contact`][] is a position and the object's inward unit normal there; a
-[`Config`][] is the pair of contacts labelled ``a`` and ``b``. Both are
-immutable, hashable named tuples of plain floats. The batched layout of a
-configuration is one row of 8 floats, ``[ax, ay, anx, any, bx, by, bnx, bny]``
-(``np.asarray(config).reshape(8)``).
+[`Config`][] is the pair of contacts labelled ``a`` and ``b`` of a two-finger hand and a
+[`Grip`][] the contacts ``a, b, c, ...`` of a hand with more fingers. All are immutable,
+hashable tuples of plain floats; the rules index them by position, so one rule serves
+every number of contacts. The batched layout of a configuration is one row of ``4 n``
+floats, per contact ``x, y, nx, ny`` (``[ax, ay, anx, any, bx, by, bnx, bny]`` for two;
+``np.asarray(config).reshape(4 * n)``).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from crmgrasp._validation import CrmgraspError, as_point
+from crmgrasp._validation import CrmgraspError, as_point, shown
 
 __all__ = [
     "LABELS",
+    "ALL_LABELS",
+    "MAX_CONTACTS",
+    "labels_of",
     "Contact",
     "Config",
+    "Grip",
+    "make_config",
+    "replaced",
+    "two_contacts",
     "label_index",
     "other",
     "config_from_row",
+    "contacts_from_row",
     "configs_to_array",
     "array_to_configs",
     "check_contacts",
@@ -32,16 +42,37 @@ __all__ = [
 ]
 
 LABELS = ("a", "b")
-"""Contact labels, in index order."""
+"""The two-finger hand's contact labels, in index order."""
+
+MAX_CONTACTS = 4
+"""The most contacts a planar hand may have."""
+
+ALL_LABELS = ("a", "b", "c", "d")
+"""Every contact label, in index order (a hand with ``n`` contacts uses the first ``n``)."""
+
+
+def labels_of(n: int) -> tuple[str, ...]:
+    """The labels of a hand with ``n`` contacts (``2 <= n <= MAX_CONTACTS``).
+
+    >>> labels_of(3)
+    ('a', 'b', 'c')
+    """
+    if isinstance(n, bool) or not isinstance(n, int) or not 2 <= n <= MAX_CONTACTS:
+        raise CrmgraspError(f"a hand has 2 to {MAX_CONTACTS} contacts, got {n!r}")
+    return ALL_LABELS[:n]
 
 
 def label_index(label: str) -> int:
-    """Index (0 or 1) of a contact label; raises on anything but ``'a'`` or ``'b'``."""
-    if label == "a":
+    """Index of a contact label (0 for ``'a'``, 1 for ``'b'``, ...); raises on anything
+    else. Whether a given hand has that contact is the hand's check
+    ([`Hand.check_crm`][crmgrasp.model.hand.Hand.check_crm])."""
+    if label == "a":  # the two-finger labels first: the common case
         return 0
     if label == "b":
         return 1
-    raise CrmgraspError(f"unknown contact label {label!r}; expected 'a' or 'b'")
+    if label in ALL_LABELS:
+        return ALL_LABELS.index(label)
+    raise CrmgraspError(f"unknown contact label {shown(label)}; expected one of {', '.join(ALL_LABELS)}")
 
 
 def other(label: str) -> str:
@@ -113,10 +144,76 @@ class Config(NamedTuple):
         return {lab: {"point": list(c.point), "normal": list(c.normal)} for lab, c in zip(LABELS, self)}
 
 
+class Grip(tuple[Contact, ...]):
+    """Configuration of a hand with three or more contacts: ``a, b, c, ...`` in order.
+
+    Examples
+    --------
+    >>> g = Grip(Contact(0, 0, 1, 0), Contact(1, 0, -1, 0), Contact(0.5, 1, 0, -1))
+    >>> g["c"].y, len(g)
+    (1, 3)
+    """
+
+    __slots__ = ()
+
+    def __new__(cls, *contacts: Contact) -> Grip:
+        return tuple.__new__(cls, contacts)
+
+    def __getnewargs__(self) -> tuple[Contact, ...]:  # pickling and copying
+        return tuple(self)
+
+    def __getitem__(self, key: int | str) -> Contact:  # type: ignore[override]
+        if isinstance(key, str):
+            key = label_index(key)
+        return tuple.__getitem__(self, key)  # type: ignore[return-value]
+
+    def __repr__(self) -> str:
+        return f"Grip({', '.join(map(repr, self))})"
+
+    def replace(self, label: str, contact: Contact) -> Grip:
+        """A copy with contact ``label`` replaced."""
+        return cast(Grip, replaced(self, label_index(label), contact))
+
+    def to_dict(self) -> dict[str, dict[str, list[float]]]:
+        """JSON-friendly form, as [`Config.to_dict`][]."""
+        return {lab: {"point": list(c.point), "normal": list(c.normal)} for lab, c in zip(ALL_LABELS, self)}
+
+
+def make_config(contacts: Sequence[Contact]) -> Config | Grip:
+    """The configuration of contacts in label order: a [`Config`][] for two, a
+    [`Grip`][] for more (the one place that picks the type)."""
+    if len(contacts) == 2:
+        return Config(contacts[0], contacts[1])
+    return Grip(*contacts)
+
+
+def two_contacts(config: Config | Grip, what: str) -> Config:
+    """``config`` if it has two contacts, else a one-line error: ``what`` takes a two-finger
+    hand."""
+    if isinstance(config, Config):
+        return config
+    raise CrmgraspError(f"{what} takes a two-finger hand; this configuration has {len(config)} contacts")
+
+
+def replaced(config: Config | Grip, index: int, contact: Contact) -> Config | Grip:
+    """A copy of ``config`` with the contact at ``index`` replaced (the same type)."""
+    if len(config) == 2:
+        return Config(config[0], contact) if index else Config(contact, config[1])
+    return Grip(*(contact if i == index else c for i, c in enumerate(config)))
+
+
 def config_from_row(row: Sequence[float]) -> Config:
-    """The configuration of one row ``[ax, ay, anx, any, bx, by, bnx, bny]`` of plain floats
-    (no checks: for rows the package made itself)."""
+    """The two-contact configuration of one row ``[ax, ay, anx, any, bx, by, bnx, bny]`` of
+    plain floats (no checks: for rows the package made itself)."""
     return Config(Contact(row[0], row[1], row[2], row[3]), Contact(row[4], row[5], row[6], row[7]))
+
+
+def contacts_from_row(row: Sequence[float]) -> Config | Grip:
+    """The configuration of one row of ``4 n`` plain floats, per contact ``x, y, nx, ny``:
+    [`config_from_row`][] for two contacts, a [`Grip`][] for more (no checks)."""
+    if len(row) == 8:
+        return config_from_row(row)
+    return Grip(*(Contact(row[i], row[i + 1], row[i + 2], row[i + 3]) for i in range(0, len(row), 4)))
 
 
 ROW_WIDTH = 4 * len(LABELS)
@@ -143,8 +240,8 @@ UNIT_TOL = 1e-6
 _NORM2_TOL = 2.0 * UNIT_TOL  # on the squared length
 
 
-def check_contacts(config: object, name: str = "configuration") -> Config:
-    """``config`` if it is a [`Config`][] of two [`Contact`][] with finite
+def check_contacts(config: object, name: str = "configuration") -> Config | Grip:
+    """``config`` if it is a [`Config`][] (or a [`Grip`][]) of [`Contact`][] with finite
     coordinates and unit normals (within [`UNIT_TOL`][]); else a one-line
     `CrmgraspError`. The public functions taking a
     configuration call it; the compiled kernels do not (their inputs come from the model).
@@ -159,15 +256,25 @@ def check_contacts(config: object, name: str = "configuration") -> Config:
     crmgrasp._validation.CrmgraspError: configuration: contact a's normal must be a unit vector, got (2, 0)
     """
     if type(config) is not Config or type(config.a) is not Contact or type(config.b) is not Contact:
-        if not isinstance(config, Config) or not all(isinstance(c, Contact) for c in config):
-            raise CrmgraspError(f"{name} must be a Config of two Contacts, got {config!r:.80}")
+        if not isinstance(config, (Config, Grip)) or not all(isinstance(c, Contact) for c in config):
+            raise CrmgraspError(f"{name} must be a Config of two Contacts (or a Grip of more), got {config!r:.80}")
+        if len(config) > 2:
+            _check_each(config, name)
+            return config
     (ax, ay, anx, any_), (bx, by, bnx, bny) = config
-    if not math.isfinite(ax + ay + anx + any_ + bx + by + bnx + bny):  # a NaN or inf (or an overflow)
-        for label, c in zip("ab", config):
-            if not all(math.isfinite(v) for v in c):
-                raise CrmgraspError(f"{name}: contact {label} must be finite, got {tuple(c)}")
-    if abs(anx * anx + any_ * any_ - 1.0) > _NORM2_TOL or abs(bnx * bnx + bny * bny - 1.0) > _NORM2_TOL:
-        for label, nx, ny in (("a", anx, any_), ("b", bnx, bny)):
-            if abs(nx * nx + ny * ny - 1.0) > _NORM2_TOL:
-                raise CrmgraspError(f"{name}: contact {label}'s normal must be a unit vector, got ({nx:g}, {ny:g})")
+    if not math.isfinite(ax + ay + anx + any_ + bx + by + bnx + bny) or (  # a NaN or inf (or an overflow)
+        abs(anx * anx + any_ * any_ - 1.0) > _NORM2_TOL or abs(bnx * bnx + bny * bny - 1.0) > _NORM2_TOL
+    ):
+        _check_each(config, name)
     return config
+
+
+def _check_each(config: Config | Grip, name: str) -> None:
+    """The one-line error of the first contact that is not finite, else of the first whose
+    normal is not a unit vector (within [`UNIT_TOL`][])."""
+    for label, c in zip(ALL_LABELS, config):
+        if not all(math.isfinite(v) for v in c):
+            raise CrmgraspError(f"{name}: contact {label} must be finite, got {tuple(c)}")
+    for label, c in zip(ALL_LABELS, config):
+        if abs(c.nx * c.nx + c.ny * c.ny - 1.0) > _NORM2_TOL:
+            raise CrmgraspError(f"{name}: contact {label}'s normal must be a unit vector, got ({c.nx:g}, {c.ny:g})")

@@ -1,23 +1,31 @@
-"""The two-contact planar hand and contact relative motions (docs/model.md sections 2 and 3).
+"""The planar hand and contact relative motions (docs/model.md sections 2, 3 and 8).
+
+A hand has ``n`` contacts (``Hand.contacts``, 2 by default) labelled ``a, b, ...`` in
+order; ``z`` below is the last one (``b`` for two contacts). Every rule is written once
+for any ``n``; for two contacts it is the paper's model.
 
 Palm model
 ----------
-With ``d = (x_b - x_a) / |x_b - x_a|`` and ``u = (d_y, -d_x)`` (the right of the
-directed segment a -> b), the palm point is ``P = (x_a + x_b) / 2 + h u``. A
-configuration is feasible iff ``|x_a - x_b| <= A`` (else APERTURE) and the palm is
-clear: ``P`` not strictly inside the object and ``n_a . u <= tol`` and
-``n_b . u <= tol`` (else PALM), with ``tol = Hand.palm_normal_tol`` (default 1e-9).
-Contacts closer than ``Hand.min_separation`` (default 0: only coincident contacts,
-``x_a == x_b``, which leave ``u`` undefined) are reported as PALM: the fingers collide.
-Under large sensing noise a CRM can land the moving contact a fraction of a millimetre
-from the other one; a hand with fingertips of diameter ``D`` models that with
-``min_separation = D``.
+With ``d = (x_z - x_a) / |x_z - x_a|`` and ``u = (d_y, -d_x)`` (the right of the
+directed segment a -> z), the palm point is ``P = mean_i x_i + h u`` (for two contacts
+``(x_a + x_b) / 2 + h u``). A configuration is feasible iff every two contacts are
+at most ``A`` apart (else APERTURE) and the palm is clear (else PALM): ``P`` not
+strictly inside the object; the outer contacts do not face the palm side,
+``n_a . u <= tol`` and ``n_z . u <= tol``, with ``tol = Hand.palm_normal_tol``
+(default 1e-9); no two contacts collide (closer than ``Hand.min_separation``, default
+0: only coincident contacts, which leave ``u`` undefined); and the fingers do not
+cross: the contacts' positions along ``d`` increase strictly in label order (a middle
+contact lies strictly between ``a`` and ``z``; it may face the palm, wrapping around
+the object). Under large sensing noise a CRM can land the moving contact a fraction
+of a millimetre from another one; a hand with fingertips of diameter ``D`` models that
+with ``min_separation = D``.
 
 CRM ``(c, f, r)``
 -----------------
 1. Goal line ``p(t) = x_f + r tau_f + t n_f`` in the (sensed) frame of contact f.
-2. Reach: the chord ``[t_lo, t_hi]`` of the line within distance A of the contact
-   that stays still; if the line misses that disc: APERTURE.
+2. Reach: the chord ``[t_lo, t_hi]`` of the line within distance A of every contact
+   that stays still (the intersection of their chords); if the line misses a disc, or
+   the chords do not overlap: APERTURE.
 3. Start at ``t_lo`` when ``c == f`` (approach along ``+n_f``), else at ``t_hi``
    (approach along ``-n_f``). The moving contact backs off by ``d`` along its
    outward normal, travels to the start, then approaches along the line.
@@ -33,7 +41,9 @@ contact and the stationary contact's reach are in the true world.
 
 from __future__ import annotations
 
+import itertools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from enum import IntEnum
 from typing import NamedTuple, Protocol
@@ -42,7 +52,16 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from crmgrasp._validation import CrmgraspError, as_point, finite, non_negative, positive, shown
-from crmgrasp.model.contacts import Config, Contact, label_index
+from crmgrasp.model.contacts import (
+    ALL_LABELS,
+    Config,
+    Contact,
+    Grip,
+    label_index,
+    labels_of,
+    make_config,
+    replaced,
+)
 from crmgrasp.model.geometry import Shape
 
 
@@ -54,7 +73,7 @@ class Sensor(Protocol):
     @property
     def active(self) -> bool: ...
 
-    def sense(self, config: Config, rng: np.random.Generator) -> Config: ...
+    def sense(self, config: Config | Grip, rng: np.random.Generator) -> Config | Grip: ...
 
 
 __all__ = [
@@ -91,9 +110,9 @@ class CRM:
     Parameters
     ----------
     c
-        Label of the contact that moves, ``'a'`` or ``'b'``.
+        Label of the contact that moves, ``'a'``, ``'b'``, ... (a contact of the hand).
     f
-        Label of the frame contact, ``'a'`` or ``'b'``.
+        Label of the frame contact.
     r
         Offset of the goal line along the frame tangent ``tau_f = n_f x z``, metres.
 
@@ -109,7 +128,7 @@ class CRM:
     f: str
     r: float = 0.0
     ci: int = field(init=False, repr=False, compare=False)
-    """Index of ``c`` (0 for a, 1 for b)."""
+    """Index of ``c`` (0 for a, 1 for b, ...)."""
     fi: int = field(init=False, repr=False, compare=False)
     """Index of ``f``."""
 
@@ -159,7 +178,7 @@ class Outcome(NamedTuple):
     the attempt stopped and the original contact again).
     """
 
-    config: Config
+    config: Config | Grip
     error: Error
     path: tuple[tuple[float, float], ...]
     goal: GoalLine | None
@@ -167,14 +186,15 @@ class Outcome(NamedTuple):
 
 @dataclass(frozen=True)
 class Hand:
-    """A two-contact planar hand (docs/model.md section 2).
+    """A planar hand of two or more contacts (docs/model.md sections 2 and 8).
 
     Parameters
     ----------
     aperture
-        Maximum distance between the two contacts, metres (> 0).
+        Maximum distance between any two contacts, metres (> 0).
     palm_depth
-        Distance ``h`` of the palm point from the contacts' midpoint, metres (>= 0).
+        Distance ``h`` of the palm point from the contacts' centroid (their midpoint for
+        two), metres (>= 0).
     backoff
         Distance ``d`` a moving contact first retreats along its outward normal,
         metres (>= 0). Drawn and followed by real executors; it does not change
@@ -191,6 +211,9 @@ class Hand:
     min_separation
         Contacts this close or closer (metres) collide: a PALM error. Default 0: only
         coincident contacts. Must be below the aperture.
+    contacts
+        The number of contacts (fingers), labelled ``a, b, c, ...``: 2 (the paper's
+        hand, the default) to [`MAX_CONTACTS`][crmgrasp.model.contacts.MAX_CONTACTS].
     """
 
     aperture: float
@@ -199,8 +222,10 @@ class Hand:
     r_max: float | None = None
     palm_normal_tol: float = PALM_NORMAL_TOL
     min_separation: float = 0.0
+    contacts: int = 2
 
     def __post_init__(self) -> None:
+        labels_of(self.contacts)  # 2 to MAX_CONTACTS, else a one-line error
         object.__setattr__(self, "aperture", positive(self.aperture, "hand aperture"))
         object.__setattr__(self, "palm_depth", non_negative(self.palm_depth, "hand palm_depth"))
         object.__setattr__(self, "backoff", non_negative(self.backoff, "hand backoff"))
@@ -215,39 +240,61 @@ class Hand:
             raise CrmgraspError(f"hand min_separation must be below the aperture {self.aperture:g}, got {sep:g}")
         object.__setattr__(self, "min_separation", sep)
 
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """The contacts' labels in order (``('a', 'b')`` for two)."""
+        return ALL_LABELS[: self.contacts]
+
     def check_crm(self, crm: CRM) -> CRM:
-        """Return ``crm`` if ``|r| <= r_max``, else raise `CrmgraspError`."""
+        """Return ``crm`` if it names contacts of this hand and ``|r| <= r_max``, else raise
+        `CrmgraspError`."""
         if not isinstance(crm, CRM):
             raise CrmgraspError(f"expected a CRM, got {crm!r}")
+        if max(crm.ci, crm.fi) >= self.contacts:
+            missing = crm.c if crm.ci >= self.contacts else crm.f
+            raise CrmgraspError(
+                f"CRM {crm} names contact {missing!r}, but the hand has contacts {', '.join(self.labels)}"
+            )
         assert self.r_max is not None
         if abs(crm.r) > self.r_max:
             raise CrmgraspError(f"CRM offset r = {crm.r:g} is beyond r_max = {self.r_max:g}")
         return crm
 
-    def contact(self, obj: Shape, a: ArrayLike, b: ArrayLike) -> Config:
-        """Configuration with contacts at the boundary points nearest ``a`` and ``b``
-        (each a finite ``(x, y)`` in metres)."""
-        pa, pb = obj.project(as_point(a, "contact a")), obj.project(as_point(b, "contact b"))
-        return Config(Contact(*pa.point, *pa.normal), Contact(*pb.point, *pb.normal))
+    def contact(self, obj: Shape, *points: ArrayLike, **labelled: ArrayLike) -> Config | Grip:
+        """Configuration with contacts at the boundary points nearest ``points``, one per
+        contact in label order, or given by label (``a=(x, y), b=(x, y)``); each a finite
+        ``(x, y)`` in metres."""
+        if labelled:
+            if points or set(labelled) != set(self.labels):
+                raise CrmgraspError(
+                    f"give one point per contact ({', '.join(self.labels)}), in order or by label; "
+                    f"got {len(points)} in order and {', '.join(labelled) or 'none'} by label"
+                )
+            points = tuple(labelled[lab] for lab in self.labels)
+        if len(points) != self.contacts:
+            raise CrmgraspError(f"the hand has {self.contacts} contacts; got {len(points)} points")
+        near = [obj.project(as_point(p, f"contact {lab}")) for p, lab in zip(points, ALL_LABELS)]
+        return make_config([Contact(*q.point, *q.normal) for q in near])
 
-    def palm(self, config: Config) -> tuple[float, float]:
+    def palm(self, config: Config | Grip) -> tuple[float, float]:
         """Palm point ``P`` of a configuration."""
         return palm_point(config, self.palm_depth)
 
-    def feasible(self, obj: Shape, config: Config) -> Error:
+    def feasible(self, obj: Shape, config: Config | Grip) -> Error:
         """``Error.NONE`` if ``config`` is feasible, else the violated constraint;
-        ``config`` is checked first ([`check_config`][]: finite, unit normals, on ``obj``)."""
-        return feasible(obj, self, check_config(obj, config))
+        ``config`` is checked first ([`check_config`][]: finite, unit normals, on ``obj``,
+        one contact per finger)."""
+        return feasible(obj, self, check_config(obj, config, contacts=self.contacts))
 
     def execute(
         self,
         obj: Shape,
-        config: Config,
+        config: Config | Grip,
         crm: CRM,
         *,
         noise: Sensor | None = None,
         rng: np.random.Generator | None = None,
-        sensed: Config | None = None,
+        sensed: Config | Grip | None = None,
     ) -> Outcome:
         """Execute ``crm`` from ``config`` on ``obj`` (docs/model.md section 3).
 
@@ -257,7 +304,7 @@ class Hand:
         transition [`execute_crm`][] checks nothing.
         """
         self.check_crm(crm)
-        check_config(obj, config)
+        check_config(obj, config, contacts=self.contacts)
         if rng is not None and not isinstance(rng, np.random.Generator):
             raise CrmgraspError(f"rng must be a numpy.random.Generator, got {shown(rng)}")
         if sensed is None and noise is not None and noise.active:
@@ -272,13 +319,19 @@ CONTACT_TOL = 1e-6
 length from 1, before [`check_config`][] refuses it."""
 
 
-def check_config(obj: Shape, config: object, name: str = "configuration") -> Config:
-    """``config`` if it is a [`Config`][crmgrasp.model.contacts.Config] of two contacts with
-    finite coordinates, unit normals and points on the boundary of ``obj`` (both within
-    [`CONTACT_TOL`][]); else a one-line `CrmgraspError`."""
-    if not isinstance(config, Config) or not all(isinstance(c, Contact) for c in config):
-        raise CrmgraspError(f"{name} must be a Config of two Contacts, got {shown(config)}")
-    for label, c in zip("ab", config):
+def check_config(
+    obj: Shape, config: object, name: str = "configuration", *, contacts: int | None = None
+) -> Config | Grip:
+    """``config`` if it is a [`Config`][crmgrasp.model.contacts.Config] (or a
+    [`Grip`][crmgrasp.model.contacts.Grip]) of ``contacts`` contacts (any number when
+    ``None``) with finite coordinates, unit normals and points on the boundary of ``obj``
+    (both within [`CONTACT_TOL`][]); else a one-line `CrmgraspError`."""
+    if not isinstance(config, (Config, Grip)) or not all(isinstance(c, Contact) for c in config):
+        kind = "a Config of two Contacts" if contacts in (2, None) else f"a Grip of {contacts} Contacts"
+        raise CrmgraspError(f"{name} must be {kind}, got {shown(config)}")
+    if contacts is not None and len(config) != contacts:
+        raise CrmgraspError(f"{name} has {len(config)} contacts; the hand has {contacts}")
+    for label, c in zip(ALL_LABELS, config):
         if not all(math.isfinite(v) for v in c):
             raise CrmgraspError(f"{name}: contact {label} must be finite, got {tuple(c)}")
         if abs(math.hypot(c.nx, c.ny) - 1.0) > CONTACT_TOL:
@@ -289,10 +342,11 @@ def check_config(obj: Shape, config: object, name: str = "configuration") -> Con
     return config
 
 
-def palm_axis(config: Config) -> tuple[float, float, float]:
-    """``(|x_b - x_a|, u_x, u_y)``: the contacts' distance and the unit vector ``u`` to
-    the right of a -> b, the side the palm is on (``u`` is NaN if they coincide)."""
-    a, b = config
+def palm_axis(config: Config | Grip) -> tuple[float, float, float]:
+    """``(|x_z - x_a|, u_x, u_y)``: the outer contacts' distance (first ``a``, last ``z``)
+    and the unit vector ``u`` to the right of a -> z, the side the palm is on (``u`` is NaN
+    if they coincide)."""
+    a, b = config[0], config[-1]
     dx, dy = b.x - a.x, b.y - a.y
     dist = math.sqrt(dx * dx + dy * dy)
     if dist == 0.0:
@@ -300,63 +354,111 @@ def palm_axis(config: Config) -> tuple[float, float, float]:
     return dist, dy / dist, -dx / dist
 
 
-def _palm_at(a: Contact, b: Contact, ux: float, uy: float, h: float) -> tuple[float, float]:
-    return (0.5 * (a.x + b.x) + h * ux, 0.5 * (a.y + b.y) + h * uy)
+def _palm_at(config: Config | Grip, ux: float, uy: float, h: float) -> tuple[float, float]:
+    """``mean_i x_i + h u``, the sum taken in label order."""
+    sx, sy = config[0].x, config[0].y
+    for c in itertools.islice(config, 1, None):
+        sx += c.x
+        sy += c.y
+    n = len(config)
+    return (sx / n + h * ux, sy / n + h * uy)
 
 
 def _faces(a: Contact, b: Contact, ux: float, uy: float, tol: float) -> bool:
     return a.nx * ux + a.ny * uy > tol or b.nx * ux + b.ny * uy > tol
 
 
-def palm_point(config: Config, palm_depth: float) -> tuple[float, float]:
-    """``P = (x_a + x_b)/2 + h u`` with ``u`` the right of a -> b (NaN if coincident)."""
+def palm_point(config: Config | Grip, palm_depth: float) -> tuple[float, float]:
+    """``P = mean_i x_i + h u`` with ``u`` the right of a -> z (NaN if ``a`` and ``z``
+    coincide); ``(x_a + x_b)/2 + h u`` for two contacts."""
     _, ux, uy = palm_axis(config)
-    return _palm_at(config.a, config.b, ux, uy, palm_depth)
+    return _palm_at(config, ux, uy, palm_depth)
 
 
-def faces_palm(config: Config, tol: float) -> bool:
-    """True if a contact's surface faces the palm side: ``n . u > tol`` for ``n_a`` or
-    ``n_b`` (the object would lie between palm and finger). False if they coincide."""
+def faces_palm(config: Config | Grip, tol: float) -> bool:
+    """True if an outer contact's surface faces the palm side: ``n . u > tol`` for ``n_a``
+    or ``n_z`` (the object would lie between palm and finger). False if they coincide."""
     _, ux, uy = palm_axis(config)
-    return _faces(config.a, config.b, ux, uy, tol)
+    return _faces(config[0], config[-1], ux, uy, tol)
 
 
-def feasible(obj: Shape, hand: Hand, config: Config) -> Error:
-    """Feasibility of a configuration (docs/model.md section 2), as an [`Error`][]: APERTURE
-    if ``|x_a - x_b| > A``; PALM if the contacts collide (``|x_a - x_b| <=
-    min_separation``, coincident by default), a contact faces the palm side
-    ([`faces_palm`][]) or the palm point ([`palm_point`][]) is inside."""
+def _spread(config: Config | Grip) -> tuple[float, float]:
+    """The largest and the smallest distance between two contacts (m)."""
+    far, near = 0.0, math.inf
+    for i, p in enumerate(config):
+        for q in itertools.islice(config, i + 1, None):
+            dx, dy = q.x - p.x, q.y - p.y
+            dist = math.sqrt(dx * dx + dy * dy)
+            far, near = max(far, dist), min(near, dist)
+    return far, near
+
+
+def _crossed(config: Config | Grip, ux: float, uy: float) -> bool:
+    """True if the contacts' positions along ``d = (-u_y, u_x)`` (a -> z) do not increase
+    strictly in label order (never for two contacts)."""
+    a = config[0]
+    last = 0.0
+    for c in itertools.islice(config, 1, None):
+        s = (c.x - a.x) * -uy + (c.y - a.y) * ux
+        if s <= last:
+            return True
+        last = s
+    return False
+
+
+def feasible(obj: Shape, hand: Hand, config: Config | Grip) -> Error:
+    """Feasibility of a configuration (docs/model.md sections 2 and 8), as an [`Error`][]:
+    APERTURE if two contacts are more than ``A`` apart; PALM if two collide (at most
+    ``min_separation`` apart, coincident by default), an outer contact faces the palm side
+    ([`faces_palm`][]), the fingers cross (positions along a -> z not increasing) or the
+    palm point ([`palm_point`][]) is inside."""
     dist, ux, uy = palm_axis(config)
     if dist > hand.aperture:
         return Error.APERTURE
-    a, b = config
-    if dist <= hand.min_separation or _faces(a, b, ux, uy, hand.palm_normal_tol):
+    if len(config) == 2:
+        near = dist
+    else:
+        far, near = _spread(config)
+        if far > hand.aperture:
+            return Error.APERTURE
+    if near <= hand.min_separation or _faces(config[0], config[-1], ux, uy, hand.palm_normal_tol):
         return Error.PALM
-    if obj.contains(_palm_at(a, b, ux, uy, hand.palm_depth)):
+    if len(config) > 2 and _crossed(config, ux, uy):
+        return Error.PALM
+    if obj.contains(_palm_at(config, ux, uy, hand.palm_depth)):
         return Error.PALM
     return Error.NONE
 
 
-def goal_line(crm: CRM, sensed: Config, still: Contact, aperture: float) -> GoalLine | None:
-    """Goal line of ``crm`` in the sensed frame and its chord within ``aperture`` of ``still``.
+def goal_line(crm: CRM, sensed: Config | Grip, stills: Sequence[Contact], aperture: float) -> GoalLine | None:
+    """Goal line of ``crm`` in the sensed frame and its chord within ``aperture`` of every
+    contact in ``stills`` (those that do not move).
 
-    Solves ``|base + t n_f - x_still|^2 = A^2`` for ``t``; ``None`` if the line
-    misses the disc of radius A around the stationary contact.
+    Solves ``|base + t n_f - x_s|^2 = A^2`` for ``t`` per still contact ``s`` and
+    intersects the intervals; ``None`` if the line misses a disc of radius A around a
+    still contact or the intervals do not overlap.
     """
-    f = sensed.b if crm.fi else sensed.a
+    f = sensed[crm.fi]
     base = (f.x + crm.r * f.ny, f.y - crm.r * f.nx)
-    wx, wy = base[0] - still.x, base[1] - still.y
     qa = f.nx * f.nx + f.ny * f.ny
-    qb = wx * f.nx + wy * f.ny
-    qc = wx * wx + wy * wy - aperture * aperture
-    disc = qb * qb - qa * qc
-    if disc < 0.0:
+    t_lo, t_hi = -math.inf, math.inf
+    for still in stills:
+        wx, wy = base[0] - still.x, base[1] - still.y
+        qb = wx * f.nx + wy * f.ny
+        qc = wx * wx + wy * wy - aperture * aperture
+        disc = qb * qb - qa * qc
+        if disc < 0.0:
+            return None
+        root = math.sqrt(disc)
+        t_lo, t_hi = max(t_lo, (-qb - root) / qa), min(t_hi, (-qb + root) / qa)
+    if t_lo > t_hi:
         return None
-    root = math.sqrt(disc)
-    return GoalLine(base, (f.nx, f.ny), (-qb - root) / qa, (-qb + root) / qa)
+    return GoalLine(base, (f.nx, f.ny), t_lo, t_hi)
 
 
-def execute_crm(obj: Shape, hand: Hand, config: Config, crm: CRM, sensed: Config | None = None) -> Outcome:
+def execute_crm(
+    obj: Shape, hand: Hand, config: Config | Grip, crm: CRM, sensed: Config | Grip | None = None
+) -> Outcome:
     """Pure CRM transition: ``(object, hand, config, crm, sensed config) -> Outcome``.
 
     See the module docstring for the algorithm. ``sensed`` defaults to ``config``
@@ -364,10 +466,10 @@ def execute_crm(obj: Shape, hand: Hand, config: Config, crm: CRM, sensed: Config
     """
     if sensed is None:
         sensed = config
-    mover, still = (config.b, config.a) if crm.ci else (config.a, config.b)
+    mover = config[crm.ci]
     origin = (mover.x, mover.y)
     backed = (mover.x - hand.backoff * mover.nx, mover.y - hand.backoff * mover.ny)
-    line = goal_line(crm, sensed, still, hand.aperture)
+    line = goal_line(crm, sensed, [c for i, c in enumerate(config) if i != crm.ci], hand.aperture)
     if line is None:
         return Outcome(config, Error.APERTURE, (origin, backed, origin), None)
     same = crm.c == crm.f
@@ -381,7 +483,7 @@ def execute_crm(obj: Shape, hand: Hand, config: Config, crm: CRM, sensed: Config
     if entry is None:
         return Outcome(config, Error.APERTURE, (origin, backed, start, line.at(t1), origin), line)
     moved = Contact(entry.point[0], entry.point[1], entry.normal[0], entry.normal[1])
-    new = Config(config.a, moved) if crm.ci else Config(moved, config.b)
+    new = replaced(config, crm.ci, moved)
     err = feasible(obj, hand, new)
     if err is not Error.NONE:
         return Outcome(config, err, (origin, backed, start, entry.point, origin), line)

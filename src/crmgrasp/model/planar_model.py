@@ -1,4 +1,5 @@
-"""The planar two-contact model (docs/model.md sections 2-5) as a `ContactModel`.
+"""The planar model of two or more contacts (docs/model.md sections 2-5 and 8) as a
+`ContactModel`.
 
 [`PlanarModel`][] holds the hand and the sensing noise and applies the rules that live
 in their own modules: the CRM transition and feasibility ([`crmgrasp.model.hand`][]),
@@ -16,36 +17,41 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.model.contact_model import TwoContacts
-from crmgrasp.model.contacts import Config, config_from_row
+from crmgrasp.model.contact_model import LabelledContacts
+from crmgrasp.model.contacts import LABELS, Config, Grip, contacts_from_row
 from crmgrasp.model.hand import CRM, Error, Hand, Outcome, check_config, execute_crm, feasible
 from crmgrasp.model.quality import min_friction
-from crmgrasp.model.sensing import Observation, SensorNoise, observe
+from crmgrasp.model.sensing import SensorNoise, observe
 
 __all__ = ["PlanarModel", "SWAP", "mirror_crm"]
 
 SWAP = {"a": "b", "b": "a"}
-"""The labels a mirror exchanges."""
+"""The labels a mirror exchanges on a two-contact hand."""
 
 
-def mirror_crm(crm: CRM) -> CRM:
-    """The planar mirror of a CRM: labels swapped, ``r -> -r``.
+def mirror_crm(crm: CRM, labels: tuple[str, ...] = LABELS) -> CRM:
+    """The planar mirror of a CRM: labels reversed (``a <-> b`` for two contacts, ``a <-> c``
+    for three), ``r -> -r``.
 
     >>> mirror_crm(CRM("a", "a", 0.08))
     CRM('b', 'b', -0.08)
+    >>> mirror_crm(CRM("b", "a", 0.0), ("a", "b", "c"))
+    CRM('b', 'c', -0)
     """
-    return CRM(SWAP[crm.c], SWAP[crm.f], -crm.r)
+    last = len(labels) - 1
+    return CRM(labels[last - labels.index(crm.c)], labels[last - labels.index(crm.f)], -crm.r)
 
 
 @dataclass(frozen=True)
-class PlanarModel(TwoContacts):
-    """Two contacts ``a``, ``b`` in the plane: rows ``[ax, ay, anx, any, bx, by, bnx, bny]``,
-    CRMs ``(c, f, r)`` with a scalar offset, observation ``(rho, m_a, m_b)``.
+class PlanarModel(LabelledContacts):
+    """The hand's contacts ``a, b, ...`` in the plane: rows of ``x, y, nx, ny`` per contact
+    (``[ax, ay, anx, any, bx, by, bnx, bny]`` for two), CRMs ``(c, f, r)`` with a scalar
+    offset, observation ``(rho, m_a, m_b, ...)``.
 
     Parameters
     ----------
     hand
-        The planar hand (aperture, palm, reach).
+        The planar hand (contacts, aperture, palm, reach).
     noise
         Sensing noise of every reading (off by default).
     """
@@ -57,14 +63,19 @@ class PlanarModel(TwoContacts):
     axes: ClassVar[str] = "xy"
     offset_dim: ClassVar[int] = 1
 
+    @property
+    def labels(self) -> tuple[str, ...]:  # type: ignore[override]
+        """The hand's contact labels (``('a', 'b')`` for the paper's hand)."""
+        return self.hand.labels
+
     # -- configurations and CRMs
-    def config_of(self, row: Sequence[float]) -> Config:
-        return config_from_row(row)
+    def config_of(self, row: Sequence[float]) -> Config | Grip:
+        return contacts_from_row(row)
 
-    def row_of(self, config: Config) -> list[float]:
-        return [*config.a, *config.b]
+    def row_of(self, config: Config | Grip) -> list[float]:
+        return [v for c in config for v in c]
 
-    def rows_of(self, configs: Sequence[Config]) -> NDArray[np.float64]:
+    def rows_of(self, configs: Sequence[Config | Grip]) -> NDArray[np.float64]:
         return np.asarray(configs, dtype=np.float64).reshape(len(configs), self.row_width)
 
     def crm(self, c: int, f: int, r: Any) -> CRM:
@@ -83,14 +94,14 @@ class PlanarModel(TwoContacts):
         return float(r)
 
     def mirror_crm(self, crm: CRM) -> CRM:
-        return mirror_crm(crm)
+        return mirror_crm(crm, self.labels)
 
     # -- the rules
-    def execute(self, obj: Any, config: Config, crm: CRM, sensed: Config | None) -> Outcome:
+    def execute(self, obj: Any, config: Config | Grip, crm: CRM, sensed: Config | Grip | None) -> Outcome:
         """[`execute_crm`][crmgrasp.model.hand.execute_crm]."""
         return execute_crm(obj, self.hand, config, crm, sensed)
 
-    def read(self, config: Config, rng: np.random.Generator) -> Config:
+    def read(self, config: Config | Grip, rng: np.random.Generator) -> Config | Grip:
         """[`sense`][crmgrasp.model.sensing.SensorNoise.sense]."""
         return self.noise.sense(config, rng)
 
@@ -98,28 +109,28 @@ class PlanarModel(TwoContacts):
         """[`sense_batch`][crmgrasp.model.sensing.SensorNoise.sense_batch]."""
         return self.noise.sense_batch(rows, rng)
 
-    def observe(self, sensed: Config) -> Observation:
+    def observe(self, sensed: Config | Grip) -> tuple[float, ...]:
         """[`observe`][crmgrasp.model.sensing.observe]."""
         return observe(sensed)
 
-    def quality(self, config: Config) -> float:
+    def quality(self, config: Config | Grip) -> float:
         """[`min_friction`][crmgrasp.model.quality.min_friction]."""
         return min_friction(config)
 
-    def feasible(self, obj: Any, config: Config) -> Error:
+    def feasible(self, obj: Any, config: Config | Grip) -> Error:
         """[`feasible`][crmgrasp.model.hand.feasible]."""
         return feasible(obj, self.hand, config)
 
-    def check_config(self, obj: Any, config: object, name: str = "configuration") -> Config:
-        """[`check_config`][crmgrasp.model.hand.check_config]."""
-        return check_config(obj, config, name)
+    def check_config(self, obj: Any, config: object, name: str = "configuration") -> Config | Grip:
+        """[`check_config`][crmgrasp.model.hand.check_config], with one contact per finger."""
+        return check_config(obj, config, name, contacts=self.n_contacts)
 
-    def place(self, obj: Any, points: Sequence[ArrayLike]) -> Config:
+    def place(self, obj: Any, points: Sequence[ArrayLike]) -> Config | Grip:
         """Each contact at the boundary point nearest its point (finite ``(x, y)``, metres;
         [`contact`][crmgrasp.model.hand.Hand.contact])."""
         if len(points) != self.n_contacts:
             raise CrmgraspError(f"the planar model takes {self.n_contacts} points, got {len(points)}")
-        return self.hand.contact(obj, points[0], points[1])
+        return self.hand.contact(obj, *points)
 
-    def numbers(self, config: Config) -> list[float]:
+    def numbers(self, config: Config | Grip) -> list[float]:
         return [v for c in config for v in c]

@@ -1,15 +1,16 @@
 """Force-derived observations, sensing noise and observation discretizers (docs/model.md section 4).
 
-Observation (paper Eq. 2-3), computed from *sensed* contacts:
+Observation (paper Eq. 2-3), computed from *sensed* contacts ``i = a, b, ...``:
 
-* ``rho = |n_a + n_b|^2`` in ``[0, 4]``: squared frictionless force residual;
-* ``m_a = (x_b - x_a) x n_b`` and ``m_b = (x_a - x_b) x n_a`` (z components, metres):
-  the frictionless moments about contact a and contact b.
+* ``rho = |sum_i n_i|^2`` in ``[0, n^2]``: squared frictionless force residual;
+* ``m_j = sum_{i != j} (x_i - x_j) x n_i`` (z components, metres), one per contact: the
+  frictionless moment about contact ``j``. For two contacts ``m_a = (x_b - x_a) x n_b``
+  and ``m_b = (x_a - x_b) x n_a``.
 
 Noise: sensed normal = true normal rotated by ``N(0, sigma_n)`` radians; sensed
-position = true position + ``N(0, sigma_p^2 I)`` metres. Each sensing draws six
-standard normals in the order ``[angle_a, x_a, y_a, angle_b, x_b, y_b]``, so a
-batch of ``N`` sensings draws exactly the stream of ``N`` scalar ones.
+position = true position + ``N(0, sigma_p^2 I)`` metres. Each sensing draws three
+standard normals per contact in the order ``[angle_a, x_a, y_a, angle_b, x_b, y_b,
+...]``, so a batch of ``N`` sensings draws exactly the stream of ``N`` scalar ones.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from crmgrasp._validation import CrmgraspError, finite, non_negative
-from crmgrasp.model.contacts import Config, Contact, check_contacts
+from crmgrasp.model.contacts import Config, Contact, Grip, check_contacts, make_config
 from crmgrasp.model.hand import Error
 
 __all__ = [
@@ -48,8 +49,12 @@ class Observation(NamedTuple):
     m_b: float
 
 
-def observe(config: Config) -> Observation:
-    """Frictionless force residual and moments of a (sensed) configuration.
+def observe(config: Config | Grip) -> tuple[float, ...]:
+    """Frictionless force residual and moments of a (sensed) configuration: an
+    [`Observation`][] for two contacts, ``(rho, m_a, m_b, m_c, ...)`` for more.
+
+    Sums run in label order from the first term, so that two contacts give the
+    two-contact formulas bit for bit.
 
     Examples
     --------
@@ -61,10 +66,27 @@ def observe(config: Config) -> Observation:
     A configuration with a non-finite coordinate or a normal that is not a unit vector is
     refused ([`check_contacts`][crmgrasp.model.contacts.check_contacts]).
     """
-    a, b = check_contacts(config, "observe")
-    sx, sy = a.nx + b.nx, a.ny + b.ny
-    dx, dy = b.x - a.x, b.y - a.y
-    return Observation(sx * sx + sy * sy, dx * b.ny - dy * b.nx, -dx * a.ny + dy * a.nx)
+    contacts = check_contacts(config, "observe")
+    sx, sy = contacts[0].nx, contacts[0].ny
+    for c in itertools.islice(contacts, 1, None):
+        sx += c.nx
+        sy += c.ny
+    moments = [_moment(contacts, j) for j in range(len(contacts))]
+    if len(contacts) == 2:
+        return Observation(sx * sx + sy * sy, moments[0], moments[1])
+    return (sx * sx + sy * sy, *moments)
+
+
+def _moment(contacts: Config | Grip, j: int) -> float:
+    """``m_j = sum_{i != j} (x_i - x_j) x n_i``, summed in label order from the first term."""
+    p = contacts[j]
+    total: float | None = None
+    for i, c in enumerate(contacts):
+        if i != j:
+            term = (c.x - p.x) * c.ny - (c.y - p.y) * c.nx
+            total = term if total is None else total + term
+    assert total is not None
+    return total
 
 
 MAX_SIGMA_N = math.pi / 4
@@ -108,12 +130,12 @@ class SensorNoise:
         """False when both deviations are zero (sensing is exact and draws nothing)."""
         return self.sigma_n > 0.0 or self.sigma_p > 0.0
 
-    def sense(self, config: Config, rng: np.random.Generator) -> Config:
+    def sense(self, config: Config | Grip, rng: np.random.Generator) -> Config | Grip:
         """A noisy reading of ``config`` (returns ``config`` itself when inactive)."""
         if not self.active:
             return config
-        z = rng.standard_normal(6)
-        return Config(self._perturb(config.a, z[0], z[1], z[2]), self._perturb(config.b, z[3], z[4], z[5]))
+        z = rng.standard_normal(3 * len(config))
+        return make_config([self._perturb(c, z[k], z[k + 1], z[k + 2]) for c, k in zip(config, range(0, len(z), 3))])
 
     def _perturb(self, c: Contact, za: float, zx: float, zy: float) -> Contact:
         ang = self.sigma_n * float(za)
@@ -126,16 +148,17 @@ class SensorNoise:
         )
 
     def sense_batch(self, configs: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.float64]:
-        """[`sense`][] of each row of ``(N, 8)`` configurations: one
-        ``standard_normal((N, 6))`` draw (the stream of ``N`` scalar readings), each row
+        """[`sense`][] of each row of ``(N, 4 n)`` configurations (``n`` contacts): one
+        ``standard_normal((N, 3 n))`` draw (the stream of ``N`` scalar readings), each row
         perturbed by the scalar rule. Returns ``configs`` itself when inactive."""
         if not self.active:
             return configs
-        z = rng.standard_normal((len(configs), 6)).tolist()
+        n = configs.shape[1] // 4
+        z = rng.standard_normal((len(configs), 3 * n)).tolist()
         out = np.empty_like(configs)
         for i, (row, zi) in enumerate(zip(configs.tolist(), z)):
-            out[i, :4] = self._perturb(Contact(*row[:4]), zi[0], zi[1], zi[2])
-            out[i, 4:] = self._perturb(Contact(*row[4:]), zi[3], zi[4], zi[5])
+            for k in range(n):
+                out[i, 4 * k : 4 * k + 4] = self._perturb(Contact(*row[4 * k : 4 * k + 4]), *zi[3 * k : 3 * k + 3])
         return out
 
 

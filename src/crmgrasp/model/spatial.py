@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from crmgrasp._validation import CrmgraspError, non_negative, positive
+from crmgrasp.model.contacts import LABELS
 from crmgrasp.model.hand import Error
 from crmgrasp.model.solids import SURFACE, ConvexPolyhedron, Cylinder, Solid, _unit, box3d, cross, dot, norm
 
@@ -91,6 +92,11 @@ class Hand3D:
             raise CrmgraspError("the hand's axes h and g must be perpendicular")
         object.__setattr__(self, "_h", h)
         object.__setattr__(self, "_g", g)
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """The contacts' labels, ``('a', 'b')``."""
+        return LABELS
 
     @property
     def reach(self) -> float:

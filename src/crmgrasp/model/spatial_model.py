@@ -16,7 +16,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from crmgrasp._validation import CrmgraspError, finite
-from crmgrasp.model.contact_model import TwoContacts
+from crmgrasp.model.contact_model import LabelledContacts
+from crmgrasp.model.contacts import LABELS
 from crmgrasp.model.hand import Error
 from crmgrasp.model.planar_model import SWAP
 from crmgrasp.model.quality3d import min_friction_3d
@@ -47,7 +48,7 @@ def contact3d(point: ArrayLike, normal: ArrayLike) -> Contact3D:
 
 
 @dataclass(frozen=True)
-class SpatialModel(TwoContacts):
+class SpatialModel(LabelledContacts):
     """Two contacts ``a``, ``b`` on a solid: rows ``[x_a, n_a, x_b, n_b]`` (12 floats), CRMs
     ``(c, f, (r_1, r_2))`` with the offset in ``f``'s tangent frame, observation
     ``(rho, |m_a|, |m_b|)``.
@@ -67,6 +68,7 @@ class SpatialModel(TwoContacts):
     table: float | None = 0.0
 
     kind: ClassVar[str] = "spatial"
+    labels: ClassVar[tuple[str, ...]] = LABELS  # type: ignore[misc]
     axes: ClassVar[str] = "xyz"
     offset_dim: ClassVar[int] = 2
 

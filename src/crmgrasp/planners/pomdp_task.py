@@ -22,7 +22,7 @@ import numpy as np
 from scipy import sparse
 
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.contacts import Config, Contact, Grip
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.model.hand import Error, execute_crm
 from crmgrasp.model.sensing import observe
@@ -49,7 +49,7 @@ class TaskPOMDP:
         return _cell(obj, self.bins, cfg)
 
 
-def _cell(obj: Polygon, bins: list[int], cfg: Config) -> Cell:
+def _cell(obj: Polygon, bins: list[int], cfg: Config | Grip) -> Cell:
     out = []
     for c in cfg:
         e = obj.edge_index(c.point)
@@ -81,6 +81,8 @@ def build_task_pomdp(
     obj = task.obj
     if not isinstance(obj, Polygon):
         raise CrmgraspError(f"the sampled POMDP needs a polygonal object, got {type(obj).__name__}")
+    if task.model.n_contacts != 2:
+        raise CrmgraspError(f"the sampled POMDP grids two contacts; {task.name!r} has {task.model.n_contacts}")
     rng = np.random.default_rng(seed)
     bins = [max(1, math.ceil(math.sqrt(e[4]) / cell)) for e in obj.edges]
     n_obs = task.discretizer.size + 1

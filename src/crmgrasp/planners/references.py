@@ -25,11 +25,12 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.model.contacts import Config
+from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import Error
 from crmgrasp.sim import Percept, run_episode
 from crmgrasp.tasks import Task, World
@@ -44,8 +45,8 @@ __all__ = [
     "BeliefPolicy",
 ]
 
-Start = Config | World
-State = tuple[int, Config]  # the world's object (an index into _Model.tasks) and the configuration
+Start = Config | Grip | World
+State = tuple[int, Config | Grip]  # the world's object (an index into _Model.tasks) and the configuration
 Step = tuple[State, int, bool]  # next state, observation index, grasped
 
 
@@ -135,13 +136,15 @@ place in the clairvoyant search."""
 
 def _key(state: State) -> tuple[int, tuple[int, ...]]:
     i, c = state
-    flat = (*c.a, *c.b)
-    if isinstance(flat[0], tuple):  # a spatial configuration: (x, n) triples per contact
-        flat = tuple(v for part in flat for v in part)
-    return i, tuple(round(v / SAME) for v in flat)
+    return i, tuple(round(v / SAME) for v in _flat(c))
 
 
-def sample_starts(task: Task, n: int, seed: int) -> list[Config] | list[World]:
+def _flat(value: tuple[Any, ...]) -> tuple[float, ...]:
+    """The numbers of a configuration, contacts (and a spatial contact's vectors) flattened."""
+    return tuple(x for part in value for x in (_flat(part) if isinstance(part, tuple) else (part,)))
+
+
+def sample_starts(task: Task, n: int, seed: int) -> list[Config | Grip] | list[World]:
     """``n`` starts from the task's sampler, seeded (worlds, for a family task)."""
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
         raise CrmgraspError(f"number of starts must be an integer >= 1, got {n!r}")

@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Circle
 from matplotlib.patches import Polygon as PolygonPatch
 
-from crmgrasp.model.contacts import LABELS, Config
+from crmgrasp.model.contacts import ALL_LABELS, Config, Grip
 from crmgrasp.model.geometry import Disc, Polygon, Shape
 from crmgrasp.model.hand import Hand, Outcome
 
@@ -35,7 +35,7 @@ __all__ = [
     "scene_legend",
 ]
 
-COLORS = {"a": "tab:blue", "b": "tab:orange"}
+COLORS = {"a": "tab:blue", "b": "tab:orange", "c": "tab:green", "d": "tab:red"}
 
 
 def draw_object(ax: Axes, obj: Shape) -> None:
@@ -54,7 +54,7 @@ def draw_scene(
     ax: Axes,
     obj: Shape,
     hand: Hand,
-    config: Config,
+    config: Config | Grip,
     outcome: Outcome | None = None,
     *,
     title: str | None = None,
@@ -89,8 +89,10 @@ def draw_scene(
         ax.set_title(title, fontsize=10)
 
 
-def _draw_config(ax: Axes, hand: Hand, config: Config, scale: float, *, alpha: float, primed: bool = False) -> None:
-    for lab, c in zip(LABELS, config):
+def _draw_config(
+    ax: Axes, hand: Hand, config: Config | Grip, scale: float, *, alpha: float, primed: bool = False
+) -> None:
+    for lab, c in zip(ALL_LABELS, config):
         ax.plot(c.x, c.y, "o", color=COLORS[lab], ms=8, alpha=alpha, zorder=4)
         ax.annotate(
             "",
@@ -110,14 +112,13 @@ def _draw_config(ax: Axes, hand: Hand, config: Config, scale: float, *, alpha: f
         )
     px, py = hand.palm(config)
     if math.isfinite(px):
-        ax.plot(
-            [config.a.x, px, config.b.x], [config.a.y, py, config.b.y], "-", color="0.4", lw=0.8, alpha=alpha, zorder=3
-        )
+        first, last = config[0], config[-1]
+        ax.plot([first.x, px, last.x], [first.y, py, last.y], "-", color="0.4", lw=0.8, alpha=alpha, zorder=3)
         ax.plot(px, py, "s", color="0.3", ms=7, alpha=alpha, zorder=4)
 
 
 def scene_figure(
-    obj: Shape, hand: Hand, config: Config, outcome: Outcome | None = None, title: str | None = None
+    obj: Shape, hand: Hand, config: Config | Grip, outcome: Outcome | None = None, title: str | None = None
 ) -> Figure:
     """A one-panel figure of [`draw_scene`][] (of [`crmgrasp.plotting.spatial.scene_figure3d`][]
     for a solid: ``outcome`` then gives the configuration after the CRM)."""
@@ -129,7 +130,7 @@ def scene_figure(
     fig = Figure(figsize=(6, 5.2), layout="constrained")
     ax = fig.add_subplot()
     draw_scene(ax, obj, hand, config, outcome, title=title)
-    handles, labels = scene_legend()
+    handles, labels = scene_legend(len(config))
     fig.legend(handles, labels, loc="outside lower center", ncols=2, fontsize=7, frameon=False)
     return fig
 
@@ -278,27 +279,28 @@ def learning_curve_figure(
     return fig
 
 
-def scene_legend() -> tuple[list[Any], list[str]]:
-    """Legend handles for the scene's marks (contacts, normals, palm, goal line, path)."""
+def scene_legend(contacts: int = 2) -> tuple[list[Any], list[str]]:
+    """Legend handles for the scene's marks (``contacts`` contacts, normals, palm, goal
+    line, path)."""
     from matplotlib.lines import Line2D
 
+    labels = ALL_LABELS[:contacts]
     handles = [
-        Line2D([], [], marker="o", ls="", color=COLORS["a"], ms=7),
-        Line2D([], [], marker="o", ls="", color=COLORS["b"], ms=7),
+        *(Line2D([], [], marker="o", ls="", color=COLORS[lab], ms=7) for lab in labels),
         Line2D([], [], marker="s", ls="-", color="0.3", ms=6, lw=0.8),
         Line2D([], [], ls="--", color="tab:green"),
         Line2D([], [], ls=":", color="0.5"),
         Line2D([], [], ls="-", marker=".", color="tab:purple"),
     ]
-    labels = [
+    texts = [
         "contact a (arrow: sensed inward normal)",
-        "contact b",
+        *(f"contact {lab}" for lab in labels[1:]),
         "palm point (behind the contacts)",
         "goal line within reach",
         "goal line beyond reach",
         "moving contact's path",
     ]
-    return handles, labels
+    return handles, texts
 
 
 def _limits(obj: Shape, points: np.ndarray) -> tuple[float, float, float, float]:
@@ -314,7 +316,7 @@ def _limits(obj: Shape, points: np.ndarray) -> tuple[float, float, float, float]
 
 
 def _rollout_points(steps: Sequence[Any]) -> list[tuple[float, float]]:
-    return [p for st in steps for p in (*st.outcome.path, st.config.a.point, st.config.b.point)]
+    return [p for st in steps for p in (*st.outcome.path, *(c.point for c in st.config))]
 
 
 def rollout_panels(

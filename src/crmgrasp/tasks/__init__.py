@@ -9,6 +9,7 @@ from TOML files and ``package.module:factory`` strings ([`resolve_task`][], what
 from crmgrasp.tasks.core import Symmetry, Task, World, make_task, paper_box, register_task, task_names
 from crmgrasp.tasks.families import FAMILY_TASKS, BoundaryStarts, default_crms, family_task, mirror_symmetry
 from crmgrasp.tasks.files import TEMPLATE, load_task_file, resolve_task, task_from_dict, task_to_dict
+from crmgrasp.tasks.fingers import FINGER_TASKS, finger_crms, three_finger_task
 from crmgrasp.tasks.spatial import SPATIAL_TASKS, SpatialTask, SurfaceStarts, spatial_crms
 from crmgrasp.tasks.starts import (
     CornerStarts,
@@ -34,6 +35,9 @@ __all__ = [
     "family_task",
     "mirror_symmetry",
     "FAMILY_TASKS",
+    "FINGER_TASKS",
+    "finger_crms",
+    "three_finger_task",
     "SPATIAL_TASKS",
     "SpatialTask",
     "SurfaceStarts",

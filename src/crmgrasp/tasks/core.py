@@ -19,12 +19,12 @@ from numpy.typing import NDArray
 
 from crmgrasp._validation import CrmgraspError, finite, non_negative
 from crmgrasp.model.contact_model import ContactModel
-from crmgrasp.model.contacts import Config
+from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.families import ShapeFamily
 from crmgrasp.model.geometry import Rectangle, Shape
 from crmgrasp.model.hand import CRM, Error, Hand
 from crmgrasp.model.planar_model import PlanarModel
-from crmgrasp.model.sensing import Discretizer, Observation, SensorNoise
+from crmgrasp.model.sensing import Discretizer, SensorNoise
 from crmgrasp.tasks.starts import CornerStarts, StartFilter, StartSampler, accept_corner_candidates
 
 __all__ = [
@@ -36,6 +36,9 @@ __all__ = [
     "register_task",
     "task_names",
 ]
+
+
+NUMBER_WORDS = {2: "two", 3: "three", 4: "four"}
 
 
 @dataclass(frozen=True)
@@ -142,6 +145,7 @@ class Task:
         if not isinstance(self.hand, Hand):
             raise CrmgraspError(f"task hand must be a Hand, got {self.hand!r}")
         self._set_model(PlanarModel(self.hand, self.noise))
+        self._check_starts()
         self._check_common()
         if self.family is not None:
             if not isinstance(self.family, ShapeFamily):
@@ -157,8 +161,19 @@ class Task:
             )
 
     def _set_model(self, model: ContactModel) -> None:
-        """Hold ``model``, the contact model every rule of this task goes through."""
+        """Hold ``model``, the contact model every rule of this task goes through; bins left
+        at their default become the default thresholds over the model's observation."""
         object.__setattr__(self, "model", model)
+        if self.discretizer == Discretizer() and model.observation_names != self.discretizer.names:
+            object.__setattr__(self, "discretizer", Discretizer(names=model.observation_names))
+
+    def _check_starts(self) -> None:
+        """Refuse a start sampler that places two contacts on a hand with more."""
+        if self.hand.contacts != 2 and not getattr(self.starts, "any_contacts", False):
+            kind = getattr(self.starts, "kind", type(self.starts).__name__)
+            raise CrmgraspError(
+                f"{kind!r} starts place two contacts, but the hand has {self.hand.contacts}; use 'uniform' starts"
+            )
 
     def _check_common(self) -> None:
         """The checks every task takes, planar or spatial: actions (through the hand's
@@ -217,7 +232,7 @@ class Task:
         """One sensed reading of ``config`` (the model's ``read``)."""
         return self.model.read(config, rng)
 
-    def observe(self, sensed: Any) -> Observation:
+    def observe(self, sensed: Any) -> tuple[float, ...]:
         """The observation of a reading (the model's ``observe``)."""
         return self.model.observe(sensed)
 
@@ -264,7 +279,7 @@ class Task:
         inst = self.instance(rng)
         return World(inst, inst.sample_start(rng, accept))
 
-    def sample_start(self, rng: np.random.Generator, accept: StartFilter | None = None) -> Config:
+    def sample_start(self, rng: np.random.Generator, accept: StartFilter | None = None) -> Config | Grip:
         """A start configuration drawn from ``rng``. ``accept``: a compiled start filter,
         used by samplers built on corner candidates ([`CornerStarts`][] and the presets
         of `crmgrasp.tasks.presets`; the same start either way), ignored by others."""
@@ -293,6 +308,11 @@ class Task:
         ``mu <= mu_goal`` (elementwise on an array)."""
         return mu <= self.mu_goal
 
+    def headline(self) -> str:
+        """The task's line in a listing: its description and its hand's number of fingers."""
+        n = self.model.n_contacts
+        return f"{self.description}; {NUMBER_WORDS.get(n, str(n))} fingers"
+
     def is_success(self, config: Any) -> bool:
         """docs/model.md section 5: `grasped` of [`quality`][]."""
         return self.grasped(self.quality(config))
@@ -306,7 +326,7 @@ class World(NamedTuple):
     """One episode's hidden world: the task on the object drawn for it, and the start."""
 
     task: Task
-    config: Config
+    config: Config | Grip
 
 
 PAPER_HAND = Hand(aperture=0.16, palm_depth=0.12, backoff=0.01)

@@ -31,7 +31,7 @@ from typing import ClassVar
 import numpy as np
 
 from crmgrasp._validation import CrmgraspError, positive, tries
-from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.contacts import LABELS, Config, Contact
 from crmgrasp.model.families import (
     BoxFamily,
     ConvexPolygonFamily,
@@ -47,6 +47,7 @@ from crmgrasp.model.families import (
 )
 from crmgrasp.model.geometry import Disc, Polygon, Shape
 from crmgrasp.model.hand import CRM, Hand
+from crmgrasp.model.planar_model import mirror_crm
 from crmgrasp.model.sensing import Discretizer
 from crmgrasp.tasks.core import PAPER_BINS, PAPER_CRMS, PAPER_HAND, Symmetry, Task, register_task
 from crmgrasp.tasks.presets import VertexStarts
@@ -187,14 +188,15 @@ def default_crms(offsets: Sequence[float] = (0.04, 0.08)) -> tuple[CRM, ...]:
     return tuple(out)
 
 
-def mirror_symmetry(actions: Sequence[CRM]) -> Symmetry:
-    """The [`Symmetry`][] mapping each CRM to its mirror ``(c', f', -r)`` in ``actions``;
-    an error if some CRM's mirror is not in the set."""
-    swap = {"a": "b", "b": "a"}
+def mirror_symmetry(actions: Sequence[CRM], labels: tuple[str, ...] = LABELS) -> Symmetry:
+    """The [`Symmetry`][] mapping each CRM to its mirror ``(c', f', -r)`` in ``actions``
+    (primes: the hand's ``labels`` reversed); an error if some CRM's mirror is not in the
+    set."""
     index = {(a.c, a.f, a.r): i for i, a in enumerate(actions)}
     perm = []
     for a in actions:
-        key = (swap[a.c], swap[a.f], -a.r if a.r else 0.0)
+        m = mirror_crm(a, labels)
+        key = (m.c, m.f, m.r if a.r else 0.0)
         if key not in index:
             raise CrmgraspError(f"the CRM set has no mirror of {a}; declare no symmetry")
         perm.append(index[key])
@@ -229,7 +231,7 @@ def family_task(
         discretizer=discretizer,
         starts=starts if starts is not None else BoundaryStarts(),
         family=family,
-        symmetry=mirror_symmetry(acts) if symmetric else None,
+        symmetry=mirror_symmetry(acts, hand.labels) if symmetric else None,
         description=description,
         **kwargs,  # type: ignore[arg-type]
     )

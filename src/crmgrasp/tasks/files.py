@@ -81,11 +81,13 @@ error_cost = 0.0                   # optional: extra cost of a CRM that ends in 
 polygon = [[0, 0], [0.3, 0], [0.3, 0.2], [0.2, 0.2], [0.2, 0.05], [0.1, 0.05], [0.1, 0.2], [0, 0.2]]
 
 [hand]
-aperture = 0.16                    # largest distance between the contacts
-palm_depth = 0.12                  # palm point behind the contacts' midpoint
+aperture = 0.16                    # largest distance between two contacts
+palm_depth = 0.12                  # palm point behind the contacts' midpoint (centroid)
 backoff = 0.01                     # optional: retreat along the normal before a CRM
 # r_max = 0.2                      # optional: largest |r| of a CRM
 # min_separation = 0.0             # optional: contacts closer than this collide
+# contacts = 2                    # optional: fingers a, b, c, ... (2 to 4); CRMs may name
+                                   # any of them and the bins take m_c, ... for more than two
 
 [[crm]]    # one table per action: contact c moves onto the line through contact f's
 c = "a"    # position offset by r along f's tangent, along f's normal
@@ -288,9 +290,10 @@ def task_from_dict(doc: Any) -> Task:
         doc = {k: v for k, v in doc.items() if k != "model"}
     d = table_keys(doc, "the task file", _TOP, {"name", "hand", "crm"})
     name = checked_name(d["name"])
+    hand = section("hand", _hand, d["hand"])
     kw: dict[str, Any] = {
-        "hand": section("hand", _hand, d["hand"]),
-        "actions": section("crm", crm_tables, d["crm"]),
+        "hand": hand,
+        "actions": section("crm", lambda v: crm_tables(v, labels=hand.labels), d["crm"]),
     }
     if ("object" in d) == ("family" in d):
         raise CrmgraspError("the task file needs exactly one of [object] and [family]")

@@ -30,7 +30,7 @@ from typing import ClassVar
 import numpy as np
 
 from crmgrasp._validation import CrmgraspError, positive, tries
-from crmgrasp.model.contacts import Config, config_from_row
+from crmgrasp.model.contacts import Config, Grip, config_from_row
 from crmgrasp.model.geometry import Polygon, Shape
 from crmgrasp.model.hand import Hand
 from crmgrasp.tasks.core import Task
@@ -204,7 +204,7 @@ class MixtureStarts:
 
     def __call__(
         self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator, accept: StartFilter | None = None
-    ) -> Config:
+    ) -> Config | Grip:
         cum = np.cumsum(self.weights) / sum(self.weights)
         i = min(int(np.searchsorted(cum, rng.random(), side="right")), len(cum) - 1)
         part = self.components[i]

@@ -17,10 +17,12 @@ import math
 import re
 import types
 import typing
-from collections.abc import Callable, Collection
+from collections.abc import Callable, Collection, Sequence
 from typing import Any
 
 from crmgrasp._validation import CrmgraspError, shown
+from crmgrasp.model.contact_model import observation_names
+from crmgrasp.model.contacts import LABELS
 from crmgrasp.model.hand import CRM
 from crmgrasp.model.sensing import Discretizer, SensorNoise
 from crmgrasp.tasks.core import Symmetry, Task
@@ -166,17 +168,22 @@ def numbers(value: Any, key: str) -> tuple[float, ...]:
     return tuple(number(v, f"{key}[{i}]") for i, v in enumerate(value))
 
 
-def crm_tables(value: Any, make: Callable[[str, str, Any, str], Any] | None = None) -> tuple[Any, ...]:
-    """The ``[[crm]]`` tables; ``make(c, f, r, where)`` builds each (default: a planar CRM,
-    ``r`` a number, 0 when absent)."""
+def crm_tables(
+    value: Any, make: Callable[[str, str, Any, str], Any] | None = None, labels: Sequence[str] = LABELS
+) -> tuple[Any, ...]:
+    """The ``[[crm]]`` tables, ``c`` and ``f`` among the hand's contact ``labels``;
+    ``make(c, f, r, where)`` builds each (default: a planar CRM, ``r`` a number, 0 when
+    absent)."""
     if not isinstance(value, list) or not value:
         raise CrmgraspError("the task needs at least one [[crm]] table")
     out = []
     for i, t in enumerate(value):
         where = f"[[crm]] number {i + 1}"
         t = table_keys(t, where, {"c", "f", "r"}, {"c", "f"})
-        if t["c"] not in ("a", "b") or t["f"] not in ("a", "b"):
-            raise CrmgraspError(f'{where}: c and f must be "a" or "b", got {shown(t["c"])}, {shown(t["f"])}')
+        if t["c"] not in labels or t["f"] not in labels:
+            quoted = [f'"{lab}"' for lab in labels]
+            names = ", ".join(quoted[:-1]) + " or " + quoted[-1]
+            raise CrmgraspError(f"{where}: c and f must be {names}, got {shown(t['c'])}, {shown(t['f'])}")
         if make is None:
             out.append(CRM(t["c"], t["f"], number(t.get("r", 0.0), f"{where} r")))
         else:
@@ -228,7 +235,8 @@ def common_keys(d: dict[str, Any], kw: dict[str, Any]) -> None:
     """The keys planar and spatial task files share (bins, noise, [`SCALAR_KEYS`][],
     symmetry), checked into the task's keyword arguments ``kw``."""
     if "bins" in d:
-        kw["discretizer"] = section("bins", bins_table, d["bins"])
+        names = observation_names(kw["hand"].labels)
+        kw["discretizer"] = section("bins", lambda t: bins_table(t, names), d["bins"])
     if "noise" in d:
         noise = section("noise", lambda t: read_fields(SensorNoise, t, "[noise]", "noise."), d["noise"])
         kw["noise"] = section("noise", lambda kw: SensorNoise(**kw), noise)

@@ -20,7 +20,7 @@ from typing import ClassVar, Protocol, runtime_checkable
 import numpy as np
 
 from crmgrasp._validation import CrmgraspError, tries
-from crmgrasp.model.contacts import ROW_WIDTH, Config, Contact, config_from_row, configs_to_array
+from crmgrasp.model.contacts import ROW_WIDTH, Config, Contact, Grip, config_from_row, configs_to_array, make_config
 from crmgrasp.model.geometry import Polygon, Shape
 from crmgrasp.model.hand import Error, Hand, feasible
 from crmgrasp.model.quality import min_friction
@@ -42,7 +42,7 @@ __all__ = [
 class StartSampler(Protocol):
     """Draws a start configuration; every draw comes from ``rng``."""
 
-    def __call__(self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator) -> Config: ...
+    def __call__(self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator) -> Config | Grip: ...
 
 
 StartFilter = Callable[[Shape, Hand, float, np.ndarray], np.ndarray]
@@ -53,7 +53,7 @@ planar layout ([`configs_to_array`][crmgrasp.model.contacts.configs_to_array]).
 compiled one that makes the same decisions."""
 
 
-def acceptable(obj: Shape, hand: Hand, mu_goal: float, config: Config) -> bool:
+def acceptable(obj: Shape, hand: Hand, mu_goal: float, config: Config | Grip) -> bool:
     """The start rule: feasible (docs/model.md section 2) and not already a grasp
     (``min_friction > mu_goal``)."""
     return feasible(obj, hand, config) is Error.NONE and min_friction(config) > mu_goal
@@ -212,23 +212,25 @@ class CornerStarts:
 
 @dataclass(frozen=True)
 class UniformStarts:
-    """Two contacts uniform in arclength on the whole boundary, resampled until
-    feasible, not a grasp and (for polygons) off the vertices."""
+    """The hand's contacts (two or more) uniform in arclength on the whole boundary,
+    resampled until feasible, not a grasp and (for polygons) off the vertices."""
 
     max_tries: int = 10_000
     kind: ClassVar[str] = "uniform"
+    any_contacts: ClassVar[bool] = True
+    """Places any number of contacts (the other samplers place two)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "max_tries", tries(self.max_tries))
 
-    def __call__(self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator) -> Config:
+    def __call__(self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator) -> Config | Grip:
         vertices = set(obj.vertex_arclengths()) if isinstance(obj, Polygon) else set()
         for _ in range(self.max_tries):
-            s = rng.random(2) * obj.perimeter
-            if vertices and (float(s[0]) in vertices or float(s[1]) in vertices):
+            s = (rng.random(hand.contacts) * obj.perimeter).tolist()
+            if vertices and not vertices.isdisjoint(s):
                 continue
-            pa, pb = obj.boundary(float(s[0])), obj.boundary(float(s[1]))
-            cfg = Config(Contact(*pa.point, *pa.normal), Contact(*pb.point, *pb.normal))
+            points = [obj.boundary(v) for v in s]
+            cfg = make_config([Contact(*p.point, *p.normal) for p in points])
             if acceptable(obj, hand, mu_goal, cfg):
                 return cfg
         raise CrmgraspError(f"no feasible uniform start found in {self.max_tries} tries")

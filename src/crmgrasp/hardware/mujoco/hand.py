@@ -306,7 +306,7 @@ class MujocoHand:
             raise CrmgraspError(f"cannot execute a CRM without contact ({s.reason})")
         i = crm.ci
         mover, still = s[i], s[1 - i]
-        line = goal_line(crm, s, still, self.task.hand.aperture)
+        line = goal_line(crm, s, (still,), self.task.hand.aperture)
         if line is None:
             return Error.APERTURE
         same = crm.c == crm.f

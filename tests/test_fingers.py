@@ -1,0 +1,208 @@
+"""Hands with more than two contacts (docs/model.md section 8): the rules written once for
+any number of contacts, two contacts bit for bit as before, three-contact grasp quality,
+the three-finger tasks and their bad input."""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import math
+import struct
+
+import numpy as np
+import pytest
+
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.model.contacts import Config, Contact, Grip, contacts_from_row
+from crmgrasp.model.geometry import Polygon, regular_polygon
+from crmgrasp.model.hand import CRM, Error, Hand, feasible
+from crmgrasp.model.planar_model import PlanarModel, mirror_crm
+from crmgrasp.model.quality import closes, force_closure, least_friction, min_friction
+from crmgrasp.model.sensing import Discretizer, SensorNoise, observe
+from crmgrasp.tasks import make_task
+from crmgrasp.tasks.core import Task
+from crmgrasp.tasks.starts import CornerStarts, UniformStarts
+
+S30, C30 = math.sin(math.pi / 6), math.cos(math.pi / 6)
+TRIANGLE = regular_polygon(3, 1.0)  # circumradius 1, a vertex at angle 0 (pointing +x)
+
+
+def tripod() -> Grip:
+    """Contacts at the midpoints of an equilateral triangle's sides (circumradius 1), their
+    normals through the centroid: a frictionless equilibrium that closes with any friction."""
+    v = TRIANGLE.vertices
+    mids = [((v[i][0] + v[(i + 1) % 3][0]) / 2, (v[i][1] + v[(i + 1) % 3][1]) / 2) for i in range(3)]
+    return Grip(*(Contact(x, y, -x / math.hypot(x, y), -y / math.hypot(x, y)) for x, y in mids))
+
+
+# ---------------------------------------------------------------- two contacts, bit for bit
+TWO_CONTACT_DIGEST = "58825d2d2e9615516d0c455a3c941ee6a644cfd75f24427f5f11a1b8eedc1151"
+"""The digest of 4,500 CRM outcomes computed by the two-contact rules before they were
+written for any number of contacts (commit df2b05a): configurations, observations, min
+friction, errors and paths on paper-box (with and without noise), discs, U handles and
+polygons."""
+
+
+def _two_contact_outcomes() -> str:
+    h = hashlib.sha256()
+    cases = (("paper-box", 0.0), ("paper-box", 0.05), ("cup-family", 0.02), ("u-handle", 0.0), ("polygon-family", 0.03))
+    for name, noise in cases:
+        task = make_task(name)
+        if noise:
+            task = dataclasses.replace(task, noise=SensorNoise(sigma_n=noise, sigma_p=noise / 10))
+        rng = np.random.default_rng(7)
+        for _ in range(150):
+            inst, config = task.sample_world(rng)
+            for _ in range(6):
+                c, f = "ab"[int(rng.integers(2))], "ab"[int(rng.integers(2))]
+                r = float(rng.uniform(-0.1, 0.1))
+                out = inst.execute(config, CRM(c, f, r), inst.read(config, rng))
+                o = inst.observe(inst.read(out.config, rng))
+                vals = [v for k in out.config for v in k] + list(o) + [inst.quality(out.config), float(out.error)]
+                vals += [v for p in out.path for v in p]
+                h.update(struct.pack(f"{len(vals)}d", *vals))
+                config = out.config
+    return h.hexdigest()
+
+
+def test_two_contacts_are_the_special_case_bit_for_bit():
+    """Starts, readings, CRM outcomes (every error kind), observations and min friction of
+    the rules written for n contacts equal those of the two-contact rules they replaced."""
+    assert _two_contact_outcomes() == TWO_CONTACT_DIGEST
+
+
+# ---------------------------------------------------------------- grasp quality
+def test_least_friction_hand_checked_cases():
+    tri = tripod()
+    assert least_friction(tri) == 0.0 and min_friction(tri) == 0.0
+    assert not closes(tri, 0.0)  # three frictionless contacts never close in the plane
+    assert closes(tri, 1e-6)
+    two = Grip(tri[0], tri[1])
+    assert least_friction(two) == pytest.approx(math.tan(math.pi / 6), abs=1e-9)
+    assert min_friction(Config(tri[0], tri[1])) == pytest.approx(math.tan(math.pi / 6), abs=1e-12)
+
+
+def test_least_friction_of_two_contacts_is_the_closed_form():
+    rng = np.random.default_rng(3)
+    checked = 0
+    for _ in range(400):
+        p = rng.normal(size=(2, 2))
+        ang = rng.uniform(0, 2 * np.pi, 2)
+        cfg = Config(*(Contact(*p[i], math.cos(ang[i]), math.sin(ang[i])) for i in range(2)))
+        mu = min_friction(cfg)
+        if math.isfinite(mu) and mu < 20:
+            checked += 1
+            assert least_friction(cfg) == pytest.approx(mu, rel=1e-8, abs=1e-9)
+    assert checked > 50
+
+
+def test_least_friction_agrees_with_the_linear_program():
+    rng = np.random.default_rng(4)
+    for _ in range(150):
+        p = rng.normal(size=(3, 2))
+        ang = rng.uniform(0, 2 * np.pi, 3)
+        n = np.stack([np.cos(ang), np.sin(ang)], axis=1)
+        mu = least_friction(Grip(*(Contact(*p[i], *n[i]) for i in range(3))))
+        if math.isinf(mu):
+            assert not force_closure(p, n, 1e6)
+        else:
+            assert force_closure(p, n, mu * 1.001 + 1e-9)
+            assert not force_closure(p, n, mu * 0.999)
+
+
+# ---------------------------------------------------------------- the hand's rules
+HAND3 = Hand(aperture=3.0, palm_depth=2.0, contacts=3)
+
+
+def _tri_grip() -> Grip:
+    """The tripod labelled so that the palm (right of a -> c) is clear: a and c on the two
+    sides whose normals point away from the palm side, b between them."""
+    t = tripod()
+    return Grip(t[1], t[0], t[2])
+
+
+def test_three_contact_feasibility_rules():
+    g = _tri_grip()
+    assert feasible(TRIANGLE, HAND3, g) is Error.NONE
+    assert feasible(TRIANGLE, dataclasses.replace(HAND3, aperture=0.8), g) is Error.APERTURE  # sides 0.87 apart
+    assert feasible(TRIANGLE, dataclasses.replace(HAND3, palm_depth=0.1), g) is Error.PALM  # palm inside
+    assert feasible(TRIANGLE, HAND3, Grip(g[0], g[2], g[1])) is Error.PALM  # fingers cross
+    assert feasible(TRIANGLE, HAND3, Grip(g[2], g[1], g[0])) is Error.PALM  # outer contacts face the palm
+    assert feasible(TRIANGLE, HAND3, Grip(g[0], g[0], g[2])) is Error.PALM  # coincident
+
+
+def test_three_contact_observation_is_eq_2_and_3():
+    g = _tri_grip()
+    rho, *moments = observe(g)
+    assert rho == pytest.approx(0.0, abs=1e-24) and moments == pytest.approx([0, 0, 0], abs=1e-12)
+    shifted = Grip(g[0], Contact(g[1].x + 0.1, g[1].y, g[1].nx, g[1].ny), g[2])
+    values = observe(shifted)
+    for j, p in enumerate(shifted):
+        want = sum((c.x - p.x) * c.ny - (c.y - p.y) * c.nx for i, c in enumerate(shifted) if i != j)
+        assert values[1 + j] == pytest.approx(want, abs=1e-15)
+
+
+def test_a_crm_holds_the_other_contacts_and_reaches_within_every_aperture():
+    g = _tri_grip()
+    out = HAND3.execute(TRIANGLE, g, CRM("b", "b", 0.2))
+    assert out.error is Error.NONE
+    assert out.config[0] == g[0] and out.config[2] == g[2] and out.config[1] != g[1]
+    tight = dataclasses.replace(HAND3, aperture=1.6)  # b's own line leaves a's or c's reach
+    far = tight.execute(TRIANGLE, g, CRM("b", "b", 0.9))
+    assert far.error is Error.APERTURE and far.config == g
+
+
+def test_noise_draws_three_normals_per_contact_in_label_order():
+    noise = SensorNoise(sigma_n=0.1, sigma_p=0.01)
+    g = _tri_grip()
+    one = noise.sense(g, np.random.default_rng(5))
+    rows = noise.sense_batch(np.array([[v for c in g for v in c]] * 2), np.random.default_rng(5))
+    assert isinstance(one, Grip) and list(rows[0]) == [v for c in one for v in c]
+
+
+def test_model_states_the_sizes_from_the_hand():
+    m = PlanarModel(HAND3)
+    assert m.labels == ("a", "b", "c") and m.row_width == 12
+    assert m.observation_names == ("rho", "m_a", "m_b", "m_c") and m.mirror_axes == (0, 3, 2, 1)
+    assert m.observation_bounds()["rho"] == (0.0, 9.0) and m.observation_bounds()["m_b"] == (-12.0, 12.0)
+    assert mirror_crm(CRM("a", "b", 0.02), m.labels) == CRM("c", "b", -0.02)
+    assert contacts_from_row(m.row_of(_tri_grip())) == _tri_grip()
+    placed = m.place(TRIANGLE, [(c.x, c.y) for c in _tri_grip()])
+    assert np.allclose(m.row_of(placed), m.row_of(_tri_grip()), atol=1e-12)
+
+
+# ---------------------------------------------------------------- tasks
+def test_three_finger_tasks_are_registered_and_sample_feasible_starts():
+    task = make_task("triangles-3f")
+    assert task.model.n_contacts == 3 and "three fingers" in task.headline()
+    assert "two fingers" in make_task("triangles").headline()
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        inst, start = task.sample_world(rng)
+        assert isinstance(start, Grip) and inst.feasible(start) is Error.NONE
+        assert not inst.is_success(start)
+
+
+def test_three_finger_bad_input_is_one_line():
+    tri = Polygon(TRIANGLE.vertices)
+    with pytest.raises(CrmgraspError, match="a hand has 2 to 4 contacts, got 5"):
+        Hand(aperture=0.2, palm_depth=0.1, contacts=5)
+    with pytest.raises(CrmgraspError, match="names contact 'c', but the hand has contacts a, b"):
+        make_task("paper-box").crm(CRM("c", "a", 0.0))
+    with pytest.raises(CrmgraspError, match="'corners' starts place two contacts, but the hand has 3"):
+        Task(name="t", obj=tri, hand=HAND3, actions=(CRM("a", "b", 0.0),), starts=CornerStarts())
+    task = Task(name="t", obj=tri, hand=HAND3, actions=(CRM("c", "a", 0.0),), starts=UniformStarts())
+    assert task.discretizer.names == ("rho", "m_a", "m_b", "m_c")  # the default bins over the model
+    with pytest.raises(CrmgraspError, match="has 2 contacts; the hand has 3"):
+        task.check_config(Config(_tri_grip()[0], _tri_grip()[2]))
+    with pytest.raises(CrmgraspError, match="the bins are over rho, m_a, m_b, but the planar model observes"):
+        Task(
+            name="t",
+            obj=tri,
+            hand=HAND3,
+            actions=(CRM("c", "a", 0.0),),
+            starts=UniformStarts(),
+            discretizer=Discretizer(m_a=(0.2,)),
+        )
+    with pytest.raises(CrmgraspError, match="give one point per contact"):
+        HAND3.contact(tri, a=(0, 0), b=(1, 0))
