@@ -64,3 +64,13 @@ def test_journal_benchmark_smoke():
     spec.loader.exec_module(mod)
     res = mod.main(200)
     assert res["units"] == 200 and all(r > 0 for r in res["journal_units_per_s_first_last"])
+
+
+def test_bench_fingers_smoke():
+    spec = importlib.util.spec_from_file_location("bench_fingers", BENCH.parent / "bench_fingers.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    res = mod.main(steps=60)
+    assert res["cartpole_us"] > 0
+    for backend in ("auto", "reference"):
+        assert res[backend]["us_per_step_with_resets"] >= res[backend]["us_per_step_alone"] > 0

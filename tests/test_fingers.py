@@ -13,12 +13,14 @@ import numpy as np
 import pytest
 
 from crmgrasp._validation import CrmgraspError
+from crmgrasp.kernels import kernel_for
 from crmgrasp.model.contacts import Config, Contact, Grip, contacts_from_row
 from crmgrasp.model.geometry import Polygon, regular_polygon
 from crmgrasp.model.hand import CRM, Error, Hand, feasible
 from crmgrasp.model.planar_model import PlanarModel, mirror_crm
 from crmgrasp.model.quality import closes, force_closure, least_friction, min_friction
 from crmgrasp.model.sensing import Discretizer, SensorNoise, observe
+from crmgrasp.sim import begin, step
 from crmgrasp.tasks import make_task
 from crmgrasp.tasks.core import Task
 from crmgrasp.tasks.starts import CornerStarts, UniformStarts
@@ -169,6 +171,46 @@ def test_model_states_the_sizes_from_the_hand():
     assert contacts_from_row(m.row_of(_tri_grip())) == _tri_grip()
     placed = m.place(TRIANGLE, [(c.x, c.y) for c in _tri_grip()])
     assert np.allclose(m.row_of(placed), m.row_of(_tri_grip()), atol=1e-12)
+
+
+# ---------------------------------------------------------------- the compiled kernel
+@pytest.mark.parametrize(("name", "noise"), [("triangles-3f", 0.0), ("odd-polygons-3f", 0.0), ("triangles-3f", 0.05)])
+def test_the_fingers_kernel_equals_the_readable_rules(name, noise):
+    """Batched CRMs, observations, bins and least friction, bit for bit, every action."""
+    task = make_task(name)
+    if noise:
+        task = dataclasses.replace(task, noise=SensorNoise(sigma_n=noise, sigma_p=noise / 10))
+    rng = np.random.default_rng(1)
+    for _ in range(6):
+        inst = task.instance(rng)
+        ref, fast = kernel_for(inst, "reference"), kernel_for(inst, "auto")
+        assert fast.name == "numba-fingers" and kernel_for(inst, "numba").name == "numba-fingers"
+        rows = inst.model.rows_of([inst.sample_start(rng) for _ in range(8)])
+        for a in range(len(inst.actions)):
+            sen = inst.model.read_rows(rows, np.random.default_rng(a))
+            (n1, e1), (n2, e2) = ref.execute(rows, sen, np.full(8, a)), fast.execute(rows, sen, np.full(8, a))
+            assert np.array_equal(n1, n2) and np.array_equal(e1, e2)
+            for x, y in zip(ref.observe(n1, sen, e1), fast.observe(n2, sen, e2), strict=True):
+                assert np.array_equal(x, y)
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.05])
+def test_the_fingers_kernel_steps_episodes_as_the_readable_step(noise):
+    task = make_task("triangles-3f")
+    if noise:
+        task = dataclasses.replace(task, noise=SensorNoise(sigma_n=noise, sigma_p=noise / 10))
+    rng = np.random.default_rng(2)
+    for _ in range(10):
+        inst, start = task.sample_world(rng)
+        fast = kernel_for(inst, "auto")
+        seed = int(rng.integers(1 << 30))
+        ra, rb = np.random.default_rng(seed), np.random.default_rng(seed)
+        a, b = begin(inst, start, ra), fast.begin(start, rb)
+        assert a == b
+        for _ in range(6):
+            action = int(rng.integers(len(inst.actions)))
+            a, b = step(inst, a.state, action, ra), fast.step_one(b.state, action, rb)
+            assert a == b
 
 
 # ---------------------------------------------------------------- tasks

@@ -98,6 +98,7 @@ def test_each_builtin_task_takes_a_stated_path():
         ("_polygon_jit", {"__future__", "numpy", "numba"}),
         ("_spatial_jit", {"__future__", "math", "numba", "crmgrasp.kernels._polygon_jit"}),
         ("_vi_jit", {"__future__", "numba"}),
+        ("_fingers_jit", {"__future__", "numpy", "numba", "crmgrasp.kernels._polygon_jit"}),
     ],
 )
 def test_compiled_code_holds_no_constant_of_the_model(module, allowed):

@@ -10,7 +10,7 @@ backend                      object                      kernel
 ``"auto"``                   a shape without a kernel    ``ReferenceKernel``
 ``"auto"``, ``"numba"``      polygon, sensing noise      ``PolygonKernel``
 ``"auto"``, ``"numba"``      polygon, noise-free         ``FusedPolygonKernel``
-``"auto"``                   three or more contacts      ``ReferenceKernel``
+``"auto"``, ``"numba"``      polygon, three+ contacts    ``FingersKernel``
 ``"reference"``              a solid (spatial task)      ``SpatialKernel``
 ``"auto"``, ``"numba"``      a solid, noise-free         ``FusedSpatialKernel``
 ``"auto"``                   a solid, sensing noise      ``SpatialKernel``
@@ -84,17 +84,17 @@ def kernel_for(task: Task, backend: str = "auto") -> Kernel:
 
 
 def _planar(task: Task, backend: str) -> Kernel:
-    """Planar model: two contacts on a polygon compiled (fused when noise-free), else the
-    reference rules."""
-    compiled = isinstance(task.obj, Polygon) and task.model.n_contacts == 2
+    """Planar model on a polygon compiled (two contacts: fused when noise-free; more: the
+    fingers kernel), else the reference rules."""
+    compiled = isinstance(task.obj, Polygon)
     if backend == "reference" or (backend == "auto" and not compiled):
         return ReferenceKernel(task)
-    if task.model.n_contacts != 2:
-        raise CrmgraspError(
-            f"no compiled kernel for {task.model.n_contacts} contacts yet; use backend 'auto' or 'reference'"
-        )
     if not compiled:
         raise CrmgraspError(f"no compiled kernel for a {type(task.obj).__name__}; use backend 'auto' or 'reference'")
+    if task.model.n_contacts > 2:
+        from crmgrasp.kernels.fingers import FingersKernel
+
+        return FingersKernel(task)
     from crmgrasp.kernels.polygon import FusedPolygonKernel, PolygonKernel
 
     return PolygonKernel(task) if task.noise.active else FusedPolygonKernel(task)

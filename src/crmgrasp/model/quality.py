@@ -114,6 +114,7 @@ ANGLE_TOL = 1e-12
 """Radians: [`least_friction`][] brackets the least cone half-angle this closely."""
 
 _SPAN_TOL = 1e-12  # a candidate normal shorter than this: two wrenches are parallel
+_ARM_MIN = 1e-12  # metres: the torque scale of contacts that (nearly) coincide
 _THETA_MAX = math.pi / 2 - 1e-9  # closure beyond this half-angle counts as none: inf
 Wrench = tuple[float, float, float]
 
@@ -125,7 +126,11 @@ def _basis(contacts: Config | Grip) -> list[tuple[Wrench, Wrench]]:
     n = len(contacts)
     cx = sum(c.x for c in contacts) / n
     cy = sum(c.y for c in contacts) / n
-    scale = max(max(math.hypot(c.x - cx, c.y - cy) for c in contacts), 1e-12)
+    scale = 0.0
+    for c in contacts:
+        dx, dy = c.x - cx, c.y - cy
+        scale = max(scale, math.sqrt(dx * dx + dy * dy))
+    scale = max(scale, _ARM_MIN)
     out = []
     for c in contacts:
         rx, ry = (c.x - cx) / scale, (c.y - cy) / scale

@@ -1,0 +1,247 @@
+"""Compiled (numba) per-row loops for a planar hand of any number of contacts on a polygon.
+
+Each function evaluates exactly the floating-point expressions of the model's readable
+rules in the same order, as [`crmgrasp.kernels._polygon_jit`][] does for two contacts:
+feasibility and the CRM transition ([`crmgrasp.model.hand`][]), the observation
+([`crmgrasp.model.sensing`][]) and the least friction ([`crmgrasp.model.quality`][]).
+The polygon's inside test and first entry are the two-contact kernel's own functions.
+numba compiles without ``fastmath``; the tests hold every result equal to the readable
+rules bit for bit.
+
+Layouts: configurations are ``(N, 4 n)`` rows, per contact ``x, y, nx, ny``; ``p`` and
+``q`` are the two-contact kernel's parameter arrays ([`crmgrasp.kernels.polygon.params`][]);
+``fp`` holds the quality's constants (``CLOSURE_TOL, SPAN_TOL, THETA_MAX, ANGLE_TOL,
+ARM_MIN``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from crmgrasp.kernels._polygon_jit import (
+    ANTIPODAL_TOL,
+    APERTURE,
+    CONVEX,
+    DEPTH,
+    EPS,
+    MIN_SEP,
+    PALM_TOL,
+    _entry,
+    _inside,
+)
+
+CLOSURE_TOL, SPAN_TOL, THETA_MAX, ANGLE_TOL, ARM_MIN = range(5)
+N_FP = 5
+
+
+@njit(cache=True)
+def _feasible(c, j, n, e, p, q):  # type: ignore[no-untyped-def]
+    """[`crmgrasp.model.hand.feasible`][] of row ``j`` (``n`` contacts): 0, 1 aperture, 2 palm."""
+    z = 4 * (n - 1)
+    dx, dy = c[j, z] - c[j, 0], c[j, z + 1] - c[j, 1]
+    dist = np.sqrt(dx * dx + dy * dy)
+    if dist > p[APERTURE]:
+        return 1
+    far, near = 0.0, np.inf
+    for a in range(n):
+        for b in range(a + 1, n):
+            ex, ey = c[j, 4 * b] - c[j, 4 * a], c[j, 4 * b + 1] - c[j, 4 * a + 1]
+            d = np.sqrt(ex * ex + ey * ey)
+            far, near = max(far, d), min(near, d)
+    if far > p[APERTURE]:
+        return 1
+    if near <= p[MIN_SEP]:
+        return 2
+    ux, uy = dy / dist, -dx / dist
+    tol = p[PALM_TOL]
+    if c[j, 2] * ux + c[j, 3] * uy > tol or c[j, z + 2] * ux + c[j, z + 3] * uy > tol:
+        return 2
+    last = 0.0
+    for k in range(1, n if n > 2 else 1):  # the fingers cross (three or more contacts)
+        s = (c[j, 4 * k] - c[j, 0]) * -uy + (c[j, 4 * k + 1] - c[j, 1]) * ux
+        if s <= last:
+            return 2
+        last = s
+    sx, sy = c[j, 0], c[j, 1]
+    for k in range(1, n):
+        sx += c[j, 4 * k]
+        sy += c[j, 4 * k + 1]
+    h = p[DEPTH]
+    if _inside(sx / n + h * ux, sy / n + h * uy, e, q[CONVEX], p[EPS]):
+        return 2
+    return 0
+
+
+@njit(cache=True)
+def _crm(cfg, sen, j, n, ci, fi, r, e, p, q, new, jn):  # type: ignore[no-untyped-def]
+    """[`crmgrasp.model.hand.execute_crm`][] on row ``j`` of ``cfg`` (true) and ``sen``
+    (sensed), contact ``ci`` moving onto contact ``fi``'s line: the result into row ``jn`` of
+    ``new``; returns the error code."""
+    w = 4 * n
+    for k in range(w):
+        new[jn, k] = cfg[j, k]
+    fo, mo = 4 * fi, 4 * ci
+    fx, fy, fnx, fny = sen[j, fo], sen[j, fo + 1], sen[j, fo + 2], sen[j, fo + 3]
+    aperture = p[APERTURE]
+    bx, by = fx + r * fny, fy - r * fnx
+    qa = fnx * fnx + fny * fny
+    t_lo, t_hi = -np.inf, np.inf
+    for k in range(n):
+        if k == ci:
+            continue
+        wx, wy = bx - cfg[j, 4 * k], by - cfg[j, 4 * k + 1]
+        qb = wx * fnx + wy * fny
+        qc = wx * wx + wy * wy - aperture * aperture
+        disc = qb * qb - qa * qc
+        if disc < 0.0:
+            return 1
+        root = np.sqrt(disc)
+        lo, hi = (-qb - root) / qa, (-qb + root) / qa
+        if lo > t_lo:  # Python's max(t_lo, lo)
+            t_lo = lo
+        if hi < t_hi:  # Python's min(t_hi, hi)
+            t_hi = hi
+    if t_lo > t_hi:
+        return 1
+    same = ci == fi
+    t0, t1 = (t_lo, t_hi) if same else (t_hi, t_lo)
+    ox, oy = bx + t0 * fnx, by + t0 * fny
+    convex = q[CONVEX]
+    if _inside(ox, oy, e, convex, p[EPS]):
+        return 1
+    sign = 1.0 if same else -1.0
+    ok, px, py, nx, ny = _entry(ox, oy, sign * fnx, sign * fny, abs(t1 - t0), e, convex, p)
+    if not ok:
+        return 1
+    new[jn, mo], new[jn, mo + 1], new[jn, mo + 2], new[jn, mo + 3] = px, py, nx, ny
+    code = _feasible(new, jn, n, e, p, q)
+    if code != 0:
+        for k in range(w):
+            new[jn, k] = cfg[j, k]
+    return code
+
+
+@njit(cache=True)
+def _observe(s, j, n, out, jo):  # type: ignore[no-untyped-def]
+    """[`crmgrasp.model.sensing.observe`][] of row ``j`` of the sensed rows ``s``: ``rho``
+    then the moment about each contact into row ``jo`` of ``out``."""
+    sx, sy = s[j, 2], s[j, 3]
+    for k in range(1, n):
+        sx += s[j, 4 * k + 2]
+        sy += s[j, 4 * k + 3]
+    out[0, jo] = sx * sx + sy * sy
+    for m in range(n):
+        px, py = s[j, 4 * m], s[j, 4 * m + 1]
+        total, first = 0.0, True
+        for i in range(n):
+            if i != m:
+                term = (s[j, 4 * i] - px) * s[j, 4 * i + 3] - (s[j, 4 * i + 1] - py) * s[j, 4 * i + 2]
+                total = term if first else total + term
+                first = False
+        out[1 + m, jo] = total
+
+
+@njit(cache=True)
+def _basis(c, j, n, fp):  # type: ignore[no-untyped-def]
+    """[`crmgrasp.model.quality._basis`][]: per contact its normal's and tangent's wrenches."""
+    cx, cy = 0.0, 0.0
+    for k in range(n):
+        cx += c[j, 4 * k]
+    for k in range(n):
+        cy += c[j, 4 * k + 1]
+    cx, cy = cx / n, cy / n
+    scale = 0.0
+    for k in range(n):
+        dx, dy = c[j, 4 * k] - cx, c[j, 4 * k + 1] - cy
+        scale = max(scale, np.sqrt(dx * dx + dy * dy))
+    scale = max(scale, fp[ARM_MIN])
+    b = np.empty((n, 6))
+    for k in range(n):
+        nx, ny = c[j, 4 * k + 2], c[j, 4 * k + 3]
+        rx, ry = (c[j, 4 * k] - cx) / scale, (c[j, 4 * k + 1] - cy) / scale
+        b[k, 0], b[k, 1], b[k, 2] = nx, ny, rx * ny - ry * nx
+        b[k, 3], b[k, 4], b[k, 5] = ny, -nx, -rx * nx - ry * ny
+    return b
+
+
+@njit(cache=True)
+def _spans(b, theta, fp, ws):  # type: ignore[no-untyped-def]
+    """[`crmgrasp.model.quality._positively_span`][] of the cone edges at ``theta``."""
+    co, si = np.cos(theta), np.sin(theta)
+    n = b.shape[0]
+    for k in range(n):
+        for d in range(3):
+            ws[2 * k, d] = co * b[k, d] + si * b[k, 3 + d]
+            ws[2 * k + 1, d] = co * b[k, d] - si * b[k, 3 + d]
+    m = 2 * n
+    spans = False
+    for i in range(m):
+        a0, a1, a2 = ws[i, 0], ws[i, 1], ws[i, 2]
+        for k in range(i + 1, m):
+            b0, b1, b2 = ws[k, 0], ws[k, 1], ws[k, 2]
+            y0, y1, y2 = a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+            norm = np.sqrt(y0 * y0 + y1 * y1 + y2 * y2)
+            if norm < fp[SPAN_TOL]:
+                continue
+            spans = True
+            tol = fp[CLOSURE_TOL] * norm
+            below, above = False, False
+            for t in range(m):
+                d = y0 * ws[t, 0] + y1 * ws[t, 1] + y2 * ws[t, 2]
+                below = below or d < -tol
+                above = above or d > tol
+            if not (below and above):
+                return False
+    return spans
+
+
+@njit(cache=True)
+def _mu(c, j, n, fp, antipodal_tol):  # type: ignore[no-untyped-def]
+    """[`crmgrasp.model.quality.least_friction`][] of row ``j``."""
+    b = _basis(c, j, n, fp)
+    ws = np.empty((2 * n, 3))
+    if _spans(b, 0.0, fp, ws):
+        return 0.0
+    if not _spans(b, fp[THETA_MAX], fp, ws):
+        return np.inf
+    lo, hi = 0.0, fp[THETA_MAX]
+    while hi - lo > fp[ANGLE_TOL]:
+        mid = 0.5 * (lo + hi)
+        if _spans(b, mid, fp, ws):
+            hi = mid
+        else:
+            lo = mid
+    mu = np.tan(hi)
+    return 0.0 if mu < antipodal_tol else mu
+
+
+@njit(cache=True)
+def _index(out, jo, code, th, strides, abs_m):  # type: ignore[no-untyped-def]
+    """`crmgrasp.model.sensing.Discretizer.index` of column ``jo`` of ``out``."""
+    idx = code
+    for i in range(th.shape[0]):
+        v = out[i, jo]
+        if abs_m and i > 0:
+            v = abs(v)
+        for t in range(th.shape[1]):
+            if v >= th[i, t]:
+                idx += strides[i]
+    return idx
+
+
+@njit(cache=True)
+def execute_rows(cfg, sen, n, ci, fi, r, e, p, q, new, err):  # type: ignore[no-untyped-def]
+    """One CRM per row: ``new[j]``, ``err[j]`` from ``cfg[j]`` (true) and ``sen[j]`` (sensed)."""
+    for j in range(cfg.shape[0]):
+        err[j] = _crm(cfg, sen, j, n, ci[j], fi[j], r[j], e, p, q, new, j)
+
+
+@njit(cache=True)
+def observe_rows(cfg, sen, n, err, th, strides, abs_m, p, fp, values, index, mu):  # type: ignore[no-untyped-def]
+    """Observation (``values``: ``(1 + n, N)``) and bin index of each sensed row, least
+    friction of each true row."""
+    for j in range(cfg.shape[0]):
+        _observe(sen, j, n, values, j)
+        index[j] = _index(values, j, err[j], th, strides, abs_m)
+        mu[j] = _mu(cfg, j, n, fp, p[ANTIPODAL_TOL])

@@ -1,0 +1,125 @@
+"""The compiled kernel of a planar hand with three or more contacts on a polygon.
+
+[`FingersKernel`][] runs the model's CRM transition, observation, bins and least friction
+as compiled loops ([`crmgrasp.kernels._fingers_jit`][]), batched and one step at a time,
+with or without sensing noise (readings are drawn by the model, as on every path). Its
+results equal the readable rules bit for bit (the tests check it).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+import crmgrasp.kernels._fingers_jit as jit
+from crmgrasp.kernels.base import F64, I64, Kernel, bin_thresholds
+from crmgrasp.kernels.polygon import params
+from crmgrasp.model import quality
+from crmgrasp.model.geometry import Polygon
+from crmgrasp.model.hand import CRM, Error
+from crmgrasp.sim import OneStep, SimState, episode_end, step_reward
+from crmgrasp.tasks import Task
+
+__all__ = ["FingersKernel"]
+
+_ERRORS = tuple(Error)
+
+
+def _quality_params() -> F64:
+    """The least friction's constants, read from [`crmgrasp.model.quality`][] now."""
+    fp = np.empty(jit.N_FP)
+    fp[jit.CLOSURE_TOL], fp[jit.SPAN_TOL] = quality.CLOSURE_TOL, quality._SPAN_TOL
+    fp[jit.THETA_MAX], fp[jit.ANGLE_TOL] = quality._THETA_MAX, quality.ANGLE_TOL
+    fp[jit.ARM_MIN] = quality._ARM_MIN
+    return fp
+
+
+class FingersKernel(Kernel):
+    """Compiled CRMs, observations, bins and least friction of a hand with any number of
+    contacts on a polygon; single steps compiled too (the reading from the model)."""
+
+    name = "numba-fingers"
+
+    def __init__(self, task: Task) -> None:
+        super().__init__(task)
+        assert isinstance(task.obj, Polygon)
+        self.n = self.model.n_contacts
+        self.e = np.ascontiguousarray(task.obj.edge_array)
+        self.p, self.q, _ = params(task)
+        self.fp = _quality_params()
+        d = task.discretizer
+        self.th = bin_thresholds(d)
+        self.strides = np.array(d._strides, dtype=np.int64)
+        self.abs_m = d.abs_moments
+        self.ci = self.acts[:, 0].astype(np.int64)
+        self.fi = self.acts[:, 1].astype(np.int64)
+        self.r = np.ascontiguousarray(self.acts[:, 2])
+
+    def execute_crms(self, cfg: F64, sen: F64, c: I64, f: I64, r: F64) -> tuple[F64, NDArray[np.int8]]:
+        cfg = np.ascontiguousarray(cfg, dtype=np.float64)
+        n = len(cfg)
+        new = np.empty_like(cfg)
+        err = np.empty(n, dtype=np.int8)
+        jit.execute_rows(
+            cfg,
+            np.ascontiguousarray(sen, dtype=np.float64),
+            self.n,
+            np.ascontiguousarray(np.broadcast_to(c, n), dtype=np.int64),
+            np.ascontiguousarray(np.broadcast_to(f, n), dtype=np.int64),
+            np.ascontiguousarray(np.broadcast_to(r, n), dtype=np.float64),
+            self.e,
+            self.p,
+            self.q,
+            new,
+            err,
+        )
+        return new, err
+
+    def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[np.ndarray, ...]:
+        n = len(cfg)
+        values = np.empty((1 + self.n, n))
+        index, mu = np.empty(n, dtype=np.int64), np.empty(n)
+        jit.observe_rows(
+            np.ascontiguousarray(cfg, dtype=np.float64),
+            np.ascontiguousarray(sen, dtype=np.float64),
+            self.n,
+            np.ascontiguousarray(err, dtype=np.int64),
+            self.th,
+            self.strides,
+            self.abs_m,
+            self.p,
+            self.fp,
+            values,
+            index,
+            mu,
+        )
+        return (*values, index, mu)
+
+    def _after(self, config: Any, error: int, rng: np.random.Generator) -> tuple[Any, ...]:
+        """A reading of ``config`` and its observation, bin index and least friction."""
+        sensed = self.model.read(config, rng)
+        row = np.array([self.model.row_of(config)])
+        srow = row if sensed is config else np.array([self.model.row_of(sensed)])
+        *values, index, mu = self.observe(row, srow, np.array([error]))
+        return sensed, tuple(float(v[0]) for v in values), int(index[0]), float(mu[0])
+
+    def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
+        sensed, obs, index, mu = self._after(config, 0, rng)
+        return OneStep(SimState(config, sensed, 0), obs, Error.NONE, index, mu)
+
+    def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
+        if isinstance(action, CRM) or not 0 <= action < len(self.acts):  # the reference step checks
+            return super().step_one(state, action, rng)
+        row = np.array([self.model.row_of(state.config)])
+        srow = row if state.sensed is state.config else np.array([self.model.row_of(state.sensed)])
+        at = slice(action, action + 1)
+        new, err = self.execute_crms(row, srow, self.ci[at], self.fi[at], self.r[at])
+        code = int(err[0])
+        config = state.config if code else self.model.config_of(new[0].tolist())
+        sensed, obs, index, mu = self._after(config, code, rng)
+        steps = state.steps + 1
+        terminated, truncated = episode_end(self.task, mu, steps)
+        reward = step_reward(self.task, terminated, code)
+        return OneStep(SimState(config, sensed, steps), obs, _ERRORS[code], index, mu, reward, terminated, truncated)
