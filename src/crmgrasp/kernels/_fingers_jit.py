@@ -4,7 +4,8 @@ Each function evaluates exactly the floating-point expressions of the model's re
 rules in the same order, as [`crmgrasp.kernels._polygon_jit`][] does for two contacts:
 feasibility and the CRM transition ([`crmgrasp.model.hand`][]), the observation
 ([`crmgrasp.model.sensing`][]) and the least friction ([`crmgrasp.model.quality`][]).
-The polygon's inside test and first entry are the two-contact kernel's own functions.
+The polygon's inside test and a CRM's approach and entry are the two-contact kernel's own
+functions.
 numba compiles without ``fastmath``; the tests hold every result equal to the readable
 rules bit for bit.
 
@@ -22,55 +23,13 @@ from numba import njit
 from crmgrasp.kernels._polygon_jit import (
     ANTIPODAL_TOL,
     APERTURE,
-    CONVEX,
-    DEPTH,
-    EPS,
-    MIN_SEP,
-    PALM_TOL,
-    _entry,
-    _inside,
+    approach,
+    chord,
+    feasible,
 )
 
 CLOSURE_TOL, SPAN_TOL, THETA_MAX, ANGLE_TOL, ARM_MIN = range(5)
 N_FP = 5
-
-
-@njit(cache=True)
-def _feasible(c, j, n, e, p, q):  # type: ignore[no-untyped-def]
-    """[`crmgrasp.model.hand.feasible`][] of row ``j`` (``n`` contacts): 0, 1 aperture, 2 palm."""
-    z = 4 * (n - 1)
-    dx, dy = c[j, z] - c[j, 0], c[j, z + 1] - c[j, 1]
-    dist = np.sqrt(dx * dx + dy * dy)
-    if dist > p[APERTURE]:
-        return 1
-    far, near = 0.0, np.inf
-    for a in range(n):
-        for b in range(a + 1, n):
-            ex, ey = c[j, 4 * b] - c[j, 4 * a], c[j, 4 * b + 1] - c[j, 4 * a + 1]
-            d = np.sqrt(ex * ex + ey * ey)
-            far, near = max(far, d), min(near, d)
-    if far > p[APERTURE]:
-        return 1
-    if near <= p[MIN_SEP]:
-        return 2
-    ux, uy = dy / dist, -dx / dist
-    tol = p[PALM_TOL]
-    if c[j, 2] * ux + c[j, 3] * uy > tol or c[j, z + 2] * ux + c[j, z + 3] * uy > tol:
-        return 2
-    last = 0.0
-    for k in range(1, n if n > 2 else 1):  # the fingers cross (three or more contacts)
-        s = (c[j, 4 * k] - c[j, 0]) * -uy + (c[j, 4 * k + 1] - c[j, 1]) * ux
-        if s <= last:
-            return 2
-        last = s
-    sx, sy = c[j, 0], c[j, 1]
-    for k in range(1, n):
-        sx += c[j, 4 * k]
-        sy += c[j, 4 * k + 1]
-    h = p[DEPTH]
-    if _inside(sx / n + h * ux, sy / n + h * uy, e, q[CONVEX], p[EPS]):
-        return 2
-    return 0
 
 
 @njit(cache=True)
@@ -83,39 +42,25 @@ def _crm(cfg, sen, j, n, ci, fi, r, e, p, q, new, jn):  # type: ignore[no-untype
         new[jn, k] = cfg[j, k]
     fo, mo = 4 * fi, 4 * ci
     fx, fy, fnx, fny = sen[j, fo], sen[j, fo + 1], sen[j, fo + 2], sen[j, fo + 3]
-    aperture = p[APERTURE]
     bx, by = fx + r * fny, fy - r * fnx
-    qa = fnx * fnx + fny * fny
     t_lo, t_hi = -np.inf, np.inf
     for k in range(n):
         if k == ci:
             continue
-        wx, wy = bx - cfg[j, 4 * k], by - cfg[j, 4 * k + 1]
-        qb = wx * fnx + wy * fny
-        qc = wx * wx + wy * wy - aperture * aperture
-        disc = qb * qb - qa * qc
-        if disc < 0.0:
+        reached, lo, hi = chord(bx, by, fnx, fny, cfg[j, 4 * k], cfg[j, 4 * k + 1], p[APERTURE])
+        if not reached:
             return 1
-        root = np.sqrt(disc)
-        lo, hi = (-qb - root) / qa, (-qb + root) / qa
         if lo > t_lo:  # Python's max(t_lo, lo)
             t_lo = lo
         if hi < t_hi:  # Python's min(t_hi, hi)
             t_hi = hi
     if t_lo > t_hi:
         return 1
-    same = ci == fi
-    t0, t1 = (t_lo, t_hi) if same else (t_hi, t_lo)
-    ox, oy = bx + t0 * fnx, by + t0 * fny
-    convex = q[CONVEX]
-    if _inside(ox, oy, e, convex, p[EPS]):
-        return 1
-    sign = 1.0 if same else -1.0
-    ok, px, py, nx, ny = _entry(ox, oy, sign * fnx, sign * fny, abs(t1 - t0), e, convex, p)
-    if not ok:
-        return 1
+    code, px, py, nx, ny = approach(bx, by, fnx, fny, t_lo, t_hi, ci == fi, e, p, q)
+    if code:
+        return code
     new[jn, mo], new[jn, mo + 1], new[jn, mo + 2], new[jn, mo + 3] = px, py, nx, ny
-    code = _feasible(new, jn, n, e, p, q)
+    code = feasible(new, jn, n, e, p, q)
     if code != 0:
         for k in range(w):
             new[jn, k] = cfg[j, k]

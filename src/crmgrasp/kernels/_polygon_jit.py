@@ -65,20 +65,40 @@ def _inside(px, py, e, convex, eps):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def _feasible(c, j, e, p, q):  # type: ignore[no-untyped-def]
-    """[`crmgrasp.model.hand.feasible`][] of row ``j`` of ``c``: 0 none, 1 aperture, 2 palm."""
-    dx, dy = c[j, 4] - c[j, 0], c[j, 5] - c[j, 1]
+def feasible(c, j, n, e, p, q):  # type: ignore[no-untyped-def]
+    """[`crmgrasp.model.hand.feasible`][] of row ``j`` of ``c`` (``n`` contacts): 0 none, 1
+    aperture, 2 palm. Shared by every planar kernel."""
+    z = 4 * (n - 1)
+    dx, dy = c[j, z] - c[j, 0], c[j, z + 1] - c[j, 1]
     dist = np.sqrt(dx * dx + dy * dy)
     if dist > p[APERTURE]:
         return 1
-    if dist <= p[MIN_SEP]:
+    far, near = 0.0, np.inf
+    for a in range(n):
+        for b in range(a + 1, n):
+            ex, ey = c[j, 4 * b] - c[j, 4 * a], c[j, 4 * b + 1] - c[j, 4 * a + 1]
+            d = np.sqrt(ex * ex + ey * ey)
+            far, near = max(far, d), min(near, d)
+    if far > p[APERTURE]:
+        return 1
+    if near <= p[MIN_SEP]:
         return 2
     ux, uy = dy / dist, -dx / dist
     tol = p[PALM_TOL]
-    if c[j, 2] * ux + c[j, 3] * uy > tol or c[j, 6] * ux + c[j, 7] * uy > tol:
+    if c[j, 2] * ux + c[j, 3] * uy > tol or c[j, z + 2] * ux + c[j, z + 3] * uy > tol:
         return 2
+    last = 0.0
+    for k in range(1, n if n > 2 else 1):  # the fingers cross (three or more contacts)
+        s = (c[j, 4 * k] - c[j, 0]) * -uy + (c[j, 4 * k + 1] - c[j, 1]) * ux
+        if s <= last:
+            return 2
+        last = s
+    sx, sy = c[j, 0], c[j, 1]
+    for k in range(1, n):
+        sx += c[j, 4 * k]
+        sy += c[j, 4 * k + 1]
     h = p[DEPTH]
-    if _inside(0.5 * (c[j, 0] + c[j, 4]) + h * ux, 0.5 * (c[j, 1] + c[j, 5]) + h * uy, e, q[CONVEX], p[EPS]):
+    if _inside(sx / n + h * ux, sy / n + h * uy, e, q[CONVEX], p[EPS]):
         return 2
     return 0
 
@@ -140,6 +160,40 @@ def _entry(ox, oy, dx, dy, u_max, e, convex, p):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
+def chord(bx, by, fnx, fny, sx, sy, aperture):  # type: ignore[no-untyped-def]
+    """Step 2 of [`crmgrasp.model.hand.execute_crm`][] for one still contact at ``(sx, sy)``:
+    ``(reached, t_lo, t_hi)``, where the goal line ``b + t n_f`` is within the aperture of
+    it. Shared by every planar kernel."""
+    wx, wy = bx - sx, by - sy
+    qa = fnx * fnx + fny * fny
+    qb = wx * fnx + wy * fny
+    qc = wx * wx + wy * wy - aperture * aperture
+    disc = qb * qb - qa * qc
+    if disc < 0.0:
+        return False, 0.0, 0.0
+    root = np.sqrt(disc)
+    return True, (-qb - root) / qa, (-qb + root) / qa
+
+
+@njit(cache=True)
+def approach(bx, by, fnx, fny, t_lo, t_hi, same, e, p, q):  # type: ignore[no-untyped-def]
+    """Steps 3-5 of [`crmgrasp.model.hand.execute_crm`][] on the goal line ``b + t n_f`` with
+    chord ``[t_lo, t_hi]``: start at the chord's far end (``t_lo`` when the contact moves
+    in its own frame), refuse a start inside, enter along the line:
+    ``(code, x, y, nx, ny)``, code 0 or 1 (aperture). Shared by every planar kernel."""
+    t0, t1 = (t_lo, t_hi) if same else (t_hi, t_lo)
+    ox, oy = bx + t0 * fnx, by + t0 * fny
+    convex = q[CONVEX]
+    if _inside(ox, oy, e, convex, p[EPS]):
+        return 1, 0.0, 0.0, 0.0, 0.0
+    sign = 1.0 if same else -1.0
+    ok, px, py, nx, ny = _entry(ox, oy, sign * fnx, sign * fny, abs(t1 - t0), e, convex, p)
+    if not ok:
+        return 1, 0.0, 0.0, 0.0, 0.0
+    return 0, px, py, nx, ny
+
+
+@njit(cache=True)
 def _crm(cfg, sen, j, c_is_b, f_is_b, r, e, p, q, new, jn):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.hand.execute_crm`][] on row ``j`` of ``cfg`` (true) and ``sen``
     (sensed): writes the resulting configuration into row ``jn`` of ``new``; returns
@@ -150,29 +204,15 @@ def _crm(cfg, sen, j, c_is_b, f_is_b, r, e, p, q, new, jn):  # type: ignore[no-u
     mo = 4 if c_is_b else 0
     so = 4 - mo
     fx, fy, fnx, fny = sen[j, fo], sen[j, fo + 1], sen[j, fo + 2], sen[j, fo + 3]
-    aperture = p[APERTURE]
     bx, by = fx + r * fny, fy - r * fnx
-    wx, wy = bx - cfg[j, so], by - cfg[j, so + 1]
-    qa = fnx * fnx + fny * fny
-    qb = wx * fnx + wy * fny
-    qc = wx * wx + wy * wy - aperture * aperture
-    disc = qb * qb - qa * qc
-    if disc < 0.0:
+    reached, t_lo, t_hi = chord(bx, by, fnx, fny, cfg[j, so], cfg[j, so + 1], p[APERTURE])
+    if not reached:
         return 1
-    root = np.sqrt(disc)
-    t_lo, t_hi = (-qb - root) / qa, (-qb + root) / qa
-    same = c_is_b == f_is_b
-    t0, t1 = (t_lo, t_hi) if same else (t_hi, t_lo)
-    ox, oy = bx + t0 * fnx, by + t0 * fny
-    convex = q[CONVEX]
-    if _inside(ox, oy, e, convex, p[EPS]):
-        return 1
-    sign = 1.0 if same else -1.0
-    ok, px, py, nx, ny = _entry(ox, oy, sign * fnx, sign * fny, abs(t1 - t0), e, convex, p)
-    if not ok:
-        return 1
+    code, px, py, nx, ny = approach(bx, by, fnx, fny, t_lo, t_hi, c_is_b == f_is_b, e, p, q)
+    if code:
+        return code
     new[jn, mo], new[jn, mo + 1], new[jn, mo + 2], new[jn, mo + 3] = px, py, nx, ny
-    code = _feasible(new, jn, e, p, q)
+    code = feasible(new, jn, 2, e, p, q)
     if code != 0:
         for k in range(8):
             new[jn, k] = cfg[j, k]
@@ -331,7 +371,7 @@ def corner_rows(u, e, p, q, out):  # type: ignore[no-untyped-def]
         else:
             out[count, 0], out[count, 1], out[count, 2], out[count, 3] = x2, y2, e[k, 5], e[k, 6]
             out[count, 4], out[count, 5], out[count, 6], out[count, 7] = x1, y1, e[ki, 5], e[ki, 6]
-        if _feasible(out, count, e, p, q) != 0:
+        if feasible(out, count, 2, e, p, q) != 0:
             continue
         if _mu(out, count, p[ANTIPODAL_TOL]) <= p[MU_GOAL]:
             continue

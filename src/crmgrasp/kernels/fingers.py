@@ -58,23 +58,11 @@ class FingersKernel(Kernel):
         self.r = np.ascontiguousarray(self.acts[:, 2])
 
     def execute_crms(self, cfg: F64, sen: F64, c: I64, f: I64, r: F64) -> tuple[F64, NDArray[np.int8]]:
-        cfg = np.ascontiguousarray(cfg, dtype=np.float64)
-        n = len(cfg)
-        new = np.empty_like(cfg)
-        err = np.empty(n, dtype=np.int8)
-        jit.execute_rows(
-            cfg,
-            np.ascontiguousarray(sen, dtype=np.float64),
-            self.n,
-            np.ascontiguousarray(np.broadcast_to(c, n), dtype=np.int64),
-            np.ascontiguousarray(np.broadcast_to(f, n), dtype=np.int64),
-            np.ascontiguousarray(np.broadcast_to(r, n), dtype=np.float64),
-            self.e,
-            self.p,
-            self.q,
-            new,
-            err,
-        )
+        rows = len(cfg)
+        crms = [np.ascontiguousarray(np.broadcast_to(v, rows), dtype=t) for v, t in ((c, int), (f, int), (r, float))]
+        new, err = np.empty((rows, 4 * self.n)), np.empty(rows, dtype=np.int8)
+        true, seen = (np.ascontiguousarray(a, dtype=np.float64) for a in (cfg, sen))
+        jit.execute_rows(true, seen, self.n, crms[0], crms[1], crms[2], self.e, self.p, self.q, new, err)
         return new, err
 
     def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[np.ndarray, ...]:
