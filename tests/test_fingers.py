@@ -248,3 +248,16 @@ def test_three_finger_bad_input_is_one_line():
         )
     with pytest.raises(CrmgraspError, match="give one point per contact"):
         HAND3.contact(tri, a=(0, 0), b=(1, 0))
+
+
+def test_the_third_contact_experiment_compares_two_fingers_with_three(tmp_path):
+    from crmgrasp.experiments.third_contact import ThirdContactConfig, third_contact
+
+    s = third_contact(tmp_path, ThirdContactConfig.quick())
+    two, three = s["rows"]
+    assert (two["fingers"], three["fingers"]) == (2, 3) and two["mu_goal"] == three["mu_goal"] == 0.15
+    assert two["graspable_share"] == 0.0 and two["belief_optimum"] is None  # tan 30 deg > 0.15: never
+    assert three["graspable_share"] >= 0.8
+    assert three["clairvoyant_bound"] <= three["belief_optimum"] <= make_task("triangles-3f").max_steps
+    for name in ("third_contact.csv", "third_contact.png", "summary.json"):
+        assert (tmp_path / name).stat().st_size > 0

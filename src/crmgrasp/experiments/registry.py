@@ -285,6 +285,25 @@ def _spatial_mujoco(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> t
     ]
 
 
+def _third_contact(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    from crmgrasp.experiments.third_contact import ThirdContactConfig, third_contact
+
+    cfg = ThirdContactConfig.quick(seed) if quick else ThirdContactConfig(seed=seed)
+    s = third_contact(out, cfg, progress=ctx.get("progress"))
+    by = {(r["family"], r["mu_goal"], r["fingers"]): r for r in s["rows"]}
+    rows: list[Row] = []
+    for fam, mu, _ in sorted(k for k in by if k[2] == 2):
+        two, three = by[(fam, mu, 2)], by[(fam, mu, 3)]
+        rows.append(
+            (
+                f"{fam}, mu_goal {mu:g}: graspable starts, two / three fingers; three-finger optimum, CRMs",
+                f"{two['graspable_share']:.0%} / {three['graspable_share']:.0%}; {fmt(three['belief_optimum'])}",
+                "more than two contacts 'with little modification' (Introduction, no experiment)",
+            )
+        )
+    return s, rows
+
+
 EXPERIMENTS: dict[str, tuple[str, Runner]] = {
     "figure4": ("Fig. 4: min-friction histogram of 30 opposition CRMs under sensing noise", _figure4),
     "figure7": ("Fig. 7: CRMs per episode vs episode, 20 trials, SARSA and the other learners", _figure7),
@@ -309,6 +328,10 @@ EXPERIMENTS: dict[str, tuple[str, Runner]] = {
         "Discussion: 3-D CRMs on boxes and cups on a table, SARSA and model-vi against the references",
         _spatial,
     ),
+    "third-contact": (
+        "Introduction: two fingers against three on triangles and odd regular polygons, friction 0.15 and 0.05",
+        _third_contact,
+    ),
     "figure4-mujoco": ("Fig. 4 on the MuJoCo stand-in hand, and intrinsic contact sensing accuracy", _figure4_mujoco),
     "figure9-mujoco": ("Fig. 9 on the MuJoCo stand-in: the kinematic policy transferred, 11 trials", _figure9_mujoco),
     "spatial-mujoco": (
@@ -326,6 +349,7 @@ QUICK_BUDGETS = {
     "generalization": ("2 trials x 100 episodes, 2 families", ("box", "cup")),
     "non-convex": ("2 trials x 150 episodes", ("U handle",)),
     "spatial": ("2 trials x 300 / 150 episodes, 80 / 40 worlds", ("box-3d", "cup-3d")),
+    "third-contact": ("20 starts, triangles at 0.15 only", ("triangles",)),
     "spatial-mujoco": ("1 trial x 300 episodes, 4 worlds per task", ("cup-3d", "box-3d")),
 }
 """Experiments whose learned numbers ``--quick`` computes on a smaller budget: that
@@ -335,6 +359,7 @@ GROUPS = (
     ("compare",),
     ("figure7-sensitivity",),
     ("cost-of-failure", "non-convex"),
+    ("third-contact",),
     ("generalization",),
     ("spatial",),
     ("spatial-mujoco",),
@@ -358,6 +383,7 @@ IMAGES = {
     "generalization": ["generalization.png"],
     "non-convex": ["non_convex.png", "non_convex.gif"],
     "spatial": ["spatial.png", "spatial_strategy.png", "spatial_strategy.gif"],
+    "third-contact": ["third_contact.png"],
     "figure4-mujoco": ["figure4_mujoco.png"],
     "figure9-mujoco": ["figure9_mujoco.png", "figure9_mujoco.gif"],
     "spatial-mujoco": ["spatial_mujoco.png", "spatial_mujoco.gif"],
