@@ -346,7 +346,7 @@ def palm_axis(config: Config | Grip) -> tuple[float, float, float]:
     """``(|x_z - x_a|, u_x, u_y)``: the outer contacts' distance (first ``a``, last ``z``)
     and the unit vector ``u`` to the right of a -> z, the side the palm is on (``u`` is NaN
     if they coincide)."""
-    a, b = config[0], config[-1]
+    a, *_, b = config  # unpacking, not indexing: a Config's [] also takes labels, in Python
     dx, dy = b.x - a.x, b.y - a.y
     dist = math.sqrt(dx * dx + dy * dy)
     if dist == 0.0:
@@ -356,8 +356,9 @@ def palm_axis(config: Config | Grip) -> tuple[float, float, float]:
 
 def _palm_at(config: Config | Grip, ux: float, uy: float, h: float) -> tuple[float, float]:
     """``mean_i x_i + h u``, the sum taken in label order."""
-    sx, sy = config[0].x, config[0].y
-    for c in itertools.islice(config, 1, None):
+    first, *rest = config
+    sx, sy = first.x, first.y
+    for c in rest:
         sx += c.x
         sy += c.y
     n = len(config)
@@ -379,7 +380,8 @@ def faces_palm(config: Config | Grip, tol: float) -> bool:
     """True if an outer contact's surface faces the palm side: ``n . u > tol`` for ``n_a``
     or ``n_z`` (the object would lie between palm and finger). False if they coincide."""
     _, ux, uy = palm_axis(config)
-    return _faces(config[0], config[-1], ux, uy, tol)
+    a, *_, b = config
+    return _faces(a, b, ux, uy, tol)
 
 
 def _spread(config: Config | Grip) -> tuple[float, float]:
@@ -396,9 +398,9 @@ def _spread(config: Config | Grip) -> tuple[float, float]:
 def _crossed(config: Config | Grip, ux: float, uy: float) -> bool:
     """True if the contacts' positions along ``d = (-u_y, u_x)`` (a -> z) do not increase
     strictly in label order (never for two contacts)."""
-    a = config[0]
+    a, *rest = config
     last = 0.0
-    for c in itertools.islice(config, 1, None):
+    for c in rest:
         s = (c.x - a.x) * -uy + (c.y - a.y) * ux
         if s <= last:
             return True
@@ -421,7 +423,8 @@ def feasible(obj: Shape, hand: Hand, config: Config | Grip) -> Error:
         far, near = _spread(config)
         if far > hand.aperture:
             return Error.APERTURE
-    if near <= hand.min_separation or _faces(config[0], config[-1], ux, uy, hand.palm_normal_tol):
+    a, *_, z = config
+    if near <= hand.min_separation or _faces(a, z, ux, uy, hand.palm_normal_tol):
         return Error.PALM
     if len(config) > 2 and _crossed(config, ux, uy):
         return Error.PALM

@@ -66,9 +66,9 @@ def observe(config: Config | Grip) -> tuple[float, ...]:
     A configuration with a non-finite coordinate or a normal that is not a unit vector is
     refused ([`check_contacts`][crmgrasp.model.contacts.check_contacts]).
     """
-    contacts = check_contacts(config, "observe")
+    contacts = list(check_contacts(config, "observe"))  # a list: [] without a Config's label lookup
     sx, sy = contacts[0].nx, contacts[0].ny
-    for c in itertools.islice(contacts, 1, None):
+    for c in contacts[1:]:
         sx += c.nx
         sy += c.ny
     moments = [_moment(contacts, j) for j in range(len(contacts))]
@@ -77,7 +77,7 @@ def observe(config: Config | Grip) -> tuple[float, ...]:
     return (sx * sx + sy * sy, *moments)
 
 
-def _moment(contacts: Config | Grip, j: int) -> float:
+def _moment(contacts: list[Contact], j: int) -> float:
     """``m_j = sum_{i != j} (x_i - x_j) x n_i``, summed in label order from the first term."""
     p = contacts[j]
     total: float | None = None
