@@ -252,6 +252,8 @@ FAMILY_ENVS = {
     "crmgrasp/Triangles3F-v0": "triangles-3f",
     "crmgrasp/OddPolygons-v0": "odd-polygons",
     "crmgrasp/OddPolygons3F-v0": "odd-polygons-3f",
+    "crmgrasp/BoxFamily3F-v0": "box-family-3f",
+    "crmgrasp/CupFamily3F-v0": "cup-family-3f",
 }
 """Registered family environments: id -> task name (each episode draws its object; the
 ``3F`` ones with a three-finger hand)."""

@@ -10,6 +10,9 @@ what the third contact buys.
   start can reach the goal; three contacts whose normals meet close with any friction.
 * ``odd-polygons`` / ``odd-polygons-3f``: regular 3-, 5- and 7-gons, equally likely (two
   contacts need ``tan(90 deg / n)``: 0.577, 0.325, 0.228).
+* ``box-family-3f`` and ``cup-family-3f``: the boxes of ``box-family`` and the discs of
+  ``cup-family`` with three fingers, at their two-finger twins' goal (0.05). Their twins keep
+  their own CRMs and starts (the paper's CRMs and corner starts on boxes).
 
 The two-finger tasks take [`default_crms`][crmgrasp.tasks.families.default_crms] and
 [`BoundaryStarts`][crmgrasp.tasks.families.BoundaryStarts]; the three-finger tasks take
@@ -26,7 +29,7 @@ from dataclasses import replace
 
 from crmgrasp._validation import positive
 from crmgrasp.model.contact_model import observation_names
-from crmgrasp.model.families import MixedFamily, RegularPolygonFamily
+from crmgrasp.model.families import BoxFamily, DiscFamily, MixedFamily, RegularPolygonFamily, ShapeFamily
 from crmgrasp.model.hand import CRM, Hand
 from crmgrasp.model.sensing import Discretizer
 from crmgrasp.tasks.core import PAPER_HAND, Task, register_task
@@ -67,9 +70,10 @@ the lowest belief-space optimum on ``triangles-3f``: 3.28 CRMs against 3.40 and 
 200 starts)."""
 
 
-def three_finger_task(name: str, family: MixedFamily | RegularPolygonFamily, description: str) -> Task:
+def three_finger_task(name: str, family: ShapeFamily, description: str, mu_goal: float = HARD_TIP) -> Task:
     """A [`family_task`][crmgrasp.tasks.families.family_task] with [`THREE_FINGERS`][],
-    [`finger_crms`][], [`FINGER_BINS`][], uniform starts and ``mu_goal = HARD_TIP``."""
+    [`finger_crms`][], [`FINGER_BINS`][] and uniform starts (``mu_goal``: [`HARD_TIP`][] by
+    default)."""
     return family_task(
         name,
         family,
@@ -77,7 +81,7 @@ def three_finger_task(name: str, family: MixedFamily | RegularPolygonFamily, des
         actions=finger_crms(THREE_FINGERS.labels),
         discretizer=FINGER_BINS,
         starts=UniformStarts(),
-        mu_goal=HARD_TIP,
+        mu_goal=mu_goal,
         description=description,
     )
 
@@ -98,6 +102,12 @@ FINGER_TASKS = {
     "triangles-3f": lambda: three_finger_task("triangles-3f", _triangles(), _TRIANGLES),
     "odd-polygons": lambda: family_task("odd-polygons", _odd(), mu_goal=HARD_TIP, description=_ODD),
     "odd-polygons-3f": lambda: three_finger_task("odd-polygons-3f", _odd(), _ODD),
+    "box-family-3f": lambda: three_finger_task(
+        "box-family-3f", BoxFamily(), "boxes 0.20-0.40 x 0.06-0.14 m in any pose; success at friction 0.05", 0.05
+    ),
+    "cup-family-3f": lambda: three_finger_task(
+        "cup-family-3f", DiscFamily(), "discs of radius 0.03-0.07 m (the planar cup); success at friction 0.05", 0.05
+    ),
 }
 """Registered finger tasks: name -> factory."""
 
