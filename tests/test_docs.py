@@ -110,3 +110,22 @@ def test_the_task_file_key_table_is_the_one_the_code_states(capsys):
     assert block == key_reference()
     assert main(["task-template", "--keys"]) == 0 and capsys.readouterr().out == block
     assert '| [starts] kind = "vertex" | `incoming` | 2 numbers | [0.005, 0.05] |' in block
+
+
+def test_docstrings_name_model_sections_as_links():
+    """A docstring that points at a section of docs/model.md links it (``[docs/model.md
+    section 2][model-2]``, the heading's id), so that the API pages open the section."""
+    import re
+
+    plain = re.compile(r"(?<!\[)docs/model\.md sections? \d")
+    link = re.compile(r"\[docs/model\.md sections? (\d)[^\]]*\]\[model-(\d)\]")
+    found, linked = [], 0
+    for path in (ROOT / "src").rglob("*.py"):
+        text = path.read_text(encoding="utf-8")
+        found += [f"{path.name}:{text[: m.start()].count(chr(10)) + 1}" for m in plain.finditer(text)]
+        for m in link.finditer(text):
+            assert m.group(1) == m.group(2), m.group(0)
+            linked += 1
+    assert found == [] and linked > 20
+    model = (ROOT / "docs" / "model.md").read_text(encoding="utf-8")
+    assert all(f"{{#model-{n}}}" in model for n in range(1, 9))

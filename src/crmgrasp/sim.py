@@ -8,7 +8,7 @@ equal to them bit for bit. [`run_episode`][] is the one loop that lets a
 
 Sensing: each configuration is read once. The observation ``o_t`` is computed from
 that reading, and the CRM executed at time ``t`` builds its goal line from the same
-reading (docs/model.md section 4). With the task's noise off, readings are exact and draw
+reading ([docs/model.md section 4][model-4]). With the task's noise off, readings are exact and draw
 nothing from the generator.
 
 Draw order: ``reset`` draws the start (the task's sampler) then one reading;

@@ -56,7 +56,7 @@ def greedy_choice(row: list[float], rng: np.random.Generator) -> int:
 
 class LearnerPolicy:
     """An [`Agent`][] as a [`Policy`][crmgrasp.sim.Policy]: it keeps the k-order
-    history (docs/model.md section 6) of the discretized observations, acts on its code and,
+    history ([docs/model.md section 6][model-6]) of the discretized observations, acts on its code and,
     when ``learn``, updates after every step.
 
     The order of the agent's draws from ``rng`` is that of SARSA's loop: the first

@@ -52,7 +52,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
     paper-box: 0 = C1 (a,b,0), 1 = C2 (b,a,0), 2 = C3 (a,a,+0.08), 3 = C4 (b,b,-0.08).
 
     ## Observation Space
-    A ``Dict``, computed from the sensed contacts (docs/model.md section 4):
+    A ``Dict``, computed from the sensed contacts ([docs/model.md section 4][model-4]):
 
     | key | meaning | min | max |
     | --- | --- | --- | --- |
@@ -208,7 +208,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
 
 
 class KOrderHistory(gym.Wrapper[int, np.int64, dict[str, Any], np.int64], gym.utils.RecordConstructorArgs):
-    """Replace the observation by the k-order history state of docs/model.md section 6.
+    """Replace the observation by the k-order history state of [docs/model.md section 6][model-6].
 
     The observation becomes ``Discrete(encoder.size)``: the integer code of
     ``(o_t, a_{t-1}, o_{t-1}, ..., a_{t-k})`` over the task's discretized

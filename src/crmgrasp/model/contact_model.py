@@ -51,7 +51,7 @@ __all__ = [
 
 OBSERVATION_NAMES: tuple[str, ...] = Observation._fields
 """The continuous observation of a two-contact model, in order: the squared frictionless
-force residual and the two frictionless moments (docs/model.md section 4)."""
+force residual and the two frictionless moments ([docs/model.md section 4][model-4])."""
 
 
 def observation_names(labels: Sequence[str]) -> tuple[str, ...]:

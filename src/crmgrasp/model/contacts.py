@@ -1,4 +1,4 @@
-"""Contact configurations of the planar hand (docs/model.md section 2).
+"""Contact configurations of the planar hand ([docs/model.md section 2][model-2]).
 
 A [`Contact`][] is a position and the object's inward unit normal there; a
 [`Config`][] is the pair of contacts labelled ``a`` and ``b`` of a two-finger hand and a

@@ -1,6 +1,6 @@
 """Planar objects: boundary, inward normals, projection, strict inside test, ray entry.
 
-Conventions (docs/model.md section 1)
+Conventions ([docs/model.md section 1][model-1])
 ----------------------------
 * Units are metres; the plane is x-y and z points out of the plane.
 * Polygon vertices are stored counter-clockwise (clockwise input is reversed).

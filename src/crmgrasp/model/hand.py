@@ -1,4 +1,4 @@
-"""The planar hand and contact relative motions (docs/model.md sections 2, 3 and 8).
+"""The planar hand and contact relative motions ([docs/model.md sections 2, 3 and 8][model-2]).
 
 A hand has ``n`` contacts (``Hand.contacts``, 2 by default) labelled ``a, b, ...`` in
 order; ``z`` below is the last one (``b`` for two contacts). Every rule is written once
@@ -186,7 +186,7 @@ class Outcome(NamedTuple):
 
 @dataclass(frozen=True)
 class Hand:
-    """A planar hand of two or more contacts (docs/model.md sections 2 and 8).
+    """A planar hand of two or more contacts ([docs/model.md sections 2 and 8][model-2]).
 
     Parameters
     ----------
@@ -296,7 +296,7 @@ class Hand:
         rng: np.random.Generator | None = None,
         sensed: Config | Grip | None = None,
     ) -> Outcome:
-        """Execute ``crm`` from ``config`` on ``obj`` (docs/model.md section 3).
+        """Execute ``crm`` from ``config`` on ``obj`` ([docs/model.md section 3][model-3]).
 
         The goal line is computed from ``sensed`` if given; otherwise from a fresh
         reading through ``noise`` (which then needs ``rng``); otherwise from the
@@ -409,7 +409,7 @@ def _crossed(config: Config | Grip, ux: float, uy: float) -> bool:
 
 
 def feasible(obj: Shape, hand: Hand, config: Config | Grip) -> Error:
-    """Feasibility of a configuration (docs/model.md sections 2 and 8), as an [`Error`][]:
+    """Feasibility of a configuration ([docs/model.md sections 2 and 8][model-2]), as an [`Error`][]:
     APERTURE if two contacts are more than ``A`` apart; PALM if two collide (at most
     ``min_separation`` apart, coincident by default), an outer contact faces the palm side
     ([`faces_palm`][]), the fingers cross (positions along a -> z not increasing) or the

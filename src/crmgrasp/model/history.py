@@ -1,4 +1,4 @@
-"""k-order internal state (paper Eq. 5, docs/model.md section 6).
+"""k-order internal state (paper Eq. 5, [docs/model.md section 6][model-6]).
 
 ``s_t = (o_t, a_{t-1}, o_{t-1}, ..., o_{t-k+1}, a_{t-k})``: the current discretized
 observation, the last ``k`` actions and the ``k - 1`` observations between them.

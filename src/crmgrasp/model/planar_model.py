@@ -1,4 +1,4 @@
-"""The planar model of two or more contacts (docs/model.md sections 2-5 and 8) as a
+"""The planar model of two or more contacts ([docs/model.md sections 2-5 and 8][model-2]) as a
 `ContactModel`.
 
 [`PlanarModel`][] holds the hand and the sensing noise and applies the rules that live

@@ -1,4 +1,4 @@
-"""Grasp quality for planar point contacts with Coulomb friction (docs/model.md section 5).
+"""Grasp quality for planar point contacts with Coulomb friction ([docs/model.md section 5][model-5]).
 
 Two contacts
 ------------
@@ -35,7 +35,7 @@ their convex hull. This is the linear program
 ``rank W = 3`` and ``d* > 0``. For two contacts the LP agrees with
 ``min_friction < mu`` for squeezing grasps, and also accepts expanding (internal)
 grasps, whose normals point away from each other, which ``min_friction`` (a
-squeezing hand, docs/model.md section 5) reports as ``inf``.
+squeezing hand, [docs/model.md section 5][model-5]) reports as ``inf``.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Force-derived observations, sensing noise and observation discretizers (docs/model.md section 4).
+"""Force-derived observations, sensing noise and observation discretizers ([docs/model.md section 4][model-4]).
 
 Observation (paper Eq. 2-3), computed from *sensed* contacts ``i = a, b, ...``:
 
@@ -192,7 +192,7 @@ class Discretizer:
 
     A value ``v`` falls in bin ``k`` = the number of thresholds ``t`` with
     ``v >= t`` (so each quantity has ``len(thresholds) + 1`` bins). Moments are
-    binned by magnitude when ``abs_moments`` is true (docs/model.md section 7). The index
+    binned by magnitude when ``abs_moments`` is true ([docs/model.md section 7][model-7]). The index
     is mixed-radix over the quantities in order, error fastest; for two contacts
     ``((rho_bin * n_ma + ma_bin) * n_mb + mb_bin) * 3 + error``.
 

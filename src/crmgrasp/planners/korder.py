@@ -5,7 +5,7 @@ needs the hidden states) and a *learner from episodes* (it starts blank and sees
 what episodes return).
 
 A learner on the k-order MDP can at best find the best *k-order policy*: a table from
-k-order histories ``(o_t, a_{t-1}, o_{t-1}, ..., a_{t-k})`` (docs/model.md section 6) to
+k-order histories ``(o_t, a_{t-1}, o_{t-1}, ..., a_{t-k})`` ([docs/model.md section 6][model-6]) to
 CRMs. The belief-space optimum ([`belief_optimum`][crmgrasp.planners.references.belief_optimum])
 may need more memory than that. [`korder_search`][] finds a good k-order policy on a
 set of sampled starts (or worlds) with the same noise-free dynamics and cost as the

@@ -1,7 +1,7 @@
 """Named grasping tasks: object, hand, CRM set, observation bins, starts, goal.
 
 A [`Task`][] bundles everything an environment or experiment needs. Tasks are
-looked up by name with [`make_task`][] (``"paper-box"`` is docs/model.md section 7);
+looked up by name with [`make_task`][] (``"paper-box"`` is [docs/model.md section 7][model-7]);
 users build their own by constructing [`Task`][] directly and may register a
 factory under a new name with [`register_task`][].
 """
@@ -304,7 +304,7 @@ class Task:
     def grasped(self, mu: NDArray[np.float64]) -> NDArray[np.bool_]: ...
 
     def grasped(self, mu: float | NDArray[np.float64]) -> bool | NDArray[np.bool_]:
-        """The success rule (docs/model.md section 5) from a configuration's min friction:
+        """The success rule ([docs/model.md section 5][model-5]) from a configuration's min friction:
         ``mu <= mu_goal`` (elementwise on an array)."""
         return mu <= self.mu_goal
 
@@ -314,7 +314,7 @@ class Task:
         return f"{self.description}; {NUMBER_WORDS.get(n, str(n))} fingers"
 
     def is_success(self, config: Any) -> bool:
-        """docs/model.md section 5: `grasped` of [`quality`][]."""
+        """[docs/model.md section 5][model-5]: `grasped` of [`quality`][]."""
         return self.grasped(self.quality(config))
 
     def action_names(self) -> tuple[str, ...]:
@@ -330,7 +330,7 @@ class World(NamedTuple):
 
 
 PAPER_HAND = Hand(aperture=0.16, palm_depth=0.12, backoff=0.01)
-"""The paper's hand (docs/model.md section 7): aperture 0.16 m, palm depth 0.12 m."""
+"""The paper's hand ([docs/model.md section 7][model-7]): aperture 0.16 m, palm depth 0.12 m."""
 
 PAPER_CRMS = (CRM("a", "b", 0.0), CRM("b", "a", 0.0), CRM("a", "a", 0.08), CRM("b", "b", -0.08))
 """The paper's four CRMs: oppose a, oppose b, slide a, slide b (mirror pairs C1-C2, C3-C4)."""
@@ -340,7 +340,7 @@ PAPER_BINS = Discretizer(rho=(1.0,), m_a=(0.10,), m_b=(0.10,))
 
 
 def paper_box() -> Task:
-    """The paper's box task (docs/model.md section 7).
+    """The paper's box task ([docs/model.md section 7][model-7]).
 
     Examples
     --------

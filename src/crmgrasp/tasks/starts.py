@@ -1,8 +1,8 @@
 """Start samplers: where an episode's contacts are placed before the first CRM.
 
 A sampler draws a start configuration from the generator it is given and accepts it by
-the start rule ([`acceptable`][]: feasible, docs/model.md section 2, and not already a
-grasp). [`CornerStarts`][] is the paper's (docs/model.md section 7): a random polygon
+the start rule ([`acceptable`][]: feasible, [docs/model.md section 2][model-2], and not already a
+grasp). [`CornerStarts`][] is the paper's ([docs/model.md section 7][model-7]): a random polygon
 corner and one contact on each side meeting there; [`UniformStarts`][] places both
 contacts anywhere on the boundary. Each sampler class states its task-file ``kind`` and
 checks its own parameters ([`crmgrasp.tasks.files`][] reads and writes them from its
@@ -54,7 +54,7 @@ compiled one that makes the same decisions."""
 
 
 def acceptable(obj: Shape, hand: Hand, mu_goal: float, config: Config | Grip) -> bool:
-    """The start rule: feasible (docs/model.md section 2) and not already a grasp
+    """The start rule: feasible ([docs/model.md section 2][model-2]) and not already a grasp
     (``min_friction > mu_goal``)."""
     return feasible(obj, hand, config) is Error.NONE and min_friction(config) > mu_goal
 
@@ -139,7 +139,7 @@ def corner_proposal(w: np.ndarray, cum: np.ndarray, c_in: np.ndarray, c_out: np.
 
 @dataclass(frozen=True)
 class CornerStarts:
-    """docs/model.md section 7 starts: a random polygon corner, one contact uniform on each
+    """[docs/model.md section 7][model-7] starts: a random polygon corner, one contact uniform on each
     of the two sides meeting there, a fair coin for which contact is ``a``;
     resampled until feasible and not already a grasp (``min_friction > mu_goal``).
 

@@ -9,7 +9,7 @@ contact by intrinsic contact sensing ([`contact_from_wrench`][crmgrasp.hardware.
 on a [`Circle`][crmgrasp.hardware.contact_sensing.Circle] of the tip radius). MuJoCo's
 contact list is used only by [`MujocoHand.true_config`][], for evaluation.
 
-A CRM ``(c, f, r)`` runs as (docs/model.md section 3 made physical):
+A CRM ``(c, f, r)`` runs as ([docs/model.md section 3][model-3] made physical):
 
 1. the goal line and its reach chord from the *sensed* configuration (the
    stationary contact's sensed position); no chord: aperture error, no motion;

@@ -9,7 +9,7 @@ site with a ``force`` and a ``torque`` sensor, which measure what the fingertip
 transmits to its carriage. The fingertips pass through each other (a real
 hand's fingers do not share a plane); they collide with the object and floor.
 The palm is a mocap body with a small sphere geom that the controller places at
-the palm point ``P`` of docs/model.md section 2 each tick.
+the palm point ``P`` of [docs/model.md section 2][model-2] each tick.
 """
 
 from __future__ import annotations
