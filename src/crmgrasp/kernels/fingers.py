@@ -98,7 +98,7 @@ class FingersKernel(Kernel):
         return OneStep(SimState(config, sensed, 0), obs, Error.NONE, index, mu)
 
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
-        if isinstance(action, CRM) or not 0 <= action < len(self.acts):  # the reference step checks
+        if isinstance(action, CRM) or not 0 <= action < len(self.acts):  # as the readable step treats it
             return super().step_one(state, action, rng)
         row = np.array([self.model.row_of(state.config)])
         srow = row if state.sensed is state.config else np.array([self.model.row_of(state.sensed)])
