@@ -74,3 +74,12 @@ def test_bench_fingers_smoke():
     assert res["cartpole_us"] > 0
     for backend in ("auto", "reference"):
         assert res[backend]["us_per_step_with_resets"] >= res[backend]["us_per_step_alone"] > 0
+
+
+def test_bench_continuous_smoke():
+    spec = importlib.util.spec_from_file_location("bench_continuous", BENCH.parent / "bench_continuous.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    res = mod.main(steps=100, rounds=1)
+    for task in mod.TASKS:
+        assert res[task]["continuous_us"] > 0 and res[task]["continuous_over_discrete"] > 0

@@ -21,7 +21,15 @@ from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.sim import OneStep, SimState
 from crmgrasp.tasks import Task, World, make_task
 
-__all__ = ["CRMGraspEnv", "KOrderHistory", "ENV_ID", "FAMILY_ENVS", "SPATIAL_ENVS", "observation_space"]
+__all__ = [
+    "CRMGraspEnv",
+    "KOrderHistory",
+    "ENV_ID",
+    "FAMILY_ENVS",
+    "SPATIAL_ENVS",
+    "CONTINUOUS_ENVS",
+    "observation_space",
+]
 
 ENV_ID = "crmgrasp/PaperBox-v0"
 _empty = np.empty
@@ -102,7 +110,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         self.observation_space = observation_space(self.task.model)
         self._clip = [(name, *self.kernel.bounds[name]) for name in self.task.model.observation_names]
         self._state: SimState | None = None
-        self._last: tuple[SimState, int] | None = None
+        self._last: tuple[SimState, Any] | None = None
         self._starts: list[tuple[float, ...]] = []
         self._next, self._block = 0, _FIRST_BLOCK
 
@@ -161,6 +169,10 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         obs, info = self._emit(res)
         return obs, res.reward, res.terminated, res.truncated, info
 
+    def crm_of(self, action: Any) -> Any:
+        """The CRM of a stepped action (an index into the task's CRMs)."""
+        return self.task.actions[action]
+
     @property
     def scene_task(self) -> Task:
         """The task on this episode's object (the task itself without a family)."""
@@ -200,7 +212,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             fig = scene_figure(t.obj, t.hand, self._state.config, None, title)
         else:
             prev, action = self._last
-            outcome = t.execute(prev.config, t.actions[action], prev.sensed)
+            outcome = t.execute(prev.config, self.crm_of(action), prev.sensed)
             fig = scene_figure(t.obj, t.hand, prev.config, outcome, f"{title} ({outcome.error.name.lower()})")
         canvas = FigureCanvasAgg(fig)
         canvas.draw()
@@ -259,8 +271,20 @@ FAMILY_ENVS = {
 ``3F`` ones with a three-finger hand)."""
 
 
+CONTINUOUS_ENVS = {
+    "crmgrasp/PaperBoxContinuous-v0": "paper-box",
+    "crmgrasp/BoxFamilyContinuous-v0": "box-family",
+    "crmgrasp/UHandleContinuous-v0": "u-handle",
+    "crmgrasp/NotchOrBoxContinuous-v0": "notch-or-box",
+    "crmgrasp/Cup3DContinuous-v0": "cup-3d",
+}
+"""Registered environments with the continuous action space
+([`ContinuousCRMEnv`][crmgrasp.envs.continuous.ContinuousCRMEnv]): id -> task name."""
+
+
 def register() -> None:
-    """Register ``crmgrasp/PaperBox-v0``, the [`FAMILY_ENVS`][] and the [`SPATIAL_ENVS`][] (idempotent)."""
+    """Register ``crmgrasp/PaperBox-v0``, the [`FAMILY_ENVS`][], the [`SPATIAL_ENVS`][] and the
+    [`CONTINUOUS_ENVS`][] (idempotent)."""
     if ENV_ID not in gym.registry:
         gym.register(
             id=ENV_ID,
@@ -277,6 +301,14 @@ def register() -> None:
                 vector_entry_point="crmgrasp.envs.vector:FamilyVectorEnv",
                 kwargs={"task": task},
                 max_episode_steps=10,  # every family task's max_steps
+            )
+    for env_id, task in CONTINUOUS_ENVS.items():
+        if env_id not in gym.registry:
+            gym.register(
+                id=env_id,
+                entry_point="crmgrasp.envs.continuous:ContinuousCRMEnv",
+                kwargs={"task": task},
+                max_episode_steps=10,
             )
 
 

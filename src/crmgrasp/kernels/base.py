@@ -131,11 +131,22 @@ class Kernel(ABC):
 
     # ------------------------------------------------------------ composites
     def execute(self, cfg: F64, sen: F64, actions: I64) -> tuple[F64, NDArray[np.int8]]:
-        """[`execute_crms`][] of the task's actions ``actions`` (indices; the offsets are
-        ``(N,)`` for a scalar offset, ``(N, offset_dim)`` otherwise)."""
-        a = self.acts[actions]
-        r = np.ascontiguousarray(a[:, 2]) if self.model.offset_dim == 1 else a[:, 2:]
-        return self.execute_crms(cfg, sen, a[:, 0].astype(np.int64), a[:, 1].astype(np.int64), r)
+        """[`execute_crms`][] of the task's actions ``actions`` (indices)."""
+        return self.execute_table(cfg, sen, self.acts[actions])
+
+    def execute_table(self, cfg: F64, sen: F64, table: F64) -> tuple[F64, NDArray[np.int8]]:
+        """[`execute_crms`][] of one CRM per row given as a row of an action table
+        ([`action_table`][]: ``c``, ``f``, offsets; ``(N,)`` offsets for a scalar offset,
+        ``(N, offset_dim)`` otherwise)."""
+        r = np.ascontiguousarray(table[:, 2]) if self.model.offset_dim == 1 else table[:, 2:]
+        return self.execute_crms(cfg, sen, table[:, 0].astype(np.int64), table[:, 1].astype(np.int64), r)
+
+    def crm_row(self, crm: Any) -> F64:
+        """The action-table row ``[[c, f, r...]]`` (shape ``(1, 2 + offset_dim)``) of a CRM of the
+        task's model, checked against the hand (one-line errors)."""
+        crm = self.task.crm(crm)
+        index = self.model.labels.index
+        return np.array([[index(crm.c), index(crm.f), *np.atleast_1d(crm.r)]], dtype=np.float64)
 
     def sample_start(self, rng: np.random.Generator) -> Any:
         """One start (`crmgrasp.tasks.Task.sample_start`, with `start_filter`):
@@ -156,13 +167,28 @@ class Kernel(ABC):
         ([`crmgrasp.sim.step`][])."""
         return step(self.task, state, action, rng)
 
+    def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:
+        """The CRM of the action-table row ``row`` (shape ``(1, 2 + offset_dim)``: contact
+        indices and offsets, within the hand's reach: the caller checks) from ``state``: the
+        continuous action's step, [`crmgrasp.sim.step`][] of that CRM."""
+        r = row[0, 2] if self.model.offset_dim == 1 else row[0, 2:]
+        return step(self.task, state, self.model.crm(int(row[0, 0]), int(row[0, 1]), r), rng)
+
     def step_batch(
         self, cfg: F64, sen: F64, actions: I64, resets: NDArray[np.bool_], starts: F64, rng: np.random.Generator
     ) -> BatchStep:
         """One step of a batch of environments: the CRM ``actions[j]`` in each row, or
         the next of ``starts`` (in order) in the rows where ``resets`` is set; then one
         reading per row, its observation, bins and min friction."""
-        new, err = self.execute(cfg, sen, actions)
+        return self.step_table(cfg, sen, self.acts[actions], resets, starts, rng)
+
+    def step_table(
+        self, cfg: F64, sen: F64, table: F64, resets: NDArray[np.bool_], starts: F64, rng: np.random.Generator
+    ) -> BatchStep:
+        """[`step_batch`][] with one CRM per row given as an action-table row (``table``:
+        ``(N, 2 + offset_dim)``, within reach: the caller checks): the continuous actions'
+        batched step."""
+        new, err = self.execute_table(cfg, sen, table)
         rows = resets.nonzero()[0]
         if len(rows):
             new[rows] = starts

@@ -79,7 +79,10 @@ class FamilyKernel(Kernel):
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
         return self.stepper.step_one(state, action, rng)
 
-    def step_batch(
-        self, cfg: F64, sen: F64, actions: I64, resets: NDArray[np.bool_], starts: F64, rng: np.random.Generator
+    def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:
+        return self.current.step_row(state, row, rng)
+
+    def step_table(
+        self, cfg: F64, sen: F64, table: F64, resets: NDArray[np.bool_], starts: F64, rng: np.random.Generator
     ) -> BatchStep:
         raise CrmgraspError(f"task {self.task.name!r} draws an object per episode: it steps one episode at a time")

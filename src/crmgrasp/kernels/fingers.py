@@ -53,9 +53,6 @@ class FingersKernel(Kernel):
         self.th = bin_thresholds(d)
         self.strides = np.array(d._strides, dtype=np.int64)
         self.abs_m = d.abs_moments
-        self.ci = self.acts[:, 0].astype(np.int64)
-        self.fi = self.acts[:, 1].astype(np.int64)
-        self.r = np.ascontiguousarray(self.acts[:, 2])
 
     def execute_crms(self, cfg: F64, sen: F64, c: I64, f: I64, r: F64) -> tuple[F64, NDArray[np.int8]]:
         rows = len(cfg)
@@ -98,12 +95,16 @@ class FingersKernel(Kernel):
         return OneStep(SimState(config, sensed, 0), obs, Error.NONE, index, mu)
 
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
-        if isinstance(action, CRM) or not 0 <= action < len(self.acts):  # as the readable step treats it
+        if isinstance(action, CRM):  # a CRM of the hand's continuous action space
+            return self.step_row(state, self.crm_row(action), rng)
+        if not 0 <= action < len(self.acts):  # as the readable step treats it
             return super().step_one(state, action, rng)
-        row = np.array([self.model.row_of(state.config)])
-        srow = row if state.sensed is state.config else np.array([self.model.row_of(state.sensed)])
-        at = slice(action, action + 1)
-        new, err = self.execute_crms(row, srow, self.ci[at], self.fi[at], self.r[at])
+        return self.step_row(state, self.acts[action : action + 1], rng)
+
+    def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:
+        srow = np.array([self.model.row_of(state.config)])
+        sen = srow if state.sensed is state.config else np.array([self.model.row_of(state.sensed)])
+        new, err = self.execute_table(srow, sen, row)
         code = int(err[0])
         config = state.config if code else self.model.config_of(new[0].tolist())
         sensed, obs, index, mu = self._after(config, code, rng)

@@ -150,15 +150,22 @@ class FusedPolygonKernel(PolygonKernel):
         return OneStep(SimState(config, config, 0), Observation(rho, m_a, m_b), Error.NONE, index, mu)
 
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
-        if isinstance(action, CRM):  # a CRM outside the task's set: the reference step
-            return super().step_one(state, action, rng)
+        if isinstance(action, CRM):  # a CRM of the hand's continuous action space
+            return self._step(state, 0, self.crm_row(action))
         if not 0 <= action < len(self.acts):  # compiled code does not check indices
             raise CrmgraspError(f"action must be an integer in [0, {len(self.acts)}), got {action!r}")
+        return self._step(state, action, self.acts)
+
+    def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:
+        return self._step(state, 0, row)
+
+    def _step(self, state: SimState, action: int, table: F64) -> OneStep:
+        """The CRM ``table[action]`` from ``state``, one compiled call."""
         config = state.config
         if config is not self._v_of:
             self._v[0, :8] = config[0] + config[1]
             self._v_of = config
-        code, index = jit.step_one(self._v, action, self.acts, self.e, self.th, self.p, self.q, self._out)
+        code, index = jit.step_one(self._v, action, table, self.e, self.th, self.p, self.q, self._out)
         o = self._out[0].tolist()
         if not code:
             config = config_from_row(o)
@@ -174,6 +181,16 @@ class FusedPolygonKernel(PolygonKernel):
     def step_batch(
         self, cfg: F64, sen: F64, actions: I64, resets: NDArray[np.bool_], starts: F64, rng: np.random.Generator
     ) -> BatchStep:
+        return self._rows(cfg, np.ascontiguousarray(actions, dtype=np.int64), self.acts, resets, starts)
+
+    def step_table(
+        self, cfg: F64, sen: F64, table: F64, resets: NDArray[np.bool_], starts: F64, rng: np.random.Generator
+    ) -> BatchStep:
+        rows = np.arange(len(cfg), dtype=np.int64)
+        return self._rows(cfg, rows, np.ascontiguousarray(table, dtype=np.float64), resets, starts)
+
+    def _rows(self, cfg: F64, actions: I64, table: F64, resets: NDArray[np.bool_], starts: F64) -> BatchStep:
+        """The CRMs ``table[actions]`` of a batch, one compiled call."""
         n = len(cfg)
         new = np.empty((n, 8))
         err, index, mu = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty(n)
@@ -181,8 +198,8 @@ class FusedPolygonKernel(PolygonKernel):
         obs["error"] = err
         jit.step_rows(
             np.ascontiguousarray(cfg),
-            np.ascontiguousarray(actions, dtype=np.int64),
-            self.acts,
+            actions,
+            table,
             np.ascontiguousarray(resets),
             np.ascontiguousarray(starts, dtype=np.float64).reshape(-1, 8),
             self.e,

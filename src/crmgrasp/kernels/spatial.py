@@ -117,14 +117,21 @@ class FusedSpatialKernel(SpatialKernel):
         return OneStep(SimState(config, config, 0), Observation(rho, m_a, m_b), Error.NONE, index, mu)
 
     def step_one(self, state: SimState, action: Any, rng: np.random.Generator) -> OneStep:
-        if isinstance(action, CRM3D):  # a CRM outside the task's set: the reference step
-            return super().step_one(state, action, rng)  # type: ignore[arg-type]
+        if isinstance(action, CRM3D):  # a CRM of the hand's continuous action space
+            return self._step(state, 0, self.crm_row(action))
         if not 0 <= action < len(self.acts):  # compiled code does not check indices
             raise CrmgraspError(f"action must be an integer in [0, {len(self.acts)}), got {action!r}")
+        return self._step(state, action, self.acts4)
+
+    def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:
+        return self._step(state, 0, row)
+
+    def _step(self, state: SimState, action: int, table: F64) -> OneStep:
+        """The CRM ``table[action]`` from ``state``, one compiled call."""
         config = state.config
         self._load(config)  # type: ignore[arg-type]
         code, index = self._jit.step_one(
-            self._v, action, self.acts4, self.planes, self.cyl, self.th, self.p, self.q, self._out
+            self._v, action, table, self.planes, self.cyl, self.th, self.p, self.q, self._out
         )
         o = self._out.tolist()
         if not code:

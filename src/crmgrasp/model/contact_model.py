@@ -37,6 +37,8 @@ from typing import Any, ClassVar, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.model.actions import CRMRange, full_ranges
 from crmgrasp.model.hand import Error
 from crmgrasp.model.sensing import Observation, SensorNoise
 
@@ -181,6 +183,21 @@ class ContactModel(Protocol):
         """The CRM a mirror symmetry maps ``crm`` to (labels swapped)."""
         ...
 
+    def full_ranges(self) -> tuple[CRMRange, ...]:
+        """The whole continuous action space: every ordered contact pair over the offsets
+        within the hand's reach ([`crmgrasp.model.actions.full_ranges`][])."""
+        ...
+
+    def check_range(self, rng: object) -> CRMRange:
+        """``rng`` if it is a [`CRMRange`][crmgrasp.model.actions.CRMRange] of this model's
+        contacts and offset coordinates whose every offset is within reach, else a one-line
+        error."""
+        ...
+
+    def range_crm(self, rng: CRMRange, r: Any) -> Any:
+        """The CRM of range ``rng`` at offset ``r`` (a sequence of ``offset_dim`` numbers)."""
+        ...
+
     def moment_index(self, label: str) -> int:
         """The position in the observation of the moment about contact ``label``."""
         ...
@@ -238,6 +255,8 @@ class LabelledContacts:
     labels: tuple[str, ...]
     axes: ClassVar[str]
     """The names of a position's coordinates (``"xy"``, ``"xyz"``)."""
+    kind: ClassVar[str]
+    offset_dim: ClassVar[int]
     hand: Any
 
     @property
@@ -271,6 +290,32 @@ class LabelledContacts:
     @property
     def columns(self) -> tuple[str, ...]:
         return contact_columns(self.labels, self.axes)
+
+    def full_ranges(self) -> tuple[CRMRange, ...]:
+        return full_ranges(self.labels, self.offset_dim, self.hand.reach)
+
+    def range_crm(self, rng: CRMRange, r: Any) -> Any:
+        index = self.labels.index
+        return self.crm(index(rng.c), index(rng.f), r[0] if self.offset_dim == 1 else (r[0], r[1]))  # type: ignore[attr-defined]
+
+    def check_range(self, rng: object) -> CRMRange:
+        if not isinstance(rng, CRMRange):
+            raise CrmgraspError(f"expected a CRMRange, got {rng!r}")
+        for label in (rng.c, rng.f):
+            if label not in self.labels:
+                raise CrmgraspError(
+                    f"CRM range {rng} names contact {label!r}, but the hand has contacts {', '.join(self.labels)}"
+                )
+        if rng.dim != self.offset_dim:
+            raise CrmgraspError(
+                f"CRM range {rng} has {rng.dim} offset coordinates; the {self.kind} model takes {self.offset_dim}"
+            )  # type: ignore[attr-defined]
+        for corner in rng.corners():
+            try:
+                self.check_crm(self.range_crm(rng, corner))  # type: ignore[attr-defined]
+            except CrmgraspError as exc:
+                raise CrmgraspError(f"CRM range {rng} reaches beyond the hand: {exc}") from None
+        return rng
 
     def moment_index(self, label: str) -> int:
         """The observation is ``rho`` then the moment about each contact in label order:

@@ -245,6 +245,12 @@ class Hand:
         """The contacts' labels in order (``('a', 'b')`` for two)."""
         return ALL_LABELS[: self.contacts]
 
+    @property
+    def reach(self) -> float:
+        """The largest ``|r|`` of a CRM (``r_max``, metres)."""
+        assert self.r_max is not None
+        return self.r_max
+
     def check_crm(self, crm: CRM) -> CRM:
         """Return ``crm`` if it names contacts of this hand and ``|r| <= r_max``, else raise
         `CrmgraspError`."""

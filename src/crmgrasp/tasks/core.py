@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from crmgrasp._validation import CrmgraspError, finite, non_negative
+from crmgrasp.model.actions import CRMRange
 from crmgrasp.model.contact_model import ContactModel
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.families import ShapeFamily
@@ -120,6 +121,10 @@ class Task:
         episode draws its object (`instance`) and ``obj`` is only the shape
         scenes show (the family's nominal one); the smallest object the family can
         draw must fit the hand's aperture.
+    ranges
+        The continuous action space ([`CRMRange`][crmgrasp.model.actions.CRMRange] per contact
+        pair, each offset within the hand's reach); empty (the default): every ordered pair
+        of the hand's contacts over ``[-r_max, r_max]`` ([`crm_ranges`][]).
     """
 
     name: str
@@ -137,6 +142,7 @@ class Task:
     grasp_reward: float = -1.0
     family: ShapeFamily | None = None
     error_cost: float = 0.0
+    ranges: tuple[CRMRange, ...] = ()
     model: ContactModel = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -184,6 +190,9 @@ class Task:
         for a in actions:
             self.hand.check_crm(a)
         object.__setattr__(self, "actions", actions)
+        if not isinstance(self.ranges, (tuple, list)):
+            raise CrmgraspError(f"task ranges must be a sequence of CRMRange, got {self.ranges!r}")
+        object.__setattr__(self, "ranges", tuple(self.model.check_range(r) for r in self.ranges))
         object.__setattr__(self, "mu_goal", non_negative(self.mu_goal, "mu_goal"))
         if not isinstance(self.discretizer, Discretizer):
             raise CrmgraspError(f"task discretizer must be a Discretizer, got {self.discretizer!r}")
@@ -219,6 +228,12 @@ class Task:
     def mirror_crm(self, crm: Any) -> Any:
         """The CRM a declared mirror symmetry maps ``crm`` to (the model's ``mirror_crm``)."""
         return self.model.mirror_crm(crm)
+
+    @property
+    def crm_ranges(self) -> tuple[CRMRange, ...]:
+        """The continuous action space: ``ranges``, or by default the model's whole space
+        (every ordered contact pair, offsets within the hand's reach)."""
+        return self.ranges or self.model.full_ranges()
 
     def crm(self, action: Any) -> Any:
         """The CRM of action index ``action``, or ``action`` itself checked against the hand."""

@@ -31,6 +31,7 @@ from crmgrasp.tasks.families import BoundaryStarts
 from crmgrasp.tasks.presets import LongSideStarts, MixtureStarts, NearCornerStarts, VertexStarts, with_reading
 from crmgrasp.tasks.schema import (
     COMMON_SECTIONS,
+    DEFAULT_GRID,
     SCALAR_KEYS,
     checked_name,
     common_dict,
@@ -40,6 +41,7 @@ from crmgrasp.tasks.schema import (
     init_keys,
     number,
     numbers,
+    range_entries,
     read_fields,
     section,
     table_keys,
@@ -92,7 +94,8 @@ backoff = 0.01                     # optional: retreat along the normal before a
 [[crm]]    # one table per action: contact c moves onto the line through contact f's
 c = "a"    # position offset by r along f's tangent, along f's normal
 f = "b"
-r = 0.0
+r = 0.0    # or a range, r = [-0.16, 0.16]: the continuous action space's pair (c, f),
+           # and `grid = 5` (optional) evenly spaced CRMs of it among the actions
 
 [[crm]]
 c = "b"
@@ -291,10 +294,8 @@ def task_from_dict(doc: Any) -> Task:
     d = table_keys(doc, "the task file", _TOP, {"name", "hand", "crm"})
     name = checked_name(d["name"])
     hand = section("hand", _hand, d["hand"])
-    kw: dict[str, Any] = {
-        "hand": hand,
-        "actions": section("crm", lambda v: crm_tables(v, labels=hand.labels), d["crm"]),
-    }
+    actions, ranges = section("crm", lambda v: crm_tables(v, labels=hand.labels), d["crm"])
+    kw: dict[str, Any] = {"hand": hand, "actions": actions, "ranges": ranges}
     if ("object" in d) == ("family" in d):
         raise CrmgraspError("the task file needs exactly one of [object] and [family]")
     if "family" in d:
@@ -329,7 +330,7 @@ def task_to_dict(task: Task) -> dict[str, Any]:
 
         return spatial_to_dict(task)
     doc = common_dict(task, task.hand)
-    doc["crm"] = [{"c": a.c, "f": a.f, "r": a.r} for a in task.actions]
+    doc["crm"] = [{"c": a.c, "f": a.f, "r": a.r} for a in task.actions] + range_entries(task.ranges)
     doc["starts"] = starts_dict(task.starts)
     if task.family is None:
         doc["object"] = _object_dict(task.obj)
@@ -351,7 +352,8 @@ def key_reference() -> str:
     rows += [("[hand] (spatial)", *r) for r in field_rows(Hand3D)]
     rows += [("[[crm]]", "c", 'string: "a" or "b" (the moving contact)', "required")]
     rows += [("[[crm]]", "f", 'string: "a" or "b" (the frame contact)', "required")]
-    rows += [("[[crm]]", "r", "number (spatial: 2 numbers)", "0")]
+    rows += [("[[crm]]", "r", "number, or a range [low, high] (spatial: 2 numbers, or 2 ranges)", "0")]
+    rows += [("[[crm]]", "grid", "integer >= 0: CRMs of an offset range among the actions", str(DEFAULT_GRID))]
     rows += [("[noise]", *r) for r in field_rows(SensorNoise)]
     d = Discretizer()
     rows += [("[bins]", n, "list of numbers", repr(list(t))) for n, t in zip(d.names, d.thresholds)]

@@ -21,6 +21,7 @@ from collections.abc import Callable, Collection, Sequence
 from typing import Any
 
 from crmgrasp._validation import CrmgraspError, shown
+from crmgrasp.model.actions import CRMRange
 from crmgrasp.model.contact_model import observation_names
 from crmgrasp.model.contacts import LABELS
 from crmgrasp.model.hand import CRM
@@ -39,6 +40,8 @@ __all__ = [
     "number",
     "numbers",
     "crm_tables",
+    "range_entries",
+    "DEFAULT_GRID",
     "bins_table",
     "section",
     "checked_name",
@@ -168,27 +171,69 @@ def numbers(value: Any, key: str) -> tuple[float, ...]:
     return tuple(number(v, f"{key}[{i}]") for i, v in enumerate(value))
 
 
+DEFAULT_GRID = 5
+"""Offsets per coordinate that an ``[[crm]]`` offset range gives the discrete actions
+unless its ``grid`` says otherwise (5 over ``[-r, r]``: ``-r, -r/2, 0, r/2, r``)."""
+
+
+def _offset_range(c: str, f: str, r: Any, dim: int, key: str) -> CRMRange | None:
+    """The range an ``[[crm]]`` entry's ``r`` states, or ``None`` for a fixed offset:
+    ``[low, high]`` in the plane (``dim = 1``), ``[[low_1, high_1], [low_2, high_2]]`` in space."""
+    if not isinstance(r, list) or (dim > 1 and not all(isinstance(v, list) for v in r)):
+        return None
+    spans = [r] if dim == 1 else r
+    if len(spans) != dim:
+        raise CrmgraspError(f"{key} must be a range [low, high] per offset coordinate ({dim}), got {shown(r)}")
+    pairs = [numbers(span, key) for span in spans]
+    if any(len(p) != 2 for p in pairs):
+        raise CrmgraspError(f"{key} must be a range [low, high] per offset coordinate, got {shown(r)}")
+    return CRMRange(c, f, tuple(p[0] for p in pairs), tuple(p[1] for p in pairs))
+
+
 def crm_tables(
-    value: Any, make: Callable[[str, str, Any, str], Any] | None = None, labels: Sequence[str] = LABELS
-) -> tuple[Any, ...]:
-    """The ``[[crm]]`` tables, ``c`` and ``f`` among the hand's contact ``labels``;
-    ``make(c, f, r, where)`` builds each (default: a planar CRM, ``r`` a number, 0 when
-    absent)."""
+    value: Any, make: Callable[[str, str, Any, str], Any] | None = None, labels: Sequence[str] = LABELS, dim: int = 1
+) -> tuple[tuple[Any, ...], tuple[CRMRange, ...]]:
+    """The ``[[crm]]`` tables: the fixed CRMs (the discrete actions) and the offset ranges
+    (the continuous action space, ``Task.ranges``), ``c`` and ``f`` among the hand's
+    contact ``labels``. ``make(c, f, r, where)`` builds a CRM (default: planar, ``r`` a
+    number, 0 when absent); an entry whose ``r`` is a range (``[low, high]``; in space one
+    per coordinate) adds its
+    range and ``grid`` (default [`DEFAULT_GRID`][]; 0 for none) evenly spaced CRMs of it to
+    the discrete actions."""
     if not isinstance(value, list) or not value:
         raise CrmgraspError("the task needs at least one [[crm]] table")
-    out = []
+    build = make or (lambda c, f, r, where: CRM(c, f, number(0.0 if r is None else r, f"{where} r")))
+    actions: list[Any] = []
+    ranges: list[CRMRange] = []
     for i, t in enumerate(value):
         where = f"[[crm]] number {i + 1}"
-        t = table_keys(t, where, {"c", "f", "r"}, {"c", "f"})
+        t = table_keys(t, where, {"c", "f", "r", "grid"}, {"c", "f"})
         if t["c"] not in labels or t["f"] not in labels:
             quoted = [f'"{lab}"' for lab in labels]
             names = ", ".join(quoted[:-1]) + " or " + quoted[-1]
             raise CrmgraspError(f"{where}: c and f must be {names}, got {shown(t['c'])}, {shown(t['f'])}")
-        if make is None:
-            out.append(CRM(t["c"], t["f"], number(t.get("r", 0.0), f"{where} r")))
-        else:
-            out.append(make(t["c"], t["f"], t.get("r"), where))
-    return tuple(out)
+        rg = _offset_range(t["c"], t["f"], t.get("r"), dim, f"{where} r")
+        if rg is None:
+            if "grid" in t:
+                raise CrmgraspError(f"{where}: grid applies to an offset range (r = [low, high]), not to a fixed r")
+            actions.append(build(t["c"], t["f"], t.get("r"), where))
+            continue
+        grid = t.get("grid", DEFAULT_GRID)
+        if isinstance(grid, bool) or not isinstance(grid, int) or not 0 <= grid <= 1000:
+            raise CrmgraspError(f"{where} grid must be an integer in [0, 1000], got {shown(grid)}")
+        ranges.append(rg)
+        points = [] if grid == 0 else ([rg.low] if rg.fixed else rg.grid(grid))
+        actions += [build(t["c"], t["f"], p[0] if dim == 1 else list(p), where) for p in points]
+    return tuple(actions), tuple(ranges)
+
+
+def range_entries(ranges: Sequence[CRMRange]) -> list[dict[str, Any]]:
+    """Offset ranges as ``[[crm]]`` entries that add no discrete action (``grid = 0``)."""
+    out = []
+    for rg in ranges:
+        spans = [[lo, hi] for lo, hi in zip(rg.low, rg.high, strict=True)]
+        out.append({"c": rg.c, "f": rg.f, "r": spans[0] if rg.dim == 1 else spans, "grid": 0})
+    return out
 
 
 def bins_table(table: Any, names: tuple[str, ...] = Discretizer().names) -> Discretizer:

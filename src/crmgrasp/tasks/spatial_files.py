@@ -46,6 +46,7 @@ from crmgrasp.tasks.schema import (
     init_keys,
     number,
     numbers,
+    range_entries,
     read_fields,
     section,
     table_keys,
@@ -152,10 +153,8 @@ def spatial_from_dict(doc: Any) -> SpatialTask:
     name = checked_name(d["name"])
     if ("solid" in d) == ("family" in d):
         raise CrmgraspError("a spatial task file needs exactly one of [solid] and [family]")
-    kw: dict[str, Any] = {
-        "hand": section("hand", _hand, d["hand"]),
-        "actions": section("crm", lambda v: crm_tables(v, _crm), d["crm"]),
-    }
+    actions, ranges = section("crm", lambda v: crm_tables(v, _crm, dim=2), d["crm"])
+    kw: dict[str, Any] = {"hand": section("hand", _hand, d["hand"]), "actions": actions, "ranges": ranges}
     if "family" in d:
         kw["family"] = section("family", _family, d["family"])
         kw["obj"] = kw["family"].nominal()
@@ -182,7 +181,8 @@ def spatial_to_dict(task: SpatialTask) -> dict[str, Any]:
     starts = task.starts
     doc = common_dict(task, task.hand3d)
     doc["model"] = "spatial"
-    doc["crm"] = [{"c": a.c, "f": a.f, "r": [*a.r]} for a in task.actions]  # type: ignore[misc]
+    fixed = [{"c": a.c, "f": a.f, "r": [*a.r]} for a in task.actions]  # type: ignore[misc]
+    doc["crm"] = fixed + range_entries(task.ranges)
     doc["starts"] = (
         {"kind": starts.kind, **write_fields(starts)} if type(starts) is SurfaceStarts else {"kind": "custom"}
     )

@@ -1,0 +1,157 @@
+"""The paper's full action space as Gymnasium environments: a contact pair and a real offset.
+
+[`ContinuousCRMEnv`][] is [`CRMGraspEnv`][crmgrasp.envs.single.CRMGraspEnv] with the action
+``(pair, r)``: CRM range ``task.crm_ranges[pair]`` at offset ``r`` (metres; one number in
+the plane, two in space). [`FlatCRMAction`][] maps one ``Box(-1, 1)`` vector onto that
+action, so that agents of continuous control (Stable-Baselines3's SAC or PPO) run on it
+unchanged. The registered ids end in ``Continuous-v0``
+([`CONTINUOUS_ENVS`][crmgrasp.envs.single.CONTINUOUS_ENVS]).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.envs.single import CONTINUOUS_ENVS, CRMGraspEnv
+from crmgrasp.tasks import Task
+
+__all__ = ["ContinuousCRMEnv", "FlatCRMAction", "CONTINUOUS_ENVS"]
+
+
+class ContinuousCRMEnv(CRMGraspEnv):
+    """A hand grasping an unseen object by CRMs whose offset it chooses.
+
+    ## Action Space
+    ``Dict({"pair": Discrete(P), "r": Box(low, high, (d,), float64)})``: execute CRM range
+    ``task.crm_ranges[pair]`` at offset ``r`` (metres, ``d = 1`` in the plane, 2 in space).
+    By default the ranges are every ordered pair of the hand's contacts over the offsets
+    within its reach (``P = 4``, ``r`` in ``[-0.16, 0.16]`` m for paper-box: the paper's
+    ``A = C x C x [-r_max, r_max]``); a task may declare its own (``Task.ranges``). The
+    ``r`` box is the smallest box holding every range; an ``r`` inside the box but outside
+    the chosen pair's range is moved into that range coordinate by coordinate (the one
+    clip, here), and an ``r`` outside the box or not finite is a one-line error.
+
+    ## Observation Space, Rewards, Starting State, Episode End, Arguments
+    As [`CRMGraspEnv`][crmgrasp.envs.single.CRMGraspEnv] (``task`` also as a registered name).
+
+    ## Version History
+    * v0: initial version.
+    """
+
+    def __init__(self, task: Task | str = "paper-box", render_mode: str | None = None, backend: str = "auto") -> None:
+        super().__init__(task, render_mode, backend)
+        model = self.task.model
+        self.ranges = self.task.crm_ranges
+        self._dim = model.offset_dim
+        low = np.min([rg.low for rg in self.ranges], axis=0)
+        high = np.max([rg.high for rg in self.ranges], axis=0)
+        r_space = spaces.Box(low, high, shape=(self._dim,), dtype=np.float64)
+        self.action_space = spaces.Dict({"pair": spaces.Discrete(len(self.ranges)), "r": r_space})  # type: ignore[assignment]
+        self._low, self._high = low.tolist(), high.tolist()
+        index = model.labels.index
+        self._rows = [np.array([[index(rg.c), index(rg.f), *rg.low]], dtype=np.float64) for rg in self.ranges]
+        self._shape = (self._dim,)
+        self._uniform = all(rg.low == self.ranges[0].low and rg.high == self.ranges[0].high for rg in self.ranges)
+
+    def action_row(self, action: Any) -> np.ndarray:
+        """The action-table row ``[[c, f, r...]]`` of ``action`` (checked; see the class), in a
+        buffer of its pair that the next call overwrites."""
+        pair, values = self._checked(action)
+        row = self._rows[pair]
+        row[0, 2:] = values
+        return row
+
+    def _checked(self, action: Any) -> tuple[int, list[float]]:
+        """``(pair, offsets)`` of an action, checked, the offsets clipped into the pair's range."""
+        if (type(action) is not dict and not isinstance(action, Mapping)) or "pair" not in action or "r" not in action:
+            raise CrmgraspError(f"action must be a dict with keys 'pair' and 'r', got {action!r:.80}")
+        pair, r = action["pair"], action["r"]
+        if type(pair) is not int:
+            if (
+                not isinstance(pair, (np.integer, np.ndarray))
+                or np.ndim(pair) != 0
+                or np.asarray(pair).dtype.kind not in "iu"
+            ):
+                raise CrmgraspError(f"action['pair'] must be an integer in [0, {len(self.ranges)}), got {pair!r}")
+            pair = int(pair)
+        if not 0 <= pair < len(self.ranges):
+            raise CrmgraspError(f"action['pair'] must be an integer in [0, {len(self.ranges)}), got {pair}")
+        values = r.tolist() if type(r) is np.ndarray and r.shape == self._shape else self._offsets(r)
+        for v, lo, hi in zip(values, self._low, self._high):
+            if not lo <= v <= hi:  # also NaN
+                raise CrmgraspError(f"action['r'] = {v!r} must be finite and within [{lo:g}, {hi:g}] m")
+        if not self._uniform:
+            values = list(self.ranges[pair].clip(values))
+        return pair, values
+
+    def _offsets(self, r: Any) -> list[float]:
+        """``r`` as ``d`` numbers, else a one-line error."""
+        try:
+            values = [float(v) for v in np.asarray(r, dtype=np.float64).reshape(-1)]
+        except (TypeError, ValueError):
+            raise CrmgraspError(f"action['r'] must be {self._dim} number(s), got {r!r:.60}") from None
+        if len(values) != self._dim or np.ndim(r) > 1:
+            raise CrmgraspError(f"action['r'] must be {self._dim} number(s), got shape {np.shape(r)}")
+        return values
+
+    def step(self, action: Any) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
+        """Execute CRM range ``action["pair"]`` at offset ``action["r"]``
+        ([`crmgrasp.kernels.Kernel.step_row`][])."""
+        if self._state is None:
+            raise CrmgraspError("call reset() before step()")
+        pair, values = self._checked(action)
+        row = self._rows[pair]
+        if self._dim == 1:
+            row[0, 2] = values[0]
+        else:
+            row[0, 2:] = values
+        self._last = (self._state, (pair, values))
+        res = self.kernel.step_row(self._state, row, self.np_random)
+        obs, info = self._emit(res)
+        return obs, res.reward, res.terminated, res.truncated, info
+
+    def crm_of(self, action: Any) -> Any:
+        """The CRM of a stepped action ``(pair, offsets)``."""
+        pair, values = action
+        return self.task.model.range_crm(self.ranges[pair], values)
+
+
+class FlatCRMAction(gym.ActionWrapper[dict[str, Any], np.ndarray, dict[str, Any]], gym.utils.RecordConstructorArgs):
+    """[`ContinuousCRMEnv`][]'s action as one vector ``u`` in ``Box(-1, 1, (1 + d,), float32)``.
+
+    ``u[0]`` chooses the pair: ``[-1, 1]`` cut into ``P`` equal parts, part ``i`` for
+    pair ``i`` (``u[0] = 1`` in the last); ``u[1:]`` map affinely onto the chosen pair's
+    range, ``-1`` to ``low`` and ``1`` to ``high``. A ``u`` of the wrong shape, not finite
+    or outside ``[-1, 1]`` is a one-line error (Stable-Baselines3 clips its actions into the
+    space before stepping).
+    """
+
+    def __init__(self, env: gym.Env) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self)
+        gym.ActionWrapper.__init__(self, env)
+        inner = env.unwrapped
+        if not isinstance(inner, ContinuousCRMEnv):
+            raise CrmgraspError(f"FlatCRMAction wraps a ContinuousCRMEnv, got {type(inner).__name__}")
+        self._ranges = inner.ranges
+        self._dim = inner.task.model.offset_dim
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(1 + self._dim,), dtype=np.float32)  # type: ignore[assignment]
+
+    def action(self, action: Any) -> dict[str, Any]:
+        """The ``{"pair", "r"}`` action of ``u`` (see the class)."""
+        u = np.asarray(action, dtype=np.float64)
+        if u.shape != (1 + self._dim,):
+            raise CrmgraspError(f"the flat action must have shape ({1 + self._dim},), got {u.shape}")
+        if not np.all((u >= -1.0) & (u <= 1.0)):  # also NaN
+            raise CrmgraspError(f"the flat action must be finite and within [-1, 1], got {u.tolist()}")
+        n = len(self._ranges)
+        pair = min(int((u[0] + 1.0) * 0.5 * n), n - 1)
+        rg = self._ranges[pair]
+        t = (u[1:] + 1.0) * 0.5
+        r = np.minimum(np.asarray(rg.low) + t * (np.asarray(rg.high) - np.asarray(rg.low)), rg.high)
+        return {"pair": pair, "r": r}
