@@ -294,3 +294,37 @@ def test_bad_ranges_in_a_task_file_fail_in_one_line(tmp_path, entry, message):
     with pytest.raises(CrmgraspError, match=message) as info:
         load_task_file(_ranged_file(tmp_path, f'[[crm]]\nc = "a"\nf = "a"\n{entry}\n'))
     assert "\n" not in str(info.value)
+
+
+# ---------------------------------------------------------------- the experiment
+def test_the_continuous_offsets_experiment_prices_the_hand_picked_crms(tmp_path):
+    """Nested odd grids never raise the optimum; the grid of 5 holds the paper's CRMs, so it
+    does no worse than them; the grid of 4 misses r = 0 and never grasps on the box."""
+    from crmgrasp.experiments.continuous_offsets import ContinuousOffsetsConfig, continuous_offsets
+
+    cfg = ContinuousOffsetsConfig(
+        tasks=("paper-box", "cup-3d"),
+        grids=(4, 5, 9),
+        spatial_grids=(2, 3),
+        starts=12,
+        trials=2,
+        episodes=40,
+        eval_episodes=20,
+    )
+    s = continuous_offsets(tmp_path, cfg)
+    box = {r["crms"]: r for r in s["rows"] if r["task"] == "paper-box"}
+    assert box["grid 4"]["belief_optimum"] == box["grid 4"]["clairvoyant_bound"] == 10.0
+    assert box["grid 9"]["belief_optimum"] <= box["grid 5"]["belief_optimum"] <= box["hand-picked"]["belief_optimum"]
+    cup = {r["crms"]: r for r in s["rows"] if r["task"] == "cup-3d"}
+    assert cup["grid 3"]["offsets_per_pair"] == 9 and cup["grid 3"]["actions"] == 36
+    for r in s["rows"]:
+        assert 1.0 <= r["clairvoyant_bound"] <= r["belief_optimum"] <= 10.0
+    assert [(r["task"], r["crms"]) for r in s["learned"]] == [
+        ("paper-box", "hand-picked"),
+        ("paper-box", "grid 9"),
+        ("cup-3d", "hand-picked"),
+        ("cup-3d", "grid 3"),
+    ]
+    assert all(r["greedy_low"] is None and len(r["per_trial"]) == 2 for r in s["learned"])  # no interval below 5
+    for name in ("continuous_offsets.csv", "continuous_offsets_learned.csv", "continuous_offsets.png", "summary.json"):
+        assert (tmp_path / name).stat().st_size > 0

@@ -304,6 +304,28 @@ def _third_contact(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tu
     return s, rows
 
 
+def _continuous_offsets(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    from crmgrasp.experiments.continuous_offsets import ContinuousOffsetsConfig, continuous_offsets
+
+    cfg = ContinuousOffsetsConfig.quick(seed) if quick else ContinuousOffsetsConfig(seed=seed)
+    s = continuous_offsets(out, cfg, progress=ctx.get("progress"))
+    rows: list[Row] = []
+    for name in cfg.tasks:
+        mine = [r for r in s["rows"] if r["task"] == name]
+        hand = next(r for r in mine if r["grid"] is None)
+        best = min((r for r in mine if r["grid"] is not None), key=lambda r: (r["belief_optimum"], r["actions"]))
+        learned = {r["crms"]: r["greedy_mean"] for r in s["learned"] if r["task"] == name}
+        rows.append(
+            (
+                f"{name}: optimum, hand-picked CRMs / best grid (offsets per pair); model-vi on each, CRMs",
+                f"{fmt(hand['belief_optimum'])} / {fmt(best['belief_optimum'])} ({best['offsets_per_pair']}); "
+                + " / ".join(fmt(v) for v in learned.values()),
+                "A = C x C x [-r_max, r_max], four CRMs picked by hand (Sec. III, no experiment)",
+            )
+        )
+    return s, rows
+
+
 EXPERIMENTS: dict[str, tuple[str, Runner]] = {
     "figure4": ("Fig. 4: min-friction histogram of 30 opposition CRMs under sensing noise", _figure4),
     "figure7": ("Fig. 7: CRMs per episode vs episode, 20 trials, SARSA and the other learners", _figure7),
@@ -332,6 +354,10 @@ EXPERIMENTS: dict[str, tuple[str, Runner]] = {
         "Introduction: two fingers against three on triangles and odd regular polygons, friction 0.15 and 0.05",
         _third_contact,
     ),
+    "continuous-offsets": (
+        "Sec. III: the optimum over grids of offsets against the hand-picked CRMs, and model-vi on each",
+        _continuous_offsets,
+    ),
     "figure4-mujoco": ("Fig. 4 on the MuJoCo stand-in hand, and intrinsic contact sensing accuracy", _figure4_mujoco),
     "figure9-mujoco": ("Fig. 9 on the MuJoCo stand-in: the kinematic policy transferred, 11 trials", _figure9_mujoco),
     "spatial-mujoco": (
@@ -350,6 +376,7 @@ QUICK_BUDGETS = {
     "non-convex": ("2 trials x 150 episodes", ("U handle",)),
     "spatial": ("2 trials x 300 / 150 episodes, 80 / 40 worlds", ("box-3d", "cup-3d")),
     "third-contact": ("20 starts, triangles at 0.15 only", ("triangles",)),
+    "continuous-offsets": ("30 starts, grids 4, 5, 9, 2 trials x 200 episodes, 2 tasks", ("paper-box", "u-handle")),
     "spatial-mujoco": ("1 trial x 300 episodes, 4 worlds per task", ("cup-3d", "box-3d")),
 }
 """Experiments whose learned numbers ``--quick`` computes on a smaller budget: that
@@ -360,6 +387,7 @@ GROUPS = (
     ("figure7-sensitivity",),
     ("cost-of-failure", "non-convex"),
     ("third-contact",),
+    ("continuous-offsets",),
     ("generalization",),
     ("spatial",),
     ("spatial-mujoco",),
@@ -384,6 +412,7 @@ IMAGES = {
     "non-convex": ["non_convex.png", "non_convex.gif"],
     "spatial": ["spatial.png", "spatial_strategy.png", "spatial_strategy.gif"],
     "third-contact": ["third_contact.png"],
+    "continuous-offsets": ["continuous_offsets.png"],
     "figure4-mujoco": ["figure4_mujoco.png"],
     "figure9-mujoco": ["figure9_mujoco.png", "figure9_mujoco.gif"],
     "spatial-mujoco": ["spatial_mujoco.png", "spatial_mujoco.gif"],

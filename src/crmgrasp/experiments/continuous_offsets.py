@@ -1,0 +1,217 @@
+"""What the hand-picked CRMs cost: the best policy over grids of offsets, and what a learner gets.
+
+The paper's action space is ``C x C x [-r_max, r_max]``; its experiments use four CRMs picked
+by hand. Per task, on the same sampled starts (worlds on a family task), this computes the
+belief-space optimum and the clairvoyant bound with the task's own CRMs and with every
+contact pair on grids of ``n`` offsets per coordinate over ``[-r_max, r_max]``
+([`crmgrasp.tasks.offsets.offset_grid`][]). Odd grids nest (5 in 9 in 17 in 33, each holding
+``r = 0``), so their optimum can only fall as the grid refines; even grids leave out
+``r = 0``, the offset that opposes a contact straight across. Then model-vi (k = 1) learns
+from episodes on the task's CRMs and on one grid, with the same budget, and its greedy
+policy is evaluated on fresh episodes.
+
+Writes ``continuous_offsets.csv``, ``continuous_offsets.png`` and ``summary.json``.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from crmgrasp._io import save_figure, write_csv, write_json
+from crmgrasp._progress import Progress
+from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts
+from crmgrasp.tasks import Task, make_task
+from crmgrasp.tasks.offsets import offset_grid
+
+__all__ = ["ContinuousOffsetsConfig", "continuous_offsets"]
+
+COLUMNS = ("task", "crms", "grid", "offsets_per_pair", "actions", "starts", "clairvoyant_bound", "belief_optimum")
+LEARNED = ("task", "crms", "actions", "trials", "episodes", "greedy_mean", "greedy_low", "greedy_high", "success")
+
+
+@dataclass(frozen=True)
+class ContinuousOffsetsConfig:
+    """Tasks; grids (offsets per coordinate: ``grids`` in the plane, ``spatial_grids`` in
+    space, where a pair gets ``n**2``); sampled starts per task; the learner's grid (per
+    coordinate, planar and spatial), trials, episodes per trial and greedy evaluation
+    episodes; seed."""
+
+    tasks: tuple[str, ...] = ("paper-box", "box-family", "u-handle", "notch-or-box", "cup-3d")
+    grids: tuple[int, ...] = (4, 5, 8, 9, 16, 17, 33)
+    spatial_grids: tuple[int, ...] = (2, 3, 5, 7)
+    starts: int = 100
+    learn_grid: int = 9
+    learn_spatial_grid: int = 3
+    trials: int = 3
+    episodes: int = 2000
+    eval_episodes: int = 500
+    seed: int = 0
+
+    @classmethod
+    def quick(cls, seed: int = 0) -> ContinuousOffsetsConfig:
+        """paper-box and u-handle, grids 4, 5 and 9, 30 starts, 2 trials x 200 episodes."""
+        return cls(
+            tasks=("paper-box", "u-handle"),
+            grids=(4, 5, 9),
+            starts=30,
+            trials=2,
+            episodes=200,
+            eval_episodes=100,
+            seed=seed,
+        )
+
+
+def _grids(task: Task, cfg: ContinuousOffsetsConfig) -> tuple[int, ...]:
+    return cfg.grids if task.model.offset_dim == 1 else cfg.spatial_grids
+
+
+def _references(task: Task, label: str, n: int | None, cfg: ContinuousOffsetsConfig) -> dict[str, Any]:
+    """The two references of ``task`` on ``cfg.starts`` starts (the same worlds for every
+    grid: drawing them does not depend on the CRMs)."""
+    starts = sample_starts(task, cfg.starts, cfg.seed)
+    t0 = time.perf_counter()
+    row = {
+        "crms": label,
+        "grid": n,
+        "offsets_per_pair": None if n is None else n**task.model.offset_dim,
+        "actions": len(task.actions),
+        "starts": cfg.starts,
+        "clairvoyant_bound": clairvoyant_bound(task, starts),
+        "belief_optimum": belief_optimum(task, starts),
+    }
+    row["seconds"] = round(time.perf_counter() - t0, 2)
+    return row
+
+
+def _learned(task: Task, label: str, cfg: ContinuousOffsetsConfig) -> dict[str, Any]:
+    """model-vi (k = 1) on ``task``: greedy CRMs per episode per trial, their mean and a
+    bootstrap 95% interval over trials (none below 5 trials), and the success rate."""
+    from crmgrasp.agents import train_trials
+    from crmgrasp.experiments.stats import bootstrap_ci
+
+    res = train_trials(
+        task, "model-vi", trials=cfg.trials, episodes=cfg.episodes, seed=cfg.seed, k=1, eval_episodes=cfg.eval_episodes
+    )
+    per_trial = res.greedy_steps.mean(axis=1)
+    low, high = (None if np.isnan(v) else v for v in bootstrap_ci(per_trial, seed=cfg.seed))
+    return {
+        "crms": label,
+        "actions": len(task.actions),
+        "trials": cfg.trials,
+        "episodes": cfg.episodes,
+        "per_trial": [float(v) for v in per_trial],
+        "greedy_mean": float(per_trial.mean()),
+        "greedy_low": low,
+        "greedy_high": high,
+        "success": float(res.greedy_success.mean()),
+    }
+
+
+def continuous_offsets(
+    out_dir: str | Path, cfg: ContinuousOffsetsConfig = ContinuousOffsetsConfig(), progress: Progress | None = None
+) -> dict[str, Any]:
+    """Compute the tables, draw them, write them; return the summary (``rows``: references
+    per task and CRM set; ``learned``: model-vi per task on its CRMs and on a grid;
+    ``budget``)."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    tasks = [make_task(name) for name in cfg.tasks]
+    units = sum(len(_grids(t, cfg)) + 3 for t in tasks)
+    stage = progress.stage("continuous offsets", units, "units") if progress else None
+    rows: list[dict[str, Any]] = []
+    learned: list[dict[str, Any]] = []
+    for task in tasks:
+        sets = [(task, "hand-picked", None)] + [(offset_grid(task, n), f"grid {n}", n) for n in _grids(task, cfg)]
+        for t, label, n in sets:
+            rows.append({"task": task.name, **_references(t, label, n, cfg)})
+            if stage is not None:
+                stage.advance(1)
+        grid = offset_grid(task, cfg.learn_grid if task.model.offset_dim == 1 else cfg.learn_spatial_grid)
+        for t, label in ((task, "hand-picked"), (grid, grid.name.rsplit("-", 1)[1].replace("grid", "grid "))):
+            learned.append({"task": task.name, **_learned(t, label, cfg)})
+            if stage is not None:
+                stage.advance(1)
+    if stage is not None:
+        stage.end()
+    write_csv(out / "continuous_offsets.csv", list(COLUMNS), [[r[c] for c in COLUMNS] for r in rows])
+    write_csv(out / "continuous_offsets_learned.csv", list(LEARNED), [[r[c] for c in LEARNED] for r in learned])
+    save_figure(_figure(rows, learned, cfg), out / "continuous_offsets.png")
+    budget = (
+        f"references on {cfg.starts} sampled starts per task, seed {cfg.seed}; model-vi k=1, {cfg.trials} trials x "
+        f"{cfg.episodes} episodes per CRM set, greedy on {cfg.eval_episodes} fresh episodes per trial"
+    )
+    summary = {"budget": budget, "rows": rows, "learned": learned}
+    write_json(out / "summary.json", summary)
+    return summary
+
+
+def _figure(rows: list[dict[str, Any]], learned: list[dict[str, Any]], cfg: ContinuousOffsetsConfig) -> Any:
+    """One panel per task: the belief-space optimum against offsets per pair (odd grids, which
+    hold ``r = 0``, joined; even grids as crosses, drawn at the top edge with their value when
+    beyond it), the hand-picked CRMs' optimum as a line, and model-vi's greedy mean on each CRM
+    set as stars (the hand-picked set's at the left, "hand")."""
+    from matplotlib.figure import Figure
+
+    names = list(dict.fromkeys(r["task"] for r in rows))
+    fig = Figure(figsize=(max(6.0, 2.9 * len(names)), 4.2), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(1, len(names)))
+    for ax, name in zip(axes, names, strict=True):
+        mine = [r for r in rows if r["task"] == name]
+        mine_learned = [r for r in learned if r["task"] == name]
+        hand = next(r for r in mine if r["grid"] is None)["belief_optimum"]
+        top = max([1.6 * hand] + [1.1 * r["greedy_mean"] for r in mine_learned])
+        ax.axhline(hand, color="tab:gray", lw=1, label="optimum, hand-picked CRMs")
+        grids = [r for r in mine if r["grid"] is not None]
+        odd = [r for r in grids if r["grid"] % 2]
+        ax.plot(
+            [r["offsets_per_pair"] for r in odd],
+            [r["belief_optimum"] for r in odd],
+            "o-",
+            color="tab:blue",
+            label="optimum, odd grid (holds r = 0)",
+        )
+        for r in (r for r in grids if not r["grid"] % 2):
+            y = min(r["belief_optimum"], 0.97 * top)
+            ax.plot([r["offsets_per_pair"]], [y], "x", color="tab:red", label="optimum, even grid")
+            if r["belief_optimum"] > top:
+                ax.annotate(
+                    f"{r['belief_optimum']:.3g}",
+                    (r["offsets_per_pair"], y),
+                    fontsize=6,
+                    color="tab:red",
+                    xytext=(3, -9),
+                    textcoords="offset points",
+                )
+        for r, color in zip(mine_learned, ("tab:gray", "tab:blue"), strict=True):
+            at = next((g["offsets_per_pair"] for g in mine if g["crms"] == r["crms"]), None) or 1
+            ax.plot(
+                [at],
+                [r["greedy_mean"]],
+                "*",
+                ms=11,
+                color=color,
+                label=f"model-vi, {r['crms']}" if at > 1 else "model-vi, hand-picked CRMs",
+            )
+        ticks = [1, *sorted({r["offsets_per_pair"] for r in grids})]
+        ax.set_xscale("log", base=2)
+        ax.set_xticks(ticks, ["hand", *map(str, ticks[1:])], fontsize=7)
+        ax.minorticks_off()
+        ax.set_ylim(0.85 * min(r["belief_optimum"] for r in mine), top)
+        ax.set_title(name, fontsize=9)
+        ax.set_xlabel("offsets per contact pair", fontsize=8)
+        ax.tick_params(labelsize=7)
+    axes[0].set_ylabel("CRMs per episode")
+    handles, labels = axes[0].get_legend_handles_labels()
+    unique = dict(zip(labels, handles, strict=True))
+    fig.legend(unique.values(), unique.keys(), loc="outside lower center", ncols=3, fontsize=7)
+    fig.suptitle(
+        f"the price of hand-picked CRMs: {cfg.starts} sampled starts per optimum;\n"
+        f"model-vi k=1: {cfg.trials} trials x {cfg.episodes} episodes, greedy on {cfg.eval_episodes} fresh episodes",
+        fontsize=9,
+    )
+    return fig
