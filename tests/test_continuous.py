@@ -328,3 +328,83 @@ def test_the_continuous_offsets_experiment_prices_the_hand_picked_crms(tmp_path)
     assert all(r["greedy_low"] is None and len(r["per_trial"]) == 2 for r in s["learned"])  # no interval below 5
     for name in ("continuous_offsets.csv", "continuous_offsets_learned.csv", "continuous_offsets.png", "summary.json"):
         assert (tmp_path / name).stat().st_size > 0
+
+
+# ---------------------------------------------------------------- the command line
+def test_commands_take_an_offset_grid_and_policies_keep_their_offsets(tmp_path, capsys):
+    import json
+
+    from crmgrasp.cli import main
+
+    assert main(["references", "--task", "paper-box", "--offset-grid", "5", "--starts", "40", "--json", "--quiet"]) == 0
+    ref = json.loads(capsys.readouterr().out)
+    assert ref["task"] == "paper-box-grid5"
+    out = tmp_path / "run"
+    argv = ["learn", "--task", "paper-box", "--offset-grid", "3", "--agent", "model-vi", "--k", "1"]
+    assert main([*argv, "--episodes", "40", "--trials", "1", "--out", str(out), "--quiet"]) == 0
+    policy = json.loads((out / "policy.json").read_text())
+    assert [a[2] for a in policy["actions"]] == [-0.16, 0.0, 0.16] * 4
+    capsys.readouterr()
+    assert main(["evaluate", "--policy", str(out / "policy.json"), "--episodes", "20", "--json", "--quiet"]) == 0
+    assert json.loads(capsys.readouterr().out)["task"] == "paper-box-grid3"
+    with pytest.raises(SystemExit):
+        main(["learn", "--task", "paper-box", "--offset-grid", "0"])
+
+
+# ---------------------------------------------------------------- vector environments
+@pytest.mark.parametrize("env_id", sorted(CONTINUOUS_ENVS))
+def test_the_continuous_vector_entry_point_batches_every_task(env_id):
+    from crmgrasp.envs.vector import ContinuousFamilyVectorEnv, ContinuousVectorEnv
+
+    vec = gym.make_vec(env_id, num_envs=4, vectorization_mode="vector_entry_point")
+    family = vec.unwrapped.task.family is not None
+    assert type(vec.unwrapped) is (ContinuousFamilyVectorEnv if family else ContinuousVectorEnv)
+    vec.action_space.seed(1)
+    vec.reset(seed=1)
+    for _ in range(15):
+        _, reward, _, _, info = vec.step(vec.action_space.sample())
+        assert reward.shape == (4,) and info["config"].shape == (4, vec.unwrapped.task.model.row_width)
+
+
+def test_the_continuous_vector_env_steps_the_paper_crms_as_the_discrete_one():
+    """Index i of the discrete vector env and (pair, r) of CRM i: the same batches bit for
+    bit, on the compiled and the reference kernels."""
+    from crmgrasp.envs.vector import ContinuousVectorEnv, CRMGraspVectorEnv
+
+    task = dataclasses.replace(make_task("paper-box"), noise=SensorNoise(0.05, 0.002))
+    ranges = task.crm_ranges
+    pair = np.array([[(r.c, r.f) for r in ranges].index((c.c, c.f)) for c in task.actions])
+    offset = np.array([[c.r] for c in task.actions])
+    out = []
+    for backend in ("numba", "reference"):
+        for cont in (False, True):
+            env = (ContinuousVectorEnv if cont else CRMGraspVectorEnv)(64, task, backend=backend)
+            rows = [env.reset(seed=2)[1]["config"]]
+            rng = np.random.default_rng(3)
+            for _ in range(12):
+                a = rng.integers(4, size=64)
+                obs, rew, term, trunc, info = env.step({"pair": pair[a], "r": offset[a]} if cont else a)
+                rows += [*obs.values(), rew, term, trunc, info["config"], info["obs_index"], info["min_friction"]]
+            out.append(rows)
+    for other in out[1:]:
+        for x, y in zip(out[0], other, strict=True):
+            np.testing.assert_array_equal(x, y)
+
+
+@pytest.mark.parametrize(
+    ("actions", "message"),
+    [
+        ({"pair": np.zeros(3, dtype=int), "r": np.zeros((3, 1))}, "4 integers"),
+        ({"pair": np.full(4, 4), "r": np.zeros((4, 1))}, r"in \[0, 4\)"),
+        ({"pair": np.zeros(4, dtype=int), "r": np.full((4, 1), np.nan)}, "finite and within"),
+        ({"pair": np.zeros(4, dtype=int), "r": np.zeros((4, 2))}, r"shape \(4, 1\)"),
+        (np.zeros(4, dtype=int), "keys 'pair' and 'r'"),
+    ],
+)
+def test_bad_batched_continuous_actions_fail_in_one_line(actions, message):
+    from crmgrasp.envs.vector import ContinuousVectorEnv
+
+    env = ContinuousVectorEnv(4, "paper-box")
+    env.reset(seed=0)
+    with pytest.raises(CrmgraspError, match=message):
+        env.step(actions)

@@ -150,3 +150,40 @@ def policy_features(task, obs):
     from crmgrasp.agents.deep import bounds_of, features
 
     return features(obs[:-1], obs[-1], bounds_of(task))
+
+
+@needs_deep
+def test_a_continuous_offset_peer_trains_saves_and_runs(tmp_path, capsys):
+    """RecurrentPPO in the continuous action space (FlatCRMAction): deterministic for a seed,
+    its actions are CRMs of the task's ranges, and its file loads, evaluates and runs."""
+    from dataclasses import replace
+
+    from crmgrasp.agents.deep import RecurrentPolicy
+    from crmgrasp.agents.loading import load_policy
+    from crmgrasp.cli import main
+    from crmgrasp.model.hand import CRM
+    from crmgrasp.model.sensing import observe
+
+    task = make_task("paper-box")
+    cfg = replace(TINY, continuous=True)
+    runs = [train_recurrent_ppo(task, 3, cfg) for _ in range(2)]
+    np.testing.assert_array_equal(runs[0].checkpoint_steps, runs[1].checkpoint_steps)
+    assert runs[0].model.action_space.shape == (2,)
+    path = RecurrentPolicy(runs[0].model, task).save(tmp_path / "deep.zip")
+    policy = load_policy(path)
+    assert policy.continuous
+    starts = [task.sample_start(np.random.default_rng(i)) for i in range(10)]
+    crm = policy.predict([(*observe(starts[0]), 0)])
+    assert isinstance(crm, CRM) and abs(crm.r) <= task.hand.r_max
+    assert policy.predict([(*observe(starts[0]), 0), (*observe(starts[0]), 1)], [crm]) is not None
+    with pytest.raises(CrmgraspError):
+        policy.predict([(*observe(starts[0]), 0), (*observe(starts[0]), 1)], [CRM("a", "b", 0.5)])
+    steps, ok = evaluate_recurrent(policy.model, task, starts, np.random.default_rng(0))
+    assert ((steps >= 1) & (steps <= task.max_steps)).all() and (ok | (steps == task.max_steps)).all()
+    assert main(["evaluate", "--policy", str(path), "--episodes", "5", "--json"]) == 0
+    capsys.readouterr()
+    log = tmp_path / "log.csv"
+    assert main(["run", "--policy", str(path), "--a", "-0.15,-0.02", "--b", "-0.10,-0.05", "--log", str(log)]) == 0
+    assert "(" in log.read_text()  # the CRMs it executed, written out
+    with pytest.raises(CrmgraspError, match="continuous must be true or false"):
+        RecurrentPPOConfig(continuous=1)

@@ -51,6 +51,7 @@ __all__ = [
     "RecurrentPolicy",
     "features",
     "bounds_of",
+    "crm_of_action",
 ]
 
 N_ERRORS = len(Error)
@@ -107,9 +108,16 @@ class RecurrentPPOConfig:
     hidden: int = 32
     checkpoint_episodes: int = 100
     """Fixed starts of each greedy checkpoint (0: no checkpoints)."""
+    continuous: bool = False
+    """Act in the task's continuous action space (a contact pair and a real offset, through
+    [`FlatCRMAction`][crmgrasp.envs.continuous.FlatCRMAction]) instead of its CRMs."""
 
     def __post_init__(self) -> None:
+        if not isinstance(self.continuous, bool):
+            raise CrmgraspError(f"RecurrentPPO continuous must be true or false, got {self.continuous!r}")
         for f in fields(self):
+            if f.name == "continuous":
+                continue
             v, low = getattr(self, f.name), 0 if f.name == "checkpoint_episodes" else 1e-300
             integral = f.type in ("int", int)
             if isinstance(v, bool) or not isinstance(v, int if integral else (int, float)) or not v >= low:
@@ -164,15 +172,22 @@ class RecurrentPolicy:
     def __init__(self, model: Any, task: Task) -> None:
         self.model = model
         self.task = task
+        self.continuous = isinstance(model.action_space, spaces.Box)
+        """Whether the model acts in the continuous action space (it was trained so)."""
 
     def predict(
         self, observations: Sequence[Any], actions: Sequence[int] = (), rng: np.random.Generator | None = None
-    ) -> int:
+    ) -> Any:
         """The deterministic action after an episode's history (observations: the model's
         values then the error flag, one more than ``actions``; the LSTM reads the
-        observations from the episode's start; ``actions`` are checked, ``rng`` unused)."""
+        observations from the episode's start; ``actions`` are checked, ``rng`` unused): an
+        index into the task's CRMs, or a CRM of its continuous action space."""
         from crmgrasp.agents.policy import observation_indices
 
+        if self.continuous:  # the actions taken are CRMs of the task's continuous action space
+            for a in actions:
+                self.task.model.check_crm(a)
+            actions = [0] * len(actions)
         observation_indices(self.task, [tuple(o) for o in observations], actions)  # checks
         state, action, bounds = None, None, bounds_of(self.task)
         for i, o in enumerate(observations):
@@ -180,7 +195,7 @@ class RecurrentPolicy:
             action, state = self.model.predict(
                 f[None], state=state, episode_start=np.array([i == 0]), deterministic=True
             )
-        return int(np.asarray(action).ravel()[0])
+        return crm_of_action(self.task, np.asarray(action).ravel())
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the model and its task atomically to ``path`` (a .zip)."""
@@ -239,6 +254,19 @@ class RecurrentPolicy:
         return cls(model, task or own)
 
 
+def crm_of_action(task: Task, action: Any) -> Any:
+    """The task's CRM that a model's action names: ``task.actions[a]`` for an integer, the
+    CRM of a flat continuous action ([`crmgrasp.envs.continuous.flat_action`][]) for a vector."""
+    u = np.asarray(action, dtype=np.float64).ravel()
+    if u.size == 1:
+        return int(u[0])
+    from crmgrasp.envs.continuous import flat_action
+
+    ranges = task.crm_ranges
+    pair, r = flat_action(ranges, np.clip(u, -1.0, 1.0))  # the Gaussian policy's mean may leave the box
+    return task.model.range_crm(ranges[pair], r.tolist())
+
+
 def _modules() -> tuple[Any, Any, Any, Any]:
     try:
         torch = importlib.import_module("torch")
@@ -282,7 +310,7 @@ def evaluate_recurrent(
         actions, lstm = model.predict(obs, state=lstm, episode_start=first, deterministic=True)
         first[:] = False
         for i in np.flatnonzero(active):
-            res = step(tasks[i], states[i], int(actions[i]), rng)
+            res = step(tasks[i], states[i], crm_of_action(tasks[i], actions[i]), rng)
             states[i], steps[i] = res.state, steps[i] + 1
             obs[i] = features(res.observation, int(res.error), bounds)
             if res.terminated or res.truncated:
@@ -296,7 +324,13 @@ def train_recurrent_ppo(
     """Train RecurrentPPO on ``task`` from ``seed`` (environments on the kernel ``backend``);
     return the model, curve and checkpoints."""
     torch, contrib, vec, callbacks = _modules()
+    from crmgrasp.envs.continuous import ContinuousCRMEnv, FlatCRMAction
     from crmgrasp.envs.single import CRMGraspEnv
+
+    def make() -> gym.Env:
+        if config.continuous:
+            return ContinuousObservation(FlatCRMAction(ContinuousCRMEnv(task, backend=backend)))
+        return ContinuousObservation(CRMGraspEnv(task, backend=backend))
 
     c = config
     starts_rng, _ = checkpoint_generators(seed)
@@ -319,9 +353,7 @@ def train_recurrent_ppo(
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
-        env = vec.DummyVecEnv(
-            [lambda: ContinuousObservation(CRMGraspEnv(task, backend=backend)) for _ in range(c.n_envs)]
-        )
+        env = vec.DummyVecEnv([make for _ in range(c.n_envs)])
         model = contrib.RecurrentPPO(
             "MlpLstmPolicy",
             env,

@@ -11,13 +11,15 @@ from crmgrasp.tasks import Task
 
 
 def _task(args: argparse.Namespace, spec: str | None = None) -> Task:
-    """The task of ``--task`` (or ``spec``) with ``--start-preset`` and ``--grasp-reward`` applied."""
+    """The task of ``--task`` (or ``spec``) with ``--start-preset``, ``--grasp-reward`` and
+    ``--offset-grid`` applied."""
     from crmgrasp.tasks.files import resolve_reading
 
     return resolve_reading(
         args.task if spec is None else spec,
         starts=getattr(args, "start_preset", None),
         grasp_reward=getattr(args, "grasp_reward", None),
+        offset_grid=getattr(args, "offset_grid", None),
     )
 
 

@@ -132,6 +132,14 @@ def _add_task(p: argparse.ArgumentParser) -> None:
         help="reward of the grasping CRM, every other CRM -1 (default: the task's own, -1 for paper-box; "
         "0 reads the paper's reward as -1 in every non-goal state)",
     )
+    p.add_argument(
+        "--offset-grid",
+        type=_int(1, 1000),
+        default=None,
+        metavar="N",
+        help="replace the task's CRMs by N evenly spaced offsets per coordinate over each contact pair of its "
+        "continuous action space (odd N holds r = 0) (default: the task's own CRMs)",
+    )
 
 
 def _add_run(p: argparse.ArgumentParser, command: str) -> None:

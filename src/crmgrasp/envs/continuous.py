@@ -10,7 +10,7 @@ unchanged. The registered ids end in ``Continuous-v0``
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -19,9 +19,97 @@ from gymnasium import spaces
 
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.envs.single import CONTINUOUS_ENVS, CRMGraspEnv
+from crmgrasp.model.actions import CRMRange
 from crmgrasp.tasks import Task
 
-__all__ = ["ContinuousCRMEnv", "FlatCRMAction", "CONTINUOUS_ENVS"]
+__all__ = ["ContinuousCRMEnv", "FlatCRMAction", "PairOffsetActions", "flat_action", "CONTINUOUS_ENVS"]
+
+
+class PairOffsetActions:
+    """A task's continuous action space: the ``Dict`` space, and the one check (and clip) of
+    an action, single and batched (see [`ContinuousCRMEnv`][] for the rule)."""
+
+    def __init__(self, task: Task) -> None:
+        self.ranges = task.crm_ranges
+        self.model = task.model
+        self.dim = task.model.offset_dim
+        low = np.min([rg.low for rg in self.ranges], axis=0)
+        high = np.max([rg.high for rg in self.ranges], axis=0)
+        r_space = spaces.Box(low, high, shape=(self.dim,), dtype=np.float64)
+        self.space = spaces.Dict({"pair": spaces.Discrete(len(self.ranges)), "r": r_space})
+        self._low, self._high = low.tolist(), high.tolist()
+        index = task.model.labels.index
+        self.rows = [np.array([[index(rg.c), index(rg.f), *rg.low]], dtype=np.float64) for rg in self.ranges]
+        self._table = np.concatenate(self.rows)  # per pair: c, f, low...
+        self._range_low = np.array([rg.low for rg in self.ranges])
+        self._range_high = np.array([rg.high for rg in self.ranges])
+        self._shape = (self.dim,)
+        self.uniform = all(rg.low == self.ranges[0].low and rg.high == self.ranges[0].high for rg in self.ranges)
+
+    def one(self, action: Any) -> tuple[int, list[float]]:
+        """``(pair, offsets)`` of one action, checked, the offsets clipped into the pair's range."""
+        if (type(action) is not dict and not isinstance(action, Mapping)) or "pair" not in action or "r" not in action:
+            raise CrmgraspError(f"action must be a dict with keys 'pair' and 'r', got {action!r:.80}")
+        pair, r = action["pair"], action["r"]
+        if type(pair) is not int:
+            if (
+                not isinstance(pair, (np.integer, np.ndarray))
+                or np.ndim(pair) != 0
+                or np.asarray(pair).dtype.kind not in "iu"
+            ):
+                raise CrmgraspError(f"action['pair'] must be an integer in [0, {len(self.ranges)}), got {pair!r}")
+            pair = int(pair)
+        if not 0 <= pair < len(self.ranges):
+            raise CrmgraspError(f"action['pair'] must be an integer in [0, {len(self.ranges)}), got {pair}")
+        values = r.tolist() if type(r) is np.ndarray and r.shape == self._shape else self._offsets(r)
+        for v, lo, hi in zip(values, self._low, self._high):
+            if not lo <= v <= hi:  # also NaN
+                raise CrmgraspError(f"action['r'] = {v!r} must be finite and within [{lo:g}, {hi:g}] m")
+        if not self.uniform:
+            values = list(self.ranges[pair].clip(values))
+        return pair, values
+
+    def _offsets(self, r: Any) -> list[float]:
+        """``r`` as ``d`` numbers, else a one-line error."""
+        try:
+            values = [float(v) for v in np.asarray(r, dtype=np.float64).reshape(-1)]
+        except (TypeError, ValueError):
+            raise CrmgraspError(f"action['r'] must be {self.dim} number(s), got {r!r:.60}") from None
+        if len(values) != self.dim or np.ndim(r) > 1:
+            raise CrmgraspError(f"action['r'] must be {self.dim} number(s), got shape {np.shape(r)}")
+        return values
+
+    def row(self, pair: int, values: list[float]) -> np.ndarray:
+        """The action-table row ``[[c, f, r...]]`` of a checked action, in a buffer of its pair
+        that the next call overwrites."""
+        row = self.rows[pair]
+        if self.dim == 1:
+            row[0, 2] = values[0]
+        else:
+            row[0, 2:] = values
+        return row
+
+    def batch(self, actions: Any, n: int) -> np.ndarray:
+        """The action table ``(n, 2 + d)`` of a batch ``{"pair": (n,), "r": (n, d)}``, checked
+        and clipped as [`one`][] (one-line errors naming the problem)."""
+        if not isinstance(actions, Mapping) or "pair" not in actions or "r" not in actions:
+            raise CrmgraspError(f"actions must be a dict with keys 'pair' and 'r', got {type(actions).__name__}")
+        pair, r = np.asarray(actions["pair"]), np.asarray(actions["r"])
+        if pair.shape != (n,) or pair.dtype.kind not in "iu":
+            raise CrmgraspError(f"actions['pair'] must be {n} integers, got shape {pair.shape} dtype {pair.dtype}")
+        if pair.min() < 0 or pair.max() >= len(self.ranges):
+            raise CrmgraspError(f"actions['pair'] must be in [0, {len(self.ranges)})")
+        if r.shape != (n, self.dim) or r.dtype.kind not in "iuf":
+            raise CrmgraspError(f"actions['r'] must have shape ({n}, {self.dim}), got {r.shape}")
+        if not np.all((r >= self._low) & (r <= self._high)):  # also NaN
+            raise CrmgraspError(f"actions['r'] must be finite and within {self._low} to {self._high} m")
+        table = self._table[pair]
+        table[:, 2:] = r if self.uniform else np.clip(r, self._range_low[pair], self._range_high[pair])
+        return table
+
+    def crm(self, pair: int, values: Any) -> Any:
+        """The CRM of a checked action."""
+        return self.model.range_crm(self.ranges[pair], values)
 
 
 class ContinuousCRMEnv(CRMGraspEnv):
@@ -46,71 +134,22 @@ class ContinuousCRMEnv(CRMGraspEnv):
 
     def __init__(self, task: Task | str = "paper-box", render_mode: str | None = None, backend: str = "auto") -> None:
         super().__init__(task, render_mode, backend)
-        model = self.task.model
-        self.ranges = self.task.crm_ranges
-        self._dim = model.offset_dim
-        low = np.min([rg.low for rg in self.ranges], axis=0)
-        high = np.max([rg.high for rg in self.ranges], axis=0)
-        r_space = spaces.Box(low, high, shape=(self._dim,), dtype=np.float64)
-        self.action_space = spaces.Dict({"pair": spaces.Discrete(len(self.ranges)), "r": r_space})  # type: ignore[assignment]
-        self._low, self._high = low.tolist(), high.tolist()
-        index = model.labels.index
-        self._rows = [np.array([[index(rg.c), index(rg.f), *rg.low]], dtype=np.float64) for rg in self.ranges]
-        self._shape = (self._dim,)
-        self._uniform = all(rg.low == self.ranges[0].low and rg.high == self.ranges[0].high for rg in self.ranges)
+        self.actions = PairOffsetActions(self.task)
+        self.ranges = self.actions.ranges
+        self.action_space = self.actions.space  # type: ignore[assignment]
 
     def action_row(self, action: Any) -> np.ndarray:
         """The action-table row ``[[c, f, r...]]`` of ``action`` (checked; see the class), in a
         buffer of its pair that the next call overwrites."""
-        pair, values = self._checked(action)
-        row = self._rows[pair]
-        row[0, 2:] = values
-        return row
-
-    def _checked(self, action: Any) -> tuple[int, list[float]]:
-        """``(pair, offsets)`` of an action, checked, the offsets clipped into the pair's range."""
-        if (type(action) is not dict and not isinstance(action, Mapping)) or "pair" not in action or "r" not in action:
-            raise CrmgraspError(f"action must be a dict with keys 'pair' and 'r', got {action!r:.80}")
-        pair, r = action["pair"], action["r"]
-        if type(pair) is not int:
-            if (
-                not isinstance(pair, (np.integer, np.ndarray))
-                or np.ndim(pair) != 0
-                or np.asarray(pair).dtype.kind not in "iu"
-            ):
-                raise CrmgraspError(f"action['pair'] must be an integer in [0, {len(self.ranges)}), got {pair!r}")
-            pair = int(pair)
-        if not 0 <= pair < len(self.ranges):
-            raise CrmgraspError(f"action['pair'] must be an integer in [0, {len(self.ranges)}), got {pair}")
-        values = r.tolist() if type(r) is np.ndarray and r.shape == self._shape else self._offsets(r)
-        for v, lo, hi in zip(values, self._low, self._high):
-            if not lo <= v <= hi:  # also NaN
-                raise CrmgraspError(f"action['r'] = {v!r} must be finite and within [{lo:g}, {hi:g}] m")
-        if not self._uniform:
-            values = list(self.ranges[pair].clip(values))
-        return pair, values
-
-    def _offsets(self, r: Any) -> list[float]:
-        """``r`` as ``d`` numbers, else a one-line error."""
-        try:
-            values = [float(v) for v in np.asarray(r, dtype=np.float64).reshape(-1)]
-        except (TypeError, ValueError):
-            raise CrmgraspError(f"action['r'] must be {self._dim} number(s), got {r!r:.60}") from None
-        if len(values) != self._dim or np.ndim(r) > 1:
-            raise CrmgraspError(f"action['r'] must be {self._dim} number(s), got shape {np.shape(r)}")
-        return values
+        return self.actions.row(*self.actions.one(action))
 
     def step(self, action: Any) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
         """Execute CRM range ``action["pair"]`` at offset ``action["r"]``
         ([`crmgrasp.kernels.Kernel.step_row`][])."""
         if self._state is None:
             raise CrmgraspError("call reset() before step()")
-        pair, values = self._checked(action)
-        row = self._rows[pair]
-        if self._dim == 1:
-            row[0, 2] = values[0]
-        else:
-            row[0, 2:] = values
+        pair, values = self.actions.one(action)
+        row = self.actions.row(pair, values)
         self._last = (self._state, (pair, values))
         res = self.kernel.step_row(self._state, row, self.np_random)
         obs, info = self._emit(res)
@@ -118,8 +157,7 @@ class ContinuousCRMEnv(CRMGraspEnv):
 
     def crm_of(self, action: Any) -> Any:
         """The CRM of a stepped action ``(pair, offsets)``."""
-        pair, values = action
-        return self.task.model.range_crm(self.ranges[pair], values)
+        return self.actions.crm(*action)
 
 
 class FlatCRMAction(gym.ActionWrapper[dict[str, Any], np.ndarray, dict[str, Any]], gym.utils.RecordConstructorArgs):
@@ -139,7 +177,7 @@ class FlatCRMAction(gym.ActionWrapper[dict[str, Any], np.ndarray, dict[str, Any]
         if not isinstance(inner, ContinuousCRMEnv):
             raise CrmgraspError(f"FlatCRMAction wraps a ContinuousCRMEnv, got {type(inner).__name__}")
         self._ranges = inner.ranges
-        self._dim = inner.task.model.offset_dim
+        self._dim = inner.actions.dim
         self.action_space = spaces.Box(-1.0, 1.0, shape=(1 + self._dim,), dtype=np.float32)  # type: ignore[assignment]
 
     def action(self, action: Any) -> dict[str, Any]:
@@ -147,11 +185,19 @@ class FlatCRMAction(gym.ActionWrapper[dict[str, Any], np.ndarray, dict[str, Any]
         u = np.asarray(action, dtype=np.float64)
         if u.shape != (1 + self._dim,):
             raise CrmgraspError(f"the flat action must have shape ({1 + self._dim},), got {u.shape}")
-        if not np.all((u >= -1.0) & (u <= 1.0)):  # also NaN
-            raise CrmgraspError(f"the flat action must be finite and within [-1, 1], got {u.tolist()}")
-        n = len(self._ranges)
-        pair = min(int((u[0] + 1.0) * 0.5 * n), n - 1)
-        rg = self._ranges[pair]
-        t = (u[1:] + 1.0) * 0.5
-        r = np.minimum(np.asarray(rg.low) + t * (np.asarray(rg.high) - np.asarray(rg.low)), rg.high)
+        pair, r = flat_action(self._ranges, u)
         return {"pair": pair, "r": r}
+
+
+def flat_action(ranges: Sequence[CRMRange], u: np.ndarray) -> tuple[int, np.ndarray]:
+    """The pair and offsets of a flat action ``u`` (``1 + d`` numbers in ``[-1, 1]``) over
+    ``ranges`` ([`FlatCRMAction`][]): ``u[0]`` picks range ``min(floor((u[0] + 1) P / 2), P - 1)``,
+    ``u[1:]`` map affinely onto its box; a ``u`` outside ``[-1, 1]`` or not finite is a
+    one-line error."""
+    if not np.all((u >= -1.0) & (u <= 1.0)):  # also NaN
+        raise CrmgraspError(f"the flat action must be finite and within [-1, 1], got {u.tolist()}")
+    n = len(ranges)
+    pair = min(int((u[0] + 1.0) * 0.5 * n), n - 1)
+    rg = ranges[pair]
+    low, high = np.asarray(rg.low), np.asarray(rg.high)
+    return pair, np.minimum(low + (u[1:] + 1.0) * 0.5 * (high - low), high)

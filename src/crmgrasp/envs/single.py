@@ -307,6 +307,7 @@ def register() -> None:
             gym.register(
                 id=env_id,
                 entry_point="crmgrasp.envs.continuous:ContinuousCRMEnv",
+                vector_entry_point="crmgrasp.envs.vector:continuous_vector_env",
                 kwargs={"task": task},
                 max_episode_steps=10,
             )

@@ -34,7 +34,13 @@ from crmgrasp.kernels import Kernel, kernel_for
 from crmgrasp.sim import episode_end, step_reward
 from crmgrasp.tasks import Task, make_task
 
-__all__ = ["CRMGraspVectorEnv", "FamilyVectorEnv"]
+__all__ = [
+    "CRMGraspVectorEnv",
+    "FamilyVectorEnv",
+    "ContinuousVectorEnv",
+    "ContinuousFamilyVectorEnv",
+    "continuous_vector_env",
+]
 
 
 class CRMGraspVectorEnv(VectorEnv):
@@ -99,6 +105,10 @@ class CRMGraspVectorEnv(VectorEnv):
             raise CrmgraspError(f"actions must be in [0, {n_actions})")
         return a
 
+    def _batch(self, actions: np.ndarray, done: np.ndarray, starts: np.ndarray) -> Any:
+        """The kernel's batched step of checked ``actions`` (indices into the task's CRMs)."""
+        return self.kernel.step_batch(self._cfg, self._sensed, actions, done, starts, self.np_random)
+
     def _info(self, index: np.ndarray, mu: np.ndarray) -> dict[str, Any]:
         config = self._cfg.view()  # a read-only view: each step builds new rows
         config.flags.writeable = False
@@ -127,7 +137,7 @@ class CRMGraspVectorEnv(VectorEnv):
         a = self._check_actions(actions)
         done = self._prev_done  # these rows reset: their action is ignored
         starts = self._starts(int(np.count_nonzero(done)))
-        res = self.kernel.step_batch(self._cfg, self._sensed, a, done, starts, self.np_random)
+        res = self._batch(a, done, starts)
         self._cfg, self._sensed = res.config, res.sensed
         steps = self._steps
         steps += 1
@@ -166,6 +176,10 @@ class FamilyVectorEnv(CRMGraspVectorEnv):
         kernel = self._rows[j]
         return kernel.begin(kernel.sample_start(self.np_random), self.np_random)
 
+    def _one(self, j: int, actions: np.ndarray) -> Any:
+        """Row ``j``'s step of checked ``actions`` (indices into the task's CRMs)."""
+        return self._rows[j].step_one(self._states[j], int(actions[j]), self.np_random)
+
     def reset(
         self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
@@ -182,10 +196,7 @@ class FamilyVectorEnv(CRMGraspVectorEnv):
         """One CRM per row (or a new object and start where the last step ended it)."""
         a = self._check_actions(actions)
         done = self._prev_done
-        results = [
-            self._begin(j) if done[j] else self._rows[j].step_one(self._states[j], int(a[j]), self.np_random)
-            for j in range(self.num_envs)
-        ]
+        results = [self._begin(j) if done[j] else self._one(j, a) for j in range(self.num_envs)]
         obs, info = self._collect(results)
         self._steps[:] = [r.state.steps for r in results]
         terminated = np.array([r.terminated for r in results]) & ~done
@@ -194,3 +205,60 @@ class FamilyVectorEnv(CRMGraspVectorEnv):
         self._prev_done = terminated | truncated
         info["steps"] = self._steps.copy()
         return obs, reward, terminated, truncated, info
+
+
+def _use_pair_offsets(env: CRMGraspVectorEnv) -> Any:
+    """Give ``env`` the continuous action space, ``Dict(pair: MultiDiscrete, r: Box(N, d))``;
+    return the [`PairOffsetActions`][crmgrasp.envs.continuous.PairOffsetActions] that checks
+    and clips each row's action."""
+    from crmgrasp.envs.continuous import PairOffsetActions
+
+    actions = PairOffsetActions(env.task)
+    env.single_action_space = actions.space
+    env.action_space = batch_space(actions.space, env.num_envs)
+    return actions
+
+
+class _PairOffsets:
+    """Actions checked as rows of an action table (the continuous action space)."""
+
+    actions: Any
+    num_envs: int
+    _ready: bool
+
+    def _check_actions(self, actions: Any) -> np.ndarray:
+        if not self._ready:
+            raise CrmgraspError("call reset() before step()")
+        return self.actions.batch(actions, self.num_envs)  # type: ignore[no-any-return]
+
+
+class ContinuousVectorEnv(_PairOffsets, CRMGraspVectorEnv):
+    """[`CRMGraspVectorEnv`][] in the continuous action space: one compiled batched step
+    ([`crmgrasp.kernels.Kernel.step_table`][]) of a contact pair and an offset per row."""
+
+    def __init__(self, num_envs: int = 1, task: Task | str = "paper-box", **kwargs: Any) -> None:
+        super().__init__(num_envs, task, **kwargs)
+        self.actions = _use_pair_offsets(self)
+
+    def _batch(self, actions: np.ndarray, done: np.ndarray, starts: np.ndarray) -> Any:
+        return self.kernel.step_table(self._cfg, self._sensed, actions, done, starts, self.np_random)
+
+
+class ContinuousFamilyVectorEnv(_PairOffsets, FamilyVectorEnv):
+    """[`FamilyVectorEnv`][] in the continuous action space (each row's object its own)."""
+
+    def __init__(self, num_envs: int = 1, task: Task | str = "box-family", **kwargs: Any) -> None:
+        super().__init__(num_envs, task, **kwargs)
+        self.actions = _use_pair_offsets(self)
+
+    def _one(self, j: int, actions: np.ndarray) -> Any:
+        return self._rows[j].step_row(self._states[j], actions[j : j + 1], self.np_random)
+
+
+def continuous_vector_env(num_envs: int = 1, task: Task | str = "paper-box", **kwargs: Any) -> CRMGraspVectorEnv:
+    """The continuous-action vector environment of ``task``: [`ContinuousFamilyVectorEnv`][]
+    for a family task, else [`ContinuousVectorEnv`][] (the registered ``...Continuous-v0``
+    ids' vector entry point)."""
+    t = make_task(task) if isinstance(task, str) else task
+    cls = ContinuousVectorEnv if t.family is None else ContinuousFamilyVectorEnv
+    return cls(num_envs, t, **kwargs)

@@ -171,7 +171,7 @@ class _HandSteps:
         return self.first
 
     def step_one(self, state: SimState, action: Any, rng: np.random.Generator) -> OneStep:
-        return self._sense(state.steps + 1, self.hand.execute(self.task.actions[action]))
+        return self._sense(state.steps + 1, self.hand.execute(self.task.crm(action)))
 
     def sample_start(self, rng: np.random.Generator) -> Any:
         return _HERE
@@ -179,7 +179,7 @@ class _HandSteps:
     def use(self, instance: Task) -> None:
         raise CrmgraspError("a hand runs where it is: it takes no world")
 
-    def row(self, now: OneStep, action: int | None = None, error: Error | None = None) -> list[Any]:
+    def row(self, now: OneStep, action: Any = None, error: Error | None = None) -> list[Any]:
         """The step log's row of a reading: contacts, observation, its bin and label, then
         the action, its CRM and error (blank after the last reading), and the raw values."""
         t = self.task
@@ -188,7 +188,8 @@ class _HandSteps:
         if action is None or error is None:
             row += ["", "", ""]
         else:
-            row += [action, str(t.actions[action]), error.name.lower()]
+            index = "" if t.model.is_crm(action) else action  # a CRM of the continuous space has no index
+            row += [index, str(t.crm(action)), error.name.lower()]
         return [*row, dumps_json(self.raws[now.state.steps], indent=None)]
 
 
@@ -199,13 +200,15 @@ class _Predicting:
     def __init__(self, policy: Any, rng: np.random.Generator) -> None:
         self.policy, self.rng = policy, rng
         self.seen: list[tuple[float, ...]] = []  # each: the observation, then the error flag
-        self.taken: list[int] = []
+        self.taken: list[Any] = []
 
     def begin(self, first: Percept) -> None:
         self.seen, self.taken = [(*first.observation, int(first.error))], []
 
-    def act(self) -> int:
-        action = int(self.policy.predict(self.seen, self.taken, self.rng))
+    def act(self) -> Any:
+        action = self.policy.predict(self.seen, self.taken, self.rng)
+        if not self.policy.task.model.is_crm(action):  # a continuous policy's CRM goes as it is
+            action = int(action)
         self.taken.append(action)
         return action
 

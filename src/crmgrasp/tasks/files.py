@@ -430,8 +430,16 @@ def resolve_task(spec: str | Path | Task) -> Task:
     )
 
 
-def resolve_reading(spec: str | Task, *, starts: str | None = None, grasp_reward: float | None = None) -> Task:
+def resolve_reading(
+    spec: str | Task, *, starts: str | None = None, grasp_reward: float | None = None, offset_grid: int | None = None
+) -> Task:
     """`with_reading` of the task ``spec`` names
-    ([`resolve_task`][]): what ``--task``, ``--start-preset`` and ``--grasp-reward``
-    (or a study cell) state."""
-    return with_reading(resolve_task(spec), starts=starts, grasp_reward=grasp_reward)
+    ([`resolve_task`][]), its CRMs replaced by a grid of ``offset_grid`` offsets per
+    coordinate if given ([`crmgrasp.tasks.offsets.offset_grid`][]): what ``--task``,
+    ``--start-preset``, ``--grasp-reward`` and ``--offset-grid`` (or a study cell) state."""
+    task = with_reading(resolve_task(spec), starts=starts, grasp_reward=grasp_reward)
+    if offset_grid is None:
+        return task
+    from crmgrasp.tasks.offsets import offset_grid as grid
+
+    return grid(task, offset_grid)
