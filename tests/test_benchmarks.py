@@ -83,3 +83,17 @@ def test_bench_continuous_smoke():
     res = mod.main(steps=100, rounds=1)
     for task in mod.TASKS:
         assert res[task]["continuous_us"] > 0 and res[task]["continuous_over_discrete"] > 0
+
+
+def test_deep_continuous_smoke():
+    import pytest
+
+    from crmgrasp.agents.deep import deep_available
+
+    if not deep_available():
+        pytest.skip("needs the extra: pip install 'crmgrasp[deep]'")
+    spec = importlib.util.spec_from_file_location("deep_continuous", BENCH.parent / "deep_continuous.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    res = mod.main(steps=256, episodes=5)
+    assert len(res) == 3 + 4 and all(0.0 <= v["success"] <= 1.0 for k, v in res.items() if isinstance(v, dict))
