@@ -67,8 +67,9 @@ def test_grid_and_cells_are_expanded(tmp_path):
         ({"cell": [{"agent": "model-vi", "symmetric": "no"}]}, "symmetric must be true or false, got 'no'"),
         ({"cell": [{"agent": "model-vi", "symmetric": 0.5}]}, "symmetric must be true or false, got 0.5"),
         ({"cell": [{"agent": "sarsa", "k": 1.5}]}, "k must be an integer, got 1.5"),
-        ({"cell": [{"agent": "sarsa", "alpha": "0.3"}]}, "alpha must be a number, got '0.3'"),
-        ({"cell": [{"agent": "sarsa", "alpha": True}]}, "alpha must be a number, got True"),
+        ({"cell": [{"agent": "sarsa", "alpha": "0.3"}]}, "alpha must be a finite number, got '0.3'"),
+        ({"cell": [{"agent": "sarsa", "alpha": True}]}, "alpha must be a finite number, got True"),
+        ({"cell": [{"agent": "sarsa", "alpha": float("inf")}]}, "alpha must be finite, got inf"),
         ({"cell": [{"agent": "sarsa", "task": 3}]}, "task must be a string, got 3"),
     ],
 )

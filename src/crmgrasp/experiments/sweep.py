@@ -56,7 +56,7 @@ from crmgrasp.experiments.learning import LearnerSpec, learn
 from crmgrasp.experiments.parallel import run_parallel
 from crmgrasp.experiments.runs import RunFolder
 from crmgrasp.experiments.stats import bootstrap_ci, fmt, iqm
-from crmgrasp.tasks.schema import checked_name
+from crmgrasp.tasks.schema import checked_name, typed
 
 __all__ = ["Study", "load_study", "run_study", "report", "CELL_KEYS"]
 
@@ -115,22 +115,17 @@ _CELL_TYPES: dict[str, type] = {
 """The types of the cell keys that are not an agent's parameters (those take their
 constructor default's type)."""
 
-_TYPE_WORDS = {bool: "true or false", int: "an integer", float: "a number", str: "a string"}
-
 
 def _typed(key: str, value: Any, want: type | None, where: str) -> Any:
-    """``value`` if it has the type ``want`` (TOML's: a boolean is not a number, a string
-    not a number; an integer is a number); any scalar when ``want`` is None."""
-    ok = (
-        want is None
-        or (want is bool and isinstance(value, bool))
-        or (want is int and isinstance(value, int) and not isinstance(value, bool))
-        or (want is float and isinstance(value, (int, float)) and not isinstance(value, bool))
-        or (want is str and isinstance(value, str))
-    )
-    if not ok:
-        raise CrmgraspError(f"{where}: {key} must be {_TYPE_WORDS[want]}, got {shown(value)}")  # type: ignore[index]
-    return value
+    """``value`` checked as a task file checks a field of type ``want``
+    ([`crmgrasp.tasks.schema.typed`][]: a boolean is not a number, a number is finite, a
+    string not a number), the cell named in the error; any scalar when ``want`` is None."""
+    if want is None:
+        return value
+    try:
+        return typed(value, want, key)
+    except CrmgraspError as exc:
+        raise CrmgraspError(f"{where}: {exc}") from None
 
 
 def _cell(raw: dict[str, Any], where: str) -> dict[str, Any]:
@@ -149,7 +144,7 @@ def _cell(raw: dict[str, Any], where: str) -> dict[str, Any]:
         raise CrmgraspError(f"{where}: agent {agent!r} takes no {', '.join(extra)} (it takes {takes})")
     for key, value in cell.items():
         default = parameter_defaults(key).get(agent) if key in AGENT_PARAMS else None
-        want = _CELL_TYPES.get(key) or (type(default) if type(default) in _TYPE_WORDS else None)
+        want = _CELL_TYPES.get(key) or (type(default) if type(default) in (bool, int, float, str) else None)
         _typed(key, value, want, where)
     return cell
 

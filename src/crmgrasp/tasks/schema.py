@@ -41,6 +41,7 @@ __all__ = [
     "numbers",
     "crm_tables",
     "range_entries",
+    "typed",
     "DEFAULT_GRID",
     "bins_table",
     "section",
@@ -64,14 +65,14 @@ def _hints(cls: type) -> dict[str, Any]:
     return typing.get_type_hints(cls)
 
 
-def _typed(value: Any, hint: Any, key: str) -> Any:
+def typed(value: Any, hint: Any, key: str) -> Any:
     """``value`` checked against a field's type: a float is a finite number, an int an
     integer (not a boolean), a bool true or false, a str a string, ``X | None`` an ``X``
     (or absent), a tuple of floats a list of numbers (of the tuple's length when it
     states one)."""
     if isinstance(hint, types.UnionType) or typing.get_origin(hint) is typing.Union:
         (inner,) = (a for a in typing.get_args(hint) if a is not type(None))
-        return None if value is None else _typed(value, inner, key)
+        return None if value is None else typed(value, inner, key)
     if hint is float:
         return number(value, key)
     if hint is bool or hint is int or hint is str:
@@ -92,13 +93,13 @@ def read_fields(cls: type, table: Any, where: str, prefix: str, skip: Collection
     """The keyword arguments that ``table`` states for the dataclass ``cls``.
 
     Its keys are the class's constructor fields (less ``skip``); each value is checked
-    against the field's type (`_typed`; errors name the key as ``prefix + key``); a
+    against the field's type ([`typed`][]; errors name the key as ``prefix + key``); a
     key left out takes the class's default, and the class itself checks the bounds. The
     class owns its schema: defaults, types and bounds are stated once, there."""
     allowed, required = init_keys(cls)
     t = table_keys(table, where, allowed - set(skip), required - set(skip))
     hints = _hints(cls)
-    return {k: _typed(v, hints[k], f"{prefix}{k}") for k, v in t.items()}
+    return {k: typed(v, hints[k], f"{prefix}{k}") for k, v in t.items()}
 
 
 def write_fields(obj: Any, skip: Collection[str] = ()) -> dict[str, Any]:
@@ -288,7 +289,7 @@ def common_keys(d: dict[str, Any], kw: dict[str, Any]) -> None:
     hints = _hints(Task)
     for key in SCALAR_KEYS:
         if d.get(key) is not None:
-            kw[key] = _typed(d[key], hints[key], key)
+            kw[key] = typed(d[key], hints[key], key)
     if d.get("symmetry") is not None:
         sym = d["symmetry"]
         if not isinstance(sym, list) or any(isinstance(i, bool) or not isinstance(i, int) for i in sym):
