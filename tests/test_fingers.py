@@ -213,6 +213,27 @@ def test_the_fingers_kernel_steps_episodes_as_the_readable_step(noise):
             assert a == b
 
 
+@pytest.mark.parametrize("name", ["triangles-3f", "odd-polygons-3f", "box-family-3f"])
+def test_the_compiled_uniform_start_rule_draws_the_readable_starts(name):
+    """The fingers kernel's uniform start filter makes the readable rule's decisions: the
+    same starts from the same stream, one at a time and as rows, on 60 objects; and a start
+    on a vertex is refused as the readable rule refuses it."""
+    from crmgrasp.tasks.starts import uniform_candidate
+
+    task = make_task(name)
+    for i in range(60):
+        inst = task.instance(np.random.default_rng(i))
+        kernel = kernel_for(inst, "auto")
+        assert kernel.start_filter is not None and kernel.start_filter.kind == "uniform"
+        assert kernel.sample_start(np.random.default_rng(i)) == inst.sample_start(np.random.default_rng(i))
+        got = kernel.sample_starts(np.random.default_rng(i), 3)
+        assert np.array_equal(got, inst.sample_starts(np.random.default_rng(i), 3))
+    obj, hand = inst.obj, inst.hand
+    on_vertex = np.array([obj.vertex_arclengths()[1], 0.3 * obj.perimeter, 0.6 * obj.perimeter])
+    assert uniform_candidate(obj, hand, inst.mu_goal, on_vertex) is None
+    assert kernel.start_filter(obj, hand, inst.mu_goal, on_vertex) is None
+
+
 # ---------------------------------------------------------------- tasks
 def test_three_finger_tasks_are_registered_and_sample_feasible_starts():
     task = make_task("triangles-3f")

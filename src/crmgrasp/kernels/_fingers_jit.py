@@ -190,3 +190,31 @@ def observe_rows(cfg, sen, n, err, th, strides, abs_m, p, fp, values, index, mu)
         _observe(sen, j, n, values, j)
         index[j] = _index(values, j, err[j], th, strides, abs_m)
         mu[j] = _mu(cfg, j, n, fp, p[ANTIPODAL_TOL])
+
+
+@njit(cache=True)
+def uniform_start(s, cum, perimeter, e, n, p, q, fp, mu_goal, out):  # type: ignore[no-untyped-def]
+    """[`crmgrasp.tasks.starts.uniform_candidate`][] on the arclengths ``s``: the contacts at
+    ``s`` (``Polygon.boundary``: wrapped by the perimeter, on the edge whose cumulative
+    length ``cum`` is the last at or below it) into row 0 of ``out``; returns whether the
+    start is taken (no contact on a vertex, feasible, least friction above ``mu_goal``)."""
+    m = e.shape[0]
+    for c in range(n):
+        for v in range(m):
+            if s[c] == cum[v]:  # a vertex: its normal is undefined
+                return False
+    for c in range(n):
+        sc = s[c] % perimeter
+        i = -1
+        for v in range(m + 1):
+            if cum[v] <= sc:
+                i = v
+        i = min(i, m - 1)
+        frac = (sc - cum[i]) / np.sqrt(e[i, 4])
+        out[0, 4 * c] = e[i, 0] + frac * e[i, 2]
+        out[0, 4 * c + 1] = e[i, 1] + frac * e[i, 3]
+        out[0, 4 * c + 2] = e[i, 5]
+        out[0, 4 * c + 3] = e[i, 6]
+    if feasible(out, 0, n, e, p, q) != 0:
+        return False
+    return _mu(out, 0, n, fp, p[ANTIPODAL_TOL]) > mu_goal

@@ -36,6 +36,27 @@ def _quality_params() -> F64:
     return fp
 
 
+class _UniformFilter:
+    """The uniform start rule of a [`FingersKernel`][]'s polygon, compiled
+    ([`crmgrasp.tasks.starts.UniformFilter`][]): the same decisions as the readable rule."""
+
+    kind = "uniform"
+
+    def __init__(self, kernel: FingersKernel) -> None:
+        obj = kernel.task.obj
+        assert isinstance(obj, Polygon)
+        self.k = kernel
+        self.cum = np.array((*obj.vertex_arclengths(), obj.perimeter), dtype=np.float64)
+        self.perimeter = obj.perimeter
+        self.out = np.empty((1, 4 * kernel.n))
+
+    def __call__(self, obj: Any, hand: Any, mu_goal: float, s: np.ndarray) -> Any:
+        k = self.k
+        if not jit.uniform_start(s, self.cum, self.perimeter, k.e, k.n, k.p, k.q, k.fp, mu_goal, self.out):
+            return None
+        return k.model.config_of(self.out[0].tolist())
+
+
 class FingersKernel(Kernel):
     """Compiled CRMs, observations, bins and least friction of a hand with any number of
     contacts on a polygon; single steps compiled too (the reading from the model)."""
@@ -53,6 +74,7 @@ class FingersKernel(Kernel):
         self.th = bin_thresholds(d)
         self.strides = np.array(d._strides, dtype=np.int64)
         self.abs_m = d.abs_moments
+        self.start_filter = _UniformFilter(self)  # type: ignore[assignment]
 
     def execute_crms(self, cfg: F64, sen: F64, c: I64, f: I64, r: F64) -> tuple[F64, NDArray[np.int8]]:
         rows = len(cfg)

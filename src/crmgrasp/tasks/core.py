@@ -75,6 +75,14 @@ def _check_symmetry(sym: Symmetry, actions: tuple[Any, ...], disc: Discretizer, 
         raise CrmgraspError(f"a symmetric task needs moments binned by magnitude with the same {same} thresholds")
 
 
+def _takes(sampler: Any, accept: Any) -> bool:
+    """Whether ``sampler`` decides its starts through the filter ``accept`` (a uniform filter
+    says ``kind = "uniform"``; a corner filter says nothing)."""
+    if getattr(accept, "kind", None) == "uniform":
+        return bool(getattr(sampler, "takes_uniform_filter", False))
+    return bool(getattr(sampler, "takes_corner_filter", False))
+
+
 MAX_STEPS = 1000
 """The longest episode a task may ask for, in CRMs (the task files' bound too)."""
 
@@ -294,12 +302,14 @@ class Task:
         inst = self.instance(rng)
         return World(inst, inst.sample_start(rng, accept))
 
-    def sample_start(self, rng: np.random.Generator, accept: StartFilter | None = None) -> Config | Grip:
-        """A start configuration drawn from ``rng``. ``accept``: a compiled start filter,
-        used by samplers built on corner candidates ([`CornerStarts`][] and the presets
-        of `crmgrasp.tasks.presets`; the same start either way), ignored by others."""
+    def sample_start(self, rng: np.random.Generator, accept: Any = None) -> Config | Grip:
+        """A start configuration drawn from ``rng``. ``accept``: a compiled start filter, used
+        by the samplers that take its kind (the same start either way), ignored by others: a
+        corner [`StartFilter`][crmgrasp.tasks.starts.StartFilter] by samplers built on corner
+        candidates ([`CornerStarts`][] and the presets of `crmgrasp.tasks.presets`), a
+        [`UniformFilter`][crmgrasp.tasks.starts.UniformFilter] by [`UniformStarts`][]."""
         self._one_object()
-        if accept is not None and getattr(self.starts, "takes_corner_filter", False):
+        if accept is not None and _takes(self.starts, accept):
             return self.starts(self.obj, self.hand, self.mu_goal, rng, accept)  # type: ignore[call-arg]
         return self.starts(self.obj, self.hand, self.mu_goal, rng)
 
@@ -310,7 +320,7 @@ class Task:
         self._one_object()
         if isinstance(self.starts, CornerStarts):
             return self.starts.batch(self.obj, self.hand, self.mu_goal, rng, n, accept or accept_corner_candidates)
-        return self.model.rows_of([self.sample_start(rng) for _ in range(n)])
+        return self.model.rows_of([self.sample_start(rng, accept) for _ in range(n)])
 
     @overload
     def grasped(self, mu: float) -> bool: ...

@@ -30,6 +30,8 @@ __all__ = [
     "StartFilter",
     "CornerStarts",
     "UniformStarts",
+    "UniformFilter",
+    "uniform_candidate",
     "acceptable",
     "corner_candidate",
     "accept_corner_candidates",
@@ -219,18 +221,41 @@ class UniformStarts:
     kind: ClassVar[str] = "uniform"
     any_contacts: ClassVar[bool] = True
     """Places any number of contacts (the other samplers place two)."""
+    takes_uniform_filter: ClassVar[bool] = True
+    """Decides each try through a [`UniformFilter`][] when a kernel supplies one."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "max_tries", tries(self.max_tries))
 
-    def __call__(self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator) -> Config | Grip:
-        vertices = set(obj.vertex_arclengths()) if isinstance(obj, Polygon) else set()
+    def __call__(
+        self, obj: Shape, hand: Hand, mu_goal: float, rng: np.random.Generator, accept: UniformFilter | None = None
+    ) -> Config | Grip:
+        """Per try, ``hand.contacts`` arclengths ``u * perimeter`` (``u`` uniform), decided by
+        ``accept`` (a compiled [`UniformFilter`][], the same decision) or [`uniform_candidate`][]."""
+        decide = accept or uniform_candidate
         for _ in range(self.max_tries):
-            s = (rng.random(hand.contacts) * obj.perimeter).tolist()
-            if vertices and not vertices.isdisjoint(s):
-                continue
-            points = [obj.boundary(v) for v in s]
-            cfg = make_config([Contact(*p.point, *p.normal) for p in points])
-            if acceptable(obj, hand, mu_goal, cfg):
+            cfg = decide(obj, hand, mu_goal, rng.random(hand.contacts) * obj.perimeter)
+            if cfg is not None:
                 return cfg
         raise CrmgraspError(f"no feasible uniform start found in {self.max_tries} tries")
+
+
+class UniformFilter(Protocol):
+    """``(obj, hand, mu_goal, s) -> start or None``: [`uniform_candidate`][]'s decision on the
+    arclengths ``s`` (one per contact), compiled by a kernel; ``kind`` is ``"uniform"`` (a
+    corner [`StartFilter`][] has none)."""
+
+    kind: str
+
+    def __call__(self, obj: Shape, hand: Hand, mu_goal: float, s: np.ndarray) -> Config | Grip | None: ...
+
+
+def uniform_candidate(obj: Shape, hand: Hand, mu_goal: float, s: np.ndarray) -> Config | Grip | None:
+    """The uniform start at arclengths ``s`` (one per contact, in label order) if it is
+    [`acceptable`][] and (on a polygon) no contact sits on a vertex, else ``None``."""
+    arcs = s.tolist()
+    if isinstance(obj, Polygon) and not set(obj.vertex_arclengths()).isdisjoint(arcs):
+        return None
+    points = [obj.boundary(v) for v in arcs]
+    cfg = make_config([Contact(*p.point, *p.normal) for p in points])
+    return cfg if acceptable(obj, hand, mu_goal, cfg) else None
