@@ -1,7 +1,7 @@
 """The three-finger environment against CartPole, in one process.
 
 Steps ``crmgrasp/Triangles3F-v0`` with random actions on the compiled kernel
-(``FingersKernel``, backend ``auto``) and on the readable rules (``reference``), and
+(``FusedFingersKernel``, backend ``auto``: the task is noise-free) and on the readable rules (``reference``), and
 ``CartPole-v1`` as the peer. Two numbers per backend: microseconds per step counting the
 resets (a new triangle and a start each episode), and per step alone (the episode's
 CRMs, resets timed apart). The issue's target: a step at most 1.5x CartPole's.

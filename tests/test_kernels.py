@@ -402,7 +402,7 @@ def test_compiled_value_iteration_equals_the_readable_sweeps(name, k, params):
         assert inner_a.q == inner_b.q and inner_a.greedy_table == inner_b.greedy_table
 
 
-@pytest.mark.parametrize("name", ["box-family", "u-handle", "box-3d", "cup-3d"])
+@pytest.mark.parametrize("name", ["box-family", "u-handle", "box-3d", "cup-3d", "triangles-3f", "box-family-3f"])
 def test_a_rebound_kernel_is_the_kernel_built_afresh(name):
     """A family's compiled kernel rebound to a new object holds exactly the arrays a kernel
     built for that object holds, and steps it the same."""

@@ -10,7 +10,8 @@ backend                      object                      kernel
 ``"auto"``                   a shape without a kernel    ``ReferenceKernel``
 ``"auto"``, ``"numba"``      polygon, sensing noise      ``PolygonKernel``
 ``"auto"``, ``"numba"``      polygon, noise-free         ``FusedPolygonKernel``
-``"auto"``, ``"numba"``      polygon, three+ contacts    ``FingersKernel``
+``"auto"``, ``"numba"``      polygon, three+, noise      ``FingersKernel``
+``"auto"``, ``"numba"``      polygon, three+, noise-free ``FusedFingersKernel``
 ``"reference"``              a solid (spatial task)      ``SpatialKernel``
 ``"auto"``, ``"numba"``      a solid, noise-free         ``FusedSpatialKernel``
 ``"auto"``                   a solid, sensing noise      ``SpatialKernel``
@@ -84,17 +85,17 @@ def kernel_for(task: Task, backend: str = "auto") -> Kernel:
 
 
 def _planar(task: Task, backend: str) -> Kernel:
-    """Planar model on a polygon compiled (two contacts: fused when noise-free; more: the
-    fingers kernel), else the reference rules."""
+    """Planar model on a polygon compiled (fused when noise-free; three or more contacts on
+    the fingers kernels), else the reference rules."""
     compiled = isinstance(task.obj, Polygon)
     if backend == "reference" or (backend == "auto" and not compiled):
         return ReferenceKernel(task)
     if not compiled:
         raise CrmgraspError(f"no compiled kernel for a {type(task.obj).__name__}; use backend 'auto' or 'reference'")
     if task.model.n_contacts > 2:
-        from crmgrasp.kernels.fingers import FingersKernel
+        from crmgrasp.kernels.fingers import FingersKernel, FusedFingersKernel
 
-        return FingersKernel(task)
+        return FingersKernel(task) if task.noise.active else FusedFingersKernel(task)
     from crmgrasp.kernels.polygon import FusedPolygonKernel, PolygonKernel
 
     return PolygonKernel(task) if task.noise.active else FusedPolygonKernel(task)

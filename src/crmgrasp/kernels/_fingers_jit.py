@@ -218,3 +218,21 @@ def uniform_start(s, cum, perimeter, e, n, p, q, fp, mu_goal, out):  # type: ign
     if feasible(out, 0, n, e, p, q) != 0:
         return False
     return _mu(out, 0, n, fp, p[ANTIPODAL_TOL]) > mu_goal
+
+
+@njit(cache=True)
+def step_one(v, action, acts, n, e, th, strides, abs_m, p, q, fp, out, vals):  # type: ignore[no-untyped-def]
+    """One noise-free CRM ``acts[action]`` of the single environment from row 0 of ``v``: the
+    new configuration into row 0 of ``out``, its observation into ``vals[:, 0]``; returns
+    ``(error code, bin index, least friction)``, as [`crmgrasp.sim.step`][]."""
+    code = _crm(v, v, 0, n, int(acts[action, 0]), int(acts[action, 1]), acts[action, 2], e, p, q, out, 0)
+    _observe(out, 0, n, vals, 0)
+    return code, _index(vals, 0, code, th, strides, abs_m), _mu(out, 0, n, fp, p[ANTIPODAL_TOL])
+
+
+@njit(cache=True)
+def begin_one(v, n, th, strides, abs_m, p, fp, vals):  # type: ignore[no-untyped-def]
+    """The observation of row 0 of ``v`` (noise-free) into ``vals[:, 0]``; returns ``(bin
+    index, least friction)``, as [`crmgrasp.sim.begin`][]."""
+    _observe(v, 0, n, vals, 0)
+    return _index(vals, 0, 0, th, strides, abs_m), _mu(v, 0, n, fp, p[ANTIPODAL_TOL])

@@ -8,12 +8,14 @@ results equal the readable rules bit for bit (the tests check it).
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 import crmgrasp.kernels._fingers_jit as jit
+import crmgrasp.kernels._polygon_jit as pjit
 from crmgrasp.kernels.base import F64, I64, Kernel, bin_thresholds
 from crmgrasp.kernels.polygon import params
 from crmgrasp.model import quality
@@ -74,7 +76,25 @@ class FingersKernel(Kernel):
         self.th = bin_thresholds(d)
         self.strides = np.array(d._strides, dtype=np.int64)
         self.abs_m = d.abs_moments
+        self._fresh()
+
+    def _fresh(self) -> None:
+        """The parts that belong to one object, or to one episode's buffers."""
         self.start_filter = _UniformFilter(self)  # type: ignore[assignment]
+
+    def rebind(self, instance: Task) -> FingersKernel:
+        """The kernel of ``instance`` (the same hand, CRMs, bins and goal on another polygon):
+        the parameters shared, the object's edges, convexity and start rule its own (what a new
+        kernel would hold, without recomputing the rest)."""
+        obj = instance.obj
+        assert isinstance(obj, Polygon)
+        new = copy.copy(self)
+        new.task = instance
+        new.e = np.ascontiguousarray(obj.edge_array)
+        new.q = self.q.copy()
+        new.q[pjit.CONVEX] = obj.convex
+        new._fresh()
+        return new
 
     def execute_crms(self, cfg: F64, sen: F64, c: I64, f: I64, r: F64) -> tuple[F64, NDArray[np.int8]]:
         rows = len(cfg)
@@ -134,3 +154,55 @@ class FingersKernel(Kernel):
         terminated, truncated = episode_end(self.task, mu, steps)
         reward = step_reward(self.task, terminated, code)
         return OneStep(SimState(config, sensed, steps), obs, _ERRORS[code], index, mu, reward, terminated, truncated)
+
+
+class FusedFingersKernel(FingersKernel):
+    """[`FingersKernel`][] for noise-free tasks: a single step (the CRM, its observation, bin
+    and least friction) is one compiled call, and the configuration stays in a buffer from
+    one step to the next."""
+
+    name = "numba-fingers-fused"
+
+    def _fresh(self) -> None:
+        super()._fresh()
+        w = 4 * self.n
+        self._v, self._out, self._vals = np.empty((1, w)), np.empty((1, w)), np.empty((1 + self.n, 1))
+        self._v_of: Any = None
+
+    def _load(self, config: Any) -> None:
+        if config is not self._v_of:
+            self._v[0] = [x for c in config for x in c]
+            self._v_of = config
+
+    def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
+        self._load(config)
+        index, mu = jit.begin_one(self._v, self.n, self.th, self.strides, self.abs_m, self.p, self.fp, self._vals)
+        return OneStep(SimState(config, config, 0), tuple(self._vals[:, 0].tolist()), Error.NONE, index, mu)
+
+    def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
+        if isinstance(action, CRM):  # a CRM of the hand's continuous action space
+            return self._step(state, 0, self.crm_row(action))
+        if not 0 <= action < len(self.acts):  # as the readable step treats it
+            return Kernel.step_one(self, state, action, rng)
+        return self._step(state, action, self.acts)
+
+    def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:
+        return self._step(state, 0, row)
+
+    def _step(self, state: SimState, action: int, table: F64) -> OneStep:
+        """The CRM ``table[action]`` from ``state``, one compiled call."""
+        config = state.config
+        self._load(config)
+        code, index, mu = jit.step_one(
+            self._v, action, table, self.n, self.e, self.th, self.strides, self.abs_m, self.p, self.q, self.fp,
+            self._out, self._vals,
+        )  # fmt: skip
+        if not code:
+            config = self.model.config_of(self._out[0].tolist())
+            self._v, self._out = self._out, self._v  # the output is the next step's input
+            self._v_of = config
+        steps = state.steps + 1
+        terminated, truncated = episode_end(self.task, mu, steps)
+        reward = step_reward(self.task, terminated, code)
+        obs = tuple(self._vals[:, 0].tolist())
+        return OneStep(SimState(config, config, steps), obs, _ERRORS[code], index, mu, reward, terminated, truncated)
