@@ -8,16 +8,14 @@ results equal the readable rules bit for bit (the tests check it).
 
 from __future__ import annotations
 
-import copy
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 import crmgrasp.kernels._fingers_jit as jit
-import crmgrasp.kernels._polygon_jit as pjit
 from crmgrasp.kernels.base import F64, I64, Kernel, bin_thresholds
-from crmgrasp.kernels.polygon import params
+from crmgrasp.kernels.polygon import params, rebound
 from crmgrasp.model import quality
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.model.hand import CRM, Error
@@ -83,18 +81,9 @@ class FingersKernel(Kernel):
         self.start_filter = _UniformFilter(self)  # type: ignore[assignment]
 
     def rebind(self, instance: Task) -> FingersKernel:
-        """The kernel of ``instance`` (the same hand, CRMs, bins and goal on another polygon):
-        the parameters shared, the object's edges, convexity and start rule its own (what a new
-        kernel would hold, without recomputing the rest)."""
-        obj = instance.obj
-        assert isinstance(obj, Polygon)
-        new = copy.copy(self)
-        new.task = instance
-        new.e = np.ascontiguousarray(obj.edge_array)
-        new.q = self.q.copy()
-        new.q[pjit.CONVEX] = obj.convex
-        new._fresh()
-        return new
+        """The kernel of ``instance`` (the same hand, CRMs, bins and goal on another polygon;
+        [`crmgrasp.kernels.polygon.rebound`][]: its start rule its own)."""
+        return rebound(self, instance)
 
     def execute_crms(self, cfg: F64, sen: F64, c: I64, f: I64, r: F64) -> tuple[F64, NDArray[np.int8]]:
         rows = len(cfg)

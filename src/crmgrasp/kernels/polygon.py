@@ -9,7 +9,7 @@ own modules when a kernel is built, so the compiled functions
 from __future__ import annotations
 
 import copy
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -25,9 +25,28 @@ from crmgrasp.model.sensing import Observation
 from crmgrasp.sim import OneStep, SimState, episode_end, step_reward
 from crmgrasp.tasks import Task
 
-__all__ = ["PolygonKernel", "FusedPolygonKernel", "params"]
+__all__ = ["PolygonKernel", "FusedPolygonKernel", "params", "rebound"]
 
 _ERRORS = tuple(Error)  # code -> Error, faster than Error(code)
+
+
+K = TypeVar("K", bound=Kernel)
+
+
+def rebound(kernel: K, instance: Task) -> K:
+    """A compiled polygon kernel (two or more contacts) on ``instance``'s polygon: a copy whose
+    parameters are shared and whose edges and convexity are the new object's (what
+    [`params`][] would give, without recomputing the rest); the copy's ``_fresh`` then sets
+    what belongs to one object or one episode."""
+    obj = instance.obj
+    assert isinstance(obj, Polygon)
+    new = copy.copy(kernel)
+    new.task = instance
+    new.e = np.ascontiguousarray(obj.edge_array)  # type: ignore[attr-defined]
+    new.q = kernel.q.copy()  # type: ignore[attr-defined]
+    new.q[jit.CONVEX] = obj.convex  # type: ignore[attr-defined]
+    new._fresh()  # type: ignore[attr-defined]
+    return new
 
 
 def params(task: Task) -> tuple[F64, NDArray[np.int64], F64]:
@@ -59,25 +78,16 @@ class PolygonKernel(Kernel):
         assert isinstance(task.obj, Polygon)
         self.e = np.ascontiguousarray(task.obj.edge_array)
         self.p, self.q, self.th = params(task)
-        self.start_filter = self._accept
+        self._fresh()
 
     def rebind(self, instance: Task) -> PolygonKernel:
         """The kernel of ``instance`` (the same hand, CRMs, bins and goal on another
-        polygon): the parameters shared, the object's edges and convexity its own (what
-        [`params`][] would give, without recomputing the rest)."""
-        obj = instance.obj
-        assert isinstance(obj, Polygon)
-        new = copy.copy(self)
-        new.task = instance
-        new.e = np.ascontiguousarray(obj.edge_array)
-        new.q = self.q.copy()
-        new.q[jit.CONVEX] = obj.convex
-        new.start_filter = new._accept
-        new._fresh()
-        return new
+        polygon; [`rebound`][])."""
+        return rebound(self, instance)
 
     def _fresh(self) -> None:
-        """Reset per-kernel buffers after a copy (none here)."""
+        """Set what belongs to one object or one episode's buffers after a copy: the start filter."""
+        self.start_filter = self._accept
 
     def execute_crms(self, cfg: F64, sen: F64, c: I64, f: I64, r: F64) -> tuple[F64, NDArray[np.int8]]:
         """The planar model's compiled CRMs: contact indices 0 (a) and 1 (b) become the
@@ -132,11 +142,8 @@ class FusedPolygonKernel(PolygonKernel):
 
     name = "numba-polygon-fused"
 
-    def __init__(self, task: Task) -> None:
-        super().__init__(task)
-        self._fresh()
-
     def _fresh(self) -> None:
+        super()._fresh()
         # the configuration stepped from (columns 0-7) and the step's output (0-7: the new
         # configuration, 8-11: rho, m_a, m_b, min friction); swapped after a move
         self._v, self._out = np.empty((1, 12)), np.empty((1, 12))
