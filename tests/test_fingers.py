@@ -280,5 +280,8 @@ def test_the_third_contact_experiment_compares_two_fingers_with_three(tmp_path):
     assert two["graspable_share"] == 0.0 and two["belief_optimum"] is None  # tan 30 deg > 0.15: never
     assert three["graspable_share"] >= 0.8
     assert three["clairvoyant_bound"] <= three["belief_optimum"] <= make_task("triangles-3f").max_steps
+    assert two["learned_crms"] is None  # nothing to learn where no start can be grasped
+    assert three["belief_optimum"] <= three["learned_crms"] <= 10 and 0 <= three["learned_success"] <= 1
+    assert three["final_friction"] is None or three["final_friction"] <= 0.15  # a grasp meets its goal
     for name in ("third_contact.csv", "third_contact.png", "summary.json"):
         assert (tmp_path / name).stat().st_size > 0

@@ -296,8 +296,10 @@ def _third_contact(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tu
         two, three = by[(fam, mu, 2)], by[(fam, mu, 3)]
         rows.append(
             (
-                f"{fam}, mu_goal {mu:g}: graspable starts, two / three fingers; three-finger optimum, CRMs",
-                f"{two['graspable_share']:.0%} / {three['graspable_share']:.0%}; {fmt(three['belief_optimum'])}",
+                f"{fam}, mu_goal {mu:g}: graspable starts, two / three fingers; three-finger optimum / "
+                "model-vi, CRMs; friction of its final grasps (median)",
+                f"{two['graspable_share']:.0%} / {three['graspable_share']:.0%}; {fmt(three['belief_optimum'])} / "
+                f"{fmt(three['learned_crms'])}; {fmt(three['final_friction'])}",
                 "more than two contacts 'with little modification' (Introduction, no experiment)",
             )
         )
@@ -375,7 +377,7 @@ QUICK_BUDGETS = {
     "generalization": ("2 trials x 100 episodes, 2 families", ("box", "cup")),
     "non-convex": ("2 trials x 150 episodes", ("U handle",)),
     "spatial": ("2 trials x 300 / 150 episodes, 80 / 40 worlds", ("box-3d", "cup-3d")),
-    "third-contact": ("20 starts, triangles at 0.15 only", ("triangles",)),
+    "third-contact": ("20 starts, triangles at 0.15 only, 1 trial x 200 episodes", ("triangles",)),
     "continuous-offsets": ("30 starts, grids 4, 5, 9, 2 trials x 200 episodes, 2 tasks", ("paper-box", "u-handle")),
     "spatial-mujoco": ("1 trial x 300 episodes, 4 worlds per task", ("cup-3d", "box-3d")),
 }

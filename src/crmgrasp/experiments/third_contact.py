@@ -3,11 +3,14 @@
 The paper expects its approach to extend "to more than two contacts with little
 modification". For each pair of twin tasks (``triangles``/``triangles-3f``,
 ``odd-polygons``/``odd-polygons-3f``: the same family, the same CRM kinds, two or three
-fingers; docs/families.md) and each goal ``mu_goal`` (0.15 and 0.05), on the same number
-of sampled starts: the share of starts from which some sequence of at most ``max_steps``
-CRMs grasps (the clairvoyant search, knowing the object), and where some do, the
-clairvoyant bound and the belief-space optimum (observations only), in CRMs per episode.
-Writes ``third_contact.csv``, ``third_contact.png`` and ``summary.json``.
+fingers; ``box-family``/``box-family-3f`` and ``cup-family``/``cup-family-3f``: the same
+family, each hand with its own CRMs and starts; docs/families.md) and each goal ``mu_goal``
+(0.15 and 0.05), on the same number of sampled starts: the share of starts from which some
+sequence of at most ``max_steps`` CRMs grasps (the clairvoyant search, knowing the object),
+and where some do, the clairvoyant bound and the belief-space optimum (observations only),
+in CRMs per episode, and model-vi (k = 1) learned from episodes and run from the same starts:
+its CRMs per episode, success share and the least friction its final grasps need (the
+median). Writes ``third_contact.csv``, ``third_contact.png`` and ``summary.json``.
 """
 
 from __future__ import annotations
@@ -35,26 +38,40 @@ COLUMNS = (
     "graspable_share",
     "clairvoyant_bound",
     "belief_optimum",
+    "learned_crms",
+    "learned_success",
+    "final_friction",
 )
 
 
 @dataclass(frozen=True)
 class ThirdContactConfig:
-    """Twin tasks (two fingers, three), goals, sampled starts per task and goal, seed."""
+    """Twin tasks (two fingers, three), goals, sampled starts per task and goal, the
+    learner's trials and episodes per trial, seed."""
 
-    pairs: tuple[tuple[str, str], ...] = (("triangles", "triangles-3f"), ("odd-polygons", "odd-polygons-3f"))
+    pairs: tuple[tuple[str, str], ...] = (
+        ("triangles", "triangles-3f"),
+        ("odd-polygons", "odd-polygons-3f"),
+        ("box-family", "box-family-3f"),
+        ("cup-family", "cup-family-3f"),
+    )
     mu_goals: tuple[float, ...] = (0.15, 0.05)
     starts: int = 100
+    trials: int = 3
+    episodes: int = 3000
     seed: int = 0
 
     @classmethod
     def quick(cls, seed: int = 0) -> ThirdContactConfig:
-        """Triangles at 0.15 on 20 starts: a smoke run."""
-        return cls(pairs=(("triangles", "triangles-3f"),), mu_goals=(0.15,), starts=20, seed=seed)
+        """Triangles at 0.15 on 20 starts, 1 trial x 200 episodes: a smoke run."""
+        return cls(
+            pairs=(("triangles", "triangles-3f"),), mu_goals=(0.15,), starts=20, trials=1, episodes=200, seed=seed
+        )
 
 
 def _row(name: str, mu: float, cfg: ThirdContactConfig) -> dict[str, Any]:
-    """The references of task ``name`` at goal ``mu`` on ``cfg.starts`` sampled starts."""
+    """The references of task ``name`` at goal ``mu`` on ``cfg.starts`` sampled starts, and
+    where some start can be grasped, the learner's greedy policies on those starts."""
     task = dataclasses.replace(make_task(name), mu_goal=mu)
     starts = sample_starts(task, cfg.starts, cfg.seed)
     share = 1.0 - ungraspable_fraction(task, starts)
@@ -67,6 +84,26 @@ def _row(name: str, mu: float, cfg: ThirdContactConfig) -> dict[str, Any]:
         "graspable_share": share,
         "clairvoyant_bound": clairvoyant_bound(task, starts) if found else None,
         "belief_optimum": belief_optimum(task, starts) if found else None,
+        **(
+            _learned(task, starts, cfg)
+            if found
+            else {"learned_crms": None, "learned_success": None, "final_friction": None}
+        ),
+    }
+
+
+def _learned(task: Any, starts: Any, cfg: ThirdContactConfig) -> dict[str, Any]:
+    """model-vi (k = 1, mirror quotient where declared), ``cfg.trials`` x ``cfg.episodes``
+    task episodes, its greedy policies run from ``starts``: the median over trials of the mean
+    CRMs per episode, the success share, and the median least friction of the final grasps."""
+    from crmgrasp.experiments._episodes import greedy_records, train_fastest
+
+    records = greedy_records(task, train_fastest(task, cfg.trials, cfg.episodes, cfg.seed), starts, cfg.seed)
+    finals = [task.quality(r.final) for trial in records for r in trial if r.success]
+    return {
+        "learned_crms": float(np.median([np.mean([len(r.actions) for r in trial]) for trial in records])),
+        "learned_success": float(np.mean([r.success for trial in records for r in trial])),
+        "final_friction": float(np.median(finals)) if finals else None,
     }
 
 
@@ -88,45 +125,50 @@ def third_contact(
         stage.end()
     write_csv(out / "third_contact.csv", list(COLUMNS), [[r[c] for c in COLUMNS] for r in rows])
     save_figure(_figure(rows, cfg), out / "third_contact.png")
-    summary = {"budget": f"{cfg.starts} sampled starts per task and goal, seed {cfg.seed}", "rows": rows}
+    budget = (
+        f"{cfg.starts} sampled starts per task and goal, seed {cfg.seed}; model-vi k=1, {cfg.trials} trials x "
+        f"{cfg.episodes} task episodes per task and goal, greedy on those starts"
+    )
+    summary = {"budget": budget, "rows": rows}
     write_json(out / "summary.json", summary)
     return summary
 
 
 def _figure(rows: list[dict[str, Any]], cfg: ThirdContactConfig) -> Any:
     """Left: the graspable share, two fingers against three, per family and goal. Right:
-    the three-finger clairvoyant bound and belief-space optimum."""
+    the three-finger clairvoyant bound, belief-space optimum and learned greedy policy."""
     from matplotlib.figure import Figure
 
     groups = [(r["family"], r["mu_goal"]) for r in rows if r["fingers"] == 2]
     by = {(r["family"], r["mu_goal"], r["fingers"]): r for r in rows}
     x = np.arange(len(groups))
     labels = [f"{fam}\nmu_goal {mu:g}" for fam, mu in groups]
-    fig = Figure(figsize=(10, 4.2), layout="constrained")
-    left, right = fig.subplots(1, 2)
+    fig = Figure(figsize=(max(10.0, 1.8 * len(groups)), 7.2), layout="constrained")
+    left, right = fig.subplots(2, 1)
     for k, (fingers, color) in enumerate(((2, "tab:gray"), (3, "tab:blue"))):
         share = [100 * by[(f, m, fingers)]["graspable_share"] for f, m in groups]
         bars = left.bar(x + (k - 0.5) * 0.38, share, 0.38, color=color, label=f"{fingers} fingers")
-        left.bar_label(bars, fmt="%.0f%%", fontsize=8)
+        left.bar_label(bars, fmt="%.0f%%", fontsize=7)
     left.set_xticks(x, labels, fontsize=8)
     left.set_ylim(0, 130)
     left.set_yticks(range(0, 101, 20))
-    left.set_ylabel("starts some CRM sequence grasps (%)")
+    left.set_ylabel("starts some CRM sequence\ngrasps (%)")
     left.set_title("what a third contact makes graspable", fontsize=10)
-    left.legend(fontsize=8, loc="upper center", ncols=2)
-    for k, (key, color, name) in enumerate(
-        (
-            ("clairvoyant_bound", "tab:green", "clairvoyant bound"),
-            ("belief_optimum", "tab:blue", "belief-space optimum"),
-        )
-    ):
+    left.legend(fontsize=8, loc="upper right", ncols=2)
+    parts = (
+        ("clairvoyant_bound", "tab:green", "clairvoyant bound"),
+        ("belief_optimum", "tab:blue", "belief-space optimum"),
+        ("learned_crms", "tab:orange", f"model-vi, median of {cfg.trials} x {cfg.episodes} episodes"),
+    )
+    for k, (key, color, name) in enumerate(parts):
         values = [by[(f, m, 3)][key] or 0.0 for f, m in groups]
-        bars = right.bar(x + (k - 0.5) * 0.38, values, 0.38, color=color, label=name)
-        right.bar_label(bars, fmt="%.2f", fontsize=8)
+        bars = right.bar(x + (k - 1) * 0.27, values, 0.27, color=color, label=name)
+        right.bar_label(bars, fmt="%.2f", fontsize=7)
     right.set_xticks(x, labels, fontsize=8)
-    right.set_ylabel("CRMs per episode, three fingers")
+    right.set_ylabel("CRMs per episode,\nthree fingers")
     right.set_title("how many CRMs the grasp takes", fontsize=10)
-    right.set_ylim(0, 1.25 * max([r["belief_optimum"] or 0.0 for r in rows] + [1.0]))
-    right.legend(fontsize=8, loc="upper center", ncols=2)
+    top = max([r[key] or 0.0 for r in rows for key, _, _ in parts if r["fingers"] == 3] + [1.0])
+    right.set_ylim(0, 1.3 * top)
+    right.legend(fontsize=8, loc="upper right", ncols=3)
     fig.suptitle(f"two fingers against three ({cfg.starts} sampled starts per bar, seed {cfg.seed})", fontsize=10)
     return fig
