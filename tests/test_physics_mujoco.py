@@ -171,6 +171,10 @@ def test_headless_render(task, tmp_path):
     assert picture.shape[0] == 320 + 26  # the render and its caption band above it
     band = picture[:26]
     assert band.max() == 1.0 and band.min() < 0.5  # a white band with dark text (the label)
+    from PIL import Image
+
+    with Image.open(tmp_path / "c1.gif") as gif:  # the motion at the still's resolution, labelled
+        assert gif.size == (picture.shape[1], picture.shape[0]) and gif.n_frames > 10
 
 
 def test_show_retries_with_osmesa_when_egl_fails(monkeypatch, tmp_path):

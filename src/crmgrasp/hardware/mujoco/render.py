@@ -106,7 +106,8 @@ def show(task: Task, start: Any, crm: Any, out: str | os.PathLike[str], rng: np.
     from crmgrasp.hardware.mujoco.spatial import mujoco_hand
 
     hand = mujoco_hand(task, start, rng)
-    rec = Recorder(hand, every=6).attach() if path.suffix.lower() == ".gif" else None
+    size = {"width": 480, "height": 320}  # the PNG's and the GIF's frames alike
+    rec = Recorder(hand, every=6, **size).attach() if path.suffix.lower() == ".gif" else None
     error = hand.execute(crm) if crm is not None else None
     what = f"CRM {crm} -> {error.name.lower()}" if error is not None else "scene"
     key = "a red, b green, palm orange"  # the stand-in's colours (hardware.mujoco.model)
@@ -115,7 +116,7 @@ def show(task: Task, start: Any, crm: Any, out: str | os.PathLike[str], rng: np.
         band = caption(f"{task.name} on MuJoCo: {what}; {key}", rec.frames[0].shape[1])
         save_gif([np.vstack([band, f]) for f in rec.frames], path, fps=15)
     else:
-        frame = render(hand)
+        frame = render(hand, **size)
         save_png(np.vstack([caption(f"{task.name} on MuJoCo: {what}; {key}", frame.shape[1]), frame]), path)
     return f"{task.name} on MuJoCo: {what}; wrote {path.resolve()}"
 
