@@ -419,3 +419,49 @@ def test_family_counts_are_bounded_with_the_limit_named(family, message):
     with pytest.raises(CrmgraspError) as err:
         task_from_dict(doc)
     assert message in str(err.value) and "\n" not in str(err.value)
+
+
+SWALLOWED = """
+import os, signal, sys
+import crmgrasp.experiments.learning as learning
+from crmgrasp.cli import main
+
+real = learning.learn
+
+
+class Finaliser:
+    def __del__(self):  # Ctrl-C lands here: Python prints "Exception ignored" and carries on
+        os.kill(os.getpid(), signal.SIGINT)
+
+
+def learn(*args, **kwargs):
+    Finaliser()
+    return real(*args, **kwargs)
+
+
+learning.learn = learn
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def test_a_ctrl_c_that_python_swallows_still_stops_the_run(tmp_path):
+    """SIGINT raised inside a finaliser is lost to Python (it prints the traceback and goes
+    on); the command remembers it and stops at the next progress step, interrupted."""
+    import subprocess
+    import sys
+
+    from tests.signals import default_sigint
+
+    argv = ["learn", "--trials", "2", "--episodes", "20000", "--quiet", "--out", str(tmp_path)]
+    proc = subprocess.run(
+        [sys.executable, "-c", SWALLOWED, *argv],
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=default_sigint,
+        timeout=120,
+    )
+    assert "Exception ignored" in proc.stderr  # Python did swallow it
+    assert proc.returncode == 130 and proc.stderr.strip().endswith("crmgrasp learn: interrupted")
+    from crmgrasp.experiments.runs import read_status
+
+    assert read_status(tmp_path) == "interrupted"

@@ -10,15 +10,49 @@ shows nothing (``--quiet``). Long functions take a ``progress`` argument (never 
 global) and call [`Progress.stage`][] once per unit of work, then
 [`Progress.advance`][] as work is done; a stage nested in another one replaces its
 line while it runs.
+
+Progress steps are also where a lost Ctrl-C stops the work. Python raises
+`KeyboardInterrupt` wherever the main thread is when SIGINT arrives; inside a finaliser
+(``__del__``), a weakref or garbage-collector callback, or a callback called from C, it
+prints the traceback ("Exception ignored in ...") and carries on. The command line's
+handler [`on_sigint`][] raises as Python does and also records the interrupt, and
+[`check`][] (called by every stage and step) raises it again.
 """
 
 from __future__ import annotations
 
 import sys
 import time
-from typing import TextIO
+from typing import Any, TextIO
 
-__all__ = ["Progress", "Quiet", "make_progress"]
+__all__ = ["Progress", "Quiet", "make_progress", "on_sigint", "check", "clear", "pending"]
+
+_pending = False
+
+
+def on_sigint(signum: int, frame: Any) -> None:
+    """The SIGINT handler of the command line: record the interrupt, then raise it."""
+    global _pending
+    _pending = True
+    raise KeyboardInterrupt
+
+
+def pending() -> bool:
+    """Whether an interrupt arrived that the command has not yet stopped on."""
+    return _pending
+
+
+def check() -> None:
+    """Raise `KeyboardInterrupt` if an interrupt is pending (one raised where Python
+    swallowed it)."""
+    if _pending:
+        raise KeyboardInterrupt
+
+
+def clear() -> None:
+    """Forget the interrupt: the command stopped on it (or a new command starts)."""
+    global _pending
+    _pending = False
 
 
 def _clock(seconds: float) -> str:
@@ -49,6 +83,7 @@ class Progress:
 
     def stage(self, label: str, total: int, unit: str = "") -> Progress:
         """Begin a unit of work of ``total`` steps (a context manager: it ends on exit)."""
+        check()
         self._stack.append([label, max(int(total), 0), 0, unit, time.monotonic()])
         self._show(force=True)
         return self
@@ -60,7 +95,9 @@ class Progress:
         self.end()
 
     def advance(self, n: int = 1) -> None:
-        """``n`` more steps of the innermost stage are done."""
+        """``n`` more steps of the innermost stage are done (and a Ctrl-C that Python
+        swallowed stops the work here: [`check`][])."""
+        check()
         if self._stack:
             self._stack[-1][2] += n
             self._show()

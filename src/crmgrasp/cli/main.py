@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from crmgrasp import _progress as interrupt  # the Ctrl-C a finaliser would swallow
 from crmgrasp._io import check_output
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.cli.common import _print_result, _progress, _run_folder, _task
@@ -416,8 +417,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         "run": _cmd_run,
     }
     previous = _on_sigterm(_terminate)
+    inherited_ignore = signal.getsignal(signal.SIGINT) is signal.SIG_IGN  # e.g. `crmgrasp ... &`: keep it
+    previous_int = None if inherited_ignore else _on_signal(signal.SIGINT, interrupt.on_sigint)
+    interrupt.clear()
     try:
-        return handlers[args.command](args)
+        result = handlers[args.command](args)
+        interrupt.check()  # a Ctrl-C that Python swallowed (in a finaliser, a callback) still stops
+        return result
     except Terminated:  # SIGTERM (kill, a scheduler's stop): as Ctrl-C, with the shell's status for it
         print(f"crmgrasp {args.command}: terminated", file=sys.stderr)
         return 143
@@ -447,6 +453,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 1
     finally:
         _on_sigterm(previous)
+        _on_signal(signal.SIGINT, previous_int)
+        interrupt.clear()
 
 
 class Terminated(KeyboardInterrupt):
@@ -461,10 +469,16 @@ def _terminate(signum: int, frame: Any) -> None:
 def _on_sigterm(handler: Any) -> Any:
     """Install ``handler`` for SIGTERM and return the previous one (``None`` where no
     handler can be set: not the main thread)."""
+    return _on_signal(signal.SIGTERM, handler)
+
+
+def _on_signal(signum: int, handler: Any) -> Any:
+    """Install ``handler`` for ``signum`` and return the previous one (``None`` where no
+    handler can be set: not the main thread)."""
     if handler is None:
         return None
     try:
-        return signal.signal(signal.SIGTERM, handler)
+        return signal.signal(signum, handler)
     except ValueError:  # signals are set from the main thread only
         return None
 
