@@ -284,33 +284,23 @@ CONTINUOUS_ENVS = {
 
 def register() -> None:
     """Register ``crmgrasp/PaperBox-v0``, the [`FAMILY_ENVS`][], the [`SPATIAL_ENVS`][] and the
-    [`CONTINUOUS_ENVS`][] (idempotent)."""
-    if ENV_ID not in gym.registry:
-        gym.register(
-            id=ENV_ID,
-            entry_point="crmgrasp.envs.single:CRMGraspEnv",
-            vector_entry_point="crmgrasp.envs.vector:CRMGraspVectorEnv",
-            kwargs={"task": "paper-box"},
-            max_episode_steps=10,  # paper-box's max_steps: the env cuts episodes there itself
-        )
-    for env_id, task in {**FAMILY_ENVS, **SPATIAL_ENVS}.items():
-        if env_id not in gym.registry:
-            gym.register(
-                id=env_id,
-                entry_point="crmgrasp.envs.single:CRMGraspEnv",
-                vector_entry_point="crmgrasp.envs.vector:FamilyVectorEnv",
-                kwargs={"task": task},
-                max_episode_steps=10,  # every family task's max_steps
-            )
-    for env_id, task in CONTINUOUS_ENVS.items():
-        if env_id not in gym.registry:
-            gym.register(
-                id=env_id,
-                entry_point="crmgrasp.envs.continuous:ContinuousCRMEnv",
-                vector_entry_point="crmgrasp.envs.vector:continuous_vector_env",
-                kwargs={"task": task},
-                max_episode_steps=10,
-            )
+    [`CONTINUOUS_ENVS`][] (idempotent). Every registered task cuts episodes at 10 CRMs (its
+    ``max_steps``: the env cuts them there itself)."""
+    kinds = (
+        ({ENV_ID: "paper-box"}, "single:CRMGraspEnv", "vector:CRMGraspVectorEnv"),
+        ({**FAMILY_ENVS, **SPATIAL_ENVS}, "single:CRMGraspEnv", "vector:FamilyVectorEnv"),
+        (CONTINUOUS_ENVS, "continuous:ContinuousCRMEnv", "vector:continuous_vector_env"),
+    )
+    for table, entry, vector in kinds:
+        for env_id, task in table.items():
+            if env_id not in gym.registry:
+                gym.register(
+                    id=env_id,
+                    entry_point=f"crmgrasp.envs.{entry}",
+                    vector_entry_point=f"crmgrasp.envs.{vector}",
+                    kwargs={"task": task},
+                    max_episode_steps=10,
+                )
 
 
 register()
