@@ -97,3 +97,12 @@ def test_deep_continuous_smoke():
     spec.loader.exec_module(mod)
     res = mod.main(steps=256, episodes=5)
     assert len(res) == 3 + 4 and all(0.0 <= v["success"] <= 1.0 for k, v in res.items() if isinstance(v, dict))
+
+
+def test_offset_learning_smoke():
+    spec = importlib.util.spec_from_file_location("offset_learning", BENCH.parent / "offset_learning.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    res = mod.main(episodes=20, trials=1, starts=10)
+    for key in ("u-handle-grid9", "cup-3d-grid3"):
+        assert res[key]["median"] >= res[key]["optimum"] - 1e-12
