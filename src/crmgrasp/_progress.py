@@ -25,7 +25,7 @@ import sys
 import time
 from typing import Any, TextIO
 
-__all__ = ["Progress", "Quiet", "make_progress", "on_sigint", "check", "clear", "pending"]
+__all__ = ["Progress", "Quiet", "make_progress", "on_sigint", "check", "clear"]
 
 _pending = False
 
@@ -35,11 +35,6 @@ def on_sigint(signum: int, frame: Any) -> None:
     global _pending
     _pending = True
     raise KeyboardInterrupt
-
-
-def pending() -> bool:
-    """Whether an interrupt arrived that the command has not yet stopped on."""
-    return _pending
 
 
 def check() -> None:
