@@ -1,65 +1,138 @@
-"""Sample efficiency across seeds: the fastest learner against Dyna-Q, on paper-box and a family.
+"""Sample efficiency from scratch across seeds: crmgrasp's learners and the peers, on the
+same checkpoint starts and the same episode streams.
 
-For each seed 0..SEEDS-1, ``crmgrasp.experiments.learning.learn`` runs 20 trials x
-EPISODES episodes of each learner below and records ``greedy_episodes_to_5pct``: the
-first checkpoint (5, 10, 15, 20, 30, ...) from which the mean greedy policy over the
-20 trials, evaluated on 1,000 fixed starts per checkpoint, stays within 5% of the
-task's reference (paper-box: the belief-space optimum 1.66; box-family: 1.75), and the
-mean greedy CRMs at checkpoint 20.
+Protocol (the issue's): for each seed ``first .. first + SEEDS - 1``, TRIALS independent
+agents (one by default) learn for EPISODES episodes of the task itself, k = 1 histories,
+no prior; after each checkpoint (5, 10, 15, 20, 30, ... episodes) the greedy policy is
+evaluated on the same 1,000 fixed starts (``checkpoint_generators(seed)``: the same for
+every learner and every checkpoint) and averaged over the seed's trials. Per learner:
 
-Learners: ``model-vi`` from scratch (k = 1, mirror quotient: ``crmgrasp learn --agent
-model-vi --k 1 --symmetric``; ``--preset fastest`` on box-family), the same with a prior
-learned in 500 episodes on ``box-family`` (paper-box only: the family has paper-box's CRMs
-and bins; ``--preset fastest`` on paper-box), and Dyna-Q k = 1 with value-iteration
-sweeps on the mirror quotient (the fastest learner before ``model-vi``).
+* ``to_5pct``: per seed, the first checkpoint from which the greedy policy stays within
+  5% of the task's reference (the belief-space optimum: paper-box 1.66, box-family 1.75)
+  at every later checkpoint (``None``: not by the budget);
+* ``median_to_5pct`` (``None`` counted as beyond the budget), ``by_10``, ``by_20``,
+  ``by_budget``: seeds whose ``to_5pct`` is at most 10, 20, the budget;
+* ``within_at_10``, ``within_at_20``: seeds whose greedy policy is within 5% at that
+  checkpoint (whether or not it stays there);
+* ``mean_at``: the greedy CRMs per episode at each checkpoint, mean over seeds;
+* ``seconds``: wall time of all its seeds.
 
-Usage: ``python benchmarks/learner_seeds.py [EPISODES] [SEEDS]`` (defaults 60 and 10).
-Prints one JSON object.
+Learners: ``pooled-vi`` (``--preset fastest``: k = 1, mirror quotient), ``pooled-vi``
+without the quotient, ``model-vi`` (mirror quotient), Dyna-Q with value-iteration sweeps
+(mirror quotient), and the peers without the quotient, as a generic tabular learner sees
+the task: PSRL and UCBVI (``crmgrasp.agents.peers``, written from their papers: rlberry
+0.7.3 pins gymnasium < 0.30 and ships neither), SARSA and Q-learning (k = 1, the paper's
+alpha 0.3, Q0 = 0, greedy; the textbook updates MushroomRL implements: mushroom-rl 1.10.2
+pins numpy 1.24.4 and cannot share this environment).
+
+Usage: ``python benchmarks/learner_seeds.py [--episodes 200] [--seeds 10] [--first 0]
+[--trials 1] [--task paper-box --task box-family] [--only NAME ...]``. Prints one JSON
+object; progress on stderr.
 """
 
+from __future__ import annotations
+
+import argparse
 import json
 import statistics
 import sys
+import time
 
-from crmgrasp.experiments.learning import SYMMETRIC_DYNA_Q, LearnerSpec, learn
+import numpy as np
+
+from crmgrasp.agents.training import DEFAULT_CHECKPOINTS, checkpoints_to_within, train_trials
 from crmgrasp.tasks import make_task
 
-FASTEST = LearnerSpec("model-vi", 1, {"symmetric": True}, "model-vi k=1 (mirror quotient)")
-WITH_PRIOR = LearnerSpec(
-    "model-vi", 1, {"symmetric": True, "prior_task": "box-family"}, "model-vi k=1 + box-family prior"
-)
+LEARNERS: dict[str, tuple[str, dict]] = {
+    "pooled-vi (fastest)": ("pooled-vi", {"symmetric": True}),
+    "pooled-vi, no quotient": ("pooled-vi", {}),
+    "model-vi": ("model-vi", {"symmetric": True}),
+    "dyna-q sweeps": ("dyna-q", {"planning": "sweep", "n_planning": 50, "symmetric": True}),
+    "psrl": ("psrl", {}),
+    "ucbvi": ("ucbvi", {}),
+    "sarsa": ("sarsa", {}),
+    "q-learning": ("q", {}),
+}
+"""Label -> (agent, parameters); k = 1 for all."""
 
 
-def _row(task_name: str, spec: LearnerSpec, episodes: int, seeds: int, trials: int, checks: int) -> dict:
+def run_learner(task_name: str, agent: str, params: dict, episodes: int, seeds: range, trials: int) -> dict:
+    """One learner on one task over the seeds (see the module docstring)."""
     task = make_task(task_name)
-    runs = [
-        learn(task, spec, trials=trials, episodes=episodes, seed=s, eval_episodes=0, checkpoint_episodes=checks)
-        for s in range(seeds)
-    ]
-    to5 = [r.summary["greedy_episodes_to_5pct"] for r in runs]
-    at20 = [float(r.result.checkpoint_steps.mean(axis=0)[list(r.result.checkpoints).index(20)]) for r in runs]
-    target = 1.05 * task.reference_mean_steps  # type: ignore[operator]
+    ref = task.reference_mean_steps
+    assert ref is not None, f"{task_name} has no reference"
+    checks = tuple(c for c in DEFAULT_CHECKPOINTS if c <= episodes)
+    t0 = time.perf_counter()
+    to5, curves = [], []
+    for seed in seeds:
+        res = train_trials(
+            task,
+            agent,
+            trials=trials,
+            episodes=episodes,
+            seed=seed,
+            k=1,
+            eval_episodes=0,
+            params=params,
+            checkpoints=checks,
+            checkpoint_episodes=1000,
+        )
+        curve = res.checkpoint_steps.mean(axis=0)
+        curves.append(curve)
+        to5.append(checkpoints_to_within(res.checkpoints, curve, ref))
+    seconds = time.perf_counter() - t0
+    at = np.array(curves)
+    bound = 1.05 * ref + 1e-12
+
+    def within_at(c: int) -> int | None:
+        return int((at[:, checks.index(c)] <= bound).sum()) if c in checks else None
+
     return {
-        "greedy_episodes_to_5pct": to5,
-        "median_greedy_episodes_to_5pct": statistics.median(episodes + 1 if v is None else v for v in to5),
-        "seeds_within_5pct_by_20": sum(v is not None and v <= 20 for v in to5),
-        "greedy_mean_steps_at_20": [round(v, 3) for v in at20],
-        "seeds_at_20_within_5pct": sum(v <= target + 1e-12 for v in at20),
+        "to_5pct": to5,
+        "median_to_5pct": statistics.median(episodes + 1 if v is None else v for v in to5),
+        "by_10": sum(v is not None and v <= 10 for v in to5),
+        "by_20": sum(v is not None and v <= 20 for v in to5),
+        "by_budget": sum(v is not None for v in to5),
+        "within_at_10": within_at(10),
+        "within_at_20": within_at(20),
+        "mean_at": {c: round(float(v), 3) for c, v in zip(checks, at.mean(axis=0), strict=True)},
+        "seconds": round(seconds, 1),
     }
 
 
-def main(episodes: int = 60, seeds: int = 10, trials: int = 20, checkpoint_episodes: int = 1000) -> dict:
-    out: dict = {"episodes": episodes, "trials": trials, "checkpoint_episodes": checkpoint_episodes}
-    for task_name, specs in (
-        ("paper-box", (FASTEST, WITH_PRIOR, SYMMETRIC_DYNA_Q)),
-        ("box-family", (FASTEST, SYMMETRIC_DYNA_Q)),
-    ):
-        out[task_name] = {
-            spec.name: _row(task_name, spec, episodes, seeds, trials, checkpoint_episodes) for spec in specs
-        }
+def main(
+    episodes: int = 200,
+    seeds: int = 10,
+    first: int = 0,
+    trials: int = 1,
+    tasks: tuple[str, ...] = ("paper-box", "box-family"),
+    only: tuple[str, ...] = (),
+) -> dict:
+    """Every learner (or those in ``only``) on every task; see the module docstring."""
+    out: dict = {"episodes": episodes, "seeds": [first, first + seeds - 1], "trials_per_seed": trials}
+    for task_name in tasks:
+        out[task_name] = {}
+        for label, (agent, params) in LEARNERS.items():
+            if only and label not in only:
+                continue
+            print(f"{task_name}: {label} ...", file=sys.stderr, flush=True)
+            row = run_learner(task_name, agent, params, episodes, range(first, first + seeds), trials)
+            out[task_name][label] = row
     return out
 
 
 if __name__ == "__main__":
-    args = [int(a) for a in sys.argv[1:3]]
-    print(json.dumps(main(*args), indent=2))
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--episodes", type=int, default=200)
+    ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--first", type=int, default=0)
+    ap.add_argument("--trials", type=int, default=1)
+    ap.add_argument("--task", action="append", dest="tasks")
+    ap.add_argument("--only", action="append", default=[], choices=tuple(LEARNERS))
+    a = ap.parse_args()
+    print(
+        json.dumps(
+            main(a.episodes, a.seeds, a.first, a.trials, tuple(a.tasks or ("paper-box", "box-family")), tuple(a.only)),
+            indent=1,
+        )
+    )

@@ -253,5 +253,5 @@ def test_model_vi_prior_from_a_family_and_its_errors():
     assert a.inner.model and a.inner.model == b.inner.model  # the same prior, computed once
     with pytest.raises(CrmgraspError, match="other CRMs"):
         build_agent(task, enc, "model-vi", {"prior_task": "cup-family"})
-    with pytest.raises(CrmgraspError, match="needs the model-vi agent"):
+    with pytest.raises(CrmgraspError, match="needs a model-based agent"):
         build_agent(task, enc, "sarsa", {"prior_task": "box-family"})

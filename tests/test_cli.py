@@ -244,29 +244,32 @@ def test_every_option_shows_its_default_or_choices():
         assert "usage:" in sub.format_help()
 
 
-def test_learn_preset_fastest_and_a_family_prior(tmp_path, capsys):
+def test_learn_preset_fastest_learns_from_scratch_and_a_prior_only_when_named(tmp_path, capsys):
     out = tmp_path / "fast"
     base = ["learn", "--trials", "2", "--episodes", "40", "--eval-episodes", "200", "--quiet"]
     assert main([*base, "--preset", "fastest", "--out", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["agent"] == "model-vi" and summary["k"] == 1 and summary["params"]["symmetric"] is True
-    assert summary["params"]["prior_task"] == "box-family"  # paper-box: the preset learns a prior on its family
-    assert summary["greedy_mean_steps"] < 1.05 * 1.66 + 0.05  # 40 episodes: near the optimum (1,000 checks)
-    scratch = tmp_path / "scratch"
-    assert main([*base, "--agent", "model-vi", "--k", "1", "--symmetric", "--out", str(scratch)]) == 0
-    assert "prior_task" not in json.loads((scratch / "summary.json").read_text())["params"]
-    family = tmp_path / "family"  # no prior where the task has none declared
+    assert summary["agent"] == "pooled-vi" and summary["k"] == 1 and summary["params"]["symmetric"] is True
+    assert "prior_task" not in summary["params"] and summary["prior"] is None  # no prior unless asked for
+    assert json.loads((out / "run.json").read_text())["config"]["prior"] is None
+    assert summary["greedy_mean_steps"] < 1.05 * 1.66 + 0.05  # 40 episodes from scratch: near the optimum
+    family = tmp_path / "family"
     assert main([*base, "--task", "cup-family", "--preset", "fastest", "--out", str(family)]) == 0
-    assert "prior_task" not in json.loads((family / "summary.json").read_text())["params"]
+    assert json.loads((family / "summary.json").read_text())["prior"] is None
     assert main([*base, "--preset", "fastest", "--agent", "sarsa", "--out", str(tmp_path / "s")]) == 0
     assert json.loads((tmp_path / "s" / "summary.json").read_text())["agent"] == "sarsa"
     prior = tmp_path / "prior"
     extra = ["--prior-task", "box-family", "--prior-episodes", "100", "--out", str(prior)]
-    assert main([*base, "--preset", "fastest", *extra]) == 0
-    assert json.loads((prior / "summary.json").read_text())["params"]["prior_task"] == "box-family"
     capsys.readouterr()
-    assert main([*base, "--agent", "sarsa", "--prior-task", "box-family", "--out", str(tmp_path / "x")]) == 2
-    assert "--prior-task does not apply to --agent sarsa" in capsys.readouterr().err
+    assert main([*base, "--preset", "fastest", *extra]) == 0
+    said = capsys.readouterr()
+    assert "prior: 100 episodes on box-family" in said.err and "after a prior of 100 episodes on box-family" in said.out
+    recorded = {"task": "box-family", "episodes": 100, "weight": 1.0, "seed": 0}
+    assert json.loads((prior / "summary.json").read_text())["prior"] == recorded
+    assert json.loads((prior / "run.json").read_text())["config"]["prior"] == recorded
+    for agent in ("sarsa", "dyna-q"):
+        assert main([*base, "--agent", agent, "--prior-task", "box-family", "--out", str(tmp_path / agent)]) == 2
+        assert f"--prior-task does not apply to --agent {agent}" in capsys.readouterr().err
 
 
 def test_learn_says_when_no_interval_is_given(tmp_path, capsys):

@@ -11,7 +11,7 @@ value iteration, twice:
   exploits;
 * **greedy values** ``Q_greedy``: tried pairs only, and a history in which nothing
   was tried is worth ``unknown`` (pessimism, -10 = one full failed episode); the
-  greedy policy (what [`greedy`][] and evaluation use) picks the best *tried*
+  greedy policy (what `ModelVI.greedy` and evaluation use) picks the best *tried*
   action, so it never bets on a guess.
 
 Both are ``Q(s,a) = sum_o p(o|s,a) (r + gamma V(s'))`` with ``V(s') = 0`` at a
@@ -63,8 +63,11 @@ class ModelVI(TabularAgent):
         Greedy value of a history with no tried action (-10 by default).
     sweeps
         Most value-iteration sweeps after each step.
-    gamma
-        Discount (0.9, the paper's).
+    compiled
+        Run the compiled sweeps (the readable ones with False; the same values).
+    **kwargs
+        [`TabularAgent`][crmgrasp.agents.tabular.TabularAgent]'s ``alpha``, ``gamma``
+        (the discount, 0.9, the paper's), ``epsilon``, ``q0``.
     """
 
     name = "model-vi"
@@ -93,7 +96,7 @@ class ModelVI(TabularAgent):
 
     @property
     def greedy_table(self) -> dict[int, list[float]]:
-        """The greedy values (tried pairs; the acting values are [`q`][])."""
+        """The greedy values (tried pairs; the acting values are ``q``)."""
         return self.q_greedy
 
     def set_prior(self, prior: Model, weight: float = 1.0) -> None:

@@ -218,10 +218,11 @@ class GreedyPolicy:
     @classmethod
     def from_agent(cls, task: Task, k: int, agent: TabularAgent | SymmetricAgent) -> GreedyPolicy:
         """The greedy policy of a tabular agent over the states it has visited: in
-        each, the best of the actions it has tried (all ties kept)."""
+        each, the best of the actions its greedy policy chooses among (``greedy_tried``: the tried
+        ones; all ties kept)."""
         table = {}
         for s, row in agent.greedy_table.items():
-            acts = sorted(agent.tried.get(s) or range(len(row)))
+            acts = sorted(agent.greedy_tried.get(s) or range(len(row)))
             best = max(row[a] for a in acts)
             table[s] = tuple(a for a in acts if row[a] == best)
         return cls(task, k, table, agent.name)

@@ -1,17 +1,17 @@
 """Learner presets: named settings of ``crmgrasp learn`` (and of any caller), with the
 rule that fills what the user did not give.
 
-A preset names an agent, a history order, whether to learn on the mirror quotient where
-the task declares a symmetry (tabular learners), and the tasks on which its agent also
-learns a prior first (a family task with the same CRMs and bins of which the task's
-object is one member). [`apply_preset`][] is the one place that combines a preset with
-the user's choices; the command line lists [`PRESETS`][] and their descriptions.
+A preset names an agent, a history order and whether to learn on the mirror quotient
+where the task declares a symmetry (tabular learners). Every preset learns from scratch:
+a prior learned on another task is used only when the user names that task
+(``prior_task``, ``--prior-task``), and its episodes are then counted and reported.
+[`apply_preset`][] is the one place that combines a preset with the user's choices; the
+command line lists [`PRESETS`][] and their descriptions.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import NamedTuple
 
 from crmgrasp._validation import CrmgraspError
@@ -34,8 +34,6 @@ class LearnerPreset:
         History order.
     symmetric
         Learn on the mirror quotient where the task declares a symmetry (tabular agents only).
-    priors
-        Task name -> the task the agent learns a prior on first (``model-vi`` only).
     description
         One line for ``--help``.
     """
@@ -43,19 +41,16 @@ class LearnerPreset:
     agent: str
     k: int
     symmetric: bool = False
-    priors: Mapping[str, str] = field(default_factory=dict)
     description: str = ""
 
 
 PRESETS: dict[str, LearnerPreset] = {
     "paper": LearnerPreset("sarsa", 2, description="the paper's SARSA, k = 2"),
     "fastest": LearnerPreset(
-        "model-vi",
+        "pooled-vi",
         1,
         symmetric=True,
-        priors={"paper-box": "box-family"},
-        description="model-vi, k = 1, on the mirror quotient where the task declares one; on paper-box with a "
-        "prior learned in 500 episodes on box-family (from scratch: --agent model-vi --k 1 --symmetric)",
+        description="pooled-vi, k = 1, on the mirror quotient where the task declares one; from scratch",
     ),
 }
 """The presets of ``crmgrasp learn --preset``."""
@@ -79,17 +74,15 @@ def apply_preset(
     symmetric: bool = False,
     prior_task: str | None = None,
 ) -> LearnerChoice:
-    """The preset ``name`` with the user's choices on top: a given ``agent``, ``k`` or
-    ``prior_task`` wins; the preset's prior applies only to its own agent on one of its
-    tasks; the mirror quotient is on if asked for, or if the preset wants it, the agent
-    is tabular and the task declares a symmetry."""
+    """The preset ``name`` with the user's choices on top: a given ``agent`` or ``k`` wins;
+    ``prior_task`` is the user's alone (no preset adds one); the mirror quotient is on if
+    asked for, or if the preset wants it, the agent is tabular and the task declares a
+    symmetry."""
     try:
         preset = PRESETS[name]
     except KeyError:
         raise CrmgraspError(f"unknown preset {name!r}; known presets: {', '.join(PRESETS)}") from None
     chosen = agent or preset.agent
-    if prior_task is None and chosen == preset.agent:
-        prior_task = preset.priors.get(task.name)
     made = AGENTS.get(chosen)
     tabular = isinstance(made, type) and issubclass(made, TabularAgent)
     mirror = symmetric or (preset.symmetric and tabular and task.symmetry is not None)

@@ -12,6 +12,13 @@ trains both mirror images, and the policy is symmetric by construction, so the
 pooled data come from the same (mirrored) visitation distribution; merely adding
 mirrored copies of transitions to a learner that may act asymmetrically biases
 its model of non-Markov histories (tried: some runs stall at 1.76 CRMs).
+
+One exception is exact: at a start history that is its own mirror image (no CRM yet,
+an observation whose mirror image is itself), the hidden state is drawn from the
+task's start distribution, which a symmetric task makes mirror-symmetric, so
+``(h, a) -> o`` and ``(h, sigma(a)) -> sigma(o)`` have the same probability whatever
+the policy. An inner learner that sets ``mirror_start = True`` is taught every
+transition from such a history twice, as taken and mirrored.
 """
 
 from __future__ import annotations
@@ -51,6 +58,7 @@ class SymmetricAgent:
         self._amap = [*task.symmetry.actions, len(task.actions)]  # the padding action maps to itself
         self._omap = mirror_observation_map(task)
         self._mirror: dict[int, int] = {}
+        self._tie_start = bool(getattr(inner, "mirror_start", False)) and encoder.k >= 1
 
     def mirror(self, s: int) -> int:
         """Code of the mirror image of history code ``s``."""
@@ -91,8 +99,19 @@ class SymmetricAgent:
         """Update the inner learner on the transition mapped to representatives."""
         c, flip = self._canon(s)
         c2, flip2 = self._canon(s2)
+        b = self._amap[a] if flip else a
         b2 = None if a2 is None else (self._amap[a2] if flip2 else a2)
-        self.inner.update(c, self._amap[a] if flip else a, r, c2, b2, terminal, rng)
+        self.inner.update(c, b, r, c2, b2, terminal, rng)
+        if self._tie_start and self._is_mirror_start(c) and self._amap[b] != b:
+            m2 = self.mirror(s2)
+            c3, flip3 = self._canon(m2)
+            b3 = None if a2 is None else self._amap[a2]
+            b3 = None if b3 is None else (self._amap[b3] if flip3 else b3)
+            self.inner.update(c, self._amap[b], r, c3, b3, terminal, rng)
+
+    def _is_mirror_start(self, c: int) -> bool:
+        """Whether representative ``c`` is a start history (no CRM yet) that is its own mirror image."""
+        return self.encoder.decode(c)[1] == self.n_actions and self.mirror(c) == c
 
     @property
     def q(self) -> dict[int, list[float]]:
@@ -116,8 +135,16 @@ class SymmetricAgent:
     @property
     def tried(self) -> dict[int, set[int]]:
         """Tried actions, mirrored like [`q`][]."""
+        return self._mirrored_sets(self.inner.tried)
+
+    @property
+    def greedy_tried(self) -> dict[int, set[int]]:
+        """The inner learner's greedy choices per state, mirrored like [`q`][]."""
+        return self._mirrored_sets(self.inner.greedy_tried)
+
+    def _mirrored_sets(self, sets: dict[int, set[int]]) -> dict[int, set[int]]:
         out = {}
-        for s, acts in self.inner.tried.items():
+        for s, acts in sets.items():
             out[s] = set(acts)
             m = self.mirror(s)
             if m != s:

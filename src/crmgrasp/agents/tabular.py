@@ -68,6 +68,11 @@ class TabularAgent:
         """The values the greedy policy ranks tried actions by (the table itself)."""
         return self.q
 
+    @property
+    def greedy_tried(self) -> dict[int, set[int]]:
+        """The actions the greedy policy chooses among in each state (the tried ones)."""
+        return self.tried
+
     def value(self, s: int) -> list[float]:
         """Q values of ``s`` without creating a row."""
         return self.q.get(s) or [self.q0] * self.n_actions

@@ -20,6 +20,9 @@ from crmgrasp._validation import CrmgraspError, integer
 from crmgrasp.agents.base import Agent, LearnerPolicy
 from crmgrasp.agents.baselines import FixedSequence, RandomAgent
 from crmgrasp.agents.model_based import ModelVI
+from crmgrasp.agents.peers import PSRL, UCBVI, EpisodicModel
+from crmgrasp.agents.pooled import HistoryFrame, PooledVI
+from crmgrasp.agents.symmetric import SymmetricAgent
 from crmgrasp.agents.tabular import DynaQ, QLearning, Sarsa, SarsaLambda
 from crmgrasp.kernels import kernel_for
 from crmgrasp.model.contacts import Config, Grip
@@ -36,6 +39,8 @@ __all__ = [
     "parameter_defaults",
     "PRIOR_KEYS",
     "PRIOR_DEFAULTS",
+    "takes_prior",
+    "prior_settings",
     "encoder_for",
     "run_episode",
     "evaluate",
@@ -56,6 +61,9 @@ AGENTS: dict[str, Callable[..., Agent]] = {
     "sarsa-lambda": SarsaLambda,
     "dyna-q": DynaQ,
     "model-vi": ModelVI,
+    "pooled-vi": PooledVI,
+    "psrl": PSRL,
+    "ucbvi": UCBVI,
     "random": RandomAgent,
     "fixed": FixedSequence,
 }
@@ -97,11 +105,12 @@ def agent_parameters(name: str) -> tuple[str, ...]:
 def parameter_defaults(param: str) -> dict[str, object]:
     """The default of keyword parameter ``param`` of every registered agent that takes it
     (agent name -> default), read from the constructors; the prior's keys
-    ([`PRIOR_KEYS`][]) are ``model-vi``'s, with [`PRIOR_DEFAULTS`][]."""
+    ([`PRIOR_KEYS`][]) are the model-based agents' ([`takes_prior`][]), with
+    [`PRIOR_DEFAULTS`][]."""
     import inspect
 
     if param in PRIOR_DEFAULTS:
-        return {"model-vi": PRIOR_DEFAULTS[param]}
+        return {name: PRIOR_DEFAULTS[param] for name in AGENTS if takes_prior(name)}
     out: dict[str, object] = {}
     for name, made in AGENTS.items():
         if param not in agent_parameters(name):
@@ -119,8 +128,11 @@ def build_agent(task: Task, encoder: KOrderEncoder, name: str, params: dict[str,
     """[`make_agent`][], wrapped in a `SymmetricAgent`
     when ``params`` has ``symmetric=True`` (the task must declare a symmetry).
 
+    A learner that needs to know how its states are built (``pooled-vi``, the peers
+    ``psrl`` and ``ucbvi``) is given its [`HistoryFrame`][crmgrasp.agents.pooled.HistoryFrame].
+
     ``prior_task`` (a task name, file or factory with the same CRMs and bins, e.g. an
-    object family) gives a ``model-vi`` agent a prior: the model one agent with the
+    object family) gives a model-based agent (``model-vi``, ``pooled-vi``) a prior: the model one agent with the
     same settings learns there in ``prior_episodes`` episodes (seed ``prior_seed``), added
     as ``prior_weight`` pseudo-counts per pair (defaults: [`PRIOR_DEFAULTS`][])
     (`set_prior`). The prior is computed once
@@ -131,20 +143,37 @@ def build_agent(task: Task, encoder: KOrderEncoder, name: str, params: dict[str,
         raise CrmgraspError(f"symmetric must be true or false, got {symmetric!r}")
     prior = {key: p.pop(key) for key in PRIOR_KEYS if key in p}
     agent = make_agent(name, len(task.actions), **p)
-    if prior:
-        if not isinstance(agent, ModelVI):
-            raise CrmgraspError(f"prior_task needs the model-vi agent, not {name!r}")
+    if prior and not isinstance(agent, ModelVI):
+        known = ", ".join(n for n in AGENTS if takes_prior(n))
+        raise CrmgraspError(f"prior_task needs a model-based agent ({known}), not {name!r}")
+    wrapped = SymmetricAgent(agent, task, encoder) if symmetric else None  # type: ignore[arg-type]
+    if isinstance(agent, (PooledVI, EpisodicModel)):
+        agent.bind(HistoryFrame(task, encoder, wrapped))
+    if prior and isinstance(agent, ModelVI):
         model, weight = _prior(task, encoder.k, name, p, symmetric, prior)
         agent.set_prior(model, weight)
-    if not symmetric:
-        return agent
-    from crmgrasp.agents.symmetric import SymmetricAgent
-
-    return SymmetricAgent(agent, task, encoder)  # type: ignore[arg-type]
+    return agent if wrapped is None else wrapped  # type: ignore[return-value]
 
 
 PRIOR_KEYS = ("prior_task", "prior_episodes", "prior_weight", "prior_seed")
-"""The parameters of [`build_agent`][] that give a ``model-vi`` agent a prior."""
+"""The parameters of [`build_agent`][] that give a model-based agent a prior."""
+
+
+def takes_prior(name: str) -> bool:
+    """Whether the registered agent ``name`` can start from a prior model (``model-vi``,
+    ``pooled-vi``: the agents that keep outcome counts)."""
+    made = AGENTS.get(name)
+    return isinstance(made, type) and issubclass(made, ModelVI)
+
+
+def prior_settings(params: dict[str, object]) -> dict[str, object] | None:
+    """The prior a run's ``params`` ask for, every setting filled in from
+    [`PRIOR_DEFAULTS`][] (``task``, ``episodes``, ``weight``, ``seed``), or None: what a
+    run records and reports, so that its prior episodes are counted with its own."""
+    if params.get("prior_task") is None:
+        return None
+    return {key.removeprefix("prior_"): params.get(key, PRIOR_DEFAULTS[key]) for key in PRIOR_KEYS}
+
 
 PRIOR_DEFAULTS: dict[str, object] = {"prior_task": None, "prior_episodes": 500, "prior_weight": 1.0, "prior_seed": 0}
 """The prior's settings when not given (``prior_task`` None: no prior)."""

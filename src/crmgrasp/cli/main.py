@@ -78,10 +78,10 @@ def _to_5pct_lines(s: dict[str, Any]) -> list[str]:
 
 
 def _learner_params(args: argparse.Namespace) -> dict[str, Any]:
-    from crmgrasp.agents.training import PRIOR_KEYS, agent_parameters
+    from crmgrasp.agents.training import PRIOR_KEYS, agent_parameters, takes_prior
 
     params = {}
-    accepted = agent_parameters(args.agent) + (PRIOR_KEYS[:2] if args.agent == "model-vi" else ())
+    accepted = agent_parameters(args.agent) + (PRIOR_KEYS[:2] if takes_prior(args.agent) else ())
     for flag, _, _ in _AGENT_FLAGS:
         key = flag.lstrip("-").replace("-", "_")
         if getattr(args, key) is not None:
@@ -116,7 +116,7 @@ def _warn_if_ungraspable(task: Task, seed: int) -> None:
 
 
 def _cmd_learn(args: argparse.Namespace) -> int:
-    from crmgrasp.agents.training import build_agent, check_budget, encoder_for
+    from crmgrasp.agents.training import build_agent, check_budget, encoder_for, prior_settings
     from crmgrasp.experiments.learning import LearnerSpec, learn, write_learn_outputs
 
     task = _task(args)
@@ -125,11 +125,19 @@ def _cmd_learn(args: argparse.Namespace) -> int:
     check_budget(args.trials, args.episodes, args.eval_episodes)
     build_agent(task, encoder_for(task, spec.k), spec.agent, spec.params)  # bad settings fail before any folder
     _warn_if_ungraspable(task, args.seed)
+    prior = prior_settings(spec.params)
+    if prior is not None:
+        print(
+            f"crmgrasp: prior: {prior['episodes']:,} episodes on {prior['task']} (seed {prior['seed']}, weight "
+            f"{prior['weight']}), learned once before the task episodes and counted with them",
+            file=sys.stderr,
+        )
     config = {
         "task": task_to_dict(task),
         "agent": spec.agent,
         "k": spec.k,
         "params": spec.params,
+        "prior": prior,
         "trials": args.trials,
         "episodes": args.episodes,
         "eval_episodes": args.eval_episodes,
@@ -155,6 +163,8 @@ def _cmd_learn(args: argparse.Namespace) -> int:
     s = run.summary
     lo, hi = (math.nan if v is None else v for v in s["greedy_ci95_over_trials"])
     print(f"{s['label']} on {task.name}: {budget(s['trials'], s['episodes'], s['seed'])}, {fmt(s['seconds'], 1)} s")
+    if prior is not None:
+        print(f"  after a prior of {prior['episodes']:,} episodes on {prior['task']} (not {task.name})")
     print(f"  CRMs per episode, last 10 training episodes: {fmt(s['final_mean_steps'])}")
     print(
         f"  greedy policy: {fmt(s['greedy_mean_steps'])} CRMs ({ci_text(lo, hi)}, "

@@ -387,6 +387,9 @@ _AGENT_FLAGS = (
     ),
     ("--planning", ("sample", "sweep"), "sampled updates or value-iteration sweeps"),
     ("--q-act", _number, "acting value of an untried CRM"),
+    ("--beta", _number, "weight of the pooled prior, in pseudo-counts"),
+    ("--alpha0", _number, "Dirichlet pseudo-counts per state-action pair"),
+    ("--scale", _number, "exploration bonus factor"),
     ("--prior-task", str, "a task with the same CRMs and bins (e.g. box-family) to learn a prior on"),
     ("--prior-episodes", _int(1, 1_000_000), "episodes of the prior"),
 )

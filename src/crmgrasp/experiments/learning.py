@@ -13,7 +13,10 @@ Used by ``crmgrasp learn`` and by Figure 7. Files written to the output folder:
   task's ``reference_mean_steps``), ``greedy_episodes_to_5pct`` (first
   checkpoint from which the greedy policy, evaluated on the same fixed starts at
   every checkpoint and averaged over trials, stays at or below that bound; ``null``
-  = never), ``converged`` (whether ``episodes_to_5pct`` was reached), wall time;
+  = never), ``converged`` (whether ``episodes_to_5pct`` was reached), wall time,
+  ``prior`` (the prior's task, episodes, weight and seed when the run used one:
+  episodes on another task, learned once and shared by every trial; null when the run
+  learned from scratch);
 * ``checkpoints.csv``: ``episode,greedy_mean_steps,greedy_sem_steps``;
 * ``policy.json``: the greedy policy of the trial with the best greedy score;
 * ``learning_curve.png``.
@@ -42,6 +45,7 @@ from crmgrasp.agents.training import (
     check_budget,
     checkpoints_to_within,
     encoder_for,
+    prior_settings,
 )
 from crmgrasp.experiments.parallel import run_parallel, usable_jobs
 from crmgrasp.experiments.runs import RunFolder
@@ -287,6 +291,7 @@ def _summary(
         ),
         "checkpoint_episodes": checkpoint_episodes,
         "converged": (episodes_to_within(curve, ref) is not None) if ref else None,
+        "prior": prior_settings(spec.params),
     }
 
 
