@@ -1,7 +1,7 @@
 """Sample efficiency from scratch across seeds: crmgrasp's learners and the peers, on the
 same checkpoint starts and the same episode streams.
 
-Protocol (the issue's): for each seed ``first .. first + SEEDS - 1``, TRIALS independent
+Protocol: for each seed ``first .. first + SEEDS - 1``, TRIALS independent
 agents (one by default) learn for EPISODES episodes of the task itself, k = 1 histories,
 no prior; after each checkpoint (5, 10, 15, 20, 30, ... episodes) the greedy policy is
 evaluated on the same 1,000 fixed starts (``checkpoint_generators(seed)``: the same for
@@ -15,11 +15,13 @@ every learner and every checkpoint) and averaged over the seed's trials. Per lea
 * ``within_at_10``, ``within_at_20``: seeds whose greedy policy is within 5% at that
   checkpoint (whether or not it stays there);
 * ``mean_at``: the greedy CRMs per episode at each checkpoint, mean over seeds;
+* ``training_curve_to_5pct``: per seed, the first episode after which the 10-episode
+  moving average of the training curve (mean over the seed's trials) stays within 5%;
 * ``seconds``: wall time of all its seeds.
 
 Learners: ``pooled-vi`` (``--preset fastest``: k = 1, mirror quotient), ``pooled-vi``
 without the quotient, ``model-vi`` (mirror quotient), Dyna-Q with value-iteration sweeps
-(mirror quotient), and the peers without the quotient, as a generic tabular learner sees
+(with and without the quotient), and the peers without the quotient, as a generic tabular learner sees
 the task: PSRL and UCBVI (``crmgrasp.agents.peers``, written from their papers: rlberry
 0.7.3 pins gymnasium < 0.30 and ships neither), SARSA and Q-learning (k = 1, the paper's
 alpha 0.3, Q0 = 0, greedy; the textbook updates MushroomRL implements: mushroom-rl 1.10.2
@@ -40,7 +42,16 @@ import time
 
 import numpy as np
 
-from crmgrasp.agents.training import DEFAULT_CHECKPOINTS, checkpoints_to_within, train_trials
+from crmgrasp.agents.training import (
+    DEFAULT_CHECKPOINTS,
+    build_agent,
+    checkpoint_generators,
+    checkpoints_to_within,
+    encoder_for,
+    episodes_to_within,
+    evaluate,
+    train_trials,
+)
 from crmgrasp.tasks import make_task
 
 LEARNERS: dict[str, tuple[str, dict]] = {
@@ -48,12 +59,17 @@ LEARNERS: dict[str, tuple[str, dict]] = {
     "pooled-vi, no quotient": ("pooled-vi", {}),
     "model-vi": ("model-vi", {"symmetric": True}),
     "dyna-q sweeps": ("dyna-q", {"planning": "sweep", "n_planning": 50, "symmetric": True}),
+    "dyna-q sweeps, no quotient": ("dyna-q", {"planning": "sweep", "n_planning": 50}),
     "psrl": ("psrl", {}),
     "ucbvi": ("ucbvi", {}),
     "sarsa": ("sarsa", {}),
     "q-learning": ("q", {}),
+    "model-vi + prior (500 box-family episodes)": ("model-vi", {"symmetric": True, "prior_task": "box-family"}),
 }
-"""Label -> (agent, parameters); k = 1 for all."""
+"""Label -> (agent, parameters); k = 1 for all. The last is not from scratch: a prior
+learned in 500 episodes on box-family (each seed its own, ``prior_seed`` = the seed), on
+paper-box only; its row adds ``within_at_0``, the seeds whose prior alone (0 task
+episodes) is within 5%."""
 
 
 def run_learner(task_name: str, agent: str, params: dict, episodes: int, seeds: range, trials: int) -> dict:
@@ -63,8 +79,14 @@ def run_learner(task_name: str, agent: str, params: dict, episodes: int, seeds: 
     assert ref is not None, f"{task_name} has no reference"
     checks = tuple(c for c in DEFAULT_CHECKPOINTS if c <= episodes)
     t0 = time.perf_counter()
-    to5, curves = [], []
+    to5, curves, at0, curve5 = [], [], [], []
+    prior = "prior_task" in params
     for seed in seeds:
+        if prior:
+            params = {**params, "prior_seed": seed}
+            agent_0 = build_agent(task, encoder_for(task, 1), agent, params)
+            steps = evaluate(task, agent_0, encoder_for(task, 1), 1000, *checkpoint_generators(seed))[0]
+            at0.append(float(steps.mean()))
         res = train_trials(
             task,
             agent,
@@ -78,6 +100,7 @@ def run_learner(task_name: str, agent: str, params: dict, episodes: int, seeds: 
             checkpoint_episodes=1000,
         )
         curve = res.checkpoint_steps.mean(axis=0)
+        curve5.append(episodes_to_within(res.curve, ref))
         curves.append(curve)
         to5.append(checkpoints_to_within(res.checkpoints, curve, ref))
     seconds = time.perf_counter() - t0
@@ -87,7 +110,9 @@ def run_learner(task_name: str, agent: str, params: dict, episodes: int, seeds: 
     def within_at(c: int) -> int | None:
         return int((at[:, checks.index(c)] <= bound).sum()) if c in checks else None
 
+    row = {} if not prior else {"within_at_0": sum(v <= bound for v in at0), "prior_episodes": 500}
     return {
+        **row,
         "to_5pct": to5,
         "median_to_5pct": statistics.median(episodes + 1 if v is None else v for v in to5),
         "by_10": sum(v is not None and v <= 10 for v in to5),
@@ -95,6 +120,7 @@ def run_learner(task_name: str, agent: str, params: dict, episodes: int, seeds: 
         "by_budget": sum(v is not None for v in to5),
         "within_at_10": within_at(10),
         "within_at_20": within_at(20),
+        "training_curve_to_5pct": curve5,
         "mean_at": {c: round(float(v), 3) for c, v in zip(checks, at.mean(axis=0), strict=True)},
         "seconds": round(seconds, 1),
     }
@@ -113,7 +139,7 @@ def main(
     for task_name in tasks:
         out[task_name] = {}
         for label, (agent, params) in LEARNERS.items():
-            if only and label not in only:
+            if (only and label not in only) or ("prior_task" in params and task_name != "paper-box"):
                 continue
             print(f"{task_name}: {label} ...", file=sys.stderr, flush=True)
             row = run_learner(task_name, agent, params, episodes, range(first, first + seeds), trials)

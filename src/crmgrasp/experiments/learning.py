@@ -73,7 +73,7 @@ class LearnerSpec:
 SYMMETRIC_DYNA_Q = LearnerSpec(
     "dyna-q", 1, {"planning": "sweep", "n_planning": 50, "symmetric": True}, "Dyna-Q k=1 (VI sweeps, mirror quotient)"
 )
-"""The fastest learner on paper-box: Dyna-Q with value-iteration sweeps on the mirror quotient."""
+"""Dyna-Q with value-iteration sweeps on the mirror quotient (the comparison's model-free-plus-planning learner)."""
 
 
 def usable(task: Task, specs: tuple[LearnerSpec, ...]) -> tuple[LearnerSpec, ...]:

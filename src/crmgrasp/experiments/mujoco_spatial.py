@@ -1,7 +1,7 @@
 """Spatial CRM policies on the MuJoCo stand-in in 3-D (extra ``crmgrasp[mujoco]``).
 
-[`spatial_mujoco`][]: for each spatial task (``cup-3d``, ``box-3d``), the fastest
-learner's policy (``model-vi``, k = 1) is trained in the kinematic model (or loaded), then
+[`spatial_mujoco`][]: for each spatial task (``cup-3d``, ``box-3d``), the policy of
+``model-vi`` (k = 1) is trained in the kinematic model (or loaded), then
 runs from ``trials`` worlds drawn from the task (a solid of the family and a surface start
 on it) on the MuJoCo hand ([`MujocoHand3D`][crmgrasp.hardware.mujoco.spatial.MujocoHand3D]) and,
 from the same worlds, on the kinematic hand, both through the one
