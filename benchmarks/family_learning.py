@@ -60,7 +60,8 @@ def task_row(name: str, learners: tuple[str, ...], episodes: int, seeds: range, 
     task = make_task(name)
     worlds = sample_starts(task, n_worlds, 10_000)
     graspable = np.array([ungraspable_fraction(task, [w]) == 0.0 for w in worlds])
-    optimum = _steps(episode_records(task, lambda: BeliefPolicy(task, worlds), worlds, 0))
+    planner = BeliefPolicy(task, worlds)  # one planner for every world: its memo is shared
+    optimum = _steps(episode_records(task, lambda: planner, worlds, 0))
     row: dict = {
         "worlds": n_worlds,
         "graspable": int(graspable.sum()),

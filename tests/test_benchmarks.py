@@ -106,3 +106,15 @@ def test_offset_learning_smoke():
     res = mod.main(episodes=20, trials=1, starts=10)
     for key in ("u-handle-grid9", "cup-3d-grid3"):
         assert res[key]["median"] >= res[key]["optimum"] - 1e-12
+
+
+def test_family_learning_smoke():
+    spec = importlib.util.spec_from_file_location("family_learning", BENCH.parent / "family_learning.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    res = mod.main(episodes=20, seeds=2, n_worlds=12, tasks=("cup-family",), learners=("pooled-vi",))
+    row = res["cup-family"]
+    assert row["worlds"] == 12 and 0 <= row["graspable"] <= 12 and row["optimum"] >= 1.0
+    learner = row["pooled-vi"]
+    assert len(learner["gap_graspable"]) == 2 and 0 <= learner["seeds_within_10pct_graspable"] <= 2
+    assert all(g >= -1e-9 for g in learner["gap"])  # the belief-space optimum is a lower bound on these worlds
