@@ -94,7 +94,7 @@ def _parser_learn(sub: Any) -> None:
         choices=tuple(PRESETS),
         help="learner settings: "
         + "; ".join(f"{name} ({preset.description})" for name, preset in PRESETS.items())
-        + "; --agent, --k and --prior-task override them",
+        + "; --agent and --k override them; no preset adds a prior (--prior-task)",
     )
     p.add_argument("--agent", default=None, choices=tuple(AGENTS), help="learner or baseline (default: the preset's)")
     p.add_argument(
