@@ -34,6 +34,7 @@ are dense (``encoder.size x n_actions x (n_obs + 1)``), which suits k = 1 and 2.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from typing import Any
 
@@ -48,7 +49,7 @@ MAX_TABLE = 20_000_000
 """Largest ``states x actions x outcomes`` table a peer builds (about 160 MB of counts)."""
 
 
-class EpisodicModel:
+class EpisodicModel(ABC):
     """Counts, rewards and finite-horizon planning shared by the peers (see the module
     docstring); subclasses choose the model they plan on while acting."""
 
@@ -77,6 +78,7 @@ class EpisodicModel:
                 f"{self.name} keeps a dense table of {cells:,} cells here (more than {MAX_TABLE:,}); use a smaller k"
             )
         self.horizon, self.n_obs = frame.horizon, n_obs
+        self._obs_stride = n_states // n_obs  # the current observation is a code's top digit
         self.counts = np.zeros((n_states, self.n_actions, n_obs + 1))
         self.reward_sum = np.zeros((n_states, self.n_actions))
         self.visits = np.zeros((n_states, self.n_actions))
@@ -115,7 +117,7 @@ class EpisodicModel:
         self._greedy = None
 
     def _observation(self, s2: int) -> int:
-        return int(s2 // (self.counts.shape[0] // self.n_obs))  # the current observation is the top digit
+        return int(s2 // self._obs_stride)
 
     def _pick(self, q: np.ndarray, state: int, rng: np.random.Generator, *, tried_only: bool) -> int:
         row = q[min(self._t, self.horizon - 1), state]
@@ -150,8 +152,9 @@ class EpisodicModel:
         """The greedy policy's stage values: an untried pair is worth ``-v_max``."""
         return np.where(self.visits > 0, qh, -self.v_max)
 
+    @abstractmethod
     def _plan_acting(self, rng: np.random.Generator) -> np.ndarray:
-        raise NotImplementedError
+        """``Q_h`` of the model the acting policy follows this episode."""
 
 
 class PSRL(EpisodicModel):

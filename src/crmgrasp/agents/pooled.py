@@ -130,13 +130,12 @@ class HistoryFrame:
         obs = self.encoder.decode(s2)[0]
         if self.symmetric is None:
             return (obs,)
-        if self.next_state(s, a, obs) != s2:
-            return (self._omap[obs],)
-        other = self._omap[obs]
-        enc = self.encoder
-        plain = enc.encode(enc.push(enc.decode(s), a, obs))
-        flipped = enc.encode(enc.push(enc.decode(s), a, other))
-        if plain == s2 and flipped != plain and self.symmetric.mirror(flipped) == s2:
+        enc, h, other = self.encoder, self.encoder.decode(s), self._omap[obs]
+        plain = enc.encode(enc.push(h, a, obs))
+        if plain != s2:
+            return (other,)
+        flipped = enc.encode(enc.push(h, a, other))
+        if flipped != plain and self.symmetric.mirror(flipped) == s2:
             return (obs, other)
         return (obs,)
 

@@ -103,10 +103,8 @@ class SymmetricAgent:
         b2 = None if a2 is None else (self._amap[a2] if flip2 else a2)
         self.inner.update(c, b, r, c2, b2, terminal, rng)
         if self._tie_start and self._is_mirror_start(c) and self._amap[b] != b:
-            m2 = self.mirror(s2)
-            c3, flip3 = self._canon(m2)
-            b3 = None if a2 is None else self._amap[a2]
-            b3 = None if b3 is None else (self._amap[b3] if flip3 else b3)
+            c3, flip3 = self._canon(self.mirror(s2))  # the mirrored transition: a2 becomes sigma(a2)
+            b3 = None if a2 is None else (a2 if flip3 else self._amap[a2])
             self.inner.update(c, self._amap[b], r, c3, b3, terminal, rng)
 
     def _is_mirror_start(self, c: int) -> bool:
