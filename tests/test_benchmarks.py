@@ -1,7 +1,10 @@
 """Smoke run of the benchmark script (tiny sizes; no thresholds asserted)."""
 
 import importlib.util
+import json
 from pathlib import Path
+
+import pytest
 
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_core.py"
 
@@ -118,3 +121,16 @@ def test_family_learning_smoke():
     learner = row["pooled-vi"]
     assert len(learner["gap_graspable"]) == 2 and 0 <= learner["seeds_within_10pct_graspable"] <= 2
     assert all(g >= -1e-9 for g in learner["gap"])  # the belief-space optimum is a lower bound on these worlds
+
+
+def test_mujoco_learning_smoke(capsys, monkeypatch):
+    pytest.importorskip("mujoco", reason="needs the extra crmgrasp[mujoco]")
+    spec = importlib.util.spec_from_file_location("mujoco_learning", BENCH.parent / "mujoco_learning.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    argv = ["mujoco_learning.py", "--task", "paper-box", "--episodes", "3", "--seeds", "1", "--score", "2"]
+    monkeypatch.setattr("sys.argv", argv)
+    mod.main()
+    out = json.loads(capsys.readouterr().out)
+    (row,) = out["tasks"]
+    assert row["task"] == "paper-box" and len(row["per_seed"]) == 1 and row["episode_seconds_median"] > 0

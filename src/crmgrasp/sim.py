@@ -266,7 +266,11 @@ class Transition(NamedTuple):
 
 
 class Episode(NamedTuple):
-    """CRMs executed, success, and (when asked for) every transition."""
+    """CRMs executed, success, and (when asked for) every transition. ``success``: the
+    last step's ``min_friction`` is a grasp (`Task.grasped`). On the kinematic model that
+    is the episode's ``terminated``; a stepper whose episodes end on what a hand senses
+    (a simulated hand, [`crmgrasp.hardware.runner.HandSteps`][]) may report the true
+    ``min_friction`` there, and then a sensed grasp that is not a true one is no success."""
 
     steps: int
     success: bool
@@ -297,7 +301,7 @@ def run_episode(
         config = kernel.sample_start(rng) if start is None else start
     now, advance = kernel.begin(config, rng), kernel.step_one
     if now.terminated or now.truncated:  # a stepper that senses its start (a hand) may end here
-        return Episode(now.state.steps, now.terminated)
+        return Episode(now.state.steps, bool(task.grasped(now.min_friction)))
     policy.begin(now.percept)
     steps: list[Transition] = []
     while True:
@@ -307,5 +311,5 @@ def run_episode(
             steps.append(Transition(now, action, nxt))
         policy.tell(nxt.percept)
         if nxt.terminated or nxt.truncated:
-            return Episode(nxt.state.steps, nxt.terminated, tuple(steps))
+            return Episode(nxt.state.steps, bool(task.grasped(nxt.min_friction)), tuple(steps))
         now = nxt

@@ -10,7 +10,7 @@ same seed (common random numbers).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -290,6 +290,8 @@ class TrialResult:
     agents: list[Agent]
     checkpoints: np.ndarray
     checkpoint_steps: np.ndarray
+    faults: dict[str, int] = field(default_factory=dict)
+    """Episodes a hand's stepper ended early, by kind (none on the kinematic model)."""
 
     @property
     def curve(self) -> np.ndarray:
@@ -338,6 +340,7 @@ def train_trials(
     backend: str = "auto",
     first_trial: int = 0,
     progress: Progress | None = None,
+    stepper: Callable[[Task], Stepper] | None = None,
 ) -> TrialResult:
     """Train ``trials`` independent agents for ``episodes`` each, then evaluate each
     greedily on ``eval_episodes`` fresh episodes.
@@ -351,10 +354,14 @@ def train_trials(
     checkpoint ([`checkpoint_generators`][]): a learning curve of the policy itself,
     free of exploration and of start-to-start noise. Episodes step through the task's
     kernel on ``backend`` ([`crmgrasp.kernels.kernel_for`][]; every backend gives
-    the same results)."""
+    the same results), or through ``stepper(task)`` if given (another hand:
+    `crmgrasp.hardware.mujoco.steps.MujocoSteps`); the result's ``faults`` are the
+    episodes that such a stepper ended early, by kind (its ``faults``), training and
+    evaluation together."""
     check_budget(trials, episodes, eval_episodes)
     encoder = encoder_for(task, k)
-    kernel = kernel_for(task, backend)
+    kernel = kernel_for(task, backend) if stepper is None else stepper(task)
+    every = PROGRESS_EVERY if stepper is None else 1  # a hand's episode takes a noticeable time
     steps = np.empty((trials, episodes), dtype=np.int64)
     success = np.empty((trials, episodes), dtype=bool)
     gsteps = np.empty((trials, eval_episodes), dtype=np.int64)
@@ -367,8 +374,8 @@ def train_trials(
         j = 0
         for e in range(episodes):
             steps[t, e], success[t, e] = run_episode(task, ag, encoder, env_rng, agent_rng, kernel=kernel)
-            if progress is not None and e % PROGRESS_EVERY == PROGRESS_EVERY - 1:
-                progress.advance(PROGRESS_EVERY)
+            if progress is not None and e % every == every - 1:
+                progress.advance(every)
             if j < len(ckpts) and ckpts[j] == e + 1:
                 starts_rng, ties_rng = checkpoint_generators(seed)
                 ck = evaluate(task, ag, encoder, checkpoint_episodes, starts_rng, ties_rng, kernel=kernel)
@@ -377,8 +384,9 @@ def train_trials(
         gsteps[t], gsucc[t] = evaluate(task, ag, encoder, eval_episodes, eval_rng, kernel=kernel)
         agents.append(ag)
         if progress is not None:
-            progress.advance(episodes % PROGRESS_EVERY)
-    return TrialResult(steps, success, gsteps, gsucc, agents, ckpts, csteps)
+            progress.advance(episodes % every)
+    faults = dict(sorted(getattr(kernel, "faults", {}).items()))
+    return TrialResult(steps, success, gsteps, gsucc, agents, ckpts, csteps, faults)
 
 
 def checkpoints_to_within(

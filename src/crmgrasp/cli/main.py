@@ -117,12 +117,16 @@ def _warn_if_ungraspable(task: Task, seed: int) -> None:
 
 def _cmd_learn(args: argparse.Namespace) -> int:
     from crmgrasp.agents.training import build_agent, check_budget, encoder_for, prior_settings
-    from crmgrasp.experiments.learning import LearnerSpec, learn, write_learn_outputs
+    from crmgrasp.experiments.learning import LearnerSpec, check_hand, learn, write_learn_outputs
 
     task = _task(args)
     _apply_preset(args, task)
     spec = LearnerSpec(args.agent, args.k, _learner_params(args))
     check_budget(args.trials, args.episodes, args.eval_episodes)
+    checkpoint_episodes = args.checkpoint_episodes
+    if checkpoint_episodes is None:
+        checkpoint_episodes = 100 if args.hand == "kinematic" else 0
+    check_hand(args.hand, args.lockstep)  # before any folder
     build_agent(task, encoder_for(task, spec.k), spec.agent, spec.params)  # bad settings fail before any folder
     _warn_if_ungraspable(task, args.seed)
     prior = prior_settings(spec.params)
@@ -141,6 +145,8 @@ def _cmd_learn(args: argparse.Namespace) -> int:
         "trials": args.trials,
         "episodes": args.episodes,
         "eval_episodes": args.eval_episodes,
+        "checkpoint_episodes": checkpoint_episodes,
+        "hand": args.hand,
         "seed": args.seed,
     }
     with _run_folder(args, task.name, config) as folder:
@@ -156,13 +162,20 @@ def _cmd_learn(args: argparse.Namespace) -> int:
             store=folder,
             progress=_progress(args),
             jobs=args.jobs,
+            checkpoint_episodes=checkpoint_episodes,
+            hand=args.hand,
         )
         paths = write_learn_outputs(task, run, folder.path)
     from crmgrasp.experiments.stats import budget, ci_text, fmt
 
     s = run.summary
     lo, hi = (math.nan if v is None else v for v in s["greedy_ci95_over_trials"])
-    print(f"{s['label']} on {task.name}: {budget(s['trials'], s['episodes'], s['seed'])}, {fmt(s['seconds'], 1)} s")
+    where = "" if args.hand == "kinematic" else f" ({args.hand} hand)"
+    cost = f"{budget(s['trials'], s['episodes'], s['seed'])}, {fmt(s['seconds'], 1)} s"
+    print(f"{s['label']} on {task.name}{where}: {cost}")
+    if args.hand != "kinematic":
+        ended = ", ".join(f"{n} {kind}" for kind, n in s["faults"].items()) or "none"
+        print(f"  episodes the {args.hand} hand ended early (physics faults, lost contacts): {ended}")
     if prior is not None:
         print(f"  after a prior of {prior['episodes']:,} episodes on {prior['task']} (not {task.name})")
     print(f"  CRMs per episode, last 10 training episodes: {fmt(s['final_mean_steps'])}")

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from crmgrasp._validation import SEED_MAX, CrmgraspError, as_point, finite, integer, shown
+from crmgrasp.hardware import HANDS
 from crmgrasp.model.contacts import ALL_LABELS, LABELS
 from crmgrasp.tasks import Task
 from crmgrasp.tasks.presets import START_PRESETS
@@ -229,11 +230,10 @@ def _add_kernel_backend(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _add_hand(p: argparse.ArgumentParser) -> None:
+def _add_hand(p: argparse.ArgumentParser, what: str = "runs on") -> None:
     p.add_argument(
         "--hand",
-        choices=("kinematic", "mujoco"),
+        choices=tuple(HANDS),
         default="kinematic",
-        help="kinematic simulator (default) or the MuJoCo stand-in hand (extra crmgrasp[mujoco]; "
-        "fingertip palm tolerance 10 degrees, its own sensor noise)",
+        help=f"the hand it {what}: " + "; ".join(f"{name}: {text}" for name, text in HANDS.items()),
     )

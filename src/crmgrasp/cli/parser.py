@@ -122,6 +122,14 @@ def _parser_learn(sub: Any) -> None:
         help="step all trials together through the batched simulator (same results; faster from ~500 trials)",
     )
     _add_kernel_backend(p)
+    _add_hand(p, "learns on (every episode: training, checkpoints, evaluation)")
+    p.add_argument(
+        "--checkpoint-episodes",
+        type=_EVAL_EPISODES,
+        default=None,
+        help="greedy evaluation episodes at each checkpoint (5, 10, 15, 20, 30, ... training episodes; "
+        "default 100 on the kinematic model, 0 = none on another hand, where each costs a physics episode)",
+    )
     p.add_argument(
         "--symmetric",
         action="store_true",
@@ -282,7 +290,13 @@ def _parser_run(sub: Any) -> None:
         "--policy", type=_path, required=True, help="a saved policy: policy.json or recurrent_ppo.zip (deep)"
     )
     _add_points(p, "start point")
-    p.add_argument("--log", type=_path, required=True, help="CSV step log to write")
+    p.add_argument(
+        "--log",
+        type=_path,
+        required=True,
+        help="step log to write: CSV, or an MCAP record in Foxglove's schemas for a name ending in .mcap "
+        "(extra crmgrasp[mcap])",
+    )
     _add_noise(p)
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
     _add_hand(p)

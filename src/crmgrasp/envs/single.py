@@ -29,6 +29,8 @@ __all__ = [
     "SPATIAL_ENVS",
     "CONTINUOUS_ENVS",
     "observation_space",
+    "space_observation",
+    "MUJOCO_ENVS",
 ]
 
 ENV_ID = "crmgrasp/PaperBox-v0"
@@ -45,6 +47,21 @@ def observation_space(model: ContactModel) -> spaces.Dict:
         for name, (low, high) in model.observation_bounds().items()
     }
     return spaces.Dict({**boxes, "error": spaces.Discrete(len(Error))})
+
+
+def space_observation(clip: list[tuple[str, float, float]], res: OneStep) -> dict[str, Any]:
+    """A step's observation as an [`observation_space`][crmgrasp.envs.single.observation_space]
+    value: each ``(name, low, high)`` of ``clip`` (the model's order) clipped into its box,
+    and the error flag."""
+    obs: dict[str, Any] = {}
+    for (name, low, high), v in zip(clip, res.observation):
+        if not (low <= v <= high):
+            v = low if v < low else high
+        box = _empty(1)  # cheaper than np.array([v])
+        box[0] = v
+        obs[name] = box
+    obs["error"] = int(res.error)
+    return obs
 
 
 class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
@@ -117,14 +134,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
     def _emit(self, res: OneStep) -> tuple[dict[str, Any], dict[str, Any]]:
         """The observation (clipped into the space) and ``info`` of a kernel's result."""
         self._state = res.state
-        obs: dict[str, Any] = {}
-        for (name, low, high), v in zip(self._clip, res.observation):
-            if not (low <= v <= high):
-                v = low if v < low else high
-            box = _empty(1)  # cheaper than np.array([v])
-            box[0] = v
-            obs[name] = box
-        obs["error"] = int(res.error)
+        obs = space_observation(self._clip, res)
         info = {
             "obs_index": res.obs_index,
             "config": res.state.config,
@@ -282,9 +292,19 @@ CONTINUOUS_ENVS = {
 ([`ContinuousCRMEnv`][crmgrasp.envs.continuous.ContinuousCRMEnv]): id -> task name."""
 
 
+MUJOCO_ENVS = {
+    "crmgrasp/PaperBoxMujoco-v0": "paper-box",
+    "crmgrasp/BoxFamilyMujoco-v0": "box-family",
+    "crmgrasp/Cup3DMujoco-v0": "cup-3d",
+    "crmgrasp/Box3DMujoco-v0": "box-3d",
+}
+"""Registered environments whose steps are CRMs of the MuJoCo stand-in hand
+(`crmgrasp.hardware.mujoco.env.MujocoCRMEnv`, extra ``crmgrasp[mujoco]``): id -> task name."""
+
+
 def register() -> None:
-    """Register ``crmgrasp/PaperBox-v0``, the [`FAMILY_ENVS`][], the [`SPATIAL_ENVS`][] and the
-    [`CONTINUOUS_ENVS`][] (idempotent). Every registered task cuts episodes at 10 CRMs (its
+    """Register ``crmgrasp/PaperBox-v0``, the [`FAMILY_ENVS`][], the [`SPATIAL_ENVS`][], the
+    [`CONTINUOUS_ENVS`][] and the [`MUJOCO_ENVS`][] (idempotent). Every registered task cuts episodes at 10 CRMs (its
     ``max_steps``: the env cuts them there itself)."""
     kinds = (
         ({ENV_ID: "paper-box"}, "single:CRMGraspEnv", "vector:CRMGraspVectorEnv"),
@@ -301,6 +321,14 @@ def register() -> None:
                     kwargs={"task": task},
                     max_episode_steps=10,
                 )
+    for env_id, task in MUJOCO_ENVS.items():  # the entry point is imported by gymnasium.make only
+        if env_id not in gym.registry:
+            gym.register(
+                id=env_id,
+                entry_point="crmgrasp.hardware.mujoco.env:MujocoCRMEnv",
+                kwargs={"task": task},
+                max_episode_steps=10,
+            )
 
 
 register()

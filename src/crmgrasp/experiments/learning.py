@@ -16,7 +16,9 @@ Used by ``crmgrasp learn`` and by Figure 7. Files written to the output folder:
   = never), ``converged`` (whether ``episodes_to_5pct`` was reached), wall time,
   ``prior`` (the prior's task, episodes, weight and seed when the run used one:
   episodes on another task, learned once and shared by every trial; null when the run
-  learned from scratch);
+  learned from scratch), ``hand`` (``kinematic``, or the hand the episodes ran on:
+  ``mujoco``) and ``faults`` (episodes that hand ended early, by kind: physics faults
+  and lost contacts; training and evaluation together);
 * ``checkpoints.csv``: ``episode,greedy_mean_steps,greedy_sem_steps``;
 * ``policy.json``: the greedy policy of the trial with the best greedy score;
 * ``learning_curve.png``.
@@ -25,6 +27,7 @@ Used by ``crmgrasp learn`` and by Figure 7. Files written to the output folder:
 from __future__ import annotations
 
 import time
+from collections import Counter
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -50,6 +53,7 @@ from crmgrasp.agents.training import (
 from crmgrasp.experiments.parallel import run_parallel, usable_jobs
 from crmgrasp.experiments.runs import RunFolder
 from crmgrasp.experiments.stats import bootstrap_ci, budget, iqm
+from crmgrasp.hardware import hand_steps
 from crmgrasp.tasks import Task
 
 __all__ = ["LearnerSpec", "LearnRun", "learn", "write_learn_outputs", "SYMMETRIC_DYNA_Q", "usable"]
@@ -106,6 +110,7 @@ class _Part:
     checkpoint_steps: np.ndarray
     policy: GreedyPolicy | None
     score: float
+    faults: dict[str, int] = field(default_factory=dict)
 
 
 _ARRAYS = ("steps", "success", "greedy_steps", "greedy_success", "checkpoints", "checkpoint_steps")
@@ -117,7 +122,7 @@ def _part(task: Task, spec: LearnerSpec, res: TrialResult) -> _Part:
     best = int(np.argmin(scores))
     agent = res.agents[best]
     policy = GreedyPolicy.from_agent(task, spec.k, agent) if isinstance(agent, (TabularAgent, SymmetricAgent)) else None
-    return _Part(*arrays, policy, float(scores[best]))  # type: ignore[misc,call-arg]
+    return _Part(*arrays, policy, float(scores[best]), res.faults)  # type: ignore[misc,call-arg]
 
 
 def _save_part(store: RunFolder, unit: str, part: _Part) -> None:
@@ -126,7 +131,7 @@ def _save_part(store: RunFolder, unit: str, part: _Part) -> None:
         np.savez(fh, **{a: getattr(part, a) for a in _ARRAYS})
     if part.policy is not None:
         part.policy.save(stem.with_suffix(".policy.json"))
-    store.complete(unit, {"file": str(stem.relative_to(store.path)), "score": part.score})
+    store.complete(unit, {"file": str(stem.relative_to(store.path)), "score": part.score, "faults": part.faults})
 
 
 def _load_part(task: Task, store: RunFolder, unit: str, info: Any, trials: int, episodes: int) -> _Part:
@@ -142,7 +147,10 @@ def _load_part(task: Task, store: RunFolder, unit: str, info: Any, trials: int, 
         raise CrmgraspError(f"cannot resume: {unit} of {str(store.path)!r} has the wrong shape")
     pol = stem.with_suffix(".policy.json")
     policy = GreedyPolicy.load(pol, task) if pol.exists() else None
-    return _Part(*arrays, policy, float(info["score"]))  # type: ignore[misc,call-arg]
+    faults = info.get("faults", {})
+    if not isinstance(faults, dict) or not all(isinstance(v, int) for v in faults.values()):
+        raise CrmgraspError(f"run record of {str(store.path)!r} is damaged ({unit}: faults)")
+    return _Part(*arrays, policy, float(info["score"]), faults)  # type: ignore[misc,call-arg]
 
 
 def _groups(trials: int, lockstep: bool) -> list[tuple[int, int]]:
@@ -164,6 +172,7 @@ class _GroupJob:
     eval_episodes: int
     checkpoint_episodes: int
     backend: str
+    hand: str = "kinematic"
 
     def __call__(self, first: int, n: int, progress: Progress | None = None) -> _Part:
         trainer = train_trials_lockstep if self.lockstep else train_trials
@@ -181,8 +190,16 @@ class _GroupJob:
             backend=self.backend,
             first_trial=first,
             progress=progress,
+            **({"stepper": hand_steps(self.hand)} if self.hand != "kinematic" else {}),
         )
         return _part(self.task, self.spec, res)
+
+
+def check_hand(hand: str, lockstep: bool = False) -> None:
+    """One-line errors for a hand that cannot run: unknown, its extra missing, or with
+    ``lockstep`` (which steps the kinematic model only)."""
+    if hand_steps(hand) is not None and lockstep:
+        raise CrmgraspError(f"lockstep steps the kinematic model only, not the {hand} hand")
 
 
 def learn(
@@ -199,6 +216,7 @@ def learn(
     store: RunFolder | None = None,
     progress: Progress | None = None,
     jobs: int = 1,
+    hand: str = "kinematic",
 ) -> LearnRun:
     """Train ``trials`` independent agents and summarise them. Episodes step through the
     task's kernel on ``backend`` ([`crmgrasp.kernels.kernel_for`][]), one trial after
@@ -209,11 +227,15 @@ def learn(
     (``trials/*.npz`` and the group's best policy) and groups already recorded there are
     loaded instead of trained: a resumed run gives the results of an uninterrupted one.
     ``progress`` shows the training episodes done. ``jobs`` worker processes (0: every
-    usable core) train groups of trials at once; the results do not depend on it."""
+    usable core) train groups of trials at once; the results do not depend on it.
+    ``hand`` runs every episode (training, checkpoints, evaluation) on another hand of
+    [`crmgrasp.hardware.HANDS`][] (``mujoco``: the physics stand-in) instead of the
+    kinematic model."""
     check_budget(trials, episodes, eval_episodes)
     usable_jobs(jobs)  # a bad value fails before any work
+    check_hand(hand, lockstep)
     t0 = time.perf_counter()
-    job = _GroupJob(task, spec, lockstep, episodes, seed, eval_episodes, checkpoint_episodes, backend)
+    job = _GroupJob(task, spec, lockstep, episodes, seed, eval_episodes, checkpoint_episodes, backend, hand)
     parts: dict[int, _Part] = {}
     stage = progress.stage(f"{spec.name} on {task.name}", trials * episodes, "episodes") if progress else None
     pending = []
@@ -245,9 +267,11 @@ def learn(
     if stage:
         stage.end()
     joined = {a: np.concatenate([getattr(p, a) for p in parts_list]) for a in _ARRAYS if a != "checkpoints"}
-    res = TrialResult(agents=[], checkpoints=parts_list[0].checkpoints, **joined)
+    res = TrialResult(agents=[], checkpoints=parts_list[0].checkpoints, **joined)  # type: ignore[arg-type]
     best = min(range(len(parts_list)), key=lambda i: (parts_list[i].score, i))
     summary = _summary(task, spec, res, trials, episodes, seed, eval_episodes, checkpoint_episodes)
+    summary["hand"] = hand
+    summary["faults"] = dict(sorted(sum((Counter(p.faults) for p in parts_list), Counter()).items()))
     summary["seconds"] = round(time.perf_counter() - t0, 3)
     return LearnRun(spec, res, summary, parts_list[best].policy)
 

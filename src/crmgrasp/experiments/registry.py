@@ -285,6 +285,23 @@ def _spatial_mujoco(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> t
     ]
 
 
+def _physics_learning(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
+    from crmgrasp.experiments.physics_learning import PhysicsLearningConfig, physics_learning
+
+    cfg = PhysicsLearningConfig.quick(seed) if quick else PhysicsLearningConfig(seed=seed)
+    s = physics_learning(out, cfg, progress=ctx.get("progress"), jobs=ctx.get("jobs", 1))
+    rows: list[Row] = []
+    for name, t in s["tasks"].items():
+        cells = []
+        for way in ("transferred", "scratch", "fine-tuned"):
+            w = t[way]
+            cells.append(f"{way} {w['success']:.0%} ({w['crms']} CRMs, {w['mujoco_episodes']} MuJoCo episodes)")
+        rows.append((f"{name}: true success on MuJoCo, {t['seeds']} seeds", "; ".join(cells), "-"))
+    sec = s["mujoco_episode_seconds"]
+    rows.append(("MuJoCo training episode, median / max wall time", f"{sec['median']} / {sec['max']} s", "-"))
+    return s, rows
+
+
 def _third_contact(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
     from crmgrasp.experiments.third_contact import ThirdContactConfig, third_contact
 
@@ -366,6 +383,10 @@ EXPERIMENTS: dict[str, tuple[str, Runner]] = {
         "Discussion in 3-D on the MuJoCo stand-in: the spatial policies on cups and boxes free on a table, 20 worlds",
         _spatial_mujoco,
     ),
+    "physics-learning": (
+        "Learning on the MuJoCo stand-in: transferred, from scratch and fine-tuned on paper-box, box-family, cup-3d",
+        _physics_learning,
+    ),
 }
 """Experiment name -> (description, runner(out_dir, seed, quick, context))."""
 
@@ -380,6 +401,7 @@ QUICK_BUDGETS = {
     "third-contact": ("20 starts, triangles at 0.15 only, 1 trial x 200 episodes", ("triangles",)),
     "continuous-offsets": ("30 starts, grids 4, 5, 9, 2 trials x 200 episodes, 2 tasks", ("paper-box", "u-handle")),
     "spatial-mujoco": ("1 trial x 300 episodes, 4 worlds per task", ("cup-3d", "box-3d")),
+    "physics-learning": ("1 seed, 5 MuJoCo / 100 kinematic episodes, 3 scoring episodes", ("paper-box", "box", "cup")),
 }
 """Experiments whose learned numbers ``--quick`` computes on a smaller budget: that
 budget, and the first words of the quantities that depend on it."""
@@ -393,13 +415,14 @@ GROUPS = (
     ("generalization",),
     ("spatial",),
     ("spatial-mujoco",),
+    ("physics-learning",),
     ("figure7", "figure8", "figure9", "figure9-mujoco"),
     ("figure4", "figure4-mujoco"),
 )
 """Experiments that run in one process, in this order, when ``reproduce`` runs groups in
 parallel (Figures 8 and 9 execute Figure 7's policy); longest expected group first."""
 
-NEEDS_MUJOCO = ("figure4-mujoco", "figure9-mujoco", "spatial-mujoco")
+NEEDS_MUJOCO = ("figure4-mujoco", "figure9-mujoco", "spatial-mujoco", "physics-learning")
 """The experiments that need the extra ``crmgrasp[mujoco]`` (skipped without it)."""
 
 IMAGES = {
@@ -418,4 +441,5 @@ IMAGES = {
     "figure4-mujoco": ["figure4_mujoco.png"],
     "figure9-mujoco": ["figure9_mujoco.png", "figure9_mujoco.gif"],
     "spatial-mujoco": ["spatial_mujoco.png", "spatial_mujoco.gif"],
+    "physics-learning": ["physics_learning.png"],
 }

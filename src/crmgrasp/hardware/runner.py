@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 import os
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
@@ -28,10 +29,10 @@ from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import CRM, Error
 from crmgrasp.model.sensing import SensorNoise
 from crmgrasp.model.spatial import CRM3D, Config3D
-from crmgrasp.sim import OneStep, Percept, SimState, run_episode
+from crmgrasp.sim import OneStep, Percept, SimState, run_episode, step_reward
 from crmgrasp.tasks import Task
 
-__all__ = ["HandInterface", "KinematicHand", "PolicyRunner", "RunResult", "log_columns"]
+__all__ = ["HandInterface", "HandSteps", "KinematicHand", "PolicyRunner", "RunResult", "log_columns"]
 
 RUN_COLUMNS = ["obs_index", "observation", "action", "crm", "error", "raw"]
 """The columns of a step log after the contacts and the observation: the observation's bin
@@ -114,9 +115,11 @@ class PolicyRunner:
         self, hand: HandInterface, rng: np.random.Generator, log: str | os.PathLike[str] | None = None
     ) -> RunResult:
         """Run one episode through the one episode loop ([`crmgrasp.sim.run_episode`][],
-        with the hand as its stepper); write the step log to ``log`` (CSV) if given."""
+        with the hand as its stepper); write the step log to ``log`` if given: CSV, or an
+        MCAP record in Foxglove's schemas for a name ending in ``.mcap``
+        ([`crmgrasp.hardware.records`][], extra ``crmgrasp[mcap]``)."""
         t = self.task
-        steps = _HandSteps(t, hand)
+        steps = HandSteps(t, hand)
         episode = run_episode(t, _Predicting(self.policy, rng), rng, trace=True, kernel=steps)
         rows = [steps.row(tr.before, tr.action, tr.after.error) for tr in episode.trace]  # type: ignore[arg-type]
         last = episode.trace[-1].after if episode.trace else steps.first
@@ -129,7 +132,16 @@ class PolicyRunner:
         else:
             result = RunResult(last.state.steps, False, "step limit")
         result.rows = rows
-        if log is not None:
+        if log is not None and str(log).endswith(".mcap"):
+            from crmgrasp.hardware.records import write_mcap
+
+            trace: list[tuple[OneStep, Any, Error | None]] = [
+                (tr.before, tr.action, tr.after.error) for tr in episode.trace
+            ]
+            if steps.lost is None:
+                trace.append((last, None, None))
+            write_mcap(Path(log), [steps.record(*item) for item in trace], t.name)
+        elif log is not None:
             write_csv(log, log_columns(t), rows)
         return result
 
@@ -138,17 +150,26 @@ _HERE = object()
 """The start of a run on a hand: wherever the hand is."""
 
 
-class _HandSteps:
+class HandSteps:
     """A hand as the episode loop's stepper: each step executes the CRM on the hand, then
     senses once. The episode ends when the *sensed* configuration is a grasp (all a real
     robot can check), when contact is lost, or after ``max_steps`` CRMs. It keeps what the
-    step log needs beside the steps: the raw sensor values of every reading."""
+    step log needs beside the steps: the raw sensor values of every reading.
 
-    def __init__(self, task: Task, hand: HandInterface) -> None:
-        self.task, self.hand = task, hand
+    ``min_friction`` of a step is that of the sensed configuration ([`score`][] may
+    override it: a simulated hand can report the truth)."""
+
+    def __init__(self, task: Task, hand: HandInterface | None = None) -> None:
+        self.task = task
+        self.hand: HandInterface = hand  # type: ignore[assignment]  # set by begin where None
         self.raws: list[dict[str, Any]] = []
+        self.clock: list[tuple[float, Any]] = []  # per reading: the hand's time (s) and the object's pose
         self.lost: str | None = None
         self.first: OneStep
+
+    def score(self, reading: Config | Config3D) -> float:
+        """The ``min_friction`` a step reports: that of the sensed configuration."""
+        return float(self.task.quality(reading))
 
     def _sense(self, steps: int, error: Error) -> OneStep:
         t, reading = self.task, self.hand.sense()
@@ -158,15 +179,18 @@ class _HandSteps:
             lost = (nan,) * len(t.model.observation_names)
             return OneStep(SimState(None, None, steps), lost, error, -1, nan, -1.0, False, True)  # type: ignore[arg-type]
         self.raws.append(getattr(self.hand, "raw_reading", dict)())
+        pose = getattr(self.hand, "object_pose", None)
+        self.clock.append((float(getattr(self.hand, "time", steps)), None if pose is None else pose()))
         obs = t.observe(reading)
-        mu = t.quality(reading)
-        grasped = bool(t.grasped(mu))
+        grasped = bool(t.grasped(t.quality(reading)))
         index = t.discretizer.index(obs, error)
         end = steps >= t.max_steps and not grasped
         state = SimState(reading, reading, steps)  # type: ignore[arg-type]
-        return OneStep(state, obs, error, index, mu, -1.0, grasped, end)
+        reward = step_reward(t, grasped, error)
+        return OneStep(state, obs, error, index, self.score(reading), reward, grasped, end)
 
     def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
+        self.raws, self.clock, self.lost = [], [], None
         self.first = self._sense(0, Error.NONE)
         return self.first
 
@@ -191,6 +215,28 @@ class _HandSteps:
             index = "" if t.model.is_crm(action) else action  # a CRM of the continuous space has no index
             row += [index, str(t.crm(action)), error.name.lower()]
         return [*row, dumps_json(self.raws[now.state.steps], indent=None)]
+
+    def record(self, now: OneStep, action: Any = None, error: Error | None = None) -> Any:
+        """The MCAP record ([`StepRecord`][crmgrasp.hardware.records.StepRecord]) of a
+        reading and the CRM taken after it."""
+        from crmgrasp.hardware.records import StepRecord, contact_frames
+
+        t, k = self.task, now.state.steps
+        time, pose = self.clock[k]
+        rec = StepRecord(
+            time=time,
+            step=k,
+            contacts=contact_frames(t.model, now.state.sensed),
+            observation={name: float(v) for name, v in zip(t.model.observation_names, now.observation)},
+            obs_index=now.obs_index,
+            label=t.discretizer.label(now.obs_index),
+            raw=self.raws[k],
+            pose=pose,
+        )
+        if action is not None and error is not None:
+            rec.action = None if t.model.is_crm(action) else int(action)
+            rec.crm, rec.error = str(t.crm(action)), error.name.lower()
+        return rec
 
 
 class _Predicting:

@@ -45,7 +45,23 @@ from crmgrasp.model.contacts import Config, Contact
 from crmgrasp.model.hand import CRM, Error, faces_palm, goal_line, palm_point
 from crmgrasp.tasks import Task
 
-__all__ = ["MujocoHand"]
+__all__ = ["MujocoHand", "PhysicsError", "FAULTS"]
+
+FAULTS = ("unstable", "penetration", "off the table")
+"""The kinds of [`PhysicsError`][]."""
+
+
+class PhysicsError(CrmgraspError):
+    """A CRM (or the placement) after which MuJoCo's state cannot be trusted: ``kind`` is one
+    of [`FAULTS`][]: ``"unstable"`` (a state that is not finite, or MuJoCo's own bad
+    acceleration warning, after which it resets the state), ``"penetration"`` (two geoms
+    interpenetrate by more than ``PhysicsParams.max_penetration``) or ``"off the table"``
+    (the object's centre moved more than ``PhysicsParams.max_displacement``)."""
+
+    def __init__(self, kind: str, detail: str) -> None:
+        super().__init__(f"physics fault ({kind}): {detail}")
+        self.kind = kind
+
 
 LABELS = ("a", "b")
 
@@ -102,6 +118,8 @@ class MujocoHand:
         self.on_tick: Callable[[MujocoHand], None] | None = None
         """Called after every control tick (e.g. to record animation frames)."""
         self._place(start)
+        self._home = np.array(self.data.qpos[:3])
+        self.check_physics()
 
     # -- the scene's geometry (overridden by the spatial hand) ----------------------
     def _scene(self) -> str:
@@ -286,19 +304,40 @@ class MujocoHand:
             return None
         return Config(found[0], found[1])
 
+    @property
+    def time(self) -> float:
+        """The simulated time, s (the clock of the hand's records)."""
+        return float(self.data.time)
+
     def object_pose(self) -> tuple[float, float, float]:
         """Object position ``(x, y)`` (m) and yaw (rad) in the world."""
         q = self.data.qpos
         return float(q[0]), float(q[1]), 2.0 * math.atan2(float(q[6]), float(q[3]))
 
+    def check_physics(self) -> None:
+        """Raise [`PhysicsError`][] if MuJoCo's state cannot be trusted (see there)."""
+        d, p, mj = self.data, self.params, self.mj
+        warned = (mj.mjtWarning.mjWARN_BADQACC, mj.mjtWarning.mjWARN_BADQPOS, mj.mjtWarning.mjWARN_BADQVEL)
+        if not (np.isfinite(d.qpos).all() and np.isfinite(d.qvel).all()) or any(d.warning[w].number for w in warned):
+            raise PhysicsError("unstable", "the simulation state diverged")
+        if d.ncon and float(d.contact.dist.min()) < -p.max_penetration:
+            depth = -float(d.contact.dist.min())
+            raise PhysicsError("penetration", f"geoms interpenetrate by {depth * 1e3:.1f} mm")
+        shift = float(np.linalg.norm(d.qpos[:3] - self._home))
+        if shift > p.max_displacement:
+            raise PhysicsError("off the table", f"the object moved {shift:.2f} m")
+
     # -- CRMs ------------------------------------------------------------------
     def execute(self, crm: Any) -> Error:
-        """Execute ``crm`` as a real motion; return its error flag."""
+        """Execute ``crm`` as a real motion; return its error flag, or raise
+        [`PhysicsError`][] if the physics went wrong on the way."""
         t0 = time.perf_counter()
         try:
-            return self._execute(self.task.hand.check_crm(crm))
+            error = self._execute(self.task.hand.check_crm(crm))
         finally:
             self.crm_seconds.append(time.perf_counter() - t0)
+        self.check_physics()
+        return error
 
     def _execute(self, crm: CRM) -> Error:
         s = self._sensed if self._sensed is not None else self.sense()

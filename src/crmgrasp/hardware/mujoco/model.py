@@ -64,7 +64,8 @@ class PhysicsParams:
     filter_tau: float = 0.5
     """High-pass filter time constant, s."""
     contact_threshold: float = 0.2
-    """Smallest tared force that [`MujocoHand.sense`][] accepts as contact, N."""
+    """Smallest tared force that [`MujocoHand.sense`][crmgrasp.hardware.mujoco.hand.MujocoHand.sense]
+    accepts as contact, N."""
     force_noise: float = 0.01
     """Standard deviation of each force channel's white noise, N."""
     torque_noise: float = 2e-5
@@ -78,9 +79,15 @@ class PhysicsParams:
     torque_drift: float = 1e-5
     """Standard deviation of each torque channel's drift rate, N m/s."""
     sense_ticks: int = 5
-    """Control ticks averaged by one [`MujocoHand.sense`][]."""
+    """Control ticks averaged by one [`MujocoHand.sense`][crmgrasp.hardware.mujoco.hand.MujocoHand.sense]."""
     settle_ticks: int = 20
     """Ticks a fingertip holds after contact before the CRM ends."""
+    max_penetration: float = 0.005
+    """Deepest interpenetration of two geoms after a CRM before it counts as a physics fault, m
+    (MuJoCo's soft contacts sink about 0.7 mm under the 2 N holds)."""
+    max_displacement: float = 0.3
+    """Farthest the object's centre may move from where it was placed before the CRM counts
+    as a physics fault (the object thrown off the table), m."""
 
     def __post_init__(self) -> None:
         for f in fields(self):
