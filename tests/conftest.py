@@ -25,3 +25,22 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE") or ("ci" if os.enviro
 @pytest.fixture
 def task():
     return paper_box()
+
+
+@pytest.fixture
+def hide_module(monkeypatch):
+    """``hide_module(name)``: ``importlib.import_module(name)`` raises ImportError, as without
+    the optional extra that provides it (for the one-line install hints)."""
+    import importlib
+
+    real = importlib.import_module
+
+    def hide(name: str) -> None:
+        def importer(wanted: str, *args: object) -> object:
+            if wanted == name:
+                raise ImportError(f"No module named {name!r}")
+            return real(wanted, *args)
+
+        monkeypatch.setattr(importlib, "import_module", importer)
+
+    return hide

@@ -138,21 +138,12 @@ def test_the_history_wrapper_passes_check_env_and_is_recreated_from_its_spec():
     assert again.reset(seed=3)[0] == env.reset(seed=3)[0]
 
 
-def test_mujoco_envs_are_registered_and_name_a_missing_extra(monkeypatch):
+def test_mujoco_envs_are_registered_and_name_a_missing_extra(hide_module):
     """Without MuJoCo, making a MuJoCo environment is one line naming the extra."""
-    import importlib
-
     from crmgrasp.envs.single import MUJOCO_ENVS
 
     assert set(MUJOCO_ENVS) <= set(gym.registry)
-    real = importlib.import_module
-
-    def no_mujoco(name, *args):
-        if name == "mujoco":
-            raise ImportError("No module named 'mujoco'")
-        return real(name, *args)
-
-    monkeypatch.setattr(importlib, "import_module", no_mujoco)
+    hide_module("mujoco")
     with pytest.raises(
         CrmgraspError, match=r"^the MuJoCo stand-in needs the optional extra: pip install 'crmgrasp\[mujoco\]'"
     ):

@@ -224,3 +224,16 @@ def test_an_interrupted_mujoco_run_resumes_to_identical_results(tmp_path, monkey
     assert (cut / "curve.csv").read_bytes() == (full / "curve.csv").read_bytes()
     faults = [json.loads((d / "summary.json").read_text())["faults"] for d in (full, cut)]
     assert faults[0] == faults[1]
+
+
+def test_mujoco_env_starts_from_a_given_config_or_world():
+    env = gym.make("crmgrasp/PaperBoxMujoco-v0").unwrapped
+    near = env.task.place((-0.15, -0.02), (-0.10, -0.05))  # docs/model.md section 7
+    obs, info = env.reset(seed=0, options={"config": near})
+    assert abs(obs["rho"][0] - 2.0) < 0.05 and abs(obs["m_a"][0] - 0.05) < 0.005
+    fam = gym.make("crmgrasp/BoxFamilyMujoco-v0").unwrapped
+    world = fam.task.sample_world(np.random.default_rng(3))
+    obs, info = fam.reset(seed=0, options={"world": world})
+    assert fam.steps.instance.obj == world.task.obj and info["steps"] == 0
+    with pytest.raises(CrmgraspError, match="options\\['world'\\] must be a World"):
+        fam.reset(options={"world": "a box"})

@@ -1,7 +1,6 @@
 """MCAP records of runs on a hand (needs the extra ``crmgrasp[mcap]``; skipped without it)."""
 
 import csv
-import importlib
 import json
 
 import numpy as np
@@ -99,14 +98,7 @@ def test_a_failed_write_leaves_nothing(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_missing_extra_is_one_line(monkeypatch):
-    real = importlib.import_module
-
-    def no_foxglove(name, *args):
-        if name == "foxglove":
-            raise ImportError("No module named 'foxglove'")
-        return real(name, *args)
-
-    monkeypatch.setattr(importlib, "import_module", no_foxglove)
+def test_missing_extra_is_one_line(hide_module):
+    hide_module("foxglove")
     with pytest.raises(CrmgraspError, match=r"pip install 'crmgrasp\[mcap\]'"):
         records.require_mcap()

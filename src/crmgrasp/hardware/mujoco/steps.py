@@ -116,14 +116,15 @@ class MujocoSteps(HandSteps):
         from crmgrasp.hardware.mujoco.spatial import mujoco_hand
 
         self.episodes += 1
-        self.raws, self.lost, self.fault = [], None, None
+        self.raws, self.clock, self.lost, self.fault = [], [], None, None
+        start = SimState(config, config, 0)
         try:
             self.hand = mujoco_hand(self.instance, config, rng, self.params)
         except PhysicsError as fault:
-            return self._ended(SimState(config, config, 0), fault.kind, Error.NONE, start=True)
-        now = self._sense(0, Error.NONE)
-        if self.lost is not None:
-            return self._ended(SimState(config, config, 0), LOST, Error.NONE, start=True)
+            return self._ended(start, fault.kind, Error.NONE, start=True)
+        now, kind = self._guarded(lambda: self._sense(0, Error.NONE))
+        if kind is not None or self.lost is not None:
+            return self._ended(start, kind or LOST, Error.NONE, start=True)
         self._last = self.first = now
         return now
 
