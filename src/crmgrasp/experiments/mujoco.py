@@ -35,7 +35,7 @@ from crmgrasp.hardware.mujoco import hardware_task
 from crmgrasp.hardware.mujoco.hand import MujocoHand
 from crmgrasp.hardware.mujoco.model import PhysicsParams
 from crmgrasp.hardware.runner import KinematicHand, PolicyRunner, log_columns
-from crmgrasp.model.contacts import Config, two_contacts
+from crmgrasp.model.contacts import Config, Grip, two_contacts
 from crmgrasp.model.hand import CRM, Error, execute_crm
 from crmgrasp.model.quality import min_friction
 from crmgrasp.model.spatial import Config3D
@@ -77,8 +77,8 @@ class SensingErrors:
         self.position: list[float] = []
         self.normal: list[float] = []
 
-    def add(self, sensed: Config | Config3D | NoContact, true: Config | Config3D | None) -> None:
-        """Record both contacts of one reading (skipped if either side has no contact)."""
+    def add(self, sensed: Config | Grip | Config3D | NoContact, true: Config | Grip | Config3D | None) -> None:
+        """Record every contact of one reading (skipped if either side has no contact)."""
         if isinstance(sensed, NoContact) or true is None:
             return
         for s, t in zip(sensed, true):

@@ -256,7 +256,11 @@ def _curves(out: Path, c: PhysicsLearningConfig, results: dict) -> None:
         ax.set_xlabel("MuJoCo training episode")
         ax.set_ylabel("CRMs per episode (10-episode mean)")
         ax.legend(fontsize=7)
-    fig.suptitle(f"pooled-vi learning on the MuJoCo stand-in; kinematic prior: {c.kinematic_episodes} episodes")
+    seeds = f"seeds {c.seed}-{c.seed + c.seeds - 1}" if c.seeds > 1 else f"seed {c.seed}"
+    fig.suptitle(
+        f"pooled-vi training episodes on the MuJoCo stand-in ({seeds}; exploration included): from scratch, "
+        f"and fine-tuned after {c.kinematic_episodes:,} kinematic episodes"
+    )
     fig.tight_layout()
     save_figure(fig, out / "physics_learning.png", dpi=110)
     write_csv(out / "curves.csv", ["task", "way", "episode", "mean_crms", "true_success_rate"], rows)

@@ -295,7 +295,7 @@ def _physics_learning(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) ->
         cells = []
         for way in ("transferred", "scratch", "fine-tuned"):
             w = t[way]
-            cells.append(f"{way} {w['success']:.0%} ({w['crms']} CRMs, {w['mujoco_episodes']} MuJoCo episodes)")
+            cells.append(f"{way} {w['success']:.1%} ({w['crms']} CRMs, {w['mujoco_episodes']} MuJoCo episodes)")
         rows.append((f"{name}: true success on MuJoCo, {t['seeds']} seeds", "; ".join(cells), "-"))
     sec = s["mujoco_episode_seconds"]
     rows.append(("MuJoCo training episode, median / max wall time", f"{sec['median']} / {sec['max']} s", "-"))

@@ -51,7 +51,7 @@ def log_columns(task: Task) -> list[str]:
 class HandInterface(Protocol):
     """What a hand must offer to run CRM policies."""
 
-    def sense(self) -> Config | Config3D | NoContact: ...
+    def sense(self) -> Config | Grip | Config3D | NoContact: ...
 
     def execute(self, crm: Any) -> Error:
         """Perform ``crm`` (a [`CRM`][crmgrasp.model.hand.CRM], or a
@@ -68,9 +68,9 @@ class KinematicHand:
     ):
         self.task = task if noise is None else dataclasses.replace(task, noise=noise)
         self.config, self.rng = task.check_config(start, "start"), rng
-        self._reading: Config | Config3D | None = None
+        self._reading: Config | Grip | Config3D | None = None
 
-    def sense(self) -> Config | Config3D:
+    def sense(self) -> Config | Grip | Config3D:
         """One noisy reading of the current configuration."""
         self._reading = self.task.read(self.config, self.rng)
         return self._reading
@@ -167,7 +167,7 @@ class HandSteps:
         self.lost: str | None = None
         self.first: OneStep
 
-    def score(self, reading: Config | Config3D) -> float:
+    def score(self, reading: Config | Grip | Config3D) -> float:
         """The ``min_friction`` a step reports: that of the sensed configuration."""
         return float(self.task.quality(reading))
 

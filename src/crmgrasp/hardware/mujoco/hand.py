@@ -41,7 +41,7 @@ from crmgrasp._validation import CrmgraspError
 from crmgrasp.hardware.contact_sensing import Circle, ContactDetector, NoContact, contact_from_wrench
 from crmgrasp.hardware.mujoco import require_mujoco
 from crmgrasp.hardware.mujoco.model import PhysicsParams, mjcf
-from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.contacts import Config, Contact, Grip
 from crmgrasp.model.hand import CRM, Error, faces_palm, goal_line, palm_point
 from crmgrasp.tasks import Task
 
@@ -64,6 +64,7 @@ class PhysicsError(CrmgraspError):
 
 
 LABELS = ("a", "b")
+"""The fingertips of the two-contact hand (a hand of N contacts has its model's labels)."""
 
 
 class MujocoHand:
@@ -92,25 +93,29 @@ class MujocoHand:
         self.mj = require_mujoco()
         params = PhysicsParams() if params is None else params
         self.task, self.params, self.rng = task, params, rng
+        self.labels = tuple(task.model.labels)
+        """The fingertips, in the contact model's order (``a, b``; ``a, b, c`` for three fingers)."""
+        n = len(self.labels)
         self.model = self.mj.MjModel.from_xml_string(self._scene())
         self.data = self.mj.MjData(self.model)
         m = self.model
-        self._tip_geom = [self.mj.mj_name2id(m, self.mj.mjtObj.mjOBJ_GEOM, f"tip_{x}") for x in LABELS]
-        self._site = [self.mj.mj_name2id(m, self.mj.mjtObj.mjOBJ_SITE, f"tip_{x}") for x in LABELS]
+        self._tip_geom = [self.mj.mj_name2id(m, self.mj.mjtObj.mjOBJ_GEOM, f"tip_{x}") for x in self.labels]
+        self._site = [self.mj.mj_name2id(m, self.mj.mjtObj.mjOBJ_SITE, f"tip_{x}") for x in self.labels]
         self._object = self.mj.mj_name2id(m, self.mj.mjtObj.mjOBJ_GEOM, "object")
         self._palm = self.mj.mj_name2id(m, self.mj.mjtObj.mjOBJ_GEOM, "palm")
         sd = np.array([params.force_noise] * 3 + [params.torque_noise] * 3)
         bias = np.array([params.force_bias] * 3 + [params.torque_bias] * 3)
         drift = np.array([params.force_drift] * 3 + [params.torque_drift] * 3)
         self._noise_sd = sd
-        self._bias = rng.normal(0.0, 1.0, size=(2, 6)) * bias
-        self._rates = rng.normal(0.0, 1.0, size=(2, 6)) * drift
-        self._tare = np.zeros((2, 6))
-        self._raw = np.zeros((2, 6))
-        self._wrench = np.zeros((2, 6))
-        self._sensors = [(int(m.sensor(f"force_{x}").adr[0]), int(m.sensor(f"torque_{x}").adr[0])) for x in LABELS]
-        self._cmd = np.zeros((2, 3))
-        self._sensed: Config | None = None
+        self._bias = rng.normal(0.0, 1.0, size=(n, 6)) * bias
+        self._rates = rng.normal(0.0, 1.0, size=(n, 6)) * drift
+        self._tare = np.zeros((n, 6))
+        self._raw = np.zeros((n, 6))
+        self._wrench = np.zeros((n, 6))
+        sensor = m.sensor
+        self._sensors = [(int(sensor(f"force_{x}").adr[0]), int(sensor(f"torque_{x}").adr[0])) for x in self.labels]
+        self._cmd = np.zeros((n, 3))
+        self._sensed: Config | Grip | None = None
         self._palm_hit = False
         self.tip = Circle(params.tip_radius)
         self.crm_seconds: list[float] = []
@@ -124,7 +129,7 @@ class MujocoHand:
     # -- the scene's geometry (overridden by the spatial hand) ----------------------
     def _scene(self) -> str:
         """The MJCF text of the scene."""
-        return mjcf(self.task, self.params)
+        return mjcf(self.task, self.params, tuple(self.task.model.labels))
 
     def _origin(self) -> np.ndarray:
         """World position of the carriages' origin (a servo target of 0)."""
@@ -134,10 +139,14 @@ class MujocoHand:
         """Geoms the palm must not overlap when it is switched on."""
         return [self._object]
 
+    def _config(self, contacts: list[Contact]) -> Config | Grip:
+        """The configuration of one contact per fingertip, in label order."""
+        return Config(*contacts) if len(contacts) == 2 else Grip(*contacts)
+
     def _palm_target(self) -> np.ndarray | None:
-        """The palm point ``P`` of the fingertip centres (None if they coincide)."""
-        (ax, ay, _), (bx, by, _) = self._centre(0).tolist(), self._centre(1).tolist()
-        px, py = palm_point(Config(Contact(ax, ay, 0.0, 0.0), Contact(bx, by, 0.0, 0.0)), self.task.hand.palm_depth)
+        """The palm point ``P`` of the fingertip centres (None if the outer two coincide)."""
+        centres = [self._centre(i).tolist() for i in range(len(self.labels))]
+        px, py = palm_point(self._config([Contact(x, y, 0.0, 0.0) for x, y, _ in centres]), self.task.hand.palm_depth)
         return np.array([px, py, self.params.height / 2]) if math.isfinite(px) else None
 
     # -- low level -------------------------------------------------------------
@@ -250,7 +259,7 @@ class MujocoHand:
         self.mj.mj_forward(self.model, d)
         for _ in range(10):
             self._tick()
-        for i in range(2):
+        for i in range(len(self.labels)):
             self._tare_tip(i)
         for i, c in enumerate(start):
             n = np.array(c.normal)
@@ -259,20 +268,20 @@ class MujocoHand:
         self._set_palm(True)
 
     def _read_wrench(self) -> np.ndarray:
-        """Both fingertips' wrenches ``(f, m)``, averaged over ``sense_ticks`` and tared, ``(2, 6)``."""
+        """Every fingertip's wrench ``(f, m)``, averaged over ``sense_ticks`` and tared, ``(N, 6)``."""
         p = self.params
-        acc = np.zeros((2, 6))
+        acc = np.zeros((len(self.labels), 6))
         for _ in range(p.sense_ticks):
             self._tick()
             acc += self._raw
         return acc / p.sense_ticks - self._tare
 
-    def sense(self) -> Config | NoContact:
-        """Both contacts from the tared, averaged fingertip wrenches (world frame)."""
+    def sense(self) -> Config | Grip | NoContact:
+        """Every contact from the tared, averaged fingertip wrenches (world frame)."""
         p = self.params
         wrench = self._read_wrench()
         contacts = []
-        for i, x in enumerate(LABELS):
+        for i, x in enumerate(self.labels):
             got = contact_from_wrench(self.tip, wrench[i, :2], float(wrench[i, 5]), p.contact_threshold)
             if isinstance(got, NoContact):
                 self._sensed = None
@@ -280,18 +289,18 @@ class MujocoHand:
             centre = self._centre(i)
             contacts.append(Contact(centre[0] + got.point[0], centre[1] + got.point[1], *got.normal))
         self._wrench = wrench
-        self._sensed = Config(*contacts)
+        self._sensed = self._config(contacts)
         return self._sensed
 
     def raw_reading(self) -> dict[str, Any]:
         """The tared wrench behind the last reading: ``f_x, f_y, m_z`` per fingertip (N, N m)."""
         w = self._wrench
-        return {x: [round(float(v), 6) for v in (w[i, 0], w[i, 1], w[i, 5])] for i, x in enumerate(LABELS)}
+        return {x: [round(float(v), 6) for v in (w[i, 0], w[i, 1], w[i, 5])] for i, x in enumerate(self.labels)}
 
-    def true_config(self) -> Config | None:
+    def true_config(self) -> Config | Grip | None:
         """The true contacts from MuJoCo's contact list (world frame), None if a tip is free."""
         d = self.data
-        found: list[Contact | None] = [None, None]
+        found: list[Contact | None] = [None] * len(self.labels)
         for k in range(d.ncon):
             con = d.contact[k]
             pair = (int(con.geom1), int(con.geom2))
@@ -300,9 +309,9 @@ class MujocoHand:
                     n = np.array(con.frame[:2]) * (1.0 if pair[0] == g else -1.0)
                     n /= np.linalg.norm(n)
                     found[i] = Contact(float(con.pos[0]), float(con.pos[1]), float(n[0]), float(n[1]))
-        if found[0] is None or found[1] is None:
+        if any(c is None for c in found):
             return None
-        return Config(found[0], found[1])
+        return self._config(found)  # type: ignore[arg-type]
 
     @property
     def time(self) -> float:
@@ -344,8 +353,8 @@ class MujocoHand:
         if isinstance(s, NoContact):
             raise CrmgraspError(f"cannot execute a CRM without contact ({s.reason})")
         i = crm.ci
-        mover, still = s[i], s[1 - i]
-        line = goal_line(crm, s, (still,), self.task.hand.aperture)
+        mover, stills = s[i], tuple(c for j, c in enumerate(s) if j != i)
+        line = goal_line(crm, s, stills, self.task.hand.aperture)
         if line is None:
             return Error.APERTURE
         same = crm.c == crm.f

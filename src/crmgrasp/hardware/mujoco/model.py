@@ -126,6 +126,10 @@ def _object_geom(task: Task, p: PhysicsParams) -> tuple[str, str]:
     raise CrmgraspError(f"the MuJoCo stand-in supports polygons and discs, not {type(obj).__name__}")
 
 
+_TIP_COLOURS = {"a": ".85 .15 .15 1", "b": ".15 .65 .2 1", "c": ".15 .3 .85 1", "d": ".8 .6 .1 1"}
+"""Fingertip colours by label (a red, b green, c blue, d amber)."""
+
+
 def _finger(label: str, p: PhysicsParams, z: float) -> str:
     """A fingertip carriage at height ``z`` (its servo origin) with x, y, z slides."""
     r = p.tip_radius
@@ -139,7 +143,7 @@ def _finger(label: str, p: PhysicsParams, z: float) -> str:
       <inertial pos="0 0 0" mass="0.05" diaginertia="1e-5 1e-5 1e-5"/>
       <body name="tip_{label}" gravcomp="1">
         <geom name="tip_{label}" type="sphere" size="{r!r}" mass="0.01" friction="{p.tip_friction!r} 0.005 0.0001"
-          contype="4" conaffinity="1"          rgba="{".85 .15 .15 1" if label == "a" else ".15 .65 .2 1"}"/>
+          contype="4" conaffinity="1"          rgba="{_TIP_COLOURS.get(label, ".5 .5 .5 1")}"/>
         <site name="tip_{label}"/>
       </body>
     </body>"""
@@ -161,25 +165,27 @@ def preamble(name: str, p: PhysicsParams, asset: str) -> str:
     <light pos="0 0 2" dir="0 0 -1" directional="true" diffuse=".5 .5 .5"/>"""
 
 
-def hand_mjcf(p: PhysicsParams, z: float) -> tuple[str, str]:
-    """(bodies, actuators and sensors) of the two-fingertip hand, carriages at height ``z``:
-    position servos (critically damped for the 60 g finger) and each tip's force and torque
-    sensors."""
+def hand_mjcf(p: PhysicsParams, z: float, labels: tuple[str, ...] = ("a", "b")) -> tuple[str, str]:
+    """(bodies, actuators and sensors) of a hand with one fingertip per label (two by
+    default), carriages at height ``z``: position servos (critically damped for the 60 g
+    finger) and each tip's force and torque sensors."""
     kv = 2.0 * math.sqrt(p.kp * 0.06)
     servos = "".join(
-        f'<position name="{lab}{ax}" joint="{lab}{ax}" kp="{p.kp!r}" kv="{kv!r}"/>' for lab in "ab" for ax in "xyz"
+        f'<position name="{lab}{ax}" joint="{lab}{ax}" kp="{p.kp!r}" kv="{kv!r}"/>' for lab in labels for ax in "xyz"
     )
     sensors = "".join(
-        f'<force name="force_{lab}" site="tip_{lab}"/><torque name="torque_{lab}" site="tip_{lab}"/>' for lab in "ab"
+        f'<force name="force_{lab}" site="tip_{lab}"/><torque name="torque_{lab}" site="tip_{lab}"/>' for lab in labels
     )
-    return _finger("a", p, z) + _finger("b", p, z), f"<actuator>{servos}</actuator>\n  <sensor>{sensors}</sensor>"
+    bodies = "".join(_finger(lab, p, z) for lab in labels)
+    return bodies, f"<actuator>{servos}</actuator>\n  <sensor>{sensors}</sensor>"
 
 
-def mjcf(task: Task, params: PhysicsParams = PhysicsParams()) -> str:
-    """MJCF text of the stand-in scene for ``task``'s object and a two-fingertip hand."""
+def mjcf(task: Task, params: PhysicsParams = PhysicsParams(), labels: tuple[str, ...] = ("a", "b")) -> str:
+    """MJCF text of the stand-in scene for ``task``'s object and a hand with one fingertip
+    per label (two by default)."""
     p = params
     asset, geom = _object_geom(task, p)
-    fingers, drives = hand_mjcf(p, p.height / 2)
+    fingers, drives = hand_mjcf(p, p.height / 2, labels)
     return f"""{preamble(f"crmgrasp-{task.name}", p, asset)}
     <camera name="top" pos="0 0 0.6" xyaxes="1 0 0 0 1 0"/>
     <geom name="floor" type="plane" size="2 2 0.1" material="grid" friction="{p.floor_friction!r} 0.005 0.0001"/>

@@ -43,7 +43,7 @@ from crmgrasp.hardware.mujoco import hardware_task, require_mujoco
 from crmgrasp.hardware.mujoco.hand import FAULTS, PhysicsError
 from crmgrasp.hardware.mujoco.model import PhysicsParams
 from crmgrasp.hardware.runner import HandSteps
-from crmgrasp.model.contacts import Config
+from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import Error
 from crmgrasp.model.spatial import Config3D
 from crmgrasp.sim import STEP_REWARD, OneStep, SimState
@@ -104,7 +104,7 @@ class MujocoSteps(HandSteps):
         self.instance = hardware_task(instance, self.palm_tolerance_deg)
 
     # -- truth -------------------------------------------------------------------
-    def score(self, reading: Config | Config3D) -> float:
+    def score(self, reading: Config | Grip | Config3D) -> float:
         """The true ``min_friction``, from MuJoCo's contacts (``inf`` with a fingertip free)."""
         true = self.hand.true_config()  # type: ignore[attr-defined]
         return math.inf if true is None else float(self.task.quality(true))
