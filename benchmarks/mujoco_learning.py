@@ -12,9 +12,10 @@ the episodes MuJoCo ended early, and, for scale, a uniformly random policy's suc
 on the same scoring worlds (within ``max_steps`` = 10 CRMs most random sequences grasp a box:
 success alone is a weak test; the CRMs per episode tell the learned policy apart).
 
-``--workers``: the same ``crmgrasp learn --hand mujoco`` run (``learn``: 4 trials x 30
-episodes, no evaluation) with one and with two worker processes, measured in this run; the
-ratio is the speed-up (the results are identical, checked).
+``--workers`` (``--workers-only``): the same ``crmgrasp learn --hand mujoco`` run (``learn``:
+4 trials x ``--workers-episodes`` (100) episodes, no evaluation) with one and with two worker
+processes, measured in this run; the ratio is the speed-up (the results are identical,
+checked).
 
 Usage: ``python benchmarks/mujoco_learning.py [--task paper-box --task cup-3d]
 [--episodes 100 --episodes 200] [--seeds 10] [--first 0] [--score 100] [--workers]``.
@@ -76,14 +77,23 @@ def one_task(name: str, episodes: int, seeds: range, score: int) -> dict:
     }
 
 
-def workers() -> dict:
+def workers(episodes: int) -> dict:
     task = make_task("paper-box")
     spec = LearnerSpec("pooled-vi", 1, {"symmetric": True})
-    out, runs = {}, {}
+    out: dict = {"trials": 4, "episodes": episodes}
+    runs = {}
     for jobs in (1, 2):
         t0 = time.perf_counter()
         runs[jobs] = learn(
-            task, spec, trials=4, episodes=30, seed=0, eval_episodes=0, checkpoint_episodes=0, hand="mujoco", jobs=jobs
+            task,
+            spec,
+            trials=4,
+            episodes=episodes,
+            seed=0,
+            eval_episodes=0,
+            checkpoint_episodes=0,
+            hand="mujoco",
+            jobs=jobs,
         )
         out[f"seconds_{jobs}_worker"] = round(time.perf_counter() - t0, 2)
         print(f"workers {jobs}: {out[f'seconds_{jobs}_worker']} s", file=sys.stderr)
@@ -101,15 +111,17 @@ def main() -> None:
     p.add_argument("--first", type=int, default=0)
     p.add_argument("--score", type=int, default=100, help="MuJoCo episodes that score each greedy policy")
     p.add_argument("--workers", action="store_true", help="also time 1 against 2 worker processes")
+    p.add_argument("--workers-episodes", type=int, default=100, help="episodes per trial of the workers run")
+    p.add_argument("--workers-only", action="store_true", help="only the workers run")
     a = p.parse_args()
     tasks = a.task or ["paper-box", "cup-3d"]
     episodes = a.episodes or [100, 200][: len(tasks)]
     if len(episodes) != len(tasks):
         p.error("give one --episodes per --task")
     seeds = range(a.first, a.first + a.seeds)
-    result = {"tasks": [one_task(t, e, seeds, a.score) for t, e in zip(tasks, episodes)]}
-    if a.workers:
-        result["workers"] = workers()
+    result = {"tasks": [] if a.workers_only else [one_task(t, e, seeds, a.score) for t, e in zip(tasks, episodes)]}
+    if a.workers or a.workers_only:
+        result["workers"] = workers(a.workers_episodes)
     print(json.dumps(result, indent=1))
 
 

@@ -134,3 +134,16 @@ def test_mujoco_learning_smoke(capsys, monkeypatch):
     out = json.loads(capsys.readouterr().out)
     (row,) = out["tasks"]
     assert row["task"] == "paper-box" and len(row["per_seed"]) == 1 and row["episode_seconds_median"] > 0
+
+
+def test_mujoco_three_fingers_smoke(capsys, monkeypatch):
+    pytest.importorskip("mujoco", reason="needs the extra crmgrasp[mujoco]")
+    spec = importlib.util.spec_from_file_location("mujoco_three_fingers", BENCH.parent / "mujoco_three_fingers.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    argv = ["mujoco_three_fingers.py", "--task", "cup-family-3f", "--episodes", "5", "--worlds", "2", "--seeds", "1"]
+    monkeypatch.setattr("sys.argv", argv)
+    mod.main()
+    out = json.loads(capsys.readouterr().out)
+    (row,) = out["tasks"]["cup-family-3f"]["per_seed"]
+    assert 0 <= row["mujoco_successes"] <= 2 and 0.0 <= row["kinematic_success"] <= 1.0
