@@ -147,3 +147,14 @@ def test_mujoco_three_fingers_smoke(capsys, monkeypatch):
     out = json.loads(capsys.readouterr().out)
     (row,) = out["tasks"]["cup-family-3f"]["per_seed"]
     assert 0 <= row["mujoco_successes"] <= 2 and 0.0 <= row["kinematic_success"] <= 1.0
+
+
+def test_pouct_peer_smoke(capsys, monkeypatch):
+    pytest.importorskip("pomdp_py", reason="needs the extra crmgrasp[pomdp]")
+    spec = importlib.util.spec_from_file_location("pouct_peer", BENCH.parent / "pouct_peer.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    monkeypatch.setattr("sys.argv", ["pouct_peer.py", "--task", "paper-box", "--sims", "10", "--episodes", "3"])
+    mod.main()
+    (row,) = json.loads(capsys.readouterr().out)["rows"]
+    assert row["episodes"] == 3 and row["belief_policy_same_worlds"] >= 1.0
