@@ -136,6 +136,8 @@ def _spans(b, theta, fp, ws):  # type: ignore[no-untyped-def]
                 d = y0 * ws[t, 0] + y1 * ws[t, 1] + y2 * ws[t, 2]
                 below = below or d < -tol
                 above = above or d > tol
+                if below and above:  # both sides seen: the rest cannot change the answer
+                    break
             if not (below and above):
                 return False
     return spans

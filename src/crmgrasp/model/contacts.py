@@ -213,7 +213,8 @@ def contacts_from_row(row: Sequence[float]) -> Config | Grip:
     [`config_from_row`][] for two contacts, a [`Grip`][] for more (no checks)."""
     if len(row) == 8:
         return config_from_row(row)
-    return Grip(*(Contact(row[i], row[i + 1], row[i + 2], row[i + 3]) for i in range(0, len(row), 4)))
+    new = tuple.__new__  # the NamedTuples' own construction, without their Python-level __new__ (a hot path)
+    return new(Grip, [new(Contact, row[i : i + 4]) for i in range(0, len(row), 4)])
 
 
 ROW_WIDTH = 4 * len(LABELS)

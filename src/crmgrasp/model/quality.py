@@ -166,6 +166,8 @@ def _positively_span(ws: list[Wrench]) -> bool:
                 d = y0 * w0 + y1 * w1 + y2 * w2
                 below = below or d < -tol
                 above = above or d > tol
+                if below and above:  # both sides seen: the rest cannot change the answer
+                    break
             if not (below and above):
                 return False
     return spans
