@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 __all__ = [
     "CrmgraspError",
@@ -119,3 +120,14 @@ def tries(value: object) -> int:
     10
     """
     return integer(value, "max_tries", 1, MAX_TRIES)
+
+
+def require_extra(extra: str, what: str, *modules: str) -> tuple[Any, ...]:
+    """Import ``modules`` and return them, or raise a one-line error: ``what`` needs the
+    optional extra ``crmgrasp[extra]``, with pip's command to install it."""
+    import importlib
+
+    try:
+        return tuple(importlib.import_module(name) for name in modules)
+    except ImportError as exc:
+        raise CrmgraspError(f"{what} needs the optional extra: pip install 'crmgrasp[{extra}]' ({exc})") from None

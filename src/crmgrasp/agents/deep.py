@@ -19,7 +19,6 @@ checkpoints ([`checkpoint_generators`][crmgrasp.agents.training.checkpoint_gener
 from __future__ import annotations
 
 import hashlib
-import importlib
 import io
 import json
 import os
@@ -34,7 +33,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, require_extra
 from crmgrasp.agents.training import checkpoint_generators, checkpoints_to_within
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import Error
@@ -268,16 +267,8 @@ def crm_of_action(task: Task, action: Any) -> Any:
 
 
 def _modules() -> tuple[Any, Any, Any, Any]:
-    try:
-        torch = importlib.import_module("torch")
-        contrib = importlib.import_module("sb3_contrib")
-        vec = importlib.import_module("stable_baselines3.common.vec_env")
-        callbacks = importlib.import_module("stable_baselines3.common.callbacks")
-    except ImportError as exc:
-        raise CrmgraspError(
-            f"the deep-RL peer needs the optional extra: pip install 'crmgrasp[deep]' ({exc})"
-        ) from None
-    return torch, contrib, vec, callbacks
+    modules = ("torch", "sb3_contrib", "stable_baselines3.common.vec_env", "stable_baselines3.common.callbacks")
+    return require_extra("deep", "the deep-RL peer", *modules)  # type: ignore[return-value]
 
 
 def deep_available() -> bool:

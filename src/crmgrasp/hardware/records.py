@@ -22,7 +22,6 @@ no half-written record.
 
 from __future__ import annotations
 
-import importlib
 import json
 import math
 from collections.abc import Sequence
@@ -32,7 +31,7 @@ from types import ModuleType
 from typing import Any
 
 from crmgrasp._io import atomic_path
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import require_extra
 
 __all__ = ["StepRecord", "write_mcap", "require_mcap", "contact_frames", "TOPICS"]
 
@@ -97,11 +96,7 @@ def contact_frames(model: Any, config: Any) -> dict[str, tuple[tuple[float, ...]
 
 def require_mcap() -> ModuleType:
     """Import and return the Foxglove SDK, or raise a one-line error naming the extra."""
-    try:
-        importlib.import_module("mcap")
-        return importlib.import_module("foxglove")
-    except ImportError as exc:
-        raise CrmgraspError(f"MCAP records need the optional extra: pip install 'crmgrasp[mcap]' ({exc})") from None
+    return require_extra("mcap", "an MCAP record", "mcap", "foxglove")[1]  # type: ignore[no-any-return]
 
 
 def _wrench(values: Sequence[float]) -> dict[str, dict[str, float]]:

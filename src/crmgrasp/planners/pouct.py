@@ -21,7 +21,6 @@ seeded from that generator before each plan, so one seed gives one run.
 
 from __future__ import annotations
 
-import importlib
 import random
 from dataclasses import dataclass
 from types import ModuleType
@@ -29,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from crmgrasp._validation import CrmgraspError, integer
+from crmgrasp._validation import CrmgraspError, integer, require_extra
 from crmgrasp.sim import Percept, SimState, begin, step
 from crmgrasp.tasks import Task
 
@@ -38,10 +37,7 @@ __all__ = ["POUCTPolicy", "POUCTSettings", "require_pomdp_py"]
 
 def require_pomdp_py() -> ModuleType:
     """Import and return ``pomdp_py``, or raise a one-line error naming the extra."""
-    try:
-        return importlib.import_module("pomdp_py")
-    except ImportError as exc:
-        raise CrmgraspError(f"the POUCT peer needs the optional extra: pip install 'crmgrasp[pomdp]' ({exc})") from None
+    return require_extra("pomdp", "the POUCT peer", "pomdp_py")[0]  # type: ignore[no-any-return]
 
 
 @dataclass(frozen=True)

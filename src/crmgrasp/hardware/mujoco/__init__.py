@@ -10,12 +10,11 @@ Rendering is headless: ``MUJOCO_GL`` defaults to ``egl`` here (set it to
 from __future__ import annotations
 
 import dataclasses
-import importlib
 import math
 import os
 from types import ModuleType
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, require_extra
 from crmgrasp.tasks import Task
 
 __all__ = ["require_mujoco", "mujoco_available", "hardware_task"]
@@ -42,9 +41,4 @@ def mujoco_available() -> bool:
 def require_mujoco() -> ModuleType:
     """Import and return ``mujoco``, or raise a one-line error naming the extra."""
     os.environ.setdefault("MUJOCO_GL", "egl")
-    try:
-        return importlib.import_module("mujoco")
-    except ImportError as exc:
-        raise CrmgraspError(
-            f"the MuJoCo stand-in needs the optional extra: pip install 'crmgrasp[mujoco]' ({exc})"
-        ) from None
+    return require_extra("mujoco", "the MuJoCo stand-in", "mujoco")[0]  # type: ignore[no-any-return]
