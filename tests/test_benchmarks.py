@@ -158,3 +158,14 @@ def test_pouct_peer_smoke(capsys, monkeypatch):
     mod.main()
     (row,) = json.loads(capsys.readouterr().out)["rows"]
     assert row["episodes"] == 3 and row["belief_policy_same_worlds"] >= 1.0
+
+
+def test_error_cost_learning_smoke(capsys, monkeypatch):
+    spec = importlib.util.spec_from_file_location("error_cost_learning", BENCH.parent / "error_cost_learning.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    argv = ["error_cost_learning.py", "--task", "notch-or-box", "--episodes", "20", "--seeds", "1"]
+    monkeypatch.setattr("sys.argv", [*argv, "--worlds", "20", "--test", "10"])
+    mod.main()
+    (row,) = json.loads(capsys.readouterr().out)["rows"]
+    assert row["cost"] == 30.0 and row["optimum"]["mean_cost"] >= 1.0 and len(row["per_seed"]) == 1

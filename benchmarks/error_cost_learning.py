@@ -1,0 +1,85 @@
+"""Learning at a high error cost: the sample-efficient learner against the belief-space optimum of the cost.
+
+An errored CRM (aperture or palm) costs ``1 + c`` (``Task.error_cost = c``). Per task and
+cost, as ``crmgrasp reproduce cost-of-failure`` does: the belief-space optimal policy of the
+cost over WORLDS sampled worlds (seed 0) and, per seed, one ``pooled-vi`` agent (k = 1, the
+mirror quotient where the task declares one, no prior) that learns for EPISODES task episodes
+with the cost; both run the same TEST held-out worlds (seed 1). Printed per task and cost:
+the optimum's mean cost (CRMs plus ``c`` per error), success and errors per episode; per seed
+the learned greedy policy's mean cost, its gap to the optimum's, success and errors; the seeds
+within 15% of the optimum with at least 95% success (issue 29's target).
+
+Usage: ``python benchmarks/error_cost_learning.py [--task notch-or-box --task box-family]
+[--cost 30] [--episodes 3000] [--seeds 5] [--worlds 400] [--test 1000]``. Prints one JSON
+object; progress on stderr. About 5 min at the defaults on 2 cores.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+import time
+
+from crmgrasp.agents.training import train_trials
+from crmgrasp.experiments._episodes import episode_records, greedy_records
+from crmgrasp.experiments.cost_of_failure import policy_rows
+from crmgrasp.planners.references import BeliefPolicy, sample_starts
+from crmgrasp.tasks import make_task
+
+
+def one(name: str, cost: float, episodes: int, seeds: int, n_worlds: int, n_test: int) -> dict:
+    task = dataclasses.replace(make_task(name), error_cost=float(cost))
+    worlds, test = sample_starts(task, n_worlds, 0), sample_starts(task, n_test, 1)
+    belief = BeliefPolicy(task, worlds)
+    optimum = policy_rows(episode_records(task, lambda: belief, test, 0), cost)
+    params = {"symmetric": True} if task.symmetry is not None else {}
+    rows = []
+    for seed in range(seeds):
+        t0 = time.perf_counter()
+        res = train_trials(
+            task, "pooled-vi", trials=1, episodes=episodes, seed=seed, k=1, eval_episodes=0, params=params
+        )
+        (records,) = greedy_records(task, res.agents, test, seed)
+        got = policy_rows(records, cost)
+        row = {
+            "seed": seed,
+            "mean_cost": round(got["mean_cost"], 3),
+            "gap": round(got["mean_cost"] / optimum["mean_cost"] - 1.0, 4),
+            "success": round(got["success_rate"], 4),
+            "errors_per_episode": round(got["errors_per_episode"], 3),
+            "seconds": round(time.perf_counter() - t0, 1),
+        }
+        rows.append(row)
+        print(f"{name} c={cost:g} seed {seed}: {row}", file=sys.stderr)
+    return {
+        "task": name,
+        "cost": cost,
+        "optimum": {
+            k: round(v, 4) for k, v in optimum.items() if k in ("mean_cost", "success_rate", "errors_per_episode")
+        },
+        "per_seed": rows,
+        "seeds_within_15pct_and_95pct_success": sum(r["gap"] <= 0.15 and r["success"] >= 0.95 for r in rows),
+    }
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--task", action="append", help="task (repeatable; default notch-or-box and box-family)")
+    p.add_argument("--cost", action="append", type=float, help="error cost c (repeatable; default 30)")
+    p.add_argument("--episodes", type=int, default=3000)
+    p.add_argument("--seeds", type=int, default=5)
+    p.add_argument("--worlds", type=int, default=400)
+    p.add_argument("--test", type=int, default=1000)
+    a = p.parse_args()
+    out = [
+        one(name, cost, a.episodes, a.seeds, a.worlds, a.test)
+        for name in (a.task or ["notch-or-box", "box-family"])
+        for cost in (a.cost or [30.0])
+    ]
+    print(json.dumps({"episodes": a.episodes, "rows": out}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
