@@ -17,10 +17,10 @@ from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.sim import Policy, run_episode
 from crmgrasp.tasks import Task
 
-__all__ = ["EpisodeRecord", "episode_records", "train_fastest", "greedy_records", "FASTEST_LABEL"]
+__all__ = ["EpisodeRecord", "episode_records", "train_model_vi", "greedy_records", "MODEL_VI_LABEL"]
 
-FASTEST_LABEL = "model-vi k=1 (mirror quotient)"
-"""How the experiments name the learner of [`train_fastest`][]."""
+MODEL_VI_LABEL = "model-vi k=1 (mirror quotient)"
+"""How the experiments name the learner of [`train_model_vi`][]."""
 
 
 @dataclass(frozen=True)
@@ -59,7 +59,7 @@ def episode_records(
     return out
 
 
-def train_fastest(task: Task, trials: int, episodes: int, seed: int) -> list[Agent]:
+def train_model_vi(task: Task, trials: int, episodes: int, seed: int) -> list[Agent]:
     """``trials`` model-vi agents (k = 1, mirror quotient where declared), trained on ``task``."""
     params: dict[str, object] = {"symmetric": task.symmetry is not None}
     res = train_trials(

@@ -91,10 +91,10 @@ def _learned(task: Task, label: str, cfg: ContinuousOffsetsConfig) -> dict[str, 
     ``task``, its greedy policy run on the references' sampled starts: CRMs per episode per
     trial, their mean and a bootstrap 95% interval over trials (none below 5), the success
     rate. The same starts as the optimum, so the two compare without sampling noise."""
-    from crmgrasp.experiments._episodes import greedy_records, train_fastest
+    from crmgrasp.experiments._episodes import greedy_records, train_model_vi
     from crmgrasp.experiments.stats import bootstrap_ci
 
-    agents = train_fastest(task, cfg.trials, cfg.episodes, cfg.seed)
+    agents = train_model_vi(task, cfg.trials, cfg.episodes, cfg.seed)
     records = greedy_records(task, agents, sample_starts(task, cfg.starts, cfg.seed), cfg.seed)
     per_trial = np.array([np.mean([len(r.actions) for r in trial]) for trial in records])
     low, high = (None if np.isnan(v) else float(v) for v in bootstrap_ci(per_trial, seed=cfg.seed))

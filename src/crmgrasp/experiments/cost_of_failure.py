@@ -41,11 +41,11 @@ from crmgrasp._io import write_csv, write_json
 from crmgrasp._progress import Progress
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.experiments._episodes import (
-    FASTEST_LABEL,
+    MODEL_VI_LABEL,
     EpisodeRecord,
     episode_records,
     greedy_records,
-    train_fastest,
+    train_model_vi,
 )
 from crmgrasp.planners.references import BeliefPolicy, sample_starts
 from crmgrasp.sim import Policy
@@ -188,7 +188,7 @@ def _one_task(base: Task, cfg: CostConfig, stage: Any) -> dict[str, Any]:
     first, last = optimal[0], optimal[-1]
     errors_fall = last["errors_per_episode"] < first["errors_per_episode"]
     return {
-        "learner": FASTEST_LABEL if base.symmetry is not None else "model-vi k=1",
+        "learner": MODEL_VI_LABEL if base.symmetry is not None else "model-vi k=1",
         "rows": learned,
         "optimal_rows": optimal,
         "errors_fall": bool(errors_fall),
@@ -198,7 +198,7 @@ def _one_task(base: Task, cfg: CostConfig, stage: Any) -> dict[str, Any]:
 
 
 def _learned_records(task: Task, test: Sequence[Any], cfg: CostConfig) -> list[EpisodeRecord]:
-    agents = train_fastest(task, cfg.trials, cfg.episodes, cfg.seed)
+    agents = train_model_vi(task, cfg.trials, cfg.episodes, cfg.seed)
     per_agent = greedy_records(task, agents, test, cfg.seed, ties=np.random.default_rng)
     return [r for records in per_agent for r in records]
 

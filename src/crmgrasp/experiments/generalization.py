@@ -49,7 +49,7 @@ import numpy as np
 from crmgrasp._io import write_csv, write_json
 from crmgrasp._progress import Progress
 from crmgrasp.agents.base import Agent
-from crmgrasp.experiments._episodes import FASTEST_LABEL, EpisodeRecord, greedy_records, train_fastest
+from crmgrasp.experiments._episodes import MODEL_VI_LABEL, EpisodeRecord, greedy_records, train_model_vi
 from crmgrasp.model import families as fam
 from crmgrasp.model.families import Pose, SamplerFamily
 from crmgrasp.planners.korder import korder_search
@@ -115,7 +115,7 @@ def _finite(task: Task, n: int, seed: int) -> Task:
 
 
 def _train(task: Task, cfg: GeneralizationConfig) -> list[Agent]:
-    return train_fastest(task, cfg.trials, cfg.episodes, cfg.seed)
+    return train_model_vi(task, cfg.trials, cfg.episodes, cfg.seed)
 
 
 def _run(task: Task, agents: Sequence[Agent], worlds: Sequence[Any], seed: int) -> list[EpisodeRecord]:
@@ -232,7 +232,7 @@ def generalization(
     if stage is not None:
         stage.end()
     summary = {
-        "learner": FASTEST_LABEL,
+        "learner": MODEL_VI_LABEL,
         "budget": f"{cfg.trials} trials x {cfg.episodes} episodes on {cfg.train_objects} training objects; "
         f"{cfg.heldout} worlds per evaluation; policy search on {cfg.search_worlds} worlds; seed {cfg.seed}",
         "families": families,

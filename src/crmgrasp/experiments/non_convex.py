@@ -24,7 +24,7 @@ from crmgrasp._io import atomic_path, save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
 from crmgrasp.agents.base import Agent
 from crmgrasp.agents.training import encoder_for, rollout
-from crmgrasp.experiments._episodes import FASTEST_LABEL, greedy_records, train_fastest
+from crmgrasp.experiments._episodes import MODEL_VI_LABEL, greedy_records, train_model_vi
 from crmgrasp.model.contacts import Config
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts
@@ -69,7 +69,7 @@ def non_convex(
     out.mkdir(parents=True, exist_ok=True)
     task = make_task(cfg.task)
     stage = progress.stage(f"non-convex: {task.name}", 3, "stages") if progress else None
-    agents = train_fastest(task, cfg.trials, cfg.episodes, cfg.seed)
+    agents = train_model_vi(task, cfg.trials, cfg.episodes, cfg.seed)
     if stage is not None:
         stage.advance(1)
     worlds: list[World] = sample_starts(task, cfg.heldout, cfg.seed + 1)  # type: ignore[assignment]
@@ -79,7 +79,7 @@ def non_convex(
     grasps = [(w, r.final) for w, r in zip(worlds, per_agent[best], strict=True) if r.success]
     summary: dict[str, Any] = {
         "task": task.name,
-        "learner": FASTEST_LABEL,
+        "learner": MODEL_VI_LABEL,
         "budget": f"{cfg.trials} trials x {cfg.episodes} episodes; {cfg.heldout} held-out worlds; seed {cfg.seed}",
         "learner_mean_crms": float(np.mean([len(r.actions) for r in records])),
         "success_rate": float(np.mean([r.success for r in records])),

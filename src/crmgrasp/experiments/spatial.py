@@ -2,13 +2,13 @@
 
 On ``box-3d`` and ``cup-3d`` (each episode a new solid: boxes of random size and yaw;
 closed cylinders of random radius and height, upright or lying), two learners train:
-the paper's SARSA (k = 2, alpha 0.3, gamma 0.9) and the fastest learner (``model-vi``,
-k = 1). Their greedy policies are evaluated at checkpoints during learning (the same
+the paper's SARSA (k = 2, alpha 0.3, gamma 0.9) and ``model-vi``
+(k = 1). Their greedy policies are evaluated at checkpoints during learning (the same
 evaluation starts at every checkpoint) and, at the end, on held-out worlds whose
 belief-space optimum and clairvoyant bound are computed exactly
 ([`crmgrasp.planners.references`][]). Writes ``spatial.png`` (greedy CRMs per episode
 against the references, one panel per task), ``spatial_strategy.png`` and
-``spatial_strategy.gif`` (the fastest learner's greedy policy on held-out cups, one row
+``spatial_strategy.gif`` (``model-vi``'s greedy policy on held-out cups, one row
 per start, each CRM a 3-D panel), ``curves.csv`` and ``summary.json``.
 """
 

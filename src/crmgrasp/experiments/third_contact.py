@@ -96,9 +96,9 @@ def _learned(task: Any, starts: Any, cfg: ThirdContactConfig) -> dict[str, Any]:
     """model-vi (k = 1, mirror quotient where declared), ``cfg.trials`` x ``cfg.episodes``
     task episodes, its greedy policies run from ``starts``: the median over trials of the mean
     CRMs per episode, the success share, and the median least friction of the final grasps."""
-    from crmgrasp.experiments._episodes import greedy_records, train_fastest
+    from crmgrasp.experiments._episodes import greedy_records, train_model_vi
 
-    records = greedy_records(task, train_fastest(task, cfg.trials, cfg.episodes, cfg.seed), starts, cfg.seed)
+    records = greedy_records(task, train_model_vi(task, cfg.trials, cfg.episodes, cfg.seed), starts, cfg.seed)
     finals = [task.quality(r.final) for trial in records for r in trial if r.success]
     return {
         "learned_crms": float(np.median([np.mean([len(r.actions) for r in trial]) for trial in records])),
