@@ -237,3 +237,15 @@ def test_mujoco_env_starts_from_a_given_config_or_world():
     assert fam.steps.instance.obj == world.task.obj and info["steps"] == 0
     with pytest.raises(CrmgraspError, match="options\\['world'\\] must be a World"):
         fam.reset(options={"world": "a box"})
+
+
+def test_evaluate_a_saved_policy_on_the_mujoco_hand(tmp_path, capsys):
+    out = tmp_path / "run"
+    argv = ["learn", "--preset", "fastest", "--trials", "1", "--episodes", "30", "--eval-episodes", "5"]
+    assert main([*argv, "--quiet", "--out", str(out)]) == 0
+    capsys.readouterr()
+    argv = ["evaluate", "--policy", str(out / "policy.json"), "--hand", "mujoco", "--episodes", "4", "--json"]
+    assert main([*argv, "--quiet"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["hand"] == "mujoco" and result["episodes"] == 4 and isinstance(result["faults"], dict)
+    assert 0.0 <= result["success_rate"] <= 1.0

@@ -195,16 +195,19 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     from crmgrasp.agents import evaluate
     from crmgrasp.agents.loading import load_policy
     from crmgrasp.agents.policy import GreedyPolicy
+    from crmgrasp.hardware import hand_steps
     from crmgrasp.kernels import kernel_for
 
     policy = load_policy(args.policy, None if args.task is None else _task(args))
     task = policy.task
+    on_hand = hand_steps(args.hand)
+    if on_hand is not None and not isinstance(policy, GreedyPolicy):
+        raise CrmgraspError(f"--hand {args.hand} runs tabular policies (policy.json); a deep policy runs on the model")
+    kernel = kernel_for(task, args.backend) if on_hand is None else on_hand(task)
     rng = np.random.default_rng(args.seed)
     with _progress(args).stage(f"evaluate {args.policy.name} on {task.name}", 0):
         if isinstance(policy, GreedyPolicy):
-            steps, success = evaluate(
-                task, policy, policy.encoder, args.episodes, rng, kernel=kernel_for(task, args.backend)
-            )
+            steps, success = evaluate(task, policy, policy.encoder, args.episodes, rng, kernel=kernel)
         else:
             from crmgrasp.agents.deep import evaluate_recurrent
 
@@ -222,11 +225,14 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
         "mean_steps": mean,
         "ci95": [lo, hi],
         "success_rate": float(success.mean()),
+        "hand": args.hand,
+        "faults": dict(sorted(getattr(kernel, "faults", {}).items())),
     }
+    where = "" if on_hand is None else f" ({args.hand} hand; episodes ended early: {result['faults'] or 'none'})"
     return _print_result(
         args,
         result,
-        f"{args.policy} on {task.name}: {result['mean_steps']:.3f} CRMs per episode "
+        f"{args.policy} on {task.name}{where}: {result['mean_steps']:.3f} CRMs per episode "
         f"(95% CI over episodes {result['ci95'][0]:.3f}-{result['ci95'][1]:.3f}), "
         f"success {result['success_rate']:.1%} over {args.episodes:,} episodes",
     )

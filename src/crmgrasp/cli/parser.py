@@ -165,6 +165,7 @@ def _parser_evaluate(sub: Any) -> None:
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
     _add_quiet(p)
     _add_kernel_backend(p)
+    _add_hand(p, "runs the episodes on (a tabular policy; success from the hand's true contacts)")
 
 
 def _parser_bench(sub: Any) -> None:
