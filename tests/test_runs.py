@@ -298,3 +298,19 @@ def test_a_journal_damaged_before_its_last_line_is_one_line(tmp_path, capsys):
     assert main(["status", str(run.path)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "run journal" in err and "is damaged (line 2)" in err
+
+
+def test_workers_are_spawned_once_torch_is_loaded(monkeypatch):
+    """A forked worker inherits torch's thread pool broken and hangs (seen: ``reproduce(...,
+    jobs=2)`` after a torch matrix product never finished); with torch loaded, workers spawn."""
+    import multiprocessing
+    import types
+
+    from crmgrasp.experiments.parallel import FORK_UNSAFE, start_method
+
+    forkable = "fork" in multiprocessing.get_all_start_methods()
+    for name in FORK_UNSAFE:
+        monkeypatch.delitem(sys.modules, name, raising=False)
+    assert start_method() == ("fork" if forkable else "spawn")
+    monkeypatch.setitem(sys.modules, "torch", types.ModuleType("torch"))
+    assert start_method() == "spawn"

@@ -3,7 +3,10 @@
 Every caller's results depend only on what each call is given (its seeds included), never
 on which process runs it or in which order calls finish, so ``jobs`` changes the time
 and not the results. Workers are forked from the calling process where the platform
-allows (compiled kernels are inherited), else spawned; they ignore Ctrl-C, which the
+allows (compiled kernels are inherited), else spawned, and spawned too once the calling
+process has loaded a library whose thread pool a forked child inherits broken
+([`FORK_UNSAFE`][]: torch; a forked worker then hangs in its first parallel operation);
+they ignore Ctrl-C, which the
 calling process turns into stopping them all (``crmgrasp`` turns SIGTERM into the same).
 """
 
@@ -12,6 +15,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 import signal
+import sys
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any, TypeVar
@@ -40,6 +44,19 @@ EXECUTORS = ("local", "ray")
 """Where [`run_parallel`][] runs calls: worker processes on this machine, or Ray."""
 
 
+FORK_UNSAFE = ("torch",)
+"""Libraries whose thread pools do not survive a fork: loaded in the calling process, they make
+[`run_parallel`][] spawn its workers (seen: ``reproduce(..., jobs=2)`` after a torch matrix
+product hung in the forked worker that ran the deep peer)."""
+
+
+def start_method() -> str:
+    """``"fork"`` where the platform has it and no [`FORK_UNSAFE`][] library is loaded, else
+    ``"spawn"``."""
+    forkable = "fork" in multiprocessing.get_all_start_methods()
+    return "fork" if forkable and not any(name in sys.modules for name in FORK_UNSAFE) else "spawn"
+
+
 def run_parallel(
     calls: Sequence[tuple[K, Callable[[], T]]], jobs: int, executor: str = "local", address: str | None = None
 ) -> Iterator[tuple[K, T]]:
@@ -59,8 +76,7 @@ def run_parallel(
         for key, call in calls:
             yield key, call()
         return
-    methods = multiprocessing.get_all_start_methods()
-    context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+    context = multiprocessing.get_context(start_method())
     pool = ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_ignore_sigint)
     try:
         futures = {pool.submit(call): key for key, call in calls}
