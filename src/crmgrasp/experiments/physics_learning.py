@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import statistics
 import time
+from collections import Counter
 from dataclasses import asdict, dataclass
 from functools import partial
 from pathlib import Path
@@ -211,11 +212,7 @@ def _task_summary(c: PhysicsLearningConfig, name: str, results: dict) -> dict[st
     for way in WAYS:
         success = np.array([u[way]["success"] for u in units])
         crms = np.array([u[way]["crms"] for u in units])
-        faults: dict[str, int] = {}
-        for u in units:
-            for d in (u[way]["faults"], u[way].get("train_faults", {})):
-                for k, v in d.items():
-                    faults[k] = faults.get(k, 0) + v
+        faults = sum((Counter(u[way]["faults"]) + Counter(u[way].get("train_faults", {})) for u in units), Counter())
         per[way] = {
             "success": round(float(success.mean()), 4),
             "success_ci95": [round(v, 4) for v in bootstrap_ci(success, seed0)] if len(units) >= 5 else None,

@@ -167,9 +167,10 @@ class HandSteps:
         self.lost: str | None = None
         self.first: OneStep
 
-    def score(self, reading: Config | Grip | Config3D) -> float:
-        """The ``min_friction`` a step reports: that of the sensed configuration."""
-        return float(self.task.quality(reading))
+    def score(self, reading: Config | Grip | Config3D, sensed: float) -> float:
+        """The ``min_friction`` a step reports, given the sensed configuration's
+        (``sensed``): that one."""
+        return sensed
 
     def _sense(self, steps: int, error: Error) -> OneStep:
         t, reading = self.task, self.hand.sense()
@@ -182,12 +183,13 @@ class HandSteps:
         pose = getattr(self.hand, "object_pose", None)
         self.clock.append((float(getattr(self.hand, "time", steps)), None if pose is None else pose()))
         obs = t.observe(reading)
-        grasped = bool(t.grasped(t.quality(reading)))
+        mu = float(t.quality(reading))
+        grasped = bool(t.grasped(mu))
         index = t.discretizer.index(obs, error)
         end = steps >= t.max_steps and not grasped
         state = SimState(reading, reading, steps)  # type: ignore[arg-type]
         reward = step_reward(t, grasped, error)
-        return OneStep(state, obs, error, index, self.score(reading), reward, grasped, end)
+        return OneStep(state, obs, error, index, self.score(reading, mu), reward, grasped, end)
 
     def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
         self.raws, self.clock, self.lost = [], [], None

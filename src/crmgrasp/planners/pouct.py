@@ -14,14 +14,14 @@ CRM every particle is stepped with it and kept if its observation equals the sen
 (rejection: exact for a noise-free task). Emptied, it is refilled by drawing worlds and
 replaying the episode's CRMs, up to ``refill_tries`` draws; then the last particles are kept.
 
-Randomness: particles and model steps draw from the policy's ``numpy.random.Generator``;
-pomdp_py's own draws (tree sampling, random rollouts) come from Python's ``random``, which is
-seeded from that generator before each plan, so one seed gives one run.
+Randomness: every draw comes from the policy's ``numpy.random.Generator``: the particles,
+the model's steps, the belief samples at the root of each simulation (the belief is a
+``pomdp_py.GenerativeDistribution`` drawing from it) and the random rollouts. pomdp_py's own
+``random`` is never used, so one seed gives one run.
 """
 
 from __future__ import annotations
 
-import random
 from dataclasses import dataclass
 from types import ModuleType
 from typing import Any
@@ -113,9 +113,18 @@ def _models(pomdp_py: ModuleType, task: Task, rng: np.random.Generator) -> tuple
             return actions
 
         def rollout(self, state: Any, history: Any = None) -> Any:
-            return actions[random.randrange(n)]
+            return actions[int(rng.integers(n))]
 
-    return State, Transition(), Observe(), Reward(), Actions()
+    class Belief(pomdp_py.GenerativeDistribution):  # type: ignore[misc,name-defined]
+        """The particle belief, sampled uniformly through the policy's generator."""
+
+        def __init__(self, states: list[Any]) -> None:
+            self.states = states
+
+        def random(self) -> Any:
+            return self.states[int(rng.integers(len(self.states)))]
+
+    return State, Belief, Transition(), Observe(), Reward(), Actions()
 
 
 class POUCTPolicy:
@@ -128,7 +137,7 @@ class POUCTPolicy:
         The task (its model is POUCT's generative model and its start distribution the
         prior).
     rng
-        Source of the particles, the model's draws and the seeds of pomdp_py's ``random``.
+        Source of the particles, the model's draws, the belief samples and the rollouts.
     settings
         Simulations per decision and belief size.
     """
@@ -137,7 +146,7 @@ class POUCTPolicy:
         self.pomdp_py = require_pomdp_py()
         self.task, self.rng = task, rng
         self.settings = POUCTSettings() if settings is None else settings
-        self._state_cls, *self._models = _models(self.pomdp_py, task, rng)
+        self._state_cls, self._belief_cls, *self._models = _models(self.pomdp_py, task, rng)
         self._worlds: list[_World] = []
         self._taken: list[int] = []
         self._taken_obs: list[tuple[int, int]] = []
@@ -188,9 +197,8 @@ class POUCTPolicy:
         pp, s = self.pomdp_py, self.settings
         if not self._worlds:
             return int(self.rng.integers(len(self.task.actions)))  # no world explains what was sensed
-        random.seed(int(self.rng.integers(2**63)))
         transition, observe, reward, actions = self._models
-        belief = pp.Particles([self._state_cls(w) for w in self._worlds])
+        belief = self._belief_cls([self._state_cls(w) for w in self._worlds])
         agent = pp.Agent(belief, actions, transition, observe, reward)
         planner = pp.POUCT(
             max_depth=self.task.max_steps - len(self._taken),

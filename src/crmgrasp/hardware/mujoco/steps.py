@@ -104,8 +104,9 @@ class MujocoSteps(HandSteps):
         self.instance = hardware_task(instance, self.palm_tolerance_deg)
 
     # -- truth -------------------------------------------------------------------
-    def score(self, reading: Config | Grip | Config3D) -> float:
-        """The true ``min_friction``, from MuJoCo's contacts (``inf`` with a fingertip free)."""
+    def score(self, reading: Config | Grip | Config3D, sensed: float) -> float:
+        """The true ``min_friction``, from MuJoCo's contacts (``inf`` with a fingertip free),
+        in place of the sensed one."""
         true = self.hand.true_config()  # type: ignore[attr-defined]
         return math.inf if true is None else float(self.task.quality(true))
 
