@@ -44,7 +44,9 @@ TASKS = (
     "box-3d",
     "cup-3d",
 )
-LEARNERS = ("pooled-vi", "model-vi")
+LEARNERS = ("backoff-vi", "pooled-vi", "model-vi")
+ORDERS = {"backoff-vi": 6}
+"""History order per learner (1 where not listed)."""
 """The two-finger families that two fingers can grasp, and the spatial tasks; not
 ``triangles`` and ``odd-polygons`` (no two-finger grasp at friction 0.15 on any world:
 every learner and the optimum spend the step limit) nor the three-finger twins
@@ -70,17 +72,19 @@ def task_row(name: str, learners: tuple[str, ...], episodes: int, seeds: range, 
     }
     params = {"symmetric": task.symmetry is not None}
     for agent in learners:
+        k = ORDERS.get(agent, 1)
         gaps, gaps_g, success, seconds = [], [], [], 0.0
         for seed in seeds:
             t0 = time.perf_counter()
-            res = train_trials(task, agent, trials=1, episodes=episodes, seed=seed, k=1, eval_episodes=0, params=params)
+            res = train_trials(task, agent, trials=1, episodes=episodes, seed=seed, k=k, eval_episodes=0, params=params)
             seconds += time.perf_counter() - t0
-            records = greedy_records(task, res.agents, worlds, seed)[0]
+            records = greedy_records(task, res.agents, worlds, seed, k=k)[0]
             steps = _steps(records)
             gaps.append(round(float(steps.mean() / optimum.mean() - 1.0), 4))
             gaps_g.append(round(float(steps[graspable].mean() / optimum[graspable].mean() - 1.0), 4))
             success.append(float(np.mean([r.success for r in records])))
         row[agent] = {
+            "k": k,
             "gap": gaps,
             "gap_graspable": gaps_g,
             "median_gap": statistics.median(gaps),

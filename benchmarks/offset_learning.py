@@ -1,41 +1,61 @@
-"""model-vi on a grid of offsets with the continuous-offsets target's budget of 5,000 episodes.
+"""A learner on a grid of offsets with the continuous-offsets target's budget of 5,000 episodes.
 
 ``crmgrasp reproduce continuous-offsets`` learns from 2,000 episodes per trial. This script
 reruns its learner (model-vi, k = 1, mirror quotient where declared, 5 trials) with the
 issue's budget, 5,000 task episodes per trial, on the U handle (grid of 9 offsets per pair)
 and cup-3d (3 x 3 per pair), and runs each greedy policy from the optimum's own 100 starts.
+``--learner backoff-vi`` runs the whole-history learner instead (k = 6, mirror quotient
+where declared, the same trials, seed and starts).
 
 Prints one JSON object: per task, CRMs per episode per trial, their median, the grid's
 belief-space optimum on those starts and the median's gap to it. Usage:
-``python benchmarks/offset_learning.py [EPISODES]`` (default 5000; about 8 minutes on 2 cores).
+``python benchmarks/offset_learning.py [--episodes 5000] [--learner model-vi|backoff-vi]``
+(model-vi about 8 minutes on 2 cores).
 """
 
 from __future__ import annotations
 
+import argparse
 import json
-import sys
 from typing import Any
 
 import numpy as np
 
+from crmgrasp.agents.training import train_trials
+from crmgrasp.experiments._episodes import greedy_records
 from crmgrasp.experiments.continuous_offsets import ContinuousOffsetsConfig, _learned
 from crmgrasp.planners.references import belief_optimum, sample_starts
-from crmgrasp.tasks import make_task
+from crmgrasp.tasks import Task, make_task
 from crmgrasp.tasks.offsets import offset_grid
 
 GRIDS = {"u-handle": 9, "cup-3d": 3}
+ORDERS = {"model-vi": 1, "backoff-vi": 6}
+"""The learners this script runs, with their history order."""
 
 
-def main(episodes: int = 5000, trials: int = 5, starts: int = 100) -> dict[str, Any]:
+def per_trial(task: Task, learner: str, cfg: ContinuousOffsetsConfig) -> list[float]:
+    """CRMs per episode of each trial's greedy policy on the optimum's starts."""
+    if learner == "model-vi":
+        return _learned(task, task.name, cfg)["per_trial"]
+    k = ORDERS[learner]
+    params = {"symmetric": task.symmetry is not None}
+    res = train_trials(
+        task, learner, trials=cfg.trials, episodes=cfg.episodes, seed=cfg.seed, k=k, eval_episodes=0, params=params
+    )
+    records = greedy_records(task, res.agents, sample_starts(task, cfg.starts, cfg.seed), cfg.seed, k=k)
+    return [float(np.mean([len(r.actions) for r in trial])) for trial in records]
+
+
+def main(episodes: int = 5000, trials: int = 5, starts: int = 100, learner: str = "model-vi") -> dict[str, Any]:
     cfg = ContinuousOffsetsConfig(trials=trials, episodes=episodes, starts=starts)
-    out: dict[str, Any] = {"episodes": episodes, "trials": trials, "starts": starts}
+    out: dict[str, Any] = {"episodes": episodes, "trials": trials, "starts": starts, "learner": learner}
     for name, n in GRIDS.items():
         task = offset_grid(make_task(name), n)
         optimum = belief_optimum(task, sample_starts(task, starts, cfg.seed))
-        row = _learned(task, task.name, cfg)
-        median = float(np.median(row["per_trial"]))
+        values = per_trial(task, learner, cfg)
+        median = float(np.median(values))
         out[task.name] = {
-            "per_trial": row["per_trial"],
+            "per_trial": values,
             "median": median,
             "optimum": optimum,
             "gap": round(median / optimum - 1.0, 4),
@@ -44,4 +64,8 @@ def main(episodes: int = 5000, trials: int = 5, starts: int = 100) -> dict[str, 
 
 
 if __name__ == "__main__":
-    print(json.dumps(main(*[int(a) for a in sys.argv[1:2]]), indent=2))
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--episodes", type=int, default=5000)
+    ap.add_argument("--learner", choices=tuple(ORDERS), default="model-vi")
+    a = ap.parse_args()
+    print(json.dumps(main(a.episodes, learner=a.learner), indent=2))

@@ -106,16 +106,17 @@ def test_offset_learning_smoke():
     spec = importlib.util.spec_from_file_location("offset_learning", BENCH.parent / "offset_learning.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    res = mod.main(episodes=20, trials=1, starts=10)
-    for key in ("u-handle-grid9", "cup-3d-grid3"):
-        assert res[key]["median"] >= res[key]["optimum"] - 1e-12
+    for learner in mod.ORDERS:
+        res = mod.main(episodes=20, trials=1, starts=10, learner=learner)
+        for key in ("u-handle-grid9", "cup-3d-grid3"):
+            assert res[key]["median"] >= res[key]["optimum"] - 1e-12
 
 
 def test_family_learning_smoke():
     spec = importlib.util.spec_from_file_location("family_learning", BENCH.parent / "family_learning.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    res = mod.main(episodes=20, seeds=2, n_worlds=12, tasks=("cup-family",), learners=("pooled-vi",))
+    res = mod.main(episodes=20, seeds=2, n_worlds=12, tasks=("cup-family",), learners=("pooled-vi", "backoff-vi"))
     row = res["cup-family"]
     assert row["worlds"] == 12 and 0 <= row["graspable"] <= 12 and row["optimum"] >= 1.0
     learner = row["pooled-vi"]

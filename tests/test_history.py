@@ -13,7 +13,7 @@ def test_paper_sizes():
     assert KOrderEncoder(24, 4, 0).size == 24 and KOrderEncoder(24, 4, 1).size == 24 * 5
 
 
-@given(st.integers(0, 3), st.integers(1, 30), st.integers(1, 6), st.data())
+@given(st.integers(0, 6), st.integers(1, 30), st.integers(1, 6), st.data())
 def test_roundtrip_and_push(k, n_obs, n_act, data):
     enc = KOrderEncoder(n_obs, n_act, k)
     h = enc.start(data.draw(st.integers(0, n_obs - 1)))
@@ -21,7 +21,9 @@ def test_roundtrip_and_push(k, n_obs, n_act, data):
     acts = []
     for _ in range(data.draw(st.integers(0, 5))):
         a, o = data.draw(st.integers(0, n_act - 1)), data.draw(st.integers(0, n_obs - 1))
+        before = enc.encode(h)
         h = enc.push(h, a, o)
+        assert enc.push_code(before, a, o) == enc.encode(h)  # the arithmetic push
         acts.append(a)
         seen.append(o)
         code = enc.encode(h)

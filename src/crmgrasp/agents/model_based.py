@@ -90,6 +90,9 @@ class ModelVI(TabularAgent):
         self.compiled = compiled
         self.model: Model = {}
         self.q_greedy: dict[int, list[float]] = {}
+        self.plan_acting = True
+        """Plan after every update (False: a learner kept for its model only, planned by
+        whoever reads it)."""
 
     def params(self) -> dict[str, Any]:  # type: ignore[override]
         return {**super().params(), "q_act": self.q_act, "unknown": self.unknown, "sweeps": self.sweeps}
@@ -136,7 +139,8 @@ class ModelVI(TabularAgent):
         counts = self.model.setdefault((s, a), {})
         o = (r, s2, terminal)
         counts[o] = counts.get(o, 0.0) + 1.0
-        self._plan()
+        if self.plan_acting:
+            self._plan()
 
     # ----------------------------------------------------------------- planning
     def _plan(self) -> None:

@@ -13,6 +13,11 @@ File layout (``format`` ``"crmgrasp-policy"``, ``version`` 2)::
       "sha256": "<hex digest of the rest of the document>"
     }
 
+A learner that backs off to shorter histories
+([`BackoffVI`][crmgrasp.agents.backoff.BackoffVI]) writes version 3, which adds
+``"backoff": {"k": 1, "greedy": {...}}``: a history the ``"greedy"`` table does not list
+acts from its last ``k`` CRMs' code in that table (``k`` below the file's).
+
 ``task_spec`` ([`crmgrasp.tasks.task_to_dict`][]) makes the file stand alone: it
 loads without naming a task, also for a task from a TOML file; given a task, the
 file is refused unless the task is the one it was made for (the first differing key is
@@ -20,8 +25,8 @@ named). Files without ``task_spec`` (written before it existed) name a registere
 
 A state code is the k-order history code of [`crmgrasp.model.history`][], written
 in canonical decimal; its ``"greedy"`` entry lists the actions tied for the best value
-(usually one). In a state the file does not list, the policy picks uniformly among
-all actions. ``sha256`` is the digest of the document without it, serialised with
+(usually one). In a state the file does not list (nor its back-off table), the policy
+picks uniformly among all actions. ``sha256`` is the digest of the document without it, serialised with
 sorted keys and no spaces, so an edited file (a changed ``k``, table or header) is
 refused. Loading reads at most [`MAX_BYTES`][] from a regular file, parses strict
 standard JSON (no duplicate keys, no NaN, integers of at most 20 digits, bounded
@@ -63,6 +68,8 @@ __all__ = [
 
 FORMAT = "crmgrasp-policy"
 VERSION = 2
+VERSIONS = (2, 3)
+"""Versions read: 2, and 3 (2 with a back-off table), written only with one."""
 MAX_BYTES = 64 * 2**20
 """Largest policy file read (64 MiB; a paper-box table is a few kB)."""
 
@@ -207,33 +214,50 @@ class GreedyPolicy:
 
     name = "policy"
 
-    def __init__(self, task: Task, k: int, table: dict[int, tuple[int, ...]], agent: str = "unknown") -> None:
+    def __init__(
+        self,
+        task: Task,
+        k: int,
+        table: dict[int, tuple[int, ...]],
+        agent: str = "unknown",
+        backoff: GreedyPolicy | None = None,
+    ) -> None:
         self.task = task
         self.encoder = KOrderEncoder(task.discretizer.size, len(task.actions), k)
         self.k = k
         self.n_actions = len(task.actions)
         self.table = table
         self.agent = agent
+        if backoff is not None and not 0 <= backoff.k < k:
+            raise CrmgraspError(f"a back-off table needs an order below {k}, got {backoff.k}")
+        self.backoff = backoff
+        """The table of shorter histories that an unlisted history acts from, or None."""
 
     @classmethod
     def from_agent(cls, task: Task, k: int, agent: TabularAgent | SymmetricAgent) -> GreedyPolicy:
         """The greedy policy of a tabular agent over the states it has visited: in
         each, the best of the actions its greedy policy chooses among (``greedy_tried``: the tried
-        ones; all ties kept)."""
-        table = {}
-        for s, row in agent.greedy_table.items():
-            acts = sorted(agent.greedy_tried.get(s) or range(len(row)))
-            best = max(row[a] for a in acts)
-            table[s] = tuple(a for a in acts if row[a] == best)
-        return cls(task, k, table, agent.name)
+        ones; all ties kept); with the back-off table of an agent that has one
+        (``backoff_tables()``)."""
+        table = _best_actions(agent.greedy_table, agent.greedy_tried)
+        tables = getattr(getattr(agent, "inner", agent), "backoff_tables", None)
+        backoff = None
+        if tables is not None:
+            k1, rows, tried = tables()
+            backoff = cls(task, k1, _best_actions(rows, tried), agent.name)
+        return cls(task, k, table, agent.name, backoff)
 
     def begin_episode(self) -> None:
         """Stateless."""
 
     def greedy(self, state: int, rng: np.random.Generator) -> int:
-        """The listed action (uniform among ties); uniform over all actions if unlisted."""
+        """The listed action (uniform among ties); else the back-off table's for the
+        history's last CRMs; uniform over all actions if neither lists it."""
         acts = self.table.get(state)
         if acts is None:
+            if self.backoff is not None:
+                h = self.encoder.decode(state)
+                return self.backoff.greedy(self.backoff.encoder.encode(h[: max(2 * self.backoff.k, 1)]), rng)
             return int(rng.integers(self.n_actions))
         return acts[0] if len(acts) == 1 else acts[int(rng.integers(len(acts)))]
 
@@ -272,8 +296,11 @@ class GreedyPolicy:
             "actions": crm_rows(self.task),
             "bins": self.task.discretizer.to_dict(),
             "agent": self.agent,
-            "greedy": {str(s): list(a) for s, a in sorted(self.table.items())},
+            "greedy": _table_json(self.table),
         }
+        if self.backoff is not None:
+            doc["version"] = 3
+            doc["backoff"] = {"k": self.backoff.k, "greedy": _table_json(self.backoff.table)}
         doc["sha256"] = policy_digest(doc)
         return doc
 
@@ -299,7 +326,7 @@ class GreedyPolicy:
 
         if not isinstance(doc, dict) or doc.get("format") != FORMAT:
             raise bad(f'not a crmgrasp policy (expected "format": "{FORMAT}")')
-        if doc.get("version") != VERSION:
+        if doc.get("version") not in VERSIONS:
             raise bad(f"unsupported policy version {shown(doc.get('version'))} (expected {VERSION}; re-save it)")
         missing = {"task", "k", "actions", "bins", "greedy", "sha256"} - set(doc)
         if missing:
@@ -320,21 +347,56 @@ class GreedyPolicy:
             raise bad(f"policy's CRM set {doc['actions']} differs from the task's {expected}")
         if doc["bins"] != task.discretizer.to_dict():
             raise bad(f"policy's observation bins {doc['bins']} differ from the task's")
-        encoder = KOrderEncoder(task.discretizer.size, len(task.actions), k)
-        if not isinstance(doc["greedy"], dict):
-            raise bad('"greedy" must be an object mapping state codes to action lists')
-        table: dict[int, tuple[int, ...]] = {}
-        for key, acts in doc["greedy"].items():
-            if not (key.isascii() and key.isdigit() and len(key) <= _MAX_INT_DIGITS and key == str(int(key))):
-                raise bad(f"state code {shown(key)} is not a canonical non-negative integer")
-            s = int(key)
-            if not 0 <= s < encoder.size:
-                raise bad(f"state code {s} is outside [0, {encoder.size}) for k = {k}")
-            if (
-                not isinstance(acts, list)
-                or not acts
-                or any(isinstance(a, bool) or not isinstance(a, int) or not 0 <= a < len(task.actions) for a in acts)
-            ):
-                raise bad(f"state {s}: actions must be a non-empty list of integers in [0, {len(task.actions)})")
-            table[s] = tuple(acts)
-        return cls(task, k, table, str(doc.get("agent", "unknown")))
+        table = _read_table(doc["greedy"], KOrderEncoder(task.discretizer.size, len(task.actions), k), bad)
+        backoff = None
+        if doc["version"] == 3 or "backoff" in doc:
+            backoff = _read_backoff(doc, task, k, bad)
+        return cls(task, k, table, str(doc.get("agent", "unknown")), backoff)
+
+
+def _best_actions(values: dict[int, list[float]], tried: dict[int, set[int]]) -> dict[int, tuple[int, ...]]:
+    """Per state, the best of the actions chosen among (all of them where none is listed), ties kept."""
+    table = {}
+    for s, row in values.items():
+        acts = sorted(tried.get(s) or range(len(row)))
+        best = max(row[a] for a in acts)
+        table[s] = tuple(a for a in acts if row[a] == best)
+    return table
+
+
+def _table_json(table: dict[int, tuple[int, ...]]) -> dict[str, list[int]]:
+    return {str(s): list(a) for s, a in sorted(table.items())}
+
+
+def _read_backoff(doc: dict[str, Any], task: Task, k: int, bad: Any) -> GreedyPolicy:
+    """The back-off table of a version 3 document (its order below ``k``)."""
+    part = doc.get("backoff")
+    if doc["version"] != 3 or not isinstance(part, dict) or set(part) != {"k", "greedy"}:
+        raise bad('a version 3 policy has a "backoff" object with "k" and "greedy" (and only version 3 has one)')
+    k1 = part["k"]
+    if isinstance(k1, bool) or not isinstance(k1, int) or not 0 <= k1 < k:
+        raise bad(f"backoff k must be an integer in [0, {k}), got {shown(k1)}")
+    table = _read_table(part["greedy"], KOrderEncoder(task.discretizer.size, len(task.actions), k1), bad)
+    return GreedyPolicy(task, k1, table, str(doc.get("agent", "unknown")))
+
+
+def _read_table(greedy: Any, encoder: KOrderEncoder, bad: Any) -> dict[int, tuple[int, ...]]:
+    """A ``"greedy"`` table, every code and action list checked against ``encoder``."""
+    n, k = encoder.n_actions, encoder.k
+    if not isinstance(greedy, dict):
+        raise bad('"greedy" must be an object mapping state codes to action lists')
+    table: dict[int, tuple[int, ...]] = {}
+    for key, acts in greedy.items():
+        if not (key.isascii() and key.isdigit() and len(key) <= _MAX_INT_DIGITS and key == str(int(key))):
+            raise bad(f"state code {shown(key)} is not a canonical non-negative integer")
+        s = int(key)
+        if not 0 <= s < encoder.size:
+            raise bad(f"state code {s} is outside [0, {encoder.size}) for k = {k}")
+        if (
+            not isinstance(acts, list)
+            or not acts
+            or any(isinstance(a, bool) or not isinstance(a, int) or not 0 <= a < n for a in acts)
+        ):
+            raise bad(f"state {s}: actions must be a non-empty list of integers in [0, {n})")
+        table[s] = tuple(acts)
+    return table

@@ -70,7 +70,7 @@ class HistoryFrame:
     """
 
     def __init__(self, task: Task, encoder: KOrderEncoder, symmetric: SymmetricAgent | None = None) -> None:
-        self.encoder, self.discretizer, self.symmetric = encoder, task.discretizer, symmetric
+        self.task, self.encoder, self.discretizer, self.symmetric = task, encoder, task.discretizer, symmetric
         self.horizon = task.max_steps
         """CRMs per episode at most (the task's step limit)."""
         self.max_cost = max(1.0 + task.error_cost, abs(task.grasp_reward))
@@ -181,8 +181,13 @@ class PooledVI(ModelVI):
     @property
     def greedy_table(self) -> dict[int, list[float]]:
         """The greedy values, on the model with the pooled prior."""
+        return self.greedy_model().q_greedy
+
+    def greedy_model(self) -> ModelVI:
+        """The greedy policy's model with the pooled prior, solved: its ``model``, values
+        ``q_greedy`` and choices ``tried``."""
         self._solve()
-        return self.judge.q_greedy
+        return self.judge
 
     @property
     def greedy_tried(self) -> dict[int, set[int]]:

@@ -52,6 +52,12 @@ PRESETS: dict[str, LearnerPreset] = {
         symmetric=True,
         description="pooled-vi, k = 1, on the mirror quotient where the task declares one; from scratch",
     ),
+    "families": LearnerPreset(
+        "backoff-vi",
+        6,
+        symmetric=True,
+        description="backoff-vi, k = 6: whole histories backed off to k = 1, for object families; from scratch",
+    ),
 }
 """The presets of ``crmgrasp learn --preset``."""
 

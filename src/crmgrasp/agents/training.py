@@ -17,6 +17,7 @@ import numpy as np
 
 from crmgrasp._progress import Progress
 from crmgrasp._validation import CrmgraspError, integer
+from crmgrasp.agents.backoff import BackoffVI
 from crmgrasp.agents.base import Agent, LearnerPolicy
 from crmgrasp.agents.baselines import FixedSequence, RandomAgent
 from crmgrasp.agents.model_based import ModelVI
@@ -62,6 +63,7 @@ AGENTS: dict[str, Callable[..., Agent]] = {
     "dyna-q": DynaQ,
     "model-vi": ModelVI,
     "pooled-vi": PooledVI,
+    "backoff-vi": BackoffVI,
     "psrl": PSRL,
     "ucbvi": UCBVI,
     "random": RandomAgent,
@@ -147,7 +149,7 @@ def build_agent(task: Task, encoder: KOrderEncoder, name: str, params: dict[str,
         known = ", ".join(n for n in AGENTS if takes_prior(n))
         raise CrmgraspError(f"prior_task needs a model-based agent ({known}), not {name!r}")
     wrapped = SymmetricAgent(agent, task, encoder) if symmetric else None  # type: ignore[arg-type]
-    if isinstance(agent, (PooledVI, EpisodicModel)):
+    if isinstance(agent, (PooledVI, BackoffVI, EpisodicModel)):
         agent.bind(HistoryFrame(task, encoder, wrapped))
     if prior and isinstance(agent, ModelVI):
         model, weight = _prior(task, encoder.k, name, p, symmetric, prior)

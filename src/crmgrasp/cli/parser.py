@@ -402,7 +402,7 @@ _AGENT_FLAGS = (
     ),
     ("--planning", ("sample", "sweep"), "sampled updates or value-iteration sweeps"),
     ("--q-act", _number, "acting value of an untried CRM"),
-    ("--beta", _number, "weight of the pooled prior, in pseudo-counts"),
+    ("--beta", _number, "weight of the prior, pseudo-counts (pooled-vi: pooled bins; backoff-vi: the k = 1 level)"),
     ("--alpha0", _number, "Dirichlet pseudo-counts per state-action pair"),
     ("--scale", _number, "exploration bonus factor"),
     ("--prior-task", str, "a task with the same CRMs and bins (e.g. box-family) to learn a prior on"),

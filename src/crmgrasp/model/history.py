@@ -95,6 +95,22 @@ class KOrderEncoder:
             return (obs,)
         return (obs, action, *history[: 2 * self.k - 2])
 
+    def push_code(self, code: int, action: int, obs: int) -> int:
+        """``encode(push(decode(code), action, obs))`` by arithmetic on the code: the new
+        slots ``(obs, action)`` on top, the oldest two slots dropped,
+        ``(obs (nA+1) + action) W + code // ((nO+1)(nA+1))`` with ``W`` the weight of the
+        third slot (for ``k = 1`` the whole old code drops; for ``k = 0``, ``obs``)."""
+        if self.k == 0:
+            return obs
+        top = obs * (self.n_actions + 1) + action
+        if self.k == 1:
+            return top
+        return top * self._weight + code // ((self.n_obs + 1) * (self.n_actions + 1))
+
+    @cached_property
+    def _weight(self) -> int:
+        return self.size // (self.n_obs * (self.n_actions + 1))
+
     def encode(self, history: History) -> int:
         """Integer code of a history."""
         code = 0

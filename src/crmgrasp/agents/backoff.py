@@ -1,0 +1,330 @@
+"""Model-based learning over whole histories, backed off to k = 1: `BackoffVI` (``backoff-vi``).
+
+A learner on k = 1 histories ([`PooledVI`][crmgrasp.agents.pooled.PooledVI]) plans as if
+``(o_t, a_{t-1})`` were a state. It is not: which worlds lie behind it depends on the
+policy that led there, so a model learned under the acting policy misleads the greedy one,
+and on object families such learners stall 30-60% above the belief-space optimum however
+long they train. The outcome of a CRM given the *whole* history since the start,
+
+``p(o' | h, a) = sum_x b_h(x) p(o' | x, a)``  (``b_h`` the belief over hidden states ``x``),
+
+does not depend on the policy ([docs/model.md section 6][model-6]): planning on a model of
+whole histories is planning in belief space. Whole histories are many and each is seen
+rarely, so the model has two levels:
+
+* **long** counts ``n(h, a, o)`` of each outcome ``o = (r, h', terminal)`` after CRM ``a``
+  in the learner's k-order history ``h``, with ``k`` at least the length of most episodes
+  (a whole history then; beyond ``k`` CRMs, its last ``k``);
+* **short**: a ``PooledVI`` learner on the k = 1 suffix ``h_1 = (o_t, a_{t-1})`` of every
+  history, taught every transition; its greedy model (own counts and the bins-pooled
+  prior) gives ``p_1(o | h_1, a)``.
+
+The **planning model** is a finite MDP with a node for every long history with data and
+one for every short state:
+
+``p(o | h, a) = (n(h, a, o) + beta p_1(o | h_1, a)) / (n(h, a) + beta)``,
+
+``p_1`` alone for a CRM never tried in ``h``. An outcome leads to the long node of the next
+history if that history has data, else to the short node of its suffix: the short values
+stand in for the subtree not yet explored. Short nodes keep the short model. It is solved
+by [`ModelVI`][crmgrasp.agents.model_based.ModelVI]'s value iteration (compiled), which
+gives acting values (an untried pair is worth ``q_act``) and greedy values (tried pairs
+only).
+
+**Acting** follows the acting values of a model planned at the first step of episode ``e``
+when ``e <= plan_every`` or ``e`` is a multiple of ``plan_every`` (a plan solves the whole
+model); a history without a node acts from its suffix's short node. The acting model is a
+posterior draw (``sample``, posterior sampling as in PSRL): each long pair's outcome
+probabilities drawn from ``Dirichlet(n(h, a, .) + beta p_1(. | h_1, a))``, so a CRM that
+the short level rates low is still tried where a history's own few outcomes leave room
+(``docs/results.md`` has the measured difference). Acting on the plan puts the data where the planned policy
+goes. **The greedy policy** (evaluated, saved)
+plans on all data so far, solved afresh when asked after new data, so a checkpoint never
+changes what follows. A saved policy lists the long nodes' choices and, for every other
+history, the short nodes' (its ``backoff`` table, [`crmgrasp.agents.policy`][]).
+
+On a mirror quotient ([`SymmetricAgent`][crmgrasp.agents.symmetric.SymmetricAgent]) the
+long histories are representatives, and the short level learns on its own quotient; a
+value is the same at a history and at its mirror image, so an outcome may lead to either.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from crmgrasp._validation import CrmgraspError, finite, integer
+from crmgrasp.agents.base import greedy_choice
+from crmgrasp.agents.model_based import ModelVI, Outcome
+from crmgrasp.agents.pooled import HistoryFrame, PooledVI
+from crmgrasp.agents.symmetric import SymmetricAgent, mirror_observation_map
+from crmgrasp.agents.tabular import TabularAgent
+from crmgrasp.model.history import KOrderEncoder
+
+__all__ = ["BackoffVI"]
+
+Node = tuple[str, int]
+"""A planning node: ``("L", long history code)`` or ``("S", short state code)``."""
+
+
+class BackoffVI(TabularAgent):
+    """Planning on whole histories with a k = 1 back-off (see the module docstring).
+
+    Parameters
+    ----------
+    n_actions
+        Number of actions.
+    beta
+        Weight of the short level's estimate in a long history's model, in pseudo-counts
+        (1 by default: one own outcome weighs as much).
+    plan_every
+        Acting re-plans before every episode up to this one, then every ``plan_every``-th.
+    q_act, unknown, sweeps, compiled
+        [`ModelVI`][crmgrasp.agents.model_based.ModelVI]'s (untried pairs' acting value,
+        greedy value of a node with nothing tried, most sweeps, compiled sweeps).
+    gamma
+        Discount (0.9, the paper's).
+    sample
+        Act on a posterior draw of the long level (True, the default) rather than on its
+        mean: each long pair's outcome probabilities are drawn from the Dirichlet whose
+        parameters are the blended counts ``n(h, a, o) + beta p_1(o | h_1, a)``.
+    """
+
+    name = "backoff-vi"
+    needs_frame = True
+
+    def __init__(
+        self,
+        n_actions: int,
+        beta: float = 1.0,
+        plan_every: int = 25,
+        q_act: float = -1.5,
+        unknown: float = -10.0,
+        sweeps: int = 1000,
+        compiled: bool = True,
+        gamma: float = 0.9,
+        sample: bool = True,
+    ) -> None:
+        super().__init__(n_actions, gamma=gamma)
+        self.beta = finite(beta, "beta")
+        if self.beta < 0.0:
+            raise CrmgraspError(f"beta must be >= 0, got {self.beta}")
+        self.plan_every = integer(plan_every, "plan_every", 1, 1_000_000)
+        self.judge = ModelVI(n_actions, q_act, unknown, sweeps, compiled, gamma=gamma)
+        self.short = PooledVI(n_actions, q_act=q_act, unknown=unknown, compiled=compiled, gamma=gamma)
+        self.short.plan_acting = False  # only its greedy model is read
+        self.counts: dict[tuple[int, int], dict[Outcome, float]] = {}
+        self.episodes = 0
+        self.sample = sample
+        self._replan = False
+        self._act: dict[Any, list[float]] = {}
+        self._solved = True
+        self._frame: HistoryFrame | None = None
+        self._short_agent: Any = self.short
+        self._short_sym: SymmetricAgent | None = None
+        self._short_frame: HistoryFrame | None = None
+        self._suffix: dict[int, int] = {}
+        self._outcomes: dict[tuple[int, int], list[tuple[float, bool, float, tuple[int, ...]]]] = {}
+        self._amap: list[int] = []
+        self._omap: list[int] = []
+
+    def params(self) -> dict[str, Any]:  # type: ignore[override]
+        j = self.judge
+        return {
+            "beta": self.beta,
+            "plan_every": self.plan_every,
+            "q_act": j.q_act,
+            "unknown": j.unknown,
+            "sweeps": j.sweeps,
+            "gamma": self.gamma,
+            "sample": self.sample,
+        }
+
+    def bind(self, frame: HistoryFrame) -> None:
+        """Give the learner its long histories' structure and build the short level (on
+        its own mirror quotient where the long level has one)."""
+        enc = frame.encoder
+        if enc.k < 2:
+            raise CrmgraspError(f"backoff-vi needs long histories, k >= 2 (6 recommended), got k = {enc.k}")
+        task = frame.task
+        short_enc = KOrderEncoder(enc.n_obs, enc.n_actions, 1)
+        self._frame = frame
+        if frame.symmetric is not None:
+            self._short_sym = SymmetricAgent(self.short, task, short_enc)
+            self._short_agent = self._short_sym
+            self._amap = list(task.symmetry.actions)  # type: ignore[union-attr]
+            self._omap = mirror_observation_map(task)
+        self._short_frame = HistoryFrame(task, short_enc, self._short_sym)
+        self.short.bind(self._short_frame)
+
+    # ----------------------------------------------------------------- levels
+    def suffix(self, s: int) -> int:
+        """The k = 1 code of history ``s``'s suffix ``(o_t, a_{t-1})``."""
+        v = self._suffix.get(s)
+        if v is None:
+            frame, short = self._bound()
+            h = frame.encoder.decode(s)
+            v = self._suffix[s] = short.encoder.encode(h[:2])
+        return v
+
+    def _bound(self) -> tuple[HistoryFrame, HistoryFrame]:
+        if self._frame is None or self._short_frame is None:
+            raise CrmgraspError("backoff-vi needs its state structure: build it with crmgrasp.agents.build_agent")
+        return self._frame, self._short_frame
+
+    def _short_node(self, s1: int) -> tuple[Node, bool]:
+        """The short node of k = 1 code ``s1`` and whether it is ``s1``'s mirror image."""
+        if self._short_sym is None:
+            return ("S", s1), False
+        m = self._short_sym.mirror(s1)
+        return (("S", m), True) if m < s1 else (("S", s1), False)
+
+    def _node(self, s: int, nodes: Mapping[Any, Any]) -> tuple[Node | None, bool]:
+        """The node history ``s`` acts from among ``nodes`` (its own, else its suffix's)."""
+        if ("L", s) in nodes:
+            return ("L", s), False
+        node, flip = self._short_node(self.suffix(s))
+        return (node, flip) if node in nodes else (None, False)
+
+    # ----------------------------------------------------------------- the loop
+    def begin_episode(self) -> None:
+        """Count the episode; re-plan the acting values when it is a planning episode."""
+        self.episodes += 1
+        e = self.episodes
+        self._replan = e <= self.plan_every or e % self.plan_every == 0
+
+    def act(self, state: int, rng: np.random.Generator) -> int:
+        """The best action by the planned acting values (uniform where there is no node)."""
+        if self._replan:
+            self._replan = False
+            if self.sample:
+                self._solved = False
+                judge = self._planned(rng)
+                self._solved = False
+            else:
+                judge = self._planned()
+            self._act = {node: list(row) for node, row in judge.q.items()}
+        node, flip = self._node(state, self._act)
+        if node is None:
+            return int(rng.integers(self.n_actions))
+        a = greedy_choice(self._act[node], rng)
+        return self._amap[a] if flip else a
+
+    def greedy(self, state: int, rng: np.random.Generator) -> int:
+        """The best tried action on the model of all data (uniform where none was tried)."""
+        judge = self._planned()
+        node, flip = self._node(state, judge.tried)
+        if node is None:
+            return int(rng.integers(self.n_actions))
+        a = judge.greedy(node, rng)  # type: ignore[arg-type]
+        return self._amap[a] if flip else a
+
+    def update(
+        self, s: int, a: int, r: float, s2: int, a2: int | None, terminal: bool, rng: np.random.Generator
+    ) -> None:
+        """Count the outcome at the long level and teach the short level its suffix."""
+        self._mark(s, a)
+        counts = self.counts.setdefault((s, a), {})
+        o = (r, s2, terminal)
+        counts[o] = counts.get(o, 0.0) + 1.0
+        b2 = None if a2 is None else a2
+        self._short_agent.update(self.suffix(s), a, r, self.suffix(s2), b2, terminal, rng)
+        self._solved = False
+
+    # ----------------------------------------------------------------- planning
+    def _planned(self, rng: np.random.Generator | None = None) -> ModelVI:
+        """The planning model of all data so far, solved (built afresh after new data)."""
+        if self._solved:
+            return self.judge
+        short = self.short.greedy_model()
+        judge, n = self.judge, self.n_actions
+        judge.model, judge.tried = {}, {}
+        longs = sorted({s for s, _ in self.counts})
+        nodes: list[Node] = [("S", s1) for s1 in short.q] + [("L", s) for s in longs]
+        judge.q = {node: [judge.q_act] * n for node in nodes}  # type: ignore[misc]
+        judge.q_greedy = {node: [judge.unknown] * n for node in nodes}  # type: ignore[misc]
+        self._outcomes = {}
+        for (s1, b), entry in short.model.items():
+            self._add(("S", s1), b, {(r, ("S", t2), t): c for (r, t2, t), c in entry.items()})
+        known = set(longs)
+        for s in longs:
+            for b in range(n):
+                entry = self._long_entry(s, b, known)
+                if entry and rng is not None:
+                    entry = {o: float(rng.gamma(c)) + 1e-300 for o, c in entry.items()}
+                if entry:
+                    self._add(("L", s), b, entry)
+        judge._plan()
+        self._solved = True
+        return judge
+
+    def _add(self, node: Node, b: int, entry: dict[Any, float]) -> None:
+        self.judge.model[(node, b)] = entry  # type: ignore[index]
+        self.judge._mark(node, b)  # type: ignore[arg-type]
+
+    def _route(self, s2: int, known: set[int]) -> Node:
+        """The node an outcome history leads to: its own if it has data, else its suffix's."""
+        return ("L", s2) if s2 in known else self._short_node(self.suffix(s2))[0]
+
+    def _long_entry(self, s: int, b: int, known: set[int]) -> dict[Any, float]:
+        """``n(h, b, .) + beta p_1(. | h_1, b)`` with outcomes routed to nodes (``p_1``
+        alone where ``h`` never tried ``b``; empty where neither level has data)."""
+        frame = self._bound()[0]
+        entry: dict[Any, float] = {}
+        own = self.counts.get((s, b))
+        for (r, s2, t), c in (own or {}).items():
+            o = (r, self._route(s2, known), t)
+            entry[o] = entry.get(o, 0.0) + c
+        if own and self.beta == 0.0:
+            return entry
+        (_, s1), flip = self._short_node(self.suffix(s))
+        outcomes = self._short_outcomes(s1, self._amap[b] if flip else b)
+        if not outcomes:
+            return entry
+        weight = self.beta if own else 1.0
+        enc, sym = frame.encoder, frame.symmetric
+        for r, t, p, seen in outcomes:
+            for obs in seen:
+                s2 = enc.push_code(s, b, self._omap[obs] if flip else obs)
+                if sym is not None:
+                    s2 = min(s2, sym.mirror(s2))
+                o = (r, self._route(s2, known), t)
+                entry[o] = entry.get(o, 0.0) + weight * p / len(seen)
+        return entry
+
+    def _short_outcomes(self, s1: int, b1: int) -> list[tuple[float, bool, float, tuple[int, ...]]]:
+        """The short level's outcomes of CRM ``b1`` in ``s1``: reward, terminal, probability,
+        and the observations (in ``s1``'s frame) that can have led there (cached per plan)."""
+        out = self._outcomes.get((s1, b1))
+        if out is None:
+            _, short_frame = self._bound()
+            pooled = self.short.judge.model.get((s1, b1)) or {}
+            total = sum(pooled.values())
+            out = [(r, t, c / total, short_frame.outcome_observations(s1, b1, t2)) for (r, t2, t), c in pooled.items()]
+            self._outcomes[(s1, b1)] = out
+        return out
+
+    # ----------------------------------------------------------------- policy tables
+    @property
+    def greedy_table(self) -> dict[int, list[float]]:
+        """The greedy values of the long histories with data."""
+        judge = self._planned()
+        return {node[1]: row for node, row in judge.q_greedy.items() if node[0] == "L"}  # type: ignore[index]
+
+    @property
+    def greedy_tried(self) -> dict[int, set[int]]:
+        """The actions the greedy policy chooses among in each long history with data."""
+        judge = self._planned()
+        return {node[1]: acts for node, acts in judge.tried.items() if node[0] == "L"}  # type: ignore[index]
+
+    def backoff_tables(self) -> tuple[int, dict[int, list[float]], dict[int, set[int]]]:
+        """The back-off level of a saved policy: its order (1), and the greedy values and
+        choices of the short states, both mirror images listed on a quotient."""
+        judge = self._planned()
+        table = {node[1]: judge.q_greedy[node] for node in judge.tried if node[0] == "S"}  # type: ignore[index]
+        tried = {node[1]: acts for node, acts in judge.tried.items() if node[0] == "S"}  # type: ignore[index]
+        if self._short_sym is not None:
+            table, tried = self._short_sym._mirrored(table), self._short_sym._mirrored_sets(tried)
+        return 1, table, tried
