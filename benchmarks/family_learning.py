@@ -44,13 +44,15 @@ TASKS = (
     "box-3d",
     "cup-3d",
 )
+"""The two-finger families that two fingers can grasp, and the spatial tasks; not
+``triangles`` and ``odd-polygons`` (no two-finger grasp at friction 0.15 on any world:
+every learner and the optimum spend the step limit) nor, by default, the three-finger twins
+(``crmgrasp reproduce third-contact``)."""
+THREE_FINGERS = ("triangles-3f", "odd-polygons-3f")
+"""Three-finger twins a run may name with ``--task`` (not run by default)."""
 LEARNERS = ("backoff-vi", "pooled-vi", "model-vi")
 ORDERS = {"backoff-vi": 6}
 """History order per learner (1 where not listed)."""
-"""The two-finger families that two fingers can grasp, and the spatial tasks; not
-``triangles`` and ``odd-polygons`` (no two-finger grasp at friction 0.15 on any world:
-every learner and the optimum spend the step limit) nor the three-finger twins
-(``crmgrasp reproduce third-contact``)."""
 
 
 def _steps(records: list) -> np.ndarray:
@@ -119,7 +121,7 @@ if __name__ == "__main__":
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--first", type=int, default=0)
     ap.add_argument("--worlds", type=int, default=300)
-    ap.add_argument("--task", action="append", dest="tasks", choices=TASKS)
+    ap.add_argument("--task", action="append", dest="tasks", choices=TASKS + THREE_FINGERS)
     ap.add_argument("--learner", action="append", dest="learners")
     a = ap.parse_args()
     res = main(a.episodes, a.seeds, a.first, a.worlds, tuple(a.tasks or TASKS), tuple(a.learners or LEARNERS))

@@ -190,13 +190,14 @@ class BackoffVI(TabularAgent):
 
     # ----------------------------------------------------------------- the loop
     def begin_episode(self) -> None:
-        """Count the episode; re-plan the acting values when it is a planning episode."""
+        """Count the episode; a planning episode re-plans the acting values at its first step."""
         self.episodes += 1
         e = self.episodes
         self._replan = e <= self.plan_every or e % self.plan_every == 0
 
     def act(self, state: int, rng: np.random.Generator) -> int:
-        """The best action by the planned acting values (uniform where there is no node)."""
+        """The best action by the planned acting values (uniform where there is no node); at
+        a planning episode's first step, plan them first (on a posterior draw with ``sample``)."""
         if self._replan:
             self._replan = False
             if self.sample:
@@ -229,8 +230,7 @@ class BackoffVI(TabularAgent):
         counts = self.counts.setdefault((s, a), {})
         o = (r, s2, terminal)
         counts[o] = counts.get(o, 0.0) + 1.0
-        b2 = None if a2 is None else a2
-        self._short_agent.update(self.suffix(s), a, r, self.suffix(s2), b2, terminal, rng)
+        self._short_agent.update(self.suffix(s), a, r, self.suffix(s2), a2, terminal, rng)
         self._solved = False
 
     # ----------------------------------------------------------------- planning
