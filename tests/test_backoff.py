@@ -134,6 +134,8 @@ def test_bad_settings_are_one_line_errors(box):
         make_agent("backoff-vi", 4, beta=-1.0)
     with pytest.raises(CrmgraspError, match="plan_every"):
         make_agent("backoff-vi", 4, plan_every=0)
+    with pytest.raises(CrmgraspError, match="sample must be true or false"):
+        make_agent("backoff-vi", 4, sample="yes")
     with pytest.raises(CrmgraspError, match="needs its state structure"):
         make_agent("backoff-vi", 4).update(0, 0, -1.0, 1, 0, False, np.random.default_rng(0))
 

@@ -93,7 +93,6 @@ class BackoffVI(TabularAgent):
     """
 
     name = "backoff-vi"
-    needs_frame = True
 
     def __init__(
         self,
@@ -112,6 +111,8 @@ class BackoffVI(TabularAgent):
         if self.beta < 0.0:
             raise CrmgraspError(f"beta must be >= 0, got {self.beta}")
         self.plan_every = integer(plan_every, "plan_every", 1, 1_000_000)
+        if not isinstance(sample, bool):
+            raise CrmgraspError(f"sample must be true or false, got {sample!r}")
         self.judge = ModelVI(n_actions, q_act, unknown, sweeps, compiled, gamma=gamma)
         self.short = PooledVI(n_actions, q_act=q_act, unknown=unknown, compiled=compiled, gamma=gamma)
         self.short.plan_acting = False  # only its greedy model is read
