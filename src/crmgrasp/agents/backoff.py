@@ -123,7 +123,6 @@ class BackoffVI(TabularAgent):
         self._act: dict[Any, list[float]] = {}
         self._solved = True
         self._frame: HistoryFrame | None = None
-        self._short_agent: Any = self.short
         self._short_sym: SymmetricAgent | None = None
         self._short_frame: HistoryFrame | None = None
         self._suffix: dict[int, int] = {}
@@ -154,7 +153,6 @@ class BackoffVI(TabularAgent):
         self._frame = frame
         if frame.symmetric is not None:
             self._short_sym = SymmetricAgent(self.short, task, short_enc)
-            self._short_agent = self._short_sym
             self._amap = list(task.symmetry.actions)  # type: ignore[union-attr]
             self._omap = mirror_observation_map(task)
         self._short_frame = HistoryFrame(task, short_enc, self._short_sym)
@@ -177,10 +175,8 @@ class BackoffVI(TabularAgent):
 
     def _short_node(self, s1: int) -> tuple[Node, bool]:
         """The short node of k = 1 code ``s1`` and whether it is ``s1``'s mirror image."""
-        if self._short_sym is None:
-            return ("S", s1), False
-        m = self._short_sym.mirror(s1)
-        return (("S", m), True) if m < s1 else (("S", s1), False)
+        c, flip = (s1, False) if self._short_sym is None else self._short_sym._canon(s1)
+        return ("S", c), flip
 
     def _node(self, s: int, nodes: Mapping[Any, Any]) -> tuple[Node | None, bool]:
         """The node history ``s`` acts from among ``nodes`` (its own, else its suffix's)."""
@@ -231,7 +227,7 @@ class BackoffVI(TabularAgent):
         counts = self.counts.setdefault((s, a), {})
         o = (r, s2, terminal)
         counts[o] = counts.get(o, 0.0) + 1.0
-        self._short_agent.update(self.suffix(s), a, r, self.suffix(s2), a2, terminal, rng)
+        (self._short_sym or self.short).update(self.suffix(s), a, r, self.suffix(s2), a2, terminal, rng)
         self._solved = False
 
     # ----------------------------------------------------------------- planning
@@ -285,12 +281,9 @@ class BackoffVI(TabularAgent):
         if not outcomes:
             return entry
         weight = self.beta if own else 1.0
-        enc, sym = frame.encoder, frame.symmetric
         for r, t, p, seen in outcomes:
             for obs in seen:
-                s2 = enc.push_code(s, b, self._omap[obs] if flip else obs)
-                if sym is not None:
-                    s2 = min(s2, sym.mirror(s2))
+                s2 = frame.next_state(s, b, self._omap[obs] if flip else obs)
                 o = (r, self._route(s2, known), t)
                 entry[o] = entry.get(o, 0.0) + weight * p / len(seen)
         return entry
@@ -301,7 +294,7 @@ class BackoffVI(TabularAgent):
         out = self._outcomes.get((s1, b1))
         if out is None:
             _, short_frame = self._bound()
-            pooled = self.short.judge.model.get((s1, b1)) or {}
+            pooled = self.short.greedy_model().model.get((s1, b1)) or {}
             total = sum(pooled.values())
             out = [(r, t, c / total, short_frame.outcome_observations(s1, b1, t2)) for (r, t2, t), c in pooled.items()]
             self._outcomes[(s1, b1)] = out

@@ -115,8 +115,7 @@ class HistoryFrame:
     def next_state(self, s: int, a: int, obs: int) -> int:
         """The state after CRM ``a`` in ``s`` senses ``obs`` (read in ``s``'s frame): its
         representative on a mirror quotient."""
-        enc = self.encoder
-        t = enc.encode(enc.push(enc.decode(s), a, obs))
+        t = self.encoder.push_code(s, a, obs)
         if self.symmetric is None:
             return t
         return min(t, self.symmetric.mirror(t))
