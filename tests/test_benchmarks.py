@@ -49,8 +49,9 @@ def test_bench_family_smoke(monkeypatch):
     spec.loader.exec_module(mod)
     calls = []
     monkeypatch.setattr(mod, "learn", lambda task, *a, **k: calls.append((task.name, k["jobs"])))
-    res = mod.main(jobs=2)
-    assert [c[0] for c in calls] == ["paper-box", "paper-box", "box-family"] and res["family_over_paper_box"] > 0
+    res = mod.main(jobs=2, repeats=2)
+    assert [c[0] for c in calls] == ["paper-box"] + ["paper-box", "box-family"] * 2
+    assert res["family_over_paper_box"] > 0 and len(res["runs"]) == 2
 
 
 def test_bench_spatial_smoke():

@@ -154,3 +154,23 @@ def test_grid_simplicity_check_decides_as_all_pairs(raw):
     except CrmgraspError as exc:
         got = str(exc)
     assert got == _all_pairs_check(pts)
+
+
+def test_a_moved_polygon_is_the_polygon_of_the_moved_vertices():
+    """`Polygon.moved` skips the checks a rigid motion cannot break: the result equals the
+    checked construction on the same vertices, and a motion beyond the bound is refused."""
+    poly = Polygon([(0.0, 0.0), (0.3, 0.0), (0.3, 0.1), (0.1, 0.05), (0.0, 0.1)])
+    moved = poly.moved(1.1, 0.02, -0.03)
+    assert moved == Polygon(moved.vertices) and moved.convex is False
+    assert moved.edges == Polygon(moved.vertices).edges
+    for dx in (math.nan, math.inf, 2e6):
+        with pytest.raises(CrmgraspError, match="not finite or beyond"):
+            poly.moved(0.0, dx, 0.0)
+
+
+def test_a_nan_vertex_is_refused_wherever_it_is():
+    for i in range(4):
+        pts = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+        pts[i] = (pts[i][0], math.nan)
+        with pytest.raises(CrmgraspError, match="not finite"):
+            Polygon(pts, _simple=True)

@@ -423,3 +423,19 @@ def test_a_rebound_kernel_is_the_kernel_built_afresh(name):
         assert a == b
         for action in range(len(task.actions)):
             assert rebound.step_one(a.state, action, rng) == fresh.step_one(b.state, action, rng)
+
+
+@pytest.mark.parametrize("name", ["box-family", "polygon-family", "u-handle", "l-shape", "t-shape", "star", "mixed"])
+def test_compiled_edges_equal_the_polygon_edges(name):
+    """`edge_rows`, which rebinds a family's kernel, gives `Polygon.edges` and `convex` bit for bit."""
+    import crmgrasp.kernels._polygon_jit as jit
+    from crmgrasp.model.polygon import Polygon
+
+    task, rng = make_task(name), np.random.default_rng(11)
+    shapes = [task.family.sample(rng) for _ in range(100)] + [U_SHAPE, regular_polygon(7, 0.1, rotation=0.2)]
+    polygons = [s for s in shapes if isinstance(s, Polygon)]
+    assert len(polygons) > 50
+    for poly in polygons:
+        e = np.empty((len(poly.vertices), 7))
+        convex = jit.edge_rows(np.array(poly.vertices), e)
+        assert e.tolist() == [list(row) for row in poly.edges] and convex == poly.convex

@@ -377,3 +377,24 @@ def corner_rows(u, e, p, q, out):  # type: ignore[no-untyped-def]
             continue
         count += 1
     return count
+
+
+@njit(cache=True)
+def edge_rows(v, e):  # type: ignore[no-untyped-def]
+    """[`crmgrasp.model.polygon.Polygon.edges`][] of the counter-clockwise vertices ``v``
+    (``(E, 2)``) into ``e`` (``(E, 7)``: start, edge vector, squared length, inward unit
+    normal), the same operations in the same order; returns
+    [`Polygon.convex`][crmgrasp.model.polygon.Polygon.convex] (every turn left or straight)."""
+    n = v.shape[0]
+    for i in range(n):
+        k = i + 1 if i + 1 < n else 0
+        ax, ay = v[i, 0], v[i, 1]
+        ex, ey = v[k, 0] - ax, v[k, 1] - ay
+        length = np.sqrt(ex * ex + ey * ey)
+        e[i, 0], e[i, 1], e[i, 2], e[i, 3] = ax, ay, ex, ey
+        e[i, 4], e[i, 5], e[i, 6] = ex * ex + ey * ey, -ey / length, ex / length
+    for i in range(n):
+        k = i + 1 if i + 1 < n else 0
+        if e[i, 2] * e[k, 3] - e[i, 3] * e[k, 2] < 0.0:
+            return False
+    return True

@@ -8,7 +8,6 @@ own modules when a kernel is built, so the compiled functions
 
 from __future__ import annotations
 
-import copy
 from typing import Any, TypeVar
 
 import numpy as np
@@ -40,11 +39,12 @@ def rebound(kernel: K, instance: Task) -> K:
     what belongs to one object or one episode."""
     obj = instance.obj
     assert isinstance(obj, Polygon)
-    new = copy.copy(kernel)
+    new = object.__new__(type(kernel))  # copy.copy's result, without its generic machinery
+    new.__dict__.update(kernel.__dict__)
     new.task = instance
-    new.e = np.ascontiguousarray(obj.edge_array)  # type: ignore[attr-defined]
+    new.e = np.empty((len(obj.vertices), 7))  # type: ignore[attr-defined]
     new.q = kernel.q.copy()  # type: ignore[attr-defined]
-    new.q[jit.CONVEX] = obj.convex  # type: ignore[attr-defined]
+    new.q[jit.CONVEX] = jit.edge_rows(np.array(obj.vertices), new.e)  # type: ignore[attr-defined]
     new._fresh()  # type: ignore[attr-defined]
     return new
 

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sized
+from collections.abc import Sequence, Sized
 from dataclasses import dataclass
 from functools import cached_property
+from itertools import chain
 from typing import Any
 
 import numpy as np
@@ -27,6 +28,16 @@ coordinates overflow."""
 Edges = tuple[tuple[float, float, float, float, float, float, float], ...]
 """Per edge ``(ax, ay, ex, ey, l2, nx, ny)``: start, edge vector, squared length,
 inward unit normal ([`Polygon.edges`][])."""
+
+
+def _bounded(pts: Sequence[tuple[float, float]]) -> float:
+    """The largest ``|coordinate|`` of ``pts``; a one-line error if one is not finite
+    (NaN included) or beyond [`MAX_COORD`][crmgrasp.model.polygon.MAX_COORD]."""
+    flat = list(chain.from_iterable(pts))
+    largest = max(map(abs, flat))
+    if not (largest <= MAX_COORD and math.isfinite(sum(flat))):  # the sum catches a NaN anywhere
+        raise CrmgraspError(f"a vertex is not finite or beyond +-{MAX_COORD:g} m")
+    return largest
 
 
 def _segments_cross(p: tuple, q: tuple, r: tuple, s: tuple) -> bool:
@@ -74,32 +85,35 @@ class Polygon:
     vertices: tuple[tuple[float, float], ...]
 
     def __init__(self, vertices: ArrayLike, _simple: bool = False) -> None:
-        """``_simple=True`` (for the package's own constructions: rectangles, regular
-        polygons, rigid motions of a checked polygon) skips the self-intersection test,
-        the only check whose cost grows with the square of the vertices; every other
-        check still runs."""
-        count = len(vertices) if isinstance(vertices, Sized) else 0
-        if count > MAX_VERTICES:  # before any work on them
-            raise CrmgraspError(f"a polygon may have at most {MAX_VERTICES} vertices, got {count}")
-        try:
-            raw: list[Any] = list(vertices)  # type: ignore[call-overload, arg-type]
-        except TypeError:
-            raise CrmgraspError(f"polygon vertices must be a sequence of (x, y), got {shown(vertices)}") from None
+        """``_simple=True`` (for the package's own constructions, a list of ``(x, y)``
+        pairs: rectangles, regular polygons) skips the self-intersection test, the only
+        check whose cost grows with the square of the vertices; every other check still
+        runs."""
+        if _simple:  # the package's own list of (x, y) pairs
+            raw: list[Any] = vertices  # type: ignore[assignment]
+        else:
+            count = len(vertices) if isinstance(vertices, Sized) else 0
+            if count > MAX_VERTICES:  # before any work on them
+                raise CrmgraspError(f"a polygon may have at most {MAX_VERTICES} vertices, got {count}")
+            try:
+                raw = list(vertices)  # type: ignore[call-overload, arg-type]
+            except TypeError:
+                raise CrmgraspError(f"polygon vertices must be a sequence of (x, y), got {shown(vertices)}") from None
         if len(raw) > MAX_VERTICES:
             raise CrmgraspError(f"a polygon may have at most {MAX_VERTICES} vertices, got {len(raw)}")
         if len(raw) < 3:
             raise CrmgraspError(f"a polygon needs at least 3 vertices, got {len(raw)}")
         if _simple:  # the package's own (x, y) pairs: one bound check for all
             pts = [(float(x), float(y)) for x, y in raw]
-            if not max(max(abs(x), abs(y)) for x, y in pts) <= MAX_COORD:  # a NaN fails too
-                raise CrmgraspError(f"a vertex is not finite or beyond +-{MAX_COORD:g} m")
+            scale = _bounded(pts)
         else:
             pts = [as_point(v, f"vertex {i}") for i, v in enumerate(raw)]
             for i, (x, y) in enumerate(pts):
                 if abs(x) > MAX_COORD or abs(y) > MAX_COORD:
                     raise CrmgraspError(f"vertex {i} ({x:g}, {y:g}) is beyond +-{MAX_COORD:g} m")
+            scale = max(map(abs, chain.from_iterable(pts)))
         area2 = sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in zip(pts, pts[1:] + pts[:1]))
-        scale = max(max(abs(x), abs(y)) for x, y in pts) or 1.0
+        scale = scale or 1.0
         if abs(area2) <= 1e-12 * scale * scale:
             raise CrmgraspError("polygon has zero area")
         if area2 < 0:
@@ -111,13 +125,18 @@ class Polygon:
     def moved(self, angle: float, dx: float, dy: float) -> Polygon:
         """This polygon rotated by ``angle`` (radians, counter-clockwise) about the origin,
         then translated by ``(dx, dy)`` (metres). A rigid motion keeps a simple polygon
-        simple, so only the cheap checks run again.
+        simple, its area and its orientation, so only the bound on the coordinates is
+        checked again.
 
         >>> Polygon([(0, 0), (1, 0), (0, 1)]).moved(0.0, 1.0, 2.0).vertices
         ((1.0, 2.0), (2.0, 2.0), (1.0, 3.0))
         """
         c, s = math.cos(angle), math.sin(angle)
-        return Polygon([(c * x - s * y + dx, s * x + c * y + dy) for x, y in self.vertices], _simple=True)
+        pts = tuple([(c * x - s * y + dx, s * x + c * y + dy) for x, y in self.vertices])
+        _bounded(pts)
+        out = object.__new__(Polygon)  # simple, with this polygon's area and orientation
+        object.__setattr__(out, "vertices", pts)
+        return out
 
     def __repr__(self) -> str:
         return f"Polygon({[tuple(round(c, 6) for c in v) for v in self.vertices]})"

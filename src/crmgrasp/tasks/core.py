@@ -8,7 +8,6 @@ factory under a new name with [`register_task`][].
 
 from __future__ import annotations
 
-import copy
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -285,9 +284,8 @@ class Task:
     def with_object(self, obj: Shape) -> Task:
         """This task on the object ``obj``, without a family (the object is not checked
         again: families draw valid shapes)."""
-        out = copy.copy(self)
-        object.__setattr__(out, "obj", obj)
-        object.__setattr__(out, "family", None)
+        out = object.__new__(type(self))  # copy.copy's result, without its generic machinery
+        out.__dict__.update(self.__dict__, obj=obj, family=None)
         return out
 
     def _one_object(self) -> None:
