@@ -205,3 +205,28 @@ def test_sensing_noise_in_3d() -> None:
     assert a == sense3d(START, sigma, 0.01, np.random.default_rng(5), HAND)  # the same seed, the same reading
     with pytest.raises(CrmgraspError, match="sigma_n"):
         sense3d(START, 1.0, 0.0, rng, HAND)
+
+
+def test_the_quick_rigid_motions_equal_the_checked_constructions():
+    """`yawed`, `box3d` and `centre` skip conversions, not arithmetic: the planes equal the
+    checked constructor's on the same numbers, and the centre is the corners' mean, bit for bit."""
+    from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, box3d, rotation_z
+
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        lo = -rng.random(3)
+        hi = rng.random(3) + 0.01
+        box = box3d(lo, hi)
+        faces = [(-1.0, 0.0, 0.0, -lo[0]), (1.0, 0.0, 0.0, hi[0]), (0.0, -1.0, 0.0, -lo[1])]
+        faces += [(0.0, 1.0, 0.0, hi[1]), (0.0, 0.0, -1.0, -lo[2]), (0.0, 0.0, 1.0, hi[2])]
+        assert box.planes == ConvexPolyhedron(tuple(faces)).planes
+        angle, dx, dy = rng.random(3) * (6.0, 0.1, 0.1)
+        r, t = rotation_z(angle), np.array([dx, dy, 0.0])
+        rows = np.array(box.planes)
+        normals = rows[:, :3] @ r.T
+        checked = ConvexPolyhedron(tuple((*n, b + float(n @ t)) for n, b in zip(normals.tolist(), rows[:, 3].tolist())))
+        moved = box.yawed(angle, dx, dy)
+        assert moved.planes == checked.planes == box.moved(r, t).planes
+        assert moved.centre.tolist() == moved.vertices.mean(axis=0).tolist()
+        cyl = Cylinder((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), 0.05, 0.1)
+        assert cyl.yawed(angle, dx, dy) == cyl.moved(r, (dx, dy, 0.0))

@@ -9,7 +9,6 @@ is the task's ([`crmgrasp.tasks.spatial.SpatialTask`][], which calls
 
 from __future__ import annotations
 
-import copy
 from typing import Any
 
 import numpy as np
@@ -68,7 +67,7 @@ def solid_params(solid: Any, p: F64, q: NDArray[np.int64]) -> tuple[F64, F64]:
 
     centre = solid.centre
     p[jit.CX : jit.CZ + 1] = centre
-    p[jit.FAR] = 1.0 + float(np.max(np.abs(centre)))
+    p[jit.FAR] = 1.0 + max(map(abs, centre.tolist()))
     q[jit.KIND] = isinstance(solid, Cylinder)
     if isinstance(solid, Cylinder):
         return np.zeros((1, 4)), np.array([*solid.origin, *solid.axis, solid.radius, solid.height])
@@ -92,6 +91,7 @@ class FusedSpatialKernel(SpatialKernel):
 
     def _fresh(self) -> None:
         self._v, self._out = np.empty(16), np.empty(16)
+        self._start_row = np.empty(12)  # a start try's configuration, read before the next try
         self._v_of: Config3D | None = None
         self.start_filter = self._accept  # type: ignore[assignment]
 
@@ -99,7 +99,8 @@ class FusedSpatialKernel(SpatialKernel):
         """The kernel of ``instance`` (the same hand, CRMs, bins and table on another solid
         of the same kind): the parameters shared, the solid's entries its own
         ([`solid_params`][], as [`spatial_params`][] would write them)."""
-        new = copy.copy(self)
+        new = object.__new__(type(self))  # copy.copy's result, without its generic machinery
+        new.__dict__.update(self.__dict__)
         new.task, new.p, new.q = instance, self.p.copy(), self.q.copy()
         new.planes, new.cyl = solid_params(instance.solid, new.p, new.q)
         new._fresh()
@@ -154,6 +155,6 @@ class FusedSpatialKernel(SpatialKernel):
 
     def _accept(self, d: F64) -> Config3D | None:
         """[`SurfaceStarts`][crmgrasp.tasks.spatial.SurfaceStarts]' decision on one try, compiled."""
-        out = np.empty(12)
+        out = self._start_row
         ok = self._jit.accept_start(np.ascontiguousarray(d), self.planes, self.cyl, self.p, self.q, out)
         return self.model.config_of(out.tolist()) if ok else None

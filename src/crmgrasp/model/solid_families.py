@@ -26,7 +26,7 @@ import numpy as np
 
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.family_base import Pose, Range, _mid, _range, _uniform, family_dict
-from crmgrasp.model.solids import Cylinder, Solid, box3d, rotation_z
+from crmgrasp.model.solids import Cylinder, Solid, box3d
 
 __all__ = ["SolidFamily", "BoxOnTable", "CylinderOnTable"]
 
@@ -45,8 +45,7 @@ class SolidFamily(Protocol):
 
 
 def _placed(solid: Solid, rng: np.random.Generator, pose: Pose) -> Solid:
-    angle, dx, dy = pose.draw(rng)
-    return solid.moved(rotation_z(angle), (dx, dy, 0.0))
+    return solid.yawed(*pose.draw(rng))
 
 
 def _table_pose() -> Pose:

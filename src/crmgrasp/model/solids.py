@@ -82,9 +82,21 @@ def rotation_z(angle: float) -> F64:
 
 def _unit(v: ArrayLike, name: str) -> F64:
     u = np.asarray(v, dtype=np.float64)
-    if u.shape != (3,) or not np.all(np.isfinite(u)) or np.linalg.norm(u) == 0.0:
+    length = math.sqrt(u.dot(u)) if u.shape == (3,) else 0.0  # what np.linalg.norm computes
+    if not (math.isfinite(length) and length > 0.0 and np.isfinite(u).all()):
         raise CrmgraspError(f"{name} must be a finite non-zero 3-vector, got {v!r}")
-    return u / np.linalg.norm(u)
+    return u / length
+
+
+def _unit_planes(rows: F64) -> tuple[tuple[float, float, float, float], ...]:
+    """The planes ``rows`` (``(m, 4)``: ``a_x, a_y, a_z, b``) checked (four or more, finite,
+    no zero normal) and scaled to unit normals, as tuples."""
+    if rows.ndim != 2 or rows.shape[1] != 4 or len(rows) < 4 or not np.isfinite(rows).all():
+        raise CrmgraspError(f"a convex polyhedron needs 4 or more finite planes (a_x, a_y, a_z, b), got {rows.shape}")
+    norms = np.sqrt((rows[:, :3] * rows[:, :3]).sum(axis=1))
+    if not norms.all():  # a zero norm
+        raise CrmgraspError("a face normal of the polyhedron is zero")
+    return tuple(map(tuple, (rows / norms[:, None]).tolist()))
 
 
 @dataclass(frozen=True)
@@ -96,15 +108,15 @@ class ConvexPolyhedron:
     planes: tuple[tuple[float, float, float, float], ...]
 
     def __post_init__(self) -> None:
-        rows = np.asarray(self.planes, dtype=np.float64)
-        if rows.ndim != 2 or rows.shape[1] != 4 or len(rows) < 4 or not np.all(np.isfinite(rows)):
-            raise CrmgraspError(
-                f"a convex polyhedron needs 4 or more finite planes (a_x, a_y, a_z, b), got {rows.shape}"
-            )
-        norms = np.sqrt((rows[:, :3] * rows[:, :3]).sum(axis=1))
-        if (norms == 0.0).any():
-            raise CrmgraspError("a face normal of the polyhedron is zero")
-        object.__setattr__(self, "planes", tuple(map(tuple, (rows / norms[:, None]).tolist())))
+        object.__setattr__(self, "planes", _unit_planes(np.asarray(self.planes, dtype=np.float64)))
+
+    @classmethod
+    def _of_rows(cls, rows: F64) -> ConvexPolyhedron:
+        """The polyhedron of the planes ``rows`` (``(m, 4)`` floats): the constructor's
+        checks and scaling, without its conversion of a tuple."""
+        out = object.__new__(cls)
+        object.__setattr__(out, "planes", _unit_planes(rows))
+        return out
 
     def contains(self, p: ArrayLike) -> bool:
         """Strictly inside: more than [`SURFACE`][] inside every face."""
@@ -161,7 +173,8 @@ class ConvexPolyhedron:
     @property
     def centre(self) -> F64:
         """The mean of the corners (inside: the solid is convex)."""
-        return self.vertices.mean(axis=0)
+        corners = self.vertices
+        return np.add.reduce(corners, axis=0) / len(corners)  # what .mean(axis=0) computes, without its overhead
 
     def support(self, d: ArrayLike) -> float:
         """``min_x d . x`` over the solid (metres for a unit ``d``)."""
@@ -169,10 +182,20 @@ class ConvexPolyhedron:
 
     def moved(self, rotation: ArrayLike, translation: ArrayLike) -> ConvexPolyhedron:
         """The solid after ``x -> R x + t``: faces ``(R a, b + (R a) . t)``."""
-        r, t = _rotation(rotation), np.asarray(translation, dtype=np.float64)
+        return self._rigid(_rotation(rotation), np.asarray(translation, dtype=np.float64))
+
+    def yawed(self, angle: float, dx: float, dy: float) -> ConvexPolyhedron:
+        """`moved` by the rotation of ``angle`` (radians) about ``z`` and the translation
+        ``(dx, dy, 0)`` (metres), without checking the rotation it builds itself."""
+        return self._rigid(rotation_z(angle), np.array([dx, dy, 0.0]))
+
+    def _rigid(self, r: F64, t: F64) -> ConvexPolyhedron:
         rows = np.array(self.planes)
         normals = rows[:, :3] @ r.T
-        out = ConvexPolyhedron(tuple((*n, b + float(n @ t)) for n, b in zip(normals.tolist(), rows[:, 3].tolist())))
+        moved = np.empty_like(rows)
+        moved[:, :3] = normals
+        moved[:, 3] = [b + float(n @ t) for n, b in zip(normals, rows[:, 3].tolist())]
+        out = ConvexPolyhedron._of_rows(moved)
         if "vertices" in self.__dict__:  # corners already known: move them too (cheaper than solving again)
             out.__dict__["vertices"] = self.vertices @ r.T + t
         return out
@@ -181,21 +204,20 @@ class ConvexPolyhedron:
 def box3d(lo: ArrayLike, hi: ArrayLike) -> ConvexPolyhedron:
     """The axis-aligned box ``[lo, hi]`` (faces in the order -x, +x, -y, +y, -z, +z)."""
     lo_, hi_ = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
-    if lo_.shape != (3,) or hi_.shape != (3,) or not np.all(hi_ > lo_):
-        raise CrmgraspError(f"a box needs lo < hi in every coordinate, got {lo!r} and {hi!r}")
-    box = ConvexPolyhedron(
-        (
-            (-1.0, 0.0, 0.0, -lo_[0]),
-            (1.0, 0.0, 0.0, hi_[0]),
-            (0.0, -1.0, 0.0, -lo_[1]),
-            (0.0, 1.0, 0.0, hi_[1]),
-            (0.0, 0.0, -1.0, -lo_[2]),
-            (0.0, 0.0, 1.0, hi_[2]),
-        )
+    if lo_.shape != (3,) or hi_.shape != (3,) or not (hi_ > lo_).all() or not np.isfinite(hi_ - lo_).all():
+        raise CrmgraspError(f"a box needs finite lo < hi in every coordinate, got {lo!r} and {hi!r}")
+    (x0, y0, z0), (x1, y1, z1) = lo_.tolist(), hi_.tolist()
+    box = object.__new__(ConvexPolyhedron)  # the planes are unit already: the constructor would divide by 1.0
+    planes = (
+        (-1.0, 0.0, 0.0, -x0),
+        (1.0, 0.0, 0.0, x1),
+        (0.0, -1.0, 0.0, -y0),
+        (0.0, 1.0, 0.0, y1),
+        (0.0, 0.0, -1.0, -z0),
+        (0.0, 0.0, 1.0, z1),
     )
-    box.__dict__["vertices"] = np.array(
-        [[x, y, z] for x in (lo_[0], hi_[0]) for y in (lo_[1], hi_[1]) for z in (lo_[2], hi_[2])]
-    )
+    object.__setattr__(box, "planes", planes)
+    box.__dict__["vertices"] = np.array([[x, y, z] for x in (x0, x1) for y in (y0, y1) for z in (z0, z1)])
     return box
 
 
@@ -291,7 +313,14 @@ class Cylinder:
 
     def moved(self, rotation: ArrayLike, translation: ArrayLike) -> Cylinder:
         """The cylinder after ``x -> R x + t``."""
-        r, t = _rotation(rotation), np.asarray(translation, dtype=np.float64)
+        return self._rigid(_rotation(rotation), np.asarray(translation, dtype=np.float64))
+
+    def yawed(self, angle: float, dx: float, dy: float) -> Cylinder:
+        """`moved` by the rotation of ``angle`` (radians) about ``z`` and the translation
+        ``(dx, dy, 0)`` (metres), without checking the rotation it builds itself."""
+        return self._rigid(rotation_z(angle), np.array([dx, dy, 0.0]))
+
+    def _rigid(self, r: F64, t: F64) -> Cylinder:
         return Cylinder(tuple(r @ np.array(self.origin) + t), tuple(r @ np.array(self.axis)), self.radius, self.height)  # type: ignore[arg-type]
 
 
