@@ -205,6 +205,7 @@ def test_learn_gives_the_same_curve_on_every_kernel_backend(tmp_path):
 
 def test_the_command_line_shows_what_the_library_knows():
     """Choices, presets and defaults come from the registries, not from copies in the CLI."""
+    from crmgrasp.agents.deep_trials import DEEP_AGENTS
     from crmgrasp.agents.presets import PRESETS
     from crmgrasp.agents.training import AGENTS, parameter_defaults
     from crmgrasp.cli.parser import build_parser
@@ -213,7 +214,9 @@ def test_the_command_line_shows_what_the_library_knows():
 
     sub = next(a for a in build_parser()._actions if a.dest == "command").choices
     learn = {a.dest: a for a in sub["learn"]._actions}
-    assert tuple(learn["agent"].choices) == tuple(AGENTS) and tuple(learn["preset"].choices) == tuple(PRESETS)
+    assert tuple(learn["agent"].choices) == (*AGENTS, *DEEP_AGENTS) and tuple(learn["preset"].choices) == tuple(PRESETS)
+    assert all(a.description in learn["agent"].help for a in DEEP_AGENTS.values())
+    assert "recurrent-ppo, ppo, sac: default 0.9" in learn["gamma"].help
     assert tuple(learn["start_preset"].choices) == tuple(START_PRESETS)
     assert all(p.description in learn["preset"].help for p in PRESETS.values())
     assert parameter_defaults("lam") == {"sarsa-lambda": 0.9} and "sarsa-lambda: default 0.9" in learn["lam"].help

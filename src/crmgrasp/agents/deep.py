@@ -144,10 +144,20 @@ class DeepRun:
         return checkpoints_to_within(self.checkpoints, self.checkpoint_steps, reference, factor)
 
 
+ALGORITHM_MODULES = {"RecurrentPPO": "sb3_contrib", "PPO": "stable_baselines3", "SAC": "stable_baselines3"}
+"""The stable-baselines3 algorithms a deep policy file may hold, and the module of each."""
+
 DEEP_FORMAT = "crmgrasp-deep-policy"
 _META = "crmgrasp.json"  # our member of the model's zip archive
 MAX_MODEL_BYTES = 256 * 2**20
 """Largest deep policy file read (256 MiB)."""
+
+
+def _member(name: str) -> zipfile.ZipInfo:
+    """A compressed zip member dated 1980-01-01 (the earliest date zip stores)."""
+    info = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
+    info.compress_type = zipfile.ZIP_DEFLATED
+    return info
 
 
 def _model_digest(archive: zipfile.ZipFile) -> str:
@@ -159,7 +169,8 @@ def _model_digest(archive: zipfile.ZipFile) -> str:
 
 
 class RecurrentPolicy:
-    """A trained RecurrentPPO model with the task it was trained on.
+    """A trained deep model (RecurrentPPO, or PPO and SAC from ``crmgrasp learn``) with the
+    task it was trained on.
 
     Saved as the model's own zip archive (stable-baselines3 format) with one more
     member, ``crmgrasp.json``: format, version, the task (task-file schema) and a
@@ -198,7 +209,13 @@ class RecurrentPolicy:
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the model and its task atomically to ``path`` (a .zip)."""
-        from crmgrasp._io import atomic_write_bytes, dumps_json
+        from crmgrasp._io import atomic_write_bytes
+
+        return atomic_write_bytes(path, self.to_bytes())
+
+    def to_bytes(self) -> bytes:
+        """The policy file's bytes: the model's archive with ``crmgrasp.json`` added."""
+        from crmgrasp._io import dumps_json
         from crmgrasp.tasks import task_to_dict
 
         buf = io.BytesIO()
@@ -206,18 +223,18 @@ class RecurrentPolicy:
         out = io.BytesIO()
         with zipfile.ZipFile(io.BytesIO(buf.getvalue())) as src, zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as dst:
             digest = _model_digest(src)
-            for name in src.namelist():
-                dst.writestr(name, src.read(name))
+            for name in src.namelist():  # fixed dates: the same model gives the same file, byte for byte
+                dst.writestr(_member(name), src.read(name))
             meta = {
                 "format": DEEP_FORMAT,
                 "version": 1,
-                "algorithm": "RecurrentPPO",
+                "algorithm": type(self.model).__name__,
                 "task": self.task.name,
                 "task_spec": task_to_dict(self.task),
                 "model_sha256": digest,
             }
-            dst.writestr(_META, dumps_json(meta))
-        return atomic_write_bytes(path, out.getvalue())
+            dst.writestr(_member(_META), dumps_json(meta))
+        return out.getvalue()
 
     @classmethod
     def load(cls, path: str | os.PathLike[str], task: Task | None = None) -> RecurrentPolicy:
@@ -245,9 +262,17 @@ class RecurrentPolicy:
             diff = first_difference(task_to_dict(own), task_to_dict(task))
             if diff is not None:
                 raise CrmgraspError(f"{where} was made for another task than {task.name!r} (it differs in {diff})")
-        _, contrib, _, _ = _modules()
+        algorithm = meta.get("algorithm")
+        if algorithm not in ALGORITHM_MODULES:
+            known = ", ".join(ALGORITHM_MODULES)
+            raise CrmgraspError(f"{where} names an unknown algorithm {algorithm!r}; known: {known}")
+        _modules()
+        import importlib
+
         try:
-            model = contrib.RecurrentPPO.load(io.BytesIO(data), device="cpu")
+            model = getattr(importlib.import_module(ALGORITHM_MODULES[algorithm]), algorithm).load(
+                io.BytesIO(data), device="cpu"
+            )
         except Exception as exc:  # stable-baselines3's own errors, in one line
             raise CrmgraspError(f"{where}: the model does not load ({type(exc).__name__}: {exc})") from None
         return cls(model, task or own)

@@ -213,6 +213,8 @@ class GreedyPolicy:
     """A fixed state -> action table, usable wherever an agent's ``greedy`` is."""
 
     name = "policy"
+    file_name = "policy.json"
+    """What a run folder calls the file of a saved policy of this kind."""
 
     def __init__(
         self,

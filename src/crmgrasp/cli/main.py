@@ -78,10 +78,14 @@ def _to_5pct_lines(s: dict[str, Any]) -> list[str]:
 
 
 def _learner_params(args: argparse.Namespace) -> dict[str, Any]:
+    from crmgrasp.agents.deep_trials import DEEP_AGENTS, deep_defaults
     from crmgrasp.agents.training import PRIOR_KEYS, agent_parameters, takes_prior
 
-    params = {}
-    accepted = agent_parameters(args.agent) + (PRIOR_KEYS[:2] if takes_prior(args.agent) else ())
+    params: dict[str, Any] = {}
+    if args.agent in DEEP_AGENTS:
+        accepted = tuple(deep_defaults(args.agent))
+    else:
+        accepted = agent_parameters(args.agent) + (PRIOR_KEYS[:2] if takes_prior(args.agent) else ())
     for flag, _, _ in _AGENT_FLAGS:
         key = flag.lstrip("-").replace("-", "_")
         if getattr(args, key) is not None:
@@ -89,8 +93,11 @@ def _learner_params(args: argparse.Namespace) -> dict[str, Any]:
                 takes = ", ".join("--" + k.replace("_", "-") for k in accepted) or "none"
                 raise CrmgraspError(f"{flag} does not apply to --agent {args.agent} (its options: {takes})")
             params[key] = getattr(args, key)
-    if args.symmetric:
-        params["symmetric"] = True
+    for flag, key, applies in (("--symmetric", "symmetric", False), ("--continuous", "continuous", True)):
+        if getattr(args, key):  # the mirror quotient is the tabular learners', the continuous space the deep ones'
+            if (args.agent in DEEP_AGENTS) != applies:
+                raise CrmgraspError(f"{flag} does not apply to --agent {args.agent}")
+            params[key] = True
     return params
 
 
@@ -116,18 +123,23 @@ def _warn_if_ungraspable(task: Task, seed: int) -> None:
 
 
 def _cmd_learn(args: argparse.Namespace) -> int:
+    from crmgrasp.agents.deep_trials import DEEP_AGENTS, check_deep
     from crmgrasp.agents.training import build_agent, check_budget, encoder_for, prior_settings
     from crmgrasp.experiments.learning import LearnerSpec, check_hand, learn, write_learn_outputs
 
     task = _task(args)
     _apply_preset(args, task)
-    spec = LearnerSpec(args.agent, args.k, _learner_params(args))
+    deep = args.agent in DEEP_AGENTS
+    spec = LearnerSpec(args.agent, args.k, _learner_params(args), args.agent if deep else "")
     check_budget(args.trials, args.episodes, args.eval_episodes)
     checkpoint_episodes = args.checkpoint_episodes
     if checkpoint_episodes is None:
         checkpoint_episodes = 100 if args.hand == "kinematic" else 0
-    check_hand(args.hand, args.lockstep)  # before any folder
-    build_agent(task, encoder_for(task, spec.k), spec.agent, spec.params)  # bad settings fail before any folder
+    check_hand(args.hand, args.lockstep, spec.agent)  # before any folder
+    if deep:  # bad settings, or the extra missing, fail before any folder
+        check_deep(spec.agent, spec.params)
+    else:
+        build_agent(task, encoder_for(task, spec.k), spec.agent, spec.params)
     _warn_if_ungraspable(task, args.seed)
     prior = prior_settings(spec.params)
     if prior is not None:
@@ -139,7 +151,7 @@ def _cmd_learn(args: argparse.Namespace) -> int:
     config = {
         "task": task_to_dict(task),
         "agent": spec.agent,
-        "k": spec.k,
+        "k": None if deep else spec.k,
         "params": spec.params,
         "prior": prior,
         "trials": args.trials,

@@ -8,6 +8,7 @@ from collections.abc import Callable
 from typing import Any
 
 from crmgrasp import __version__
+from crmgrasp.agents.deep_trials import DEEP_AGENTS, deep_defaults
 from crmgrasp.agents.presets import PRESETS
 from crmgrasp.agents.training import AGENTS, parameter_defaults
 from crmgrasp.cli.options import (
@@ -96,12 +97,18 @@ def _parser_learn(sub: Any) -> None:
         + "; ".join(f"{name} ({preset.description})" for name, preset in PRESETS.items())
         + "; --agent and --k override them; no preset adds a prior (--prior-task)",
     )
-    p.add_argument("--agent", default=None, choices=tuple(AGENTS), help="learner or baseline (default: the preset's)")
+    p.add_argument(
+        "--agent",
+        default=None,
+        choices=(*AGENTS, *DEEP_AGENTS),
+        help="learner or baseline (default: the preset's); deep learners (crmgrasp[deep]): "
+        + "; ".join(f"{name}, {a.description}" for name, a in DEEP_AGENTS.items()),
+    )
     p.add_argument(
         "--k",
         type=_int(0, MAX_K),
         default=None,
-        help=f"history order (default: the preset's; 0 to {MAX_K})",
+        help=f"history order of a tabular learner (default: the preset's; 0 to {MAX_K}; a deep learner has none)",
     )
     p.add_argument("--trials", type=_TRIALS, default=20, help="independent trials (default 20; 1 to 100,000)")
     p.add_argument(
@@ -134,6 +141,12 @@ def _parser_learn(sub: Any) -> None:
         "--symmetric",
         action="store_true",
         help="learn on the mirror quotient of the task (tabular learners; the task must declare a symmetry)",
+    )
+    p.add_argument(
+        "--continuous",
+        action="store_true",
+        help="deep learners: act in the continuous action space (a contact pair and a real offset, "
+        "through the flat Box action); sac always does",
     )
     for flag, kind, text in _AGENT_FLAGS:
         help_text = f"{text} ({_defaults_text(flag)})"
@@ -416,6 +429,8 @@ def _defaults_text(flag: str) -> str:
     """``"sarsa, q: default 0.3"``-style text: the agents taking the parameter of ``flag``,
     grouped by their default (read from the agents' constructors)."""
     groups: dict[str, list[str]] = {}
-    for agent, default in parameter_defaults(flag.lstrip("-").replace("-", "_")).items():
+    key = flag.lstrip("-").replace("-", "_")
+    deep = {name: deep_defaults(name)[key] for name in DEEP_AGENTS if key in deep_defaults(name)}
+    for agent, default in {**parameter_defaults(key), **deep}.items():
         groups.setdefault(repr(default) if isinstance(default, str) else f"{default}", []).append(agent)
     return "; ".join(f"{', '.join(agents)}: default {value}" for value, agents in groups.items())

@@ -20,7 +20,8 @@ Used by ``crmgrasp learn`` and by Figure 7. Files written to the output folder:
   ``mujoco``) and ``faults`` (episodes that hand ended early, by kind: physics faults
   and lost contacts; training and evaluation together);
 * ``checkpoints.csv``: ``episode,greedy_mean_steps,greedy_sem_steps``;
-* ``policy.json``: the greedy policy of the trial with the best greedy score;
+* ``policy.json``: the greedy policy of the trial with the best greedy score (a deep
+  learner's: ``policy.zip``, [`crmgrasp.agents.deep_trials`][]);
 * ``learning_curve.png``.
 """
 
@@ -39,6 +40,7 @@ from crmgrasp._io import atomic_path, save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents import GreedyPolicy, TabularAgent, episodes_to_within, train_trials, train_trials_lockstep
+from crmgrasp.agents.deep_trials import DEEP_AGENTS, SavedDeepPolicy, deep_settings, train_deep_trials
 from crmgrasp.agents.symmetric import SymmetricAgent
 from crmgrasp.agents.training import (
     DEFAULT_CHECKPOINTS,
@@ -89,13 +91,13 @@ def usable(task: Task, specs: tuple[LearnerSpec, ...]) -> tuple[LearnerSpec, ...
 class LearnRun:
     """A finished learning run: curves and evaluations of every trial (``result``; its
     ``agents`` are empty, the trials may have run in other processes or earlier
-    sessions), the summary, and the greedy policy of the trial with the best greedy
-    score (tabular learners; else ``None``)."""
+    sessions), the summary, and the policy of the trial with the best greedy score
+    (tabular and deep learners; else ``None``)."""
 
     spec: LearnerSpec
     result: TrialResult
     summary: dict[str, Any]
-    policy: GreedyPolicy | None = None
+    policy: GreedyPolicy | SavedDeepPolicy | None = None
 
 
 @dataclass
@@ -108,7 +110,7 @@ class _Part:
     greedy_success: np.ndarray
     checkpoints: np.ndarray
     checkpoint_steps: np.ndarray
-    policy: GreedyPolicy | None
+    policy: GreedyPolicy | SavedDeepPolicy | None
     score: float
     faults: dict[str, int] = field(default_factory=dict)
 
@@ -120,8 +122,10 @@ def _part(task: Task, spec: LearnerSpec, res: TrialResult) -> _Part:
     arrays: list[Any] = [getattr(res, a) for a in _ARRAYS]
     scores = res.greedy_steps.mean(axis=1) if res.greedy_steps.size else np.zeros(len(res.agents))
     best = int(np.argmin(scores))
-    agent = res.agents[best]
-    policy = GreedyPolicy.from_agent(task, spec.k, agent) if isinstance(agent, (TabularAgent, SymmetricAgent)) else None
+    agent: Any = res.agents[best]
+    policy: GreedyPolicy | SavedDeepPolicy | None = agent if isinstance(agent, SavedDeepPolicy) else None
+    if isinstance(agent, (TabularAgent, SymmetricAgent)):
+        policy = GreedyPolicy.from_agent(task, spec.k, agent)
     return _Part(*arrays, policy, float(scores[best]), res.faults)  # type: ignore[misc,call-arg]
 
 
@@ -130,7 +134,7 @@ def _save_part(store: RunFolder, unit: str, part: _Part) -> None:
     with atomic_path(stem.with_suffix(".npz")) as tmp, open(tmp, "wb") as fh:
         np.savez(fh, **{a: getattr(part, a) for a in _ARRAYS})
     if part.policy is not None:
-        part.policy.save(stem.with_suffix(".policy.json"))
+        part.policy.save(_policy_file(stem, part.policy.file_name))
     store.complete(unit, {"file": str(stem.relative_to(store.path)), "score": part.score, "faults": part.faults})
 
 
@@ -145,12 +149,29 @@ def _load_part(task: Task, store: RunFolder, unit: str, info: Any, trials: int, 
         raise CrmgraspError(f"cannot resume: {unit} of {str(store.path)!r} is damaged ({exc})") from None
     if arrays[0].shape != (trials, episodes):
         raise CrmgraspError(f"cannot resume: {unit} of {str(store.path)!r} has the wrong shape")
-    pol = stem.with_suffix(".policy.json")
-    policy = GreedyPolicy.load(pol, task) if pol.exists() else None
+    policy = _load_policy(task, stem)
     faults = info.get("faults", {})
     if not isinstance(faults, dict) or not all(isinstance(v, int) for v in faults.values()):
         raise CrmgraspError(f"run record of {str(store.path)!r} is damaged ({unit}: faults)")
     return _Part(*arrays, policy, float(info["score"]), faults)  # type: ignore[misc,call-arg]
+
+
+def _policy_file(stem: Path, file_name: str) -> Path:
+    """Where a group of trials keeps its best policy: ``<group>.policy.json`` or ``.policy.zip``."""
+    return stem.with_suffix(".policy" + Path(file_name).suffix)
+
+
+def _load_policy(task: Task, stem: Path) -> GreedyPolicy | SavedDeepPolicy | None:
+    """A saved group's best policy, checked as its loader checks it (None if it saved none)."""
+    tabular, deep = _policy_file(stem, GreedyPolicy.file_name), _policy_file(stem, SavedDeepPolicy.file_name)
+    if tabular.exists():
+        return GreedyPolicy.load(tabular, task)
+    if deep.exists():
+        from crmgrasp.agents.deep import RecurrentPolicy
+
+        RecurrentPolicy.load(deep, task)  # a damaged or foreign file: one line, before it is used
+        return SavedDeepPolicy(deep.read_bytes())
+    return None
 
 
 def _groups(trials: int, lockstep: bool) -> list[tuple[int, int]]:
@@ -175,31 +196,35 @@ class _GroupJob:
     hand: str = "kinematic"
 
     def __call__(self, first: int, n: int, progress: Progress | None = None) -> _Part:
+        common: dict[str, Any] = {
+            "trials": n,
+            "episodes": self.episodes,
+            "seed": self.seed,
+            "eval_episodes": self.eval_episodes,
+            "params": self.spec.params,
+            "checkpoints": DEFAULT_CHECKPOINTS if self.checkpoint_episodes else (),
+            "checkpoint_episodes": self.checkpoint_episodes,
+            "backend": self.backend,
+            "first_trial": first,
+            "progress": progress,
+        }
+        if self.spec.agent in DEEP_AGENTS:
+            return _part(self.task, self.spec, train_deep_trials(self.task, self.spec.agent, **common))
         trainer = train_trials_lockstep if self.lockstep else train_trials
-        res = trainer(
-            self.task,
-            self.spec.agent,
-            trials=n,
-            episodes=self.episodes,
-            seed=self.seed,
-            k=self.spec.k,
-            eval_episodes=self.eval_episodes,
-            params=self.spec.params,
-            checkpoints=DEFAULT_CHECKPOINTS if self.checkpoint_episodes else (),
-            checkpoint_episodes=self.checkpoint_episodes,
-            backend=self.backend,
-            first_trial=first,
-            progress=progress,
-            **({"stepper": hand_steps(self.hand)} if self.hand != "kinematic" else {}),
-        )
-        return _part(self.task, self.spec, res)
+        if self.hand != "kinematic":
+            common["stepper"] = hand_steps(self.hand)
+        return _part(self.task, self.spec, trainer(self.task, self.spec.agent, k=self.spec.k, **common))
 
 
-def check_hand(hand: str, lockstep: bool = False) -> None:
+def check_hand(hand: str, lockstep: bool = False, agent: str | None = None) -> None:
     """One-line errors for a hand that cannot run: unknown, its extra missing, or with
-    ``lockstep`` (which steps the kinematic model only)."""
+    ``lockstep`` (which steps the kinematic model only); and for a deep learner ``agent``
+    with ``lockstep`` or another hand (it trains on the kinematic model's environments)."""
     if hand_steps(hand) is not None and lockstep:
         raise CrmgraspError(f"lockstep steps the kinematic model only, not the {hand} hand")
+    if agent in DEEP_AGENTS and (lockstep or hand != "kinematic"):
+        what = "lockstep" if lockstep else f"the {hand} hand"
+        raise CrmgraspError(f"the deep learner {agent!r} trains on the kinematic model's environments, not with {what}")
 
 
 def learn(
@@ -233,7 +258,7 @@ def learn(
     kinematic model."""
     check_budget(trials, episodes, eval_episodes)
     usable_jobs(jobs)  # a bad value fails before any work
-    check_hand(hand, lockstep)
+    check_hand(hand, lockstep, spec.agent)
     t0 = time.perf_counter()
     job = _GroupJob(task, spec, lockstep, episodes, seed, eval_episodes, checkpoint_episodes, backend, hand)
     parts: dict[int, _Part] = {}
@@ -289,14 +314,18 @@ def _summary(
     curve = res.curve
     ref = task.reference_mean_steps
     per_trial = res.greedy_steps.mean(axis=1) if eval_episodes else np.full(trials, np.nan)
-    agent = build_agent(task, encoder_for(task, spec.k), spec.agent, spec.params)
-    params: dict[str, Any] = getattr(agent, "params", dict)()
-    params.update({key: spec.params[key] for key in PRIOR_KEYS if key in spec.params})  # not the agent's own
+    deep = spec.agent in DEEP_AGENTS
+    if deep:
+        params = deep_settings(spec.agent, spec.params)
+    else:
+        agent = build_agent(task, encoder_for(task, spec.k), spec.agent, spec.params)
+        params = getattr(agent, "params", dict)()
+        params.update({key: spec.params[key] for key in PRIOR_KEYS if key in spec.params})  # not the agent's own
     return {
         "agent": spec.agent,
         "label": spec.name,
         "task": task.name,
-        "k": spec.k,
+        "k": None if deep else spec.k,
         "params": params,
         "trials": trials,
         "episodes": episodes,
@@ -319,8 +348,8 @@ def _summary(
     }
 
 
-def best_policy(task: Task, run: LearnRun) -> GreedyPolicy | None:
-    """Greedy policy of the trial with the lowest greedy mean (tabular agents only)."""
+def best_policy(task: Task, run: LearnRun) -> GreedyPolicy | SavedDeepPolicy | None:
+    """The policy of the trial with the lowest greedy mean (tabular and deep learners)."""
     return run.policy
 
 
@@ -346,7 +375,7 @@ def write_learn_outputs(task: Task, run: LearnRun, out_dir: str | Path) -> list[
     ]
     policy = best_policy(task, run)
     if policy is not None:
-        paths.append(policy.save(out / "policy.json"))
+        paths.append(policy.save(out / policy.file_name))
     title = f"{run.spec.name} on {task.name}, " + budget(*(run.summary[k] for k in ("trials", "episodes", "seed")))
     if task.reference_mean_steps is None:  # say why no optimum is drawn, and how to get one
         title += "\nno optimum line: the task states no reference_mean_steps (crmgrasp references computes it)"
