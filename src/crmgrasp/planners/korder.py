@@ -45,16 +45,19 @@ and on the starts searched it does what the search measured.
 
 from __future__ import annotations
 
+import math
 from collections import Counter
 from collections.abc import Sequence
-from typing import NamedTuple
+from typing import Any, NamedTuple
+
+import numpy as np
 
 from crmgrasp._validation import CrmgraspError, integer
 from crmgrasp.agents.policy import GreedyPolicy
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.planners.references import BeliefPolicy, Start, State, _Model
-from crmgrasp.sim import Percept
+from crmgrasp.sim import OneStep, Percept, SimState, run_episode
 from crmgrasp.tasks import Task
 
 __all__ = ["korder_search", "KOrderResult", "INITS"]
@@ -106,29 +109,66 @@ class _Episodes:
 
 def _projected(task: Task, starts: Sequence[Start], ep: _Episodes) -> tuple[dict[int, int], float]:
     """The belief-optimal policy's most frequent action per k-order history (it runs on
-    every start through its policy interface, seeing only discretized observations), and
+    every start through the one episode loop, seeing only discretized observations), and
     the belief-space optimum of the starts."""
-    policy = BeliefPolicy(task, starts)
-    votes: dict[int, Counter[int]] = {}
-    m, enc = ep.model, ep.enc
-    for w in range(len(starts)):
-        state, hist = ep.states[w], enc.start(ep.first[w])
-        policy.begin(_percept(ep.first[w]))
-        for _ in range(ep.horizon):
-            a = policy.act()
-            votes.setdefault(enc.encode(hist), Counter())[a] += 1
-            state, obs, grasped = m.step(state, a)
-            if grasped:
-                break
-            policy.tell(_percept(obs))
-            hist = enc.push(hist, a, obs)
-    table = {code: min(v.items(), key=lambda kv: (-kv[1], kv[0]))[0] for code, v in votes.items()}
-    return table, policy.optimum()
+    voter = _Voter(BeliefPolicy(task, starts), ep.enc)
+    steps, unused = _MemoSteps(ep), np.random.default_rng(0)  # the memoised steps draw nothing
+    for state in ep.states:
+        run_episode(task, voter, unused, start=state, kernel=steps)  # type: ignore[arg-type]
+    table = {code: min(v.items(), key=lambda kv: (-kv[1], kv[0]))[0] for code, v in voter.votes.items()}
+    return table, voter.policy.optimum()
 
 
-def _percept(obs: int) -> Percept:
-    """A percept carrying only what the belief policy reads: the discretized observation."""
-    return Percept((), Error.NONE, obs, None)  # type: ignore[arg-type]
+class _Voter:
+    """A [`Policy`][crmgrasp.sim.Policy] that acts as ``policy`` and counts, per k-order
+    history, the actions it takes there."""
+
+    def __init__(self, policy: BeliefPolicy, enc: KOrderEncoder) -> None:
+        self.policy, self.enc = policy, enc
+        self.votes: dict[int, Counter[int]] = {}
+        self._hist: tuple[int, ...] = ()
+        self._a = 0
+
+    def begin(self, first: Percept) -> None:
+        self.policy.begin(first)
+        self._hist = self.enc.start(first.obs_index)
+
+    def act(self) -> int:
+        self._a = self.policy.act()
+        self.votes.setdefault(self.enc.encode(self._hist), Counter())[self._a] += 1
+        return self._a
+
+    def tell(self, percept: Percept) -> None:
+        self.policy.tell(percept)
+        self._hist = self.enc.push(self._hist, self._a, percept.obs_index)
+
+
+class _MemoSteps:
+    """The search's memoised noise-free steps ([`_Episodes`][]' model) as a
+    [`Stepper`][crmgrasp.sim.Stepper] of the one episode loop, from given hidden states: a
+    step's result carries the discretized observation, the episode's end (a grasp, or
+    ``max_steps`` CRMs) and ``min_friction`` 0 at a grasp (``inf`` elsewhere); what the
+    belief policy reads, without the sensed values the model does not keep."""
+
+    def __init__(self, ep: _Episodes) -> None:
+        self.model, self.horizon = ep.model, ep.horizon
+        self.first = dict(zip(ep.states, ep.first, strict=True))
+
+    def sample_start(self, rng: np.random.Generator) -> Any:
+        raise CrmgraspError("the search's episodes start from its given starts")
+
+    def use(self, instance: Task) -> None:
+        raise CrmgraspError("the search's episodes start from its given starts")
+
+    def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
+        return OneStep(SimState(config, config, 0), (), Error.NONE, self.first[config], math.inf)
+
+    def step_one(self, state: SimState, action: Any, rng: np.random.Generator) -> OneStep:
+        nxt, obs, grasped = self.model.step(state.config, action)  # type: ignore[arg-type]
+        steps = state.steps + 1
+        done = SimState(nxt, nxt, steps)  # type: ignore[arg-type]
+        truncated = steps >= self.horizon and not grasped
+        return OneStep(done, (), Error.NONE, obs, 0.0 if grasped else math.inf, -1.0, grasped, truncated)
 
 
 FILL_LIMIT = 100_000
