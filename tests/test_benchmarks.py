@@ -162,12 +162,14 @@ def test_pouct_peer_smoke(capsys, monkeypatch):
     assert row["episodes"] == 3 and row["belief_policy_same_worlds"] >= 1.0
 
 
-def test_error_cost_learning_smoke(capsys, monkeypatch):
+@pytest.mark.parametrize("learner", ["pooled-vi", "backoff-vi"])
+def test_error_cost_learning_smoke(capsys, monkeypatch, learner):
     spec = importlib.util.spec_from_file_location("error_cost_learning", BENCH.parent / "error_cost_learning.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    argv = ["error_cost_learning.py", "--task", "notch-or-box", "--episodes", "20", "--seeds", "1"]
-    monkeypatch.setattr("sys.argv", [*argv, "--worlds", "20", "--test", "10"])
+    argv = ["error_cost_learning.py", "--task", "notch-or-box", "--episodes", "200", "--seeds", "1"]
+    monkeypatch.setattr("sys.argv", [*argv, "--worlds", "20", "--test", "30", "--learner", learner])
     mod.main()
     (row,) = json.loads(capsys.readouterr().out)["rows"]
     assert row["cost"] == 30.0 and row["optimum"]["mean_cost"] >= 1.0 and len(row["per_seed"]) == 1
+    assert row["learner"] == learner and row["per_seed"][0]["success"] >= 0.9  # evaluated on its own histories
