@@ -10,7 +10,8 @@ the learned greedy policy's mean cost, its gap to the optimum's, success and err
 within 15% of the optimum with at least 95% success (issue 29's target).
 
 Usage: ``python benchmarks/error_cost_learning.py [--task notch-or-box --task box-family]
-[--cost 30] [--episodes 3000] [--seeds 5] [--worlds 400] [--test 1000] [--learner backoff-vi]``. Prints one JSON
+[--cost 30] [--episodes 3000] [--seeds 5] [--worlds 400] [--test 1000] [--learner backoff-vi]
+[--param KEY=NUMBER ...]`` (``--param``: a learner parameter, e.g. ``explore=1`` for ``backoff-vi``). Prints one JSON
 object; progress on stderr. About 5 min at the defaults on 2 cores.
 """
 
@@ -33,13 +34,20 @@ ORDERS = {"pooled-vi": 1, "backoff-vi": 6}
 
 
 def one(
-    name: str, cost: float, episodes: int, seeds: int, n_worlds: int, n_test: int, learner: str = "pooled-vi"
+    name: str,
+    cost: float,
+    episodes: int,
+    seeds: int,
+    n_worlds: int,
+    n_test: int,
+    learner: str = "pooled-vi",
+    extra: dict | None = None,
 ) -> dict:
     task = dataclasses.replace(make_task(name), error_cost=float(cost))
     worlds, test = sample_starts(task, n_worlds, 0), sample_starts(task, n_test, 1)
     belief = BeliefPolicy(task, worlds)
     optimum = policy_rows(episode_records(task, lambda: belief, test, 0), cost)
-    params = {"symmetric": True} if task.symmetry is not None else {}
+    params = {**({"symmetric": True} if task.symmetry is not None else {}), **(extra or {})}
     rows = []
     for seed in range(seeds):
         t0 = time.perf_counter()
@@ -60,6 +68,7 @@ def one(
     return {
         "task": name,
         "learner": learner,
+        "params": extra or {},
         "cost": cost,
         "optimum": {
             k: round(v, 4) for k, v in optimum.items() if k in ("mean_cost", "success_rate", "errors_per_episode")
@@ -78,9 +87,11 @@ def main() -> None:
     p.add_argument("--worlds", type=int, default=400)
     p.add_argument("--test", type=int, default=1000)
     p.add_argument("--learner", choices=tuple(ORDERS), default="pooled-vi")
+    p.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER")
     a = p.parse_args()
+    extra = {k: float(v) for k, v in (item.split("=", 1) for item in a.param)}
     out = [
-        one(name, cost, a.episodes, a.seeds, a.worlds, a.test, a.learner)
+        one(name, cost, a.episodes, a.seeds, a.worlds, a.test, a.learner, extra)
         for name in (a.task or ["notch-or-box", "box-family"])
         for cost in (a.cost or [30.0])
     ]

@@ -13,8 +13,9 @@ gap). Per learner and task: the gaps per seed, their median, the seeds within 10
 graspable worlds, success, and the wall time of training.
 
 Usage: ``python benchmarks/family_learning.py [--episodes 3000] [--seeds 10] [--first 0]
-[--worlds 300] [--task NAME ...] [--learner NAME ...]``. Prints one JSON object; progress
-on stderr.
+[--worlds 300] [--task NAME ...] [--learner NAME ...] [--param KEY=NUMBER ...]`` (``--param``:
+a learner parameter, e.g. ``explore=1`` for ``backoff-vi``, given to every learner run).
+Prints one JSON object; progress on stderr.
 """
 
 from __future__ import annotations
@@ -59,7 +60,9 @@ def _steps(records: list) -> np.ndarray:
     return np.array([len(r.actions) for r in records], dtype=float)
 
 
-def task_row(name: str, learners: tuple[str, ...], episodes: int, seeds: range, n_worlds: int) -> dict:
+def task_row(
+    name: str, learners: tuple[str, ...], episodes: int, seeds: range, n_worlds: int, extra: dict | None = None
+) -> dict:
     """One task: the optimum, then every learner over the seeds (see the module docstring)."""
     task = make_task(name)
     worlds = sample_starts(task, n_worlds, 10_000)
@@ -72,7 +75,7 @@ def task_row(name: str, learners: tuple[str, ...], episodes: int, seeds: range, 
         "optimum": round(float(optimum.mean()), 4),
         "optimum_graspable": round(float(optimum[graspable].mean()), 4),
     }
-    params = {"symmetric": task.symmetry is not None}
+    params = {"symmetric": task.symmetry is not None, **(extra or {})}
     for agent in learners:
         k = ORDERS.get(agent, 1)
         gaps, gaps_g, success, seconds = [], [], [], 0.0
@@ -106,12 +109,13 @@ def main(
     n_worlds: int = 300,
     tasks: tuple[str, ...] = TASKS,
     learners: tuple[str, ...] = LEARNERS,
+    extra: dict | None = None,
 ) -> dict:
     """Every task and learner; see the module docstring."""
-    out: dict = {"episodes": episodes, "seeds": [first, first + seeds - 1], "worlds": n_worlds}
+    out: dict = {"episodes": episodes, "seeds": [first, first + seeds - 1], "worlds": n_worlds, "params": extra or {}}
     for name in tasks:
         print(f"{name} ...", file=sys.stderr, flush=True)
-        out[name] = task_row(name, learners, episodes, range(first, first + seeds), n_worlds)
+        out[name] = task_row(name, learners, episodes, range(first, first + seeds), n_worlds, extra)
     return out
 
 
@@ -123,6 +127,8 @@ if __name__ == "__main__":
     ap.add_argument("--worlds", type=int, default=300)
     ap.add_argument("--task", action="append", dest="tasks", choices=TASKS + THREE_FINGERS)
     ap.add_argument("--learner", action="append", dest="learners")
+    ap.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER")
     a = ap.parse_args()
-    res = main(a.episodes, a.seeds, a.first, a.worlds, tuple(a.tasks or TASKS), tuple(a.learners or LEARNERS))
+    extra = {k: float(v) for k, v in (item.split("=", 1) for item in a.param)}
+    res = main(a.episodes, a.seeds, a.first, a.worlds, tuple(a.tasks or TASKS), tuple(a.learners or LEARNERS), extra)
     print(json.dumps(res, indent=1))

@@ -136,6 +136,8 @@ def test_bad_settings_are_one_line_errors(box):
         make_agent("backoff-vi", 4, plan_every=0)
     with pytest.raises(CrmgraspError, match="sample must be true or false"):
         make_agent("backoff-vi", 4, sample="yes")
+    with pytest.raises(CrmgraspError, match="explore must be >= 0"):
+        make_agent("backoff-vi", 4, explore=-0.5)
     with pytest.raises(CrmgraspError, match="needs its state structure"):
         make_agent("backoff-vi", 4).update(0, 0, -1.0, 1, 0, False, np.random.default_rng(0))
 
@@ -157,3 +159,24 @@ def test_learns_the_paper_box(box):
             checkpoint_episodes=1000,
         )
         assert res.checkpoint_steps[0, 0] <= 1.05 * 1.66
+
+
+def test_explore_tries_what_the_short_level_rates_an_error():
+    """notch-or-box at error cost 30, seed 4: after the sensing CRM on a box, the short
+    level rates the grasping CRM a sure error (it errs after the same suffix on the notched
+    block), so the draw never tries it and the greedy policy spends a CRM more on every box
+    (+40%). With ``explore`` the draw tries it once and the policy is the optimum's (2.0)."""
+    import dataclasses
+
+    from crmgrasp.experiments._episodes import greedy_records
+    from crmgrasp.planners.references import sample_starts
+
+    task = dataclasses.replace(make_task("notch-or-box"), error_cost=30.0)
+    test = sample_starts(task, 300, 1)
+    cost = {}
+    for explore in (0.0, 1.0):
+        res = train_trials(task, "backoff-vi", trials=1, episodes=3000, seed=4, k=6, eval_episodes=0,
+                           params={"explore": explore})  # fmt: skip
+        (records,) = greedy_records(task, res.agents, test, 4, k=6)
+        cost[explore] = np.mean([len(r.actions) + 30.0 * sum(r.errors) for r in records])
+    assert cost[0.0] > 2.6 and cost[1.0] <= 2.05

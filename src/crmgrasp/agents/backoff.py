@@ -90,6 +90,11 @@ class BackoffVI(TabularAgent):
         Act on a posterior draw of the long level (True, the default) rather than on its
         mean: each long pair's outcome probabilities are drawn from the Dirichlet whose
         parameters are the blended counts ``n(h, a, o) + beta p_1(o | h_1, a)``.
+    explore
+        Pseudo-counts of an immediate grasp added to the draw of a CRM never tried in a
+        long history (0: none). The short level may rate such a CRM a sure error from other
+        histories with the same suffix; this keeps a chance that the draw tries it where its
+        own history may differ.
     """
 
     name = "backoff-vi"
@@ -105,8 +110,12 @@ class BackoffVI(TabularAgent):
         compiled: bool = True,
         gamma: float = 0.9,
         sample: bool = True,
+        explore: float = 0.0,
     ) -> None:
         super().__init__(n_actions, gamma=gamma)
+        self.explore = finite(explore, "explore")
+        if self.explore < 0.0:
+            raise CrmgraspError(f"explore must be >= 0, got {self.explore}")
         self.beta = finite(beta, "beta")
         if self.beta < 0.0:
             raise CrmgraspError(f"beta must be >= 0, got {self.beta}")
@@ -140,6 +149,7 @@ class BackoffVI(TabularAgent):
             "sweeps": j.sweeps,
             "gamma": self.gamma,
             "sample": self.sample,
+            "explore": self.explore,
         }
 
     def bind(self, frame: HistoryFrame) -> None:
@@ -250,6 +260,9 @@ class BackoffVI(TabularAgent):
             for b in range(n):
                 entry = self._long_entry(s, b, known)
                 if entry and rng is not None:
+                    if self.explore and (s, b) not in self.counts:  # untried here: a grasp is possible
+                        grasp: Any = (self._bound()[0].task.grasp_reward, ("L", s), True)
+                        entry[grasp] = entry.get(grasp, 0.0) + self.explore
                     entry = {o: float(rng.gamma(c)) + 1e-300 for o, c in entry.items()}
                 if entry:
                     self._add(("L", s), b, entry)

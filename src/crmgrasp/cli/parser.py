@@ -418,6 +418,7 @@ _AGENT_FLAGS = (
     ("--beta", _number, "weight of the prior, pseudo-counts (pooled-vi: pooled bins; backoff-vi: the k = 1 level)"),
     ("--alpha0", _number, "Dirichlet pseudo-counts per state-action pair"),
     ("--scale", _number, "exploration bonus factor"),
+    ("--explore", _number, "pseudo-counts of a grasp in the posterior draw of a CRM a whole history never tried"),
     ("--prior-task", str, "a task with the same CRMs and bins (e.g. box-family) to learn a prior on"),
     ("--prior-episodes", _int(1, 1_000_000), "episodes of the prior"),
 )
