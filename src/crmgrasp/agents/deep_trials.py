@@ -141,16 +141,16 @@ def _model(name: str, env: Any, c: RecurrentPPOConfig, seed: int, budget: int) -
     cls = getattr(importlib.import_module(ALGORITHM_MODULES[algo.algorithm]), algo.algorithm)
     common = {"learning_rate": c.learning_rate, "gamma": c.gamma, "seed": seed, "device": "cpu", "verbose": 0}
     if algo.algorithm == "SAC":
-        arch = arch_of(c)
+        arch = _mlp(c)
         replay = {"batch_size": 64, "learning_starts": c.n_steps, "buffer_size": budget}
         return cls(algo.policy, env, policy_kwargs=arch, **replay, **common)
     ppo = {"n_steps": c.n_steps, "batch_size": max(1, c.n_steps * c.n_envs // 4), "n_epochs": c.n_epochs}
     recurrent = algo.algorithm == "RecurrentPPO"
-    net: dict[str, Any] = {"lstm_hidden_size": c.lstm_hidden, "net_arch": [c.hidden]} if recurrent else arch_of(c)
+    net: dict[str, Any] = {"lstm_hidden_size": c.lstm_hidden, "net_arch": [c.hidden]} if recurrent else _mlp(c)
     return cls(algo.policy, env, ent_coef=c.ent_coef, policy_kwargs=net, **ppo, **common)
 
 
-def arch_of(c: RecurrentPPOConfig) -> dict[str, Any]:
+def _mlp(c: RecurrentPPOConfig) -> dict[str, Any]:
     """The MLP of PPO and SAC: two hidden layers of ``c.hidden`` units."""
     return {"net_arch": [c.hidden, c.hidden]}
 
