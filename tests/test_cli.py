@@ -205,7 +205,7 @@ def test_learn_gives_the_same_curve_on_every_kernel_backend(tmp_path):
 
 def test_the_command_line_shows_what_the_library_knows():
     """Choices, presets and defaults come from the registries, not from copies in the CLI."""
-    from crmgrasp.agents.deep_trials import DEEP_AGENTS
+    from crmgrasp.agents.deep import DEEP_AGENTS
     from crmgrasp.agents.presets import PRESETS
     from crmgrasp.agents.training import AGENTS, parameter_defaults
     from crmgrasp.cli.parser import build_parser

@@ -8,8 +8,8 @@ import pytest
 
 from crmgrasp import make_task
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.agents.deep import RecurrentPolicy, deep_available
-from crmgrasp.agents.deep_trials import DEEP_AGENTS, check_deep, deep_config, deep_settings, train_deep_trials
+from crmgrasp.agents.deep import DEEP_AGENTS, RecurrentPolicy, deep_available
+from crmgrasp.agents.deep_trials import check_deep, deep_config, deep_settings, train_deep_trials
 from crmgrasp.cli.main import main
 from crmgrasp.experiments.learning import LearnerSpec, learn
 from crmgrasp.experiments.runs import RunFolder

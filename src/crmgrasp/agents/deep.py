@@ -19,6 +19,7 @@ checkpoints ([`checkpoint_generators`][crmgrasp.agents.training.checkpoint_gener
 from __future__ import annotations
 
 import hashlib
+import importlib
 import io
 import json
 import os
@@ -51,6 +52,11 @@ __all__ = [
     "features",
     "bounds_of",
     "crm_of_action",
+    "ALGORITHM_MODULES",
+    "DeepAlgorithm",
+    "DEEP_AGENTS",
+    "make_model",
+    "env_maker",
 ]
 
 N_ERRORS = len(Error)
@@ -146,6 +152,25 @@ class DeepRun:
 
 ALGORITHM_MODULES = {"RecurrentPPO": "sb3_contrib", "PPO": "stable_baselines3", "SAC": "stable_baselines3"}
 """The stable-baselines3 algorithms a deep policy file may hold, and the module of each."""
+
+
+@dataclass(frozen=True)
+class DeepAlgorithm:
+    """A deep learner of ``crmgrasp learn``: its stable-baselines3 class and policy network,
+    and whether it can act in a task's discrete CRMs."""
+
+    algorithm: str
+    policy: str
+    discrete: bool
+    description: str
+
+
+DEEP_AGENTS: dict[str, DeepAlgorithm] = {
+    "recurrent-ppo": DeepAlgorithm("RecurrentPPO", "MlpLstmPolicy", True, "RecurrentPPO, an LSTM over the episode"),
+    "ppo": DeepAlgorithm("PPO", "MlpPolicy", True, "PPO, an MLP on the current observation"),
+    "sac": DeepAlgorithm("SAC", "MlpPolicy", False, "SAC, an MLP on the current observation, continuous actions"),
+}
+"""Deep learner name -> algorithm (each in [`ALGORITHM_MODULES`][crmgrasp.agents.deep.ALGORITHM_MODULES])."""
 
 DEEP_FORMAT = "crmgrasp-deep-policy"
 _META = "crmgrasp.json"  # our member of the model's zip archive
@@ -267,8 +292,6 @@ class RecurrentPolicy:
             known = ", ".join(ALGORITHM_MODULES)
             raise CrmgraspError(f"{where} names an unknown algorithm {algorithm!r}; known: {known}")
         _modules()
-        import importlib
-
         try:
             model = getattr(importlib.import_module(ALGORITHM_MODULES[algorithm]), algorithm).load(
                 io.BytesIO(data), device="cpu"
@@ -339,15 +362,7 @@ def train_recurrent_ppo(
 ) -> DeepRun:
     """Train RecurrentPPO on ``task`` from ``seed`` (environments on the kernel ``backend``);
     return the model, curve and checkpoints."""
-    torch, contrib, vec, callbacks = _modules()
-    from crmgrasp.envs.continuous import ContinuousCRMEnv, FlatCRMAction
-    from crmgrasp.envs.single import CRMGraspEnv
-
-    def make() -> gym.Env:
-        if config.continuous:
-            return ContinuousObservation(FlatCRMAction(ContinuousCRMEnv(task, backend=backend)))
-        return ContinuousObservation(CRMGraspEnv(task, backend=backend))
-
+    torch, _, vec, callbacks = _modules()
     c = config
     starts_rng, _ = checkpoint_generators(seed)
     ckpt_starts = [task.sample_world(starts_rng) for _ in range(c.checkpoint_episodes)]  # the starts' stream
@@ -369,21 +384,8 @@ def train_recurrent_ppo(
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
-        env = vec.DummyVecEnv([make for _ in range(c.n_envs)])
-        model = contrib.RecurrentPPO(
-            "MlpLstmPolicy",
-            env,
-            n_steps=c.n_steps,
-            batch_size=max(1, c.n_steps * c.n_envs // 4),
-            n_epochs=c.n_epochs,
-            learning_rate=c.learning_rate,
-            gamma=c.gamma,
-            ent_coef=c.ent_coef,
-            policy_kwargs={"lstm_hidden_size": c.lstm_hidden, "net_arch": [c.hidden]},
-            seed=seed,
-            device="cpu",
-            verbose=0,
-        )
+        env = vec.DummyVecEnv([env_maker(task, c, backend)] * c.n_envs)
+        model = make_model("recurrent-ppo", env, c, seed)
         t0 = time.perf_counter()
         model.learn(c.total_steps, callback=Track())
         seconds = time.perf_counter() - t0
@@ -392,3 +394,37 @@ def train_recurrent_ppo(
     cp = np.array([e for e, _ in ckpts], dtype=np.int64)
     cv = np.array([v for _, v in ckpts], dtype=float)
     return DeepRun(model, np.array(lengths, dtype=float), cp, cv, seconds)
+
+
+def make_model(name: str, env: Any, c: RecurrentPPOConfig, seed: int, budget: int = 0) -> Any:
+    """The untrained stable-baselines3 model of deep learner ``name`` on ``env`` (``budget``:
+    SAC's replay buffer, in transitions)."""
+    algo = DEEP_AGENTS[name]
+    cls = getattr(importlib.import_module(ALGORITHM_MODULES[algo.algorithm]), algo.algorithm)
+    common = {"learning_rate": c.learning_rate, "gamma": c.gamma, "seed": seed, "device": "cpu", "verbose": 0}
+    if algo.algorithm == "SAC":
+        arch = _mlp(c)
+        replay = {"batch_size": 64, "learning_starts": c.n_steps, "buffer_size": budget}
+        return cls(algo.policy, env, policy_kwargs=arch, **replay, **common)
+    ppo = {"n_steps": c.n_steps, "batch_size": max(1, c.n_steps * c.n_envs // 4), "n_epochs": c.n_epochs}
+    recurrent = algo.algorithm == "RecurrentPPO"
+    net: dict[str, Any] = {"lstm_hidden_size": c.lstm_hidden, "net_arch": [c.hidden]} if recurrent else _mlp(c)
+    return cls(algo.policy, env, ent_coef=c.ent_coef, policy_kwargs=net, **ppo, **common)
+
+
+def _mlp(c: RecurrentPPOConfig) -> dict[str, Any]:
+    """The MLP of PPO and SAC: two hidden layers of ``c.hidden`` units."""
+    return {"net_arch": [c.hidden, c.hidden]}
+
+
+def env_maker(task: Task, config: RecurrentPPOConfig, backend: str) -> Any:
+    """A maker of one training environment: the task's CRMs, or its flat continuous actions."""
+    from crmgrasp.envs.continuous import ContinuousCRMEnv, FlatCRMAction
+    from crmgrasp.envs.single import CRMGraspEnv
+
+    def make() -> gym.Env:
+        if config.continuous:
+            return ContinuousObservation(FlatCRMAction(ContinuousCRMEnv(task, backend=backend)))
+        return ContinuousObservation(CRMGraspEnv(task, backend=backend))
+
+    return make

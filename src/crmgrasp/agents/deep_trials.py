@@ -9,7 +9,7 @@ greedily on ``eval_episodes`` fresh episodes. Each trial's model is seeded from 
 own generator ([`trial_generators`][crmgrasp.agents.training.trial_generators]), so trials
 run in any grouping and process with the same results.
 
-The learners ([`DEEP_AGENTS`][]):
+The learners ([`DEEP_AGENTS`][crmgrasp.agents.deep.DEEP_AGENTS]):
 
 * ``recurrent-ppo``: sb3-contrib's RecurrentPPO, an LSTM policy that reads the episode's
   observations from its start (the deep peer of `crmgrasp compare`);
@@ -26,29 +26,27 @@ continuous action space: a contact pair and a real offset, through the flat ``Bo
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any, ClassVar
 
-import gymnasium as gym
 import numpy as np
 
 from crmgrasp._progress import Progress
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents.deep import (
-    ALGORITHM_MODULES,
-    ContinuousObservation,
+    DEEP_AGENTS,
     RecurrentPolicy,
     RecurrentPPOConfig,
     _modules,
+    env_maker,
     evaluate_recurrent,
+    make_model,
 )
 from crmgrasp.agents.training import TrialResult, check_budget, checkpoint_generators, trial_generators
 from crmgrasp.tasks import Task
 
 __all__ = [
-    "DeepAlgorithm",
     "DEEP_AGENTS",
     "deep_defaults",
     "deep_config",
@@ -58,26 +56,6 @@ __all__ = [
     "train_deep_trials",
 ]
 
-
-@dataclass(frozen=True)
-class DeepAlgorithm:
-    """A deep learner of ``crmgrasp learn``: its stable-baselines3 class and policy network,
-    and whether it can act in a task's discrete CRMs."""
-
-    algorithm: str
-    policy: str
-    discrete: bool
-    description: str
-
-
-DEEP_AGENTS: dict[str, DeepAlgorithm] = {
-    "recurrent-ppo": DeepAlgorithm("RecurrentPPO", "MlpLstmPolicy", True, "RecurrentPPO, an LSTM over the episode"),
-    "ppo": DeepAlgorithm("PPO", "MlpPolicy", True, "PPO, an MLP on the current observation"),
-    "sac": DeepAlgorithm("SAC", "MlpPolicy", False, "SAC, an MLP on the current observation, continuous actions"),
-}
-"""Deep learner name -> algorithm (each in [`ALGORITHM_MODULES`][crmgrasp.agents.deep.ALGORITHM_MODULES])."""
-
-assert all(a.algorithm in ALGORITHM_MODULES for a in DEEP_AGENTS.values())
 
 _PARAMETERS = ("gamma", "continuous")
 
@@ -135,26 +113,6 @@ class SavedDeepPolicy:
         return atomic_write_bytes(path, self.data)
 
 
-def _model(name: str, env: Any, c: RecurrentPPOConfig, seed: int, budget: int) -> Any:
-    """The untrained stable-baselines3 model of deep learner ``name`` on ``env``."""
-    algo = DEEP_AGENTS[name]
-    cls = getattr(importlib.import_module(ALGORITHM_MODULES[algo.algorithm]), algo.algorithm)
-    common = {"learning_rate": c.learning_rate, "gamma": c.gamma, "seed": seed, "device": "cpu", "verbose": 0}
-    if algo.algorithm == "SAC":
-        arch = _mlp(c)
-        replay = {"batch_size": 64, "learning_starts": c.n_steps, "buffer_size": budget}
-        return cls(algo.policy, env, policy_kwargs=arch, **replay, **common)
-    ppo = {"n_steps": c.n_steps, "batch_size": max(1, c.n_steps * c.n_envs // 4), "n_epochs": c.n_epochs}
-    recurrent = algo.algorithm == "RecurrentPPO"
-    net: dict[str, Any] = {"lstm_hidden_size": c.lstm_hidden, "net_arch": [c.hidden]} if recurrent else _mlp(c)
-    return cls(algo.policy, env, ent_coef=c.ent_coef, policy_kwargs=net, **ppo, **common)
-
-
-def _mlp(c: RecurrentPPOConfig) -> dict[str, Any]:
-    """The MLP of PPO and SAC: two hidden layers of ``c.hidden`` units."""
-    return {"net_arch": [c.hidden, c.hidden]}
-
-
 @dataclass
 class _Tally:
     """One trial's finished training episodes and its greedy checkpoints."""
@@ -204,8 +162,8 @@ def train_deep_trials(
     try:
         for t, (env_rng, _, eval_rng) in enumerate(trial_generators(seed, trials, first_trial)):
             tally = _Tally(steps[t], success[t], csteps[t])
-            envs = vec.DummyVecEnv([_env_maker(task, config, backend)] * config.n_envs)
-            model = _model(agent, envs, config, int(env_rng.integers(2**31 - 1)), episodes * task.max_steps)
+            envs = vec.DummyVecEnv([env_maker(task, config, backend)] * config.n_envs)
+            model = make_model(agent, envs, config, int(env_rng.integers(2**31 - 1)), episodes * task.max_steps)
             track = _tracker(task, tally, ckpts, fixed, seed, progress)
             model.learn(episodes * task.max_steps + config.n_envs * config.n_steps, callback=track)
             if tally.count < episodes:  # cannot happen: every episode ends within max_steps CRMs
@@ -216,19 +174,6 @@ def train_deep_trials(
     finally:
         torch.set_num_threads(threads)
     return TrialResult(steps, success, gsteps, gsucc, policies, ckpts, csteps)  # type: ignore[arg-type]
-
-
-def _env_maker(task: Task, config: RecurrentPPOConfig, backend: str) -> Any:
-    """A maker of one training environment: the task's CRMs, or its flat continuous actions."""
-    from crmgrasp.envs.continuous import ContinuousCRMEnv, FlatCRMAction
-    from crmgrasp.envs.single import CRMGraspEnv
-
-    def make() -> gym.Env:
-        if config.continuous:
-            return ContinuousObservation(FlatCRMAction(ContinuousCRMEnv(task, backend=backend)))
-        return ContinuousObservation(CRMGraspEnv(task, backend=backend))
-
-    return make
 
 
 def _tracker(

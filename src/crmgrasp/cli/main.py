@@ -78,7 +78,8 @@ def _to_5pct_lines(s: dict[str, Any]) -> list[str]:
 
 
 def _learner_params(args: argparse.Namespace) -> dict[str, Any]:
-    from crmgrasp.agents.deep_trials import DEEP_AGENTS, deep_defaults
+    from crmgrasp.agents.deep import DEEP_AGENTS
+    from crmgrasp.agents.deep_trials import deep_defaults
     from crmgrasp.agents.training import PRIOR_KEYS, agent_parameters, takes_prior
 
     params: dict[str, Any] = {}
@@ -123,7 +124,8 @@ def _warn_if_ungraspable(task: Task, seed: int) -> None:
 
 
 def _cmd_learn(args: argparse.Namespace) -> int:
-    from crmgrasp.agents.deep_trials import DEEP_AGENTS, check_deep
+    from crmgrasp.agents.deep import DEEP_AGENTS
+    from crmgrasp.agents.deep_trials import check_deep
     from crmgrasp.agents.training import build_agent, check_budget, encoder_for, prior_settings
     from crmgrasp.experiments.learning import LearnerSpec, check_hand, learn, write_learn_outputs
 

@@ -8,7 +8,8 @@ from collections.abc import Callable
 from typing import Any
 
 from crmgrasp import __version__
-from crmgrasp.agents.deep_trials import DEEP_AGENTS, deep_defaults
+from crmgrasp.agents.deep import DEEP_AGENTS
+from crmgrasp.agents.deep_trials import deep_defaults
 from crmgrasp.agents.presets import PRESETS
 from crmgrasp.agents.training import AGENTS, parameter_defaults
 from crmgrasp.cli.options import (
@@ -431,7 +432,7 @@ def _defaults_text(flag: str) -> str:
     grouped by their default (read from the agents' constructors)."""
     groups: dict[str, list[str]] = {}
     key = flag.lstrip("-").replace("-", "_")
-    deep = {name: deep_defaults(name)[key] for name in DEEP_AGENTS if key in deep_defaults(name)}
+    deep = {name: d[key] for name in DEEP_AGENTS if key in (d := deep_defaults(name))}
     for agent, default in {**parameter_defaults(key), **deep}.items():
         groups.setdefault(repr(default) if isinstance(default, str) else f"{default}", []).append(agent)
     return "; ".join(f"{', '.join(agents)}: default {value}" for value, agents in groups.items())

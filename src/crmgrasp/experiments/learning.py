@@ -40,7 +40,8 @@ from crmgrasp._io import atomic_path, save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents import GreedyPolicy, TabularAgent, episodes_to_within, train_trials, train_trials_lockstep
-from crmgrasp.agents.deep_trials import DEEP_AGENTS, SavedDeepPolicy, deep_settings, train_deep_trials
+from crmgrasp.agents.deep import DEEP_AGENTS
+from crmgrasp.agents.deep_trials import SavedDeepPolicy, deep_settings, train_deep_trials
 from crmgrasp.agents.symmetric import SymmetricAgent
 from crmgrasp.agents.training import (
     DEFAULT_CHECKPOINTS,
