@@ -4,7 +4,9 @@
 of an episode: the environments, training, evaluation, planners and controllers
 step through them, or through a kernel of [`crmgrasp.kernels`][] that is tested
 equal to them bit for bit. [`run_episode`][] is the one loop that lets a
-[`Policy`][] (a learner, a planner or a controller) act in an episode.
+[`Policy`][] (a learner, a planner or a controller) act in an episode, and
+[`run_batch`][] its batched form: many rows of episodes stepped together (lockstep
+training, the deep peer's evaluation).
 
 Sensing: each configuration is read once. The observation ``o_t`` is computed from
 that reading, and the CRM executed at time ``t`` builds its goal line from the same
@@ -17,7 +19,7 @@ Draw order: ``reset`` draws the start (the task's sampler) then one reading;
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any, NamedTuple, Protocol, overload
 
 import numpy as np
@@ -43,6 +45,11 @@ __all__ = [
     "step",
     "episode_end",
     "run_episode",
+    "BatchPolicy",
+    "Rows",
+    "RowPolicies",
+    "StepperRows",
+    "run_batch",
 ]
 
 
@@ -313,3 +320,114 @@ def run_episode(
         if nxt.terminated or nxt.truncated:
             return Episode(nxt.state.steps, bool(task.grasped(nxt.min_friction)), tuple(steps))
         now = nxt
+
+
+class BatchPolicy(Protocol):
+    """The agent interface of [`run_batch`][]: a [`Policy`][] over rows of episodes.
+    ``begin`` and ``tell`` receive one row's percepts, ``act`` the actions of the live
+    ``rows`` (in their order), so that a policy can decide for all of them in one call."""
+
+    def begin(self, row: int, first: Percept) -> None: ...
+
+    def act(self, rows: list[int]) -> Sequence[int | CRM]: ...
+
+    def tell(self, row: int, percept: Percept) -> None: ...
+
+
+class Rows(Protocol):
+    """What [`run_batch`][] steps: rows of episodes, each with its own state."""
+
+    def begin(self, row: int) -> Percept:
+        """Start the row's next episode; its first percept."""
+        ...
+
+    def step(self, rows: list[int], actions: Sequence[int | CRM]) -> list[Percept]:
+        """One CRM in each of ``rows`` (``actions`` in their order); the percepts."""
+        ...
+
+    def episode(self, row: int) -> Episode:
+        """The row's current episode: CRMs executed and success (trace empty)."""
+        ...
+
+
+class RowPolicies:
+    """One [`Policy`][] per row as a [`BatchPolicy`][] (each told its row's percepts)."""
+
+    def __init__(self, policies: Sequence[Policy]) -> None:
+        self.policies = policies
+
+    def begin(self, row: int, first: Percept) -> None:
+        self.policies[row].begin(first)
+
+    def act(self, rows: list[int]) -> list[int | CRM]:
+        p = self.policies
+        return [p[r].act() for r in rows]
+
+    def tell(self, row: int, percept: Percept) -> None:
+        self.policies[row].tell(percept)
+
+
+class StepperRows:
+    """[`Rows`][] of one episode each from given starts (a configuration of ``task``, or a
+    [`World`][crmgrasp.tasks.World] of a family task: its object and configuration), each
+    row stepped through its own [`Stepper`][] (``make`` of its task: the reference
+    [`TaskSteps`][] unless given); readings draw from ``rng`` in row order."""
+
+    def __init__(
+        self,
+        task: Task,
+        starts: Sequence[Config | Grip | World],
+        rng: np.random.Generator,
+        make: Callable[[Task], Stepper] = TaskSteps,
+    ) -> None:
+        self.rng = rng
+        self.tasks = [s.task if isinstance(s, World) else task for s in starts]
+        self.configs = [s.config if isinstance(s, World) else s for s in starts]
+        made: dict[int, Stepper] = {}  # one stepper per object
+        for t in self.tasks:
+            if id(t) not in made:
+                made[id(t)] = make(t)
+        self.steppers = [made[id(t)] for t in self.tasks]
+        self.now: dict[int, OneStep] = {}
+
+    def begin(self, row: int) -> Percept:
+        self.now[row] = now = self.steppers[row].begin(self.configs[row], self.rng)
+        return now.percept
+
+    def step(self, rows: list[int], actions: Sequence[int | CRM]) -> list[Percept]:
+        out = []
+        for r, a in zip(rows, actions, strict=True):
+            self.now[r] = now = self.steppers[r].step_one(self.now[r].state, a, self.rng)
+            out.append(now.percept)
+        return out
+
+    def episode(self, row: int) -> Episode:
+        now = self.now[row]
+        return Episode(now.state.steps, bool(self.tasks[row].grasped(now.min_friction)))
+
+
+def run_batch(rows: Rows, policy: BatchPolicy, n: int, more: Callable[[int, Episode | None], bool]) -> None:
+    """The batched form of [`run_episode`][]: rows ``0 .. n-1`` of episodes in lockstep.
+
+    Row ``r`` begins an episode whenever ``more(r, last)`` is true (``last``: the row's
+    episode that just ended, ``None`` before its first; the caller records it there).
+    Each step, every live row's action comes from one ``policy.act`` call, every row's
+    CRM from one ``rows.step`` call, and then, row by row, the policy is told the percept
+    and an ended episode is handed to ``more``. Per row, the calls come in
+    [`run_episode`][]'s order."""
+    live: list[int] = []
+    for r in range(n):
+        if more(r, None):
+            policy.begin(r, rows.begin(r))
+            live.append(r)
+    while live:
+        percepts = rows.step(live, policy.act(live))
+        still = []
+        for r, p in zip(live, percepts, strict=True):
+            policy.tell(r, p)
+            if p.terminated or p.truncated:
+                if not more(r, rows.episode(r)):
+                    continue
+                policy.begin(r, rows.begin(r))
+            still.append(r)
+        live = still

@@ -38,7 +38,7 @@ from crmgrasp._validation import CrmgraspError, require_extra
 from crmgrasp.agents.training import checkpoint_generators, checkpoints_to_within
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import Error
-from crmgrasp.sim import SimState, step
+from crmgrasp.sim import Percept, StepperRows, run_batch
 from crmgrasp.tasks import Task, World
 
 __all__ = [
@@ -332,29 +332,43 @@ def evaluate_recurrent(
     model: Any, task: Task, starts: Sequence[Config | Grip | World], rng: np.random.Generator
 ) -> tuple[np.ndarray, np.ndarray]:
     """Run the deterministic LSTM policy from every start (a configuration, or a world of
-    a family task: its object and configuration), all episodes batched.
+    a family task: its object and configuration), all episodes batched
+    ([`crmgrasp.sim.run_batch`][], each episode stepped by [`crmgrasp.sim.step`][]).
 
     Returns CRMs per episode and success flags. ``rng`` drives sensing noise (if the task has any).
     """
     n = len(starts)
-    tasks = [s.task if isinstance(s, World) else task for s in starts]
-    configs = [s.config if isinstance(s, World) else s for s in starts]
-    states = [SimState(c, t.read(c, rng), 0) for t, c in zip(tasks, configs)]
-    bounds = bounds_of(task)
-    obs = np.stack([features(t.observe(s.sensed), 0, bounds) for t, s in zip(tasks, states)])
-    steps, success = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=bool)
-    active = np.ones(n, dtype=bool)
-    lstm, first = None, np.ones(n, dtype=bool)
-    while active.any():
-        actions, lstm = model.predict(obs, state=lstm, episode_start=first, deterministic=True)
-        first[:] = False
-        for i in np.flatnonzero(active):
-            res = step(tasks[i], states[i], crm_of_action(tasks[i], actions[i]), rng)
-            states[i], steps[i] = res.state, steps[i] + 1
-            obs[i] = features(res.observation, int(res.error), bounds)
-            if res.terminated or res.truncated:
-                active[i], success[i] = False, res.terminated
-    return steps, success
+    rows = StepperRows(task, starts, rng)
+    run_batch(rows, _ModelRows(model, rows.tasks, bounds_of(task)), n, lambda row, last: last is None)
+    episodes = [rows.episode(r) for r in range(n)]
+    return np.array([e.steps for e in episodes], dtype=np.int64), np.array([e.success for e in episodes], dtype=bool)
+
+
+class _ModelRows:
+    """A deep model as a [`BatchPolicy`][crmgrasp.sim.BatchPolicy] over one episode per row:
+    each step, one deterministic ``predict`` over every row's latest observation (rows
+    whose episode ended keep their last one, so the batch, and with it the model's
+    floats, stays the same size), the LSTM state carried between calls."""
+
+    def __init__(self, model: Any, tasks: Sequence[Task], bounds: Any) -> None:
+        self.model, self.tasks, self.bounds = model, tasks, bounds
+        self.obs: np.ndarray | None = None
+        self.first = np.ones(len(tasks), dtype=bool)
+        self.lstm: Any = None
+
+    def begin(self, row: int, first: Percept) -> None:
+        self.tell(row, first)
+
+    def act(self, rows: list[int]) -> list[Any]:
+        actions, self.lstm = self.model.predict(self.obs, state=self.lstm, episode_start=self.first, deterministic=True)
+        self.first[:] = False
+        return [crm_of_action(self.tasks[r], actions[r]) for r in rows]
+
+    def tell(self, row: int, percept: Percept) -> None:
+        f = features(percept.observation, int(percept.error), self.bounds)
+        if self.obs is None:
+            self.obs = np.zeros((len(self.tasks), len(f)), dtype=f.dtype)
+        self.obs[row] = f
 
 
 def train_recurrent_ppo(

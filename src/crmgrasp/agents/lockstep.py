@@ -5,9 +5,8 @@
 compare curves and Q tables): each trial keeps its own agent and its own three
 generators, and draws from them in the same order as the sequential loop; only
 the CRM executions of all trials that are mid-episode go through the task's
-kernel together ([`crmgrasp.kernels.Kernel.execute`][] and
-[`observe`][crmgrasp.kernels.Kernel.observe]), which is bit-identical to
-[`crmgrasp.sim.step`][].
+kernel together ([`crmgrasp.kernels.rows.KernelRows`][] in the batched episode loop,
+[`crmgrasp.sim.run_batch`][]), which is bit-identical to [`crmgrasp.sim.step`][].
 """
 
 from __future__ import annotations
@@ -28,9 +27,9 @@ from crmgrasp.agents.training import (
     trial_generators,
 )
 from crmgrasp.kernels import kernel_for
-from crmgrasp.model.hand import Error
+from crmgrasp.kernels.rows import KernelRows
 from crmgrasp.model.history import KOrderEncoder
-from crmgrasp.sim import Percept, reset, step_reward
+from crmgrasp.sim import Episode, RowPolicies, run_batch
 from crmgrasp.tasks import Task
 
 __all__ = ["train_trials_lockstep"]
@@ -39,7 +38,7 @@ __all__ = ["train_trials_lockstep"]
 class _Trial:
     """The mutable state of one trial between lockstep steps."""
 
-    __slots__ = ("agent", "env_rng", "episode", "eval_rng", "next_checkpoint", "policy", "steps")
+    __slots__ = ("agent", "env_rng", "episode", "eval_rng", "next_checkpoint", "policy")
 
     def __init__(self, agent: Agent, encoder: KOrderEncoder, gens: tuple[np.random.Generator, ...]) -> None:
         self.agent = agent
@@ -47,7 +46,6 @@ class _Trial:
         self.policy = LearnerPolicy(agent, encoder, agent_rng)
         self.episode = 0
         self.next_checkpoint = 0
-        self.steps = 0
 
 
 def train_trials_lockstep(
@@ -77,7 +75,6 @@ def train_trials_lockstep(
     check_budget(trials, episodes, eval_episodes)
     encoder = encoder_for(task, k)
     kernel = kernel_for(task, backend)
-    model = task.model
     ckpts = np.array(sorted({c for c in checkpoints if 1 <= c <= episodes}), dtype=np.int64)
     steps = np.empty((trials, episodes), dtype=np.int64)
     success = np.empty((trials, episodes), dtype=bool)
@@ -88,20 +85,13 @@ def train_trials_lockstep(
     ]
     finished = [0]
 
-    cfg = np.zeros((trials, model.row_width))  # true configurations, one row per trial
-    sen = np.zeros((trials, model.row_width))  # their sensed readings
-
-    def begin(t: int, tr: _Trial) -> None:
-        first = reset(task, tr.env_rng)
-        state = first.state
-        cfg[t] = model.row_of(state.config)
-        sen[t] = model.row_of(state.sensed)
-        tr.steps = 0
-        tr.policy.begin(first.percept)
-
-    def finish(t: int, tr: _Trial, ok: bool) -> bool:
-        """Record the episode; start the next one. False when the trial is over."""
-        steps[t, tr.episode], success[t, tr.episode] = tr.steps, ok
+    def more(t: int, last: Episode | None) -> bool:
+        """Record the trial's episode that ended (and run a checkpoint's evaluation after it);
+        whether the trial runs another."""
+        tr = runs[t]
+        if last is None:
+            return True
+        steps[t, tr.episode], success[t, tr.episode] = last.steps, last.success
         tr.episode += 1
         finished[0] += 1
         if progress is not None and finished[0] == PROGRESS_EVERY:
@@ -113,45 +103,10 @@ def train_trials_lockstep(
             ck = evaluate(task, tr.agent, encoder, checkpoint_episodes, starts_rng, ties_rng, kernel=kernel)
             csteps[t, j] = ck[0].mean()
             tr.next_checkpoint += 1
-        if tr.episode == episodes:
-            return False
-        begin(t, tr)
-        return True
+        return tr.episode < episodes
 
-    for t, tr in enumerate(runs):
-        begin(t, tr)
-    active = np.arange(trials)
-    while len(active):
-        acts = np.array([runs[t].policy.act() for t in active])
-        new, errors = kernel.execute(cfg[active], sen[active], acts)
-        cfg[active] = new
-        if model.noise.active:  # one reading per trial, from the trial's own generator, in trial order
-            for i, t in enumerate(active.tolist()):
-                sen[t] = model.row_of(model.read(model.config_of(new[i].tolist()), runs[t].env_rng))
-        else:
-            sen[active] = new
-        *values, index, mu = kernel.observe(new, sen[active], errors)
-        done = task.grasped(mu)
-        still = []
-        rows = zip(active.tolist(), sen[active].tolist(), *(v.tolist() for v in values))
-        for i, (t, srow, *obs) in enumerate(rows):
-            tr = runs[t]
-            tr.steps += 1
-            terminated = bool(done[i])
-            truncated = tr.steps >= task.max_steps and not terminated
-            percept = Percept(
-                tuple(obs),
-                Error(errors[i]),
-                int(index[i]),
-                model.config_of(srow),
-                step_reward(task, terminated, errors[i]),
-                terminated,
-                truncated,
-            )
-            tr.policy.tell(percept)
-            if (not (terminated or truncated)) or finish(t, tr, terminated):
-                still.append(t)
-        active = np.array(still, dtype=np.int64)
+    rows = KernelRows(task, kernel, [tr.env_rng for tr in runs])
+    run_batch(rows, RowPolicies([tr.policy for tr in runs]), trials, more)
     if progress is not None:
         progress.advance(finished[0])
     gsteps = np.empty((trials, eval_episodes), dtype=np.int64)

@@ -57,7 +57,7 @@ from crmgrasp.agents.policy import GreedyPolicy
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.planners.references import BeliefPolicy, Start, State, _Model
-from crmgrasp.sim import OneStep, Percept, SimState, run_episode
+from crmgrasp.sim import OneStep, Percept, SimState, run_episode, step_reward
 from crmgrasp.tasks import Task
 
 __all__ = ["korder_search", "KOrderResult", "INITS"]
@@ -84,27 +84,50 @@ class _Episodes:
         self.states: list[State] = [self.model.state(c) for c in starts]
         self.first = [task.discretizer.index(self.model.tasks[i].observe(cfg), Error.NONE) for i, cfg in self.states]
         self.count = 0
+        self.policy = _TablePolicy(self.enc, task.error_cost)
+        self.steps = _MemoSteps(self)
 
     def run(self, w: int, table: dict[int, int], backoff: dict[int, int]) -> tuple[float, list[int]]:
         """Cost (CRMs, plus ``error_cost`` per errored CRM) and visited history codes of
-        start ``w``; a history not in ``table`` acts as ``backoff`` says for its current
-        observation (CRM 0 if it says nothing)."""
-        m, enc, c_err = self.model, self.enc, self.model.task.error_cost
+        start ``w`` ([`_TablePolicy`][] through the one episode loop, on the memoised steps)."""
         self.count += 1
-        state, hist = self.states[w], self.enc.start(self.first[w])
-        cost, codes = 0.0, []
-        for _ in range(self.horizon):
-            code = enc.encode(hist)
-            codes.append(code)
-            a = table.get(code)
-            if a is None:
-                a = backoff.get(hist[0], 0)
-            nxt, obs, grasped = m.step(state, a)
-            cost += 1.0 + c_err * m.errored[(state, a)]
-            if grasped:
-                break
-            state, hist = nxt, enc.push(hist, a, obs)
-        return cost, codes
+        self.policy.table, self.policy.backoff = table, backoff
+        run_episode(self.model.task, self.policy, _UNUSED, start=self.states[w], kernel=self.steps)  # type: ignore[arg-type]
+        return self.policy.cost, self.policy.codes
+
+
+_UNUSED = np.random.default_rng(0)
+"""The generator the loop passes to the memoised steps, which draw nothing."""
+
+
+class _TablePolicy:
+    """A [`Policy`][crmgrasp.sim.Policy] that acts as a k-order table says: a history not in
+    ``table`` acts as ``backoff`` says for its current observation (CRM 0 if it says
+    nothing). It keeps the episode's cost (CRMs, plus ``error_cost`` per errored CRM) and
+    the history codes it acted on."""
+
+    def __init__(self, enc: KOrderEncoder, error_cost: float) -> None:
+        self.enc, self.error_cost = enc, error_cost
+        self.table: dict[int, int] = {}
+        self.backoff: dict[int, int] = {}
+        self.cost = 0.0
+        self.codes: list[int] = []
+        self._hist: tuple[int, ...] = ()
+        self._a = 0
+
+    def begin(self, first: Percept) -> None:
+        self.cost, self.codes, self._hist = 0.0, [], self.enc.start(first.obs_index)
+
+    def act(self) -> int:
+        code = self.enc.encode(self._hist)
+        self.codes.append(code)
+        a = self.table.get(code)
+        self._a = self.backoff.get(self._hist[0], 0) if a is None else a
+        return self._a
+
+    def tell(self, percept: Percept) -> None:
+        self.cost += 1.0 + self.error_cost * (percept.error is not Error.NONE)
+        self._hist = self.enc.push(self._hist, self._a, percept.obs_index)
 
 
 def _projected(task: Task, starts: Sequence[Start], ep: _Episodes) -> tuple[dict[int, int], float]:
@@ -112,9 +135,8 @@ def _projected(task: Task, starts: Sequence[Start], ep: _Episodes) -> tuple[dict
     every start through the one episode loop, seeing only discretized observations), and
     the belief-space optimum of the starts."""
     voter = _Voter(BeliefPolicy(task, starts), ep.enc)
-    steps, unused = _MemoSteps(ep), np.random.default_rng(0)  # the memoised steps draw nothing
     for state in ep.states:
-        run_episode(task, voter, unused, start=state, kernel=steps)  # type: ignore[arg-type]
+        run_episode(task, voter, _UNUSED, start=state, kernel=ep.steps)  # type: ignore[arg-type]
     table = {code: min(v.items(), key=lambda kv: (-kv[1], kv[0]))[0] for code, v in voter.votes.items()}
     return table, voter.policy.optimum()
 
@@ -146,12 +168,13 @@ class _Voter:
 class _MemoSteps:
     """The search's memoised noise-free steps ([`_Episodes`][]' model) as a
     [`Stepper`][crmgrasp.sim.Stepper] of the one episode loop, from given hidden states: a
-    step's result carries the discretized observation, the episode's end (a grasp, or
-    ``max_steps`` CRMs) and ``min_friction`` 0 at a grasp (``inf`` elsewhere); what the
-    belief policy reads, without the sensed values the model does not keep."""
+    step's result carries the discretized observation, the error flag, the reward, the
+    episode's end (a grasp, or ``max_steps`` CRMs) and ``min_friction`` 0 at a grasp
+    (``inf`` elsewhere); what the policies read, without the sensed values the model does
+    not keep."""
 
     def __init__(self, ep: _Episodes) -> None:
-        self.model, self.horizon = ep.model, ep.horizon
+        self.model, self.horizon, self.task = ep.model, ep.horizon, ep.model.task
         self.first = dict(zip(ep.states, ep.first, strict=True))
 
     def sample_start(self, rng: np.random.Generator) -> Any:
@@ -165,10 +188,12 @@ class _MemoSteps:
 
     def step_one(self, state: SimState, action: Any, rng: np.random.Generator) -> OneStep:
         nxt, obs, grasped = self.model.step(state.config, action)  # type: ignore[arg-type]
+        error = self.model.errors[(state.config, action)]  # type: ignore[index]
         steps = state.steps + 1
         done = SimState(nxt, nxt, steps)  # type: ignore[arg-type]
         truncated = steps >= self.horizon and not grasped
-        return OneStep(done, (), Error.NONE, obs, 0.0 if grasped else math.inf, -1.0, grasped, truncated)
+        reward = step_reward(self.task, grasped, error)
+        return OneStep(done, (), error, obs, 0.0 if grasped else math.inf, reward, grasped, truncated)
 
 
 FILL_LIMIT = 100_000

@@ -60,7 +60,8 @@ class _Model:
         self.tasks: list[Task] = [task]
         self._ids: dict[int, int] = {}
         self._step: dict[tuple[State, int], Step] = {}
-        self.errored: dict[tuple[State, int], bool] = {}
+        self.errors: dict[tuple[State, int], Error] = {}
+        """Each cached step's error flag."""
         self._clair: dict[State, tuple[int | None, int]] = {}  # state -> (depth found, horizon searched)
 
     def state(self, start: Start) -> State:
@@ -84,7 +85,7 @@ class _Model:
             out = t.execute(config, t.actions[action], config)
             index = t.discretizer.index(t.observe(out.config), out.error)
             hit = self._step[key] = ((i, out.config), index, t.is_success(out.config))
-            self.errored[key] = out.error is not Error.NONE
+            self.errors[key] = out.error
         return hit
 
     def clairvoyant(self, state: State, horizon: int) -> int:
@@ -232,7 +233,7 @@ def _value(model: _Model, belief: tuple[State, ...], h: int, memo: dict, acts: d
         errors = 0
         for c in belief:
             nxt, index, grasped = model.step(c, a)
-            errors += model.errored[(c, a)]
+            errors += model.errors[(c, a)] is not Error.NONE
             if not grasped:
                 children.setdefault(index, []).append(nxt)
         kids = [tuple(v) for v in children.values()]
