@@ -19,7 +19,7 @@ Draw order: ``reset`` draws the start (the task's sampler) then one reading;
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import Any, NamedTuple, Protocol, overload
 
 import numpy as np
@@ -341,8 +341,10 @@ class Rows(Protocol):
         """Start the row's next episode; its first percept."""
         ...
 
-    def step(self, rows: list[int], actions: Sequence[int | CRM]) -> list[Percept]:
-        """One CRM in each of ``rows`` (``actions`` in their order); the percepts."""
+    def step(self, rows: list[int], actions: Sequence[int | CRM]) -> Iterable[Percept]:
+        """One CRM in each of ``rows`` (``actions`` in their order); the percepts, in the
+        rows' order (an iterator may build each when it is asked for: the loop tells each
+        before it asks for the next)."""
         ...
 
     def episode(self, row: int) -> Episode:
@@ -394,12 +396,11 @@ class StepperRows:
         self.now[row] = now = self.steppers[row].begin(self.configs[row], self.rng)
         return now.percept
 
-    def step(self, rows: list[int], actions: Sequence[int | CRM]) -> list[Percept]:
-        out = []
+    def step(self, rows: list[int], actions: Sequence[int | CRM]) -> Iterator[Percept]:
+        """Each row's step, when its percept is asked for."""
         for r, a in zip(rows, actions, strict=True):
             self.now[r] = now = self.steppers[r].step_one(self.now[r].state, a, self.rng)
-            out.append(now.percept)
-        return out
+            yield now.percept
 
     def episode(self, row: int) -> Episode:
         now = self.now[row]
@@ -413,17 +414,17 @@ def run_batch(rows: Rows, policy: BatchPolicy, n: int, more: Callable[[int, Epis
     episode that just ended, ``None`` before its first; the caller records it there).
     Each step, every live row's action comes from one ``policy.act`` call, every row's
     CRM from one ``rows.step`` call, and then, row by row, the policy is told the percept
-    and an ended episode is handed to ``more``. Per row, the calls come in
-    [`run_episode`][]'s order."""
+    (``rows.step`` may yield them one at a time: a percept is dropped once told, which
+    keeps the garbage collector's young generation small) and an ended episode is handed
+    to ``more``. Per row, the calls come in [`run_episode`][]'s order."""
     live: list[int] = []
     for r in range(n):
         if more(r, None):
             policy.begin(r, rows.begin(r))
             live.append(r)
     while live:
-        percepts = rows.step(live, policy.act(live))
         still = []
-        for r, p in zip(live, percepts, strict=True):
+        for r, p in zip(live, rows.step(live, policy.act(live)), strict=True):
             policy.tell(r, p)
             if p.terminated or p.truncated:
                 if not more(r, rows.episode(r)):

@@ -9,7 +9,7 @@ order, after the CRMs), so a row's results do not depend on the other rows.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 
 import numpy as np
 
@@ -42,8 +42,9 @@ class KernelRows:
         self.steps[row], self.grasped[row] = 0, False
         return first.percept
 
-    def step(self, rows: list[int], actions: Sequence[int | CRM]) -> list[Percept]:
-        """The task's actions (indices) in ``rows``, batched."""
+    def step(self, rows: list[int], actions: Sequence[int | CRM]) -> Iterator[Percept]:
+        """The task's actions (indices) in ``rows``, batched; the percepts come one at a time
+        (each is told and dropped before the next is built)."""
         task, model, active = self.task, self.model, np.array(rows, dtype=np.int64)
         new, errors = self.kernel.execute(self.cfg[active], self.sen[active], np.array(actions))
         self.cfg[active] = new
@@ -54,15 +55,13 @@ class KernelRows:
             self.sen[active] = new
         *values, index, mu = self.kernel.observe(new, self.sen[active], errors)
         done = task.grasped(mu)
-        out = []
         for i, (r, srow, *obs) in enumerate(zip(rows, self.sen[active].tolist(), *(v.tolist() for v in values))):
             steps = self.steps[r] = self.steps[r] + 1
             terminated = self.grasped[r] = bool(done[i])
             truncated = steps >= task.max_steps and not terminated
             err, sensed = Error(errors[i]), model.config_of(srow)
             reward = step_reward(task, terminated, errors[i])
-            out.append(Percept(tuple(obs), err, int(index[i]), sensed, reward, terminated, truncated))
-        return out
+            yield Percept(tuple(obs), err, int(index[i]), sensed, reward, terminated, truncated)
 
     def episode(self, row: int) -> Episode:
         """CRMs executed in the row's episode, and whether it ended in a grasp."""
