@@ -213,6 +213,28 @@ def test_the_fingers_kernel_steps_episodes_as_the_readable_step(noise):
             assert a == b
 
 
+def test_the_fused_fingers_kernel_steps_from_any_earlier_state():
+    """The fused kernel keeps its row's observation and least friction for the step after an
+    errored CRM; stepping from any earlier state (a branch), errors included, is still the
+    readable step."""
+    task = make_task("triangles-3f")
+    rng = np.random.default_rng(5)
+    errors = 0
+    for _ in range(8):
+        inst, start = task.sample_world(rng)
+        fast = kernel_for(inst, "auto")
+        assert type(fast).__name__ == "FusedFingersKernel"
+        states = [fast.begin(start, rng).state]
+        for _ in range(40):
+            src = states[int(rng.integers(len(states)))] if rng.random() < 0.5 else states[-1]
+            action = int(rng.integers(len(inst.actions)))
+            a, b = step(inst, src, action, rng), fast.step_one(src, action, rng)
+            assert a == b
+            errors += a.error != 0
+            states.append(b.state)
+    assert errors > 50  # the reuse after an error is exercised
+
+
 @pytest.mark.parametrize("name", ["triangles-3f", "odd-polygons-3f", "box-family-3f"])
 def test_the_compiled_uniform_start_rule_draws_the_readable_starts(name):
     """The fingers kernel's uniform start filter makes the readable rule's decisions: the

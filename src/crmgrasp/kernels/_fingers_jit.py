@@ -223,11 +223,15 @@ def uniform_start(s, cum, perimeter, e, n, p, q, fp, mu_goal, out):  # type: ign
 
 
 @njit(cache=True)
-def step_one(v, action, acts, n, e, th, strides, abs_m, p, q, fp, out, vals):  # type: ignore[no-untyped-def]
+def step_one(v, action, acts, n, e, th, strides, abs_m, p, q, fp, out, vals, known, mu_v):  # type: ignore[no-untyped-def]
     """One noise-free CRM ``acts[action]`` of the single environment from row 0 of ``v``: the
     new configuration into row 0 of ``out``, its observation into ``vals[:, 0]``; returns
-    ``(error code, bin index, least friction)``, as [`crmgrasp.sim.step`][]."""
+    ``(error code, bin index, least friction)``, as [`crmgrasp.sim.step`][]. With ``known``,
+    ``vals[:, 0]`` and ``mu_v`` already hold the observation and least friction of ``v``'s row:
+    after an error (the row unchanged) they are the step's own, not computed again."""
     code = _crm(v, v, 0, n, int(acts[action, 0]), int(acts[action, 1]), acts[action, 2], e, p, q, out, 0)
+    if code != 0 and known:
+        return code, _index(vals, 0, code, th, strides, abs_m), mu_v
     _observe(out, 0, n, vals, 0)
     return code, _index(vals, 0, code, th, strides, abs_m), _mu(out, 0, n, fp, p[ANTIPODAL_TOL])
 

@@ -157,15 +157,20 @@ class FusedFingersKernel(FingersKernel):
         w = 4 * self.n
         self._v, self._out, self._vals = np.empty((1, w)), np.empty((1, w)), np.empty((1 + self.n, 1))
         self._v_of: Any = None
+        # whether _vals and _mu hold the observation and least friction of _v's row (an
+        # errored CRM leaves the row as it was: its step reuses them)
+        self._known, self._mu = False, 0.0
 
     def _load(self, config: Any) -> None:
         if config is not self._v_of:
             self._v[0] = [x for c in config for x in c]
             self._v_of = config
+            self._known = False
 
     def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
         self._load(config)
         index, mu = jit.begin_one(self._v, self.n, self.th, self.strides, self.abs_m, self.p, self.fp, self._vals)
+        self._known, self._mu = True, mu
         return OneStep(SimState(config, config, 0), tuple(self._vals[:, 0].tolist()), Error.NONE, index, mu)
 
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
@@ -184,8 +189,9 @@ class FusedFingersKernel(FingersKernel):
         self._load(config)
         code, index, mu = jit.step_one(
             self._v, action, table, self.n, self.e, self.th, self.strides, self.abs_m, self.p, self.q, self.fp,
-            self._out, self._vals,
+            self._out, self._vals, self._known, self._mu,
         )  # fmt: skip
+        self._known, self._mu = True, mu
         if not code:
             config = self.model.config_of(self._out[0].tolist())
             self._v, self._out = self._out, self._v  # the output is the next step's input
