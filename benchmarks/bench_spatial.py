@@ -3,7 +3,8 @@
 For ``CartPole-v1`` and each of ``crmgrasp/Box3D-v0`` and ``crmgrasp/Cup3D-v0`` (the
 compiled spatial kernel; ``--reference`` adds the readable reference rules): random
 actions through ``gymnasium.make``, ``steps`` of them in each of ``rounds`` rounds, the
-minimum over rounds kept. Two times per environment: one ``env.step`` alone, and
+environments alternating round by round (this machine's speed drifts by tens of percent within
+a minute), the least round kept per environment. Two times per environment: one ``env.step`` alone, and
 ``env.step`` plus the resets it triggers, per step (a spatial reset draws a new solid,
 builds its kernel and draws a start, so it weighs more than CartPole's).
 
@@ -26,15 +27,21 @@ import numpy as np
 import crmgrasp  # noqa: F401  (registers the environments)
 
 
-def _time(env_id: str, steps: int, rounds: int, **kwargs: Any) -> tuple[float, float]:
-    """Microseconds per ``env.step`` alone, and per step with the resets it triggers."""
-    env = gym.make(env_id, **kwargs)
-    env.reset(seed=0)
-    actions = np.random.default_rng(0).integers(env.action_space.n, size=steps).tolist()
-    clock, best = time.perf_counter, (float("inf"), float("inf"))
-    for _ in range(rounds):
+class _Timer:
+    """One environment and its fixed random actions; `round` times one pass over them."""
+
+    def __init__(self, env_id: str, steps: int, **kwargs: Any) -> None:
+        self.env = gym.make(env_id, **kwargs)
+        self.env.reset(seed=0)
+        self.actions = np.random.default_rng(0).integers(self.env.action_space.n, size=steps).tolist()
+        self.best = (float("inf"), float("inf"))
+
+    def round(self) -> None:
+        """Microseconds per ``env.step`` alone and per step with the resets it triggers; the
+        round with the least total is kept."""
+        env, clock = self.env, time.perf_counter
         in_step = in_reset = 0.0
-        for a in actions:
+        for a in self.actions:
             t0 = clock()
             _, _, term, trunc, _ = env.step(a)
             t1 = clock()
@@ -42,22 +49,27 @@ def _time(env_id: str, steps: int, rounds: int, **kwargs: Any) -> tuple[float, f
             if term or trunc:
                 env.reset()
                 in_reset += clock() - t1
-        if (in_step + in_reset) / steps * 1e6 < best[1]:
-            best = (in_step / steps * 1e6, (in_step + in_reset) / steps * 1e6)
-    return best
+        n = len(self.actions)
+        if (in_step + in_reset) / n * 1e6 < self.best[1]:
+            self.best = (in_step / n * 1e6, (in_step + in_reset) / n * 1e6)
 
 
 def main(steps: int = 20_000, rounds: int = 5, reference: bool = False) -> dict[str, Any]:
-    cart = _time("CartPole-v1", steps, rounds)
-    out: dict[str, Any] = {"steps": steps, "rounds": rounds, "cartpole_us": [round(v, 2) for v in cart]}
     runs = [("", {})] + ([("_reference", {"backend": "reference"})] if reference else [])
+    timers = {"cartpole": _Timer("CartPole-v1", steps)}
     for env_id in ("crmgrasp/Box3D-v0", "crmgrasp/Cup3D-v0"):
         for suffix, kw in runs:
-            step, with_resets = _time(env_id, steps, rounds, **kw)
-            name = env_id.split("/")[1].split("-")[0].lower() + suffix
-            out[f"{name}_step_us"] = round(step, 2)
-            out[f"{name}_step_over_cartpole"] = round(step / cart[0], 2)
-            out[f"{name}_with_resets_over_cartpole"] = round(with_resets / cart[1], 2)
+            timers[env_id.split("/")[1].split("-")[0].lower() + suffix] = _Timer(env_id, steps, **kw)
+    for _ in range(rounds):  # the environments alternate round by round: each sees the same machine
+        for timer in timers.values():
+            timer.round()
+    cart = timers.pop("cartpole").best
+    out: dict[str, Any] = {"steps": steps, "rounds": rounds, "cartpole_us": [round(v, 2) for v in cart]}
+    for name, timer in timers.items():
+        step, with_resets = timer.best
+        out[f"{name}_step_us"] = round(step, 2)
+        out[f"{name}_step_over_cartpole"] = round(step / cart[0], 2)
+        out[f"{name}_with_resets_over_cartpole"] = round(with_resets / cart[1], 2)
     return out
 
 

@@ -207,6 +207,32 @@ def test_sensing_noise_in_3d() -> None:
         sense3d(START, 1.0, 0.0, rng, HAND)
 
 
+def test_rigid_motions_compute_what_numpy_computes_bit_for_bit():
+    """`moved` and `yawed` write the faces' arithmetic out in Python floats: the bytes (the sign
+    of a zero included) equal numpy's ``R a``, ``b + np.dot(R a, t)`` and row scaling, on
+    boxes with zero coordinates and on general polyhedra."""
+    from crmgrasp.model.solids import ConvexPolyhedron, box3d, rotation_z
+
+    def numpy_moved(planes, r, t):
+        rows = np.array(planes)
+        normals = rows[:, :3] @ r.T
+        raw = np.array([(*n, b + float(np.dot(n, t))) for n, b in zip(normals, rows[:, 3])])
+        return (raw / np.sqrt((raw[:, :3] * raw[:, :3]).sum(axis=1))[:, None]).tobytes()
+
+    rng = np.random.default_rng(8)
+    for i in range(300):
+        if i % 3 == 0:
+            solid = ConvexPolyhedron(tuple(map(tuple, rng.normal(size=(7, 4)).tolist())))
+        else:
+            size = rng.random(3) + 0.01
+            lo = (-size[0], -0.0, 0.0) if i % 3 == 1 else (-size[0], -size[1], -size[2])
+            solid = box3d(lo, (size[0], size[1], -0.0 if i % 3 == 2 else size[2]))
+        angle, dx, dy, dz = (rng.random(4) - (0.0, 0.5, 0.5, 0.5)) * (6.3, 0.2, 0.2, 0.2)
+        r = rotation_z(angle)
+        assert np.array(solid.yawed(angle, dx, dy).planes).tobytes() == numpy_moved(solid.planes, r, (dx, dy, 0.0))
+        assert np.array(solid.moved(r, (dx, dy, dz)).planes).tobytes() == numpy_moved(solid.planes, r, (dx, dy, dz))
+
+
 def test_the_quick_rigid_motions_equal_the_checked_constructions():
     """`yawed`, `box3d` and `centre` skip conversions, not arithmetic: the planes equal the
     checked constructor's on the same numbers, and the centre is the corners' mean, bit for bit."""

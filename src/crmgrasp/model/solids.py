@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
@@ -88,15 +89,29 @@ def _unit(v: ArrayLike, name: str) -> F64:
     return u / length
 
 
-def _unit_planes(rows: F64) -> tuple[tuple[float, float, float, float], ...]:
+Plane = tuple[float, float, float, float]
+
+
+def _unit_planes(rows: F64) -> tuple[Plane, ...]:
     """The planes ``rows`` (``(m, 4)``: ``a_x, a_y, a_z, b``) checked (four or more, finite,
     no zero normal) and scaled to unit normals, as tuples."""
-    if rows.ndim != 2 or rows.shape[1] != 4 or len(rows) < 4 or not np.isfinite(rows).all():
+    if rows.ndim != 2 or rows.shape[1] != 4 or len(rows) < 4:
         raise CrmgraspError(f"a convex polyhedron needs 4 or more finite planes (a_x, a_y, a_z, b), got {rows.shape}")
-    norms = np.sqrt((rows[:, :3] * rows[:, :3]).sum(axis=1))
-    if not norms.all():  # a zero norm
-        raise CrmgraspError("a face normal of the polyhedron is zero")
-    return tuple(map(tuple, (rows / norms[:, None]).tolist()))
+    return _scaled(rows.tolist())
+
+
+def _scaled(rows: Iterable[Sequence[float]]) -> tuple[Plane, ...]:
+    """Each plane ``(a, b)`` divided by ``|a| = sqrt(a_x^2 + a_y^2 + a_z^2)`` (summed in that
+    order, as numpy sums a row of three), refused if not finite or ``a = 0``."""
+    out = []
+    for a0, a1, a2, b in rows:
+        length = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+        if not math.isfinite(length + b):  # a NaN or an infinity among the four
+            raise CrmgraspError("a convex polyhedron needs 4 or more finite planes (a_x, a_y, a_z, b)")
+        if length == 0.0:
+            raise CrmgraspError("a face normal of the polyhedron is zero")
+        out.append((a0 / length, a1 / length, a2 / length, b / length))
+    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -105,18 +120,10 @@ class ConvexPolyhedron:
     ``(a_x, a_y, a_z, b)``); bounded and with an interior (checked on construction by
     the caller's vertices being inside, see [`box3d`][])."""
 
-    planes: tuple[tuple[float, float, float, float], ...]
+    planes: tuple[Plane, ...]
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "planes", _unit_planes(np.asarray(self.planes, dtype=np.float64)))
-
-    @classmethod
-    def _of_rows(cls, rows: F64) -> ConvexPolyhedron:
-        """The polyhedron of the planes ``rows`` (``(m, 4)`` floats): the constructor's
-        checks and scaling, without its conversion of a tuple."""
-        out = object.__new__(cls)
-        object.__setattr__(out, "planes", _unit_planes(rows))
-        return out
 
     def contains(self, p: ArrayLike) -> bool:
         """Strictly inside: more than [`SURFACE`][] inside every face."""
@@ -190,12 +197,15 @@ class ConvexPolyhedron:
         return self._rigid(rotation_z(angle), np.array([dx, dy, 0.0]))
 
     def _rigid(self, r: F64, t: F64) -> ConvexPolyhedron:
-        rows = np.array(self.planes)
-        normals = rows[:, :3] @ r.T
-        moved = np.empty_like(rows)
-        moved[:, :3] = normals
-        moved[:, 3] = [b + float(n @ t) for n, b in zip(normals, rows[:, 3].tolist())]
-        out = ConvexPolyhedron._of_rows(moved)
+        """Faces ``(R a, b + (R a) . t)``, scaled to unit normals; the dot product of three
+        written out as ``np.dot`` of two 3-vectors sums it, from ``0.0`` and in order (bit for
+        bit, the sign of a zero included; tested)."""
+        normals = (np.array(self.planes)[:, :3] @ r.T).tolist()
+        t0, t1, t2 = t.tolist()
+        offsets = [f[3] for f in self.planes]
+        rows = [(n0, n1, n2, b + (((0.0 + n0 * t0) + n1 * t1) + n2 * t2)) for (n0, n1, n2), b in zip(normals, offsets)]
+        out = object.__new__(ConvexPolyhedron)
+        object.__setattr__(out, "planes", _scaled(rows))
         if "vertices" in self.__dict__:  # corners already known: move them too (cheaper than solving again)
             out.__dict__["vertices"] = self.vertices @ r.T + t
         return out
@@ -204,9 +214,12 @@ class ConvexPolyhedron:
 def box3d(lo: ArrayLike, hi: ArrayLike) -> ConvexPolyhedron:
     """The axis-aligned box ``[lo, hi]`` (faces in the order -x, +x, -y, +y, -z, +z)."""
     lo_, hi_ = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
-    if lo_.shape != (3,) or hi_.shape != (3,) or not (hi_ > lo_).all() or not np.isfinite(hi_ - lo_).all():
+    if lo_.shape != (3,) or hi_.shape != (3,):
         raise CrmgraspError(f"a box needs finite lo < hi in every coordinate, got {lo!r} and {hi!r}")
     (x0, y0, z0), (x1, y1, z1) = lo_.tolist(), hi_.tolist()
+    sides = (x1 - x0, y1 - y0, z1 - z0)
+    if not all(d > 0.0 and math.isfinite(d) for d in sides):  # NaN fails the first test
+        raise CrmgraspError(f"a box needs finite lo < hi in every coordinate, got {lo!r} and {hi!r}")
     box = object.__new__(ConvexPolyhedron)  # the planes are unit already: the constructor would divide by 1.0
     planes = (
         (-1.0, 0.0, 0.0, -x0),
