@@ -127,8 +127,10 @@ if __name__ == "__main__":
     ap.add_argument("--worlds", type=int, default=300)
     ap.add_argument("--task", action="append", dest="tasks", choices=TASKS + THREE_FINGERS)
     ap.add_argument("--learner", action="append", dest="learners")
-    ap.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER")
+    ap.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER|true|false")
     a = ap.parse_args()
-    extra = {k: float(v) for k, v in (item.split("=", 1) for item in a.param)}
+    flags = {"true": True, "false": False}
+    pairs = (item.split("=", 1) for item in a.param)
+    extra = {k: flags[v.lower()] if v.lower() in flags else float(v) for k, v in pairs}
     res = main(a.episodes, a.seeds, a.first, a.worlds, tuple(a.tasks or TASKS), tuple(a.learners or LEARNERS), extra)
     print(json.dumps(res, indent=1))

@@ -71,6 +71,36 @@ def test_planning_model_blends_own_counts_with_the_short_level(box):
     assert len(judge.tried[("L", h)]) >= 1
 
 
+@pytest.mark.parametrize("middle", [False, True])
+def test_the_middle_level_pools_histories_with_the_same_last_two_crms(box, middle):
+    """k = 3. History ``h`` never tried CRM 1; ``h2`` (the same last two CRMs and
+    observations, another first observation) grasped with it twice; ``h3`` (the same k = 1
+    suffix, another k = 2 one) failed with it six times. The short level says a grasp 2 of 8;
+    with ``middle`` the model of ``h`` backs off to the pooled k = 2 counts first:
+    ``(2 + beta 2 / 8) / (2 + beta)``."""
+    enc, d, rng = encoder_for(box, 3), box.discretizer, np.random.default_rng(0)
+    ob, oc, od = (d.compose(v, Error.NONE) for v in ((1, 0, 0), (0, 1, 1), (1, 1, 0)))
+    x1, x2 = d.compose((0, 0, 0), Error.NONE), d.compose((0, 0, 1), Error.NONE)
+
+    def history(*obs):
+        h = enc.start(obs[0])
+        for o in obs[1:]:
+            h = enc.push(h, 0, o)
+        return enc.encode(h)
+
+    h, h2, h3 = history(x1, ob, oc), history(x2, ob, oc), history(x1, od, oc)
+    agent = _agent(box, k=3, beta=1.0, middle=middle)
+    agent.update(h, 0, -1.0, h3, 0, False, rng)  # h has data (a long node), not for CRM 1
+    for _ in range(2):
+        agent.update(h2, 1, -1.0, h2, None, True, rng)
+    for _ in range(6):
+        agent.update(h3, 1, -1.0, h3, 0, False, rng)
+    assert agent.suffix(h) == agent.suffix(h2) == agent.suffix(h3)
+    entry = agent._planned().model[(("L", h), 1)]
+    grasped = sum(c for (_, _, t), c in entry.items() if t) / sum(entry.values())
+    assert grasped == pytest.approx((2 + 0.25) / 3 if middle else 0.25)
+
+
 def test_training_repeats_bit_for_bit_and_the_file_is_the_greedy_policy(box, tmp_path):
     kw = {"trials": 1, "episodes": 80, "seed": 4, "k": 3, "eval_episodes": 0, "params": {"symmetric": True}}
     a = train_trials(box, "backoff-vi", **kw, checkpoints=(40, 80), checkpoint_episodes=100)
@@ -136,6 +166,8 @@ def test_bad_settings_are_one_line_errors(box):
         make_agent("backoff-vi", 4, plan_every=0)
     with pytest.raises(CrmgraspError, match="sample must be true or false"):
         make_agent("backoff-vi", 4, sample="yes")
+    with pytest.raises(CrmgraspError, match="middle must be true or false"):
+        make_agent("backoff-vi", 4, middle=1)
     with pytest.raises(CrmgraspError, match="explore must be >= 0"):
         make_agent("backoff-vi", 4, explore=-0.5)
     with pytest.raises(CrmgraspError, match="needs its state structure"):

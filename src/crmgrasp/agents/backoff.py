@@ -90,6 +90,11 @@ class BackoffVI(TabularAgent):
         Act on a posterior draw of the long level (True, the default) rather than on its
         mean: each long pair's outcome probabilities are drawn from the Dirichlet whose
         parameters are the blended counts ``n(h, a, o) + beta p_1(o | h_1, a)``.
+    middle
+        Back a long history's model off to its k = 2 suffix first (False, the default: to the
+        k = 1 level directly): the counts of every long history with the same last two CRMs and
+        observations, pooled, with ``beta`` pseudo-counts of the short level's estimate, stand
+        in for the short level in the long history's blend.
     explore
         Pseudo-counts of an immediate grasp added to the draw of a CRM never tried in a
         long history (0: none). The short level may rate such a CRM a sure error from other
@@ -111,6 +116,7 @@ class BackoffVI(TabularAgent):
         gamma: float = 0.9,
         sample: bool = True,
         explore: float = 0.0,
+        middle: bool = False,
     ) -> None:
         super().__init__(n_actions, gamma=gamma)
         self.explore = finite(explore, "explore")
@@ -122,6 +128,9 @@ class BackoffVI(TabularAgent):
         self.plan_every = integer(plan_every, "plan_every", 1, 1_000_000)
         if not isinstance(sample, bool):
             raise CrmgraspError(f"sample must be true or false, got {sample!r}")
+        if not isinstance(middle, bool):
+            raise CrmgraspError(f"middle must be true or false, got {middle!r}")
+        self.middle = middle
         self.judge = ModelVI(n_actions, q_act, unknown, sweeps, compiled, gamma=gamma)
         self.short = PooledVI(n_actions, q_act=q_act, unknown=unknown, compiled=compiled, gamma=gamma)
         self.short.plan_acting = False  # only its greedy model is read
@@ -136,6 +145,9 @@ class BackoffVI(TabularAgent):
         self._short_frame: HistoryFrame | None = None
         self._suffix: dict[int, int] = {}
         self._outcomes: dict[tuple[int, int], list[tuple[float, bool, float, tuple[int, ...]]]] = {}
+        self._mid_counts: dict[tuple[int, int], dict[tuple[float, int, bool], float]] = {}
+        self._mid: dict[tuple[int, int], dict[tuple[float, int, bool], float]] = {}
+        self._mid_code: dict[int, int] = {}
         self._amap: list[int] = []
         self._omap: list[int] = []
 
@@ -150,6 +162,7 @@ class BackoffVI(TabularAgent):
             "gamma": self.gamma,
             "sample": self.sample,
             "explore": self.explore,
+            "middle": self.middle,
         }
 
     def bind(self, frame: HistoryFrame) -> None:
@@ -253,6 +266,8 @@ class BackoffVI(TabularAgent):
         judge.q = {node: [judge.q_act] * n for node in nodes}  # type: ignore[misc]
         judge.q_greedy = {node: [judge.unknown] * n for node in nodes}  # type: ignore[misc]
         self._outcomes = {}
+        if self.middle:
+            self._pool_middle()
         for (s1, b), entry in short.model.items():
             self._add(("S", s1), b, {(r, ("S", t2), t): c for (r, t2, t), c in entry.items()})
         known = set(longs)
@@ -289,17 +304,63 @@ class BackoffVI(TabularAgent):
             entry[o] = entry.get(o, 0.0) + c
         if own and self.beta == 0.0:
             return entry
+        weight = self.beta if own else 1.0
+        mid = self._middle_outcomes(s, b) if self.middle else None
+        if mid:
+            for (r, obs, t), p in mid.items():
+                o = (r, self._route(frame.next_state(s, b, obs), known), t)
+                entry[o] = entry.get(o, 0.0) + weight * p
+            return entry
         (_, s1), flip = self._short_node(self.suffix(s))
         outcomes = self._short_outcomes(s1, self._amap[b] if flip else b)
         if not outcomes:
             return entry
-        weight = self.beta if own else 1.0
         for r, t, p, seen in outcomes:
             for obs in seen:
                 s2 = frame.next_state(s, b, self._omap[obs] if flip else obs)
                 o = (r, self._route(s2, known), t)
                 entry[o] = entry.get(o, 0.0) + weight * p / len(seen)
         return entry
+
+    def _middle_code(self, s: int) -> int:
+        """The code of history ``s``'s last two CRMs and observations (its k = 2 suffix)."""
+        v = self._mid_code.get(s)
+        if v is None:
+            enc = self._bound()[0].encoder
+            v = self._mid_code[s] = KOrderEncoder(enc.n_obs, enc.n_actions, 2).encode(enc.decode(s)[:4])
+        return v
+
+    def _pool_middle(self) -> None:
+        """Pool the long counts by k = 2 suffix: outcome ``(r, observation, terminal)``, the
+        observation in the long histories' own frame (one per suffix code)."""
+        frame = self._bound()[0]
+        pooled: dict[tuple[int, int], dict[tuple[float, int, bool], float]] = {}
+        for (s, b), counts in self.counts.items():
+            row = pooled.setdefault((self._middle_code(s), b), {})
+            for (r, s2, t), c in counts.items():
+                seen = frame.outcome_observations(s, b, s2)
+                for obs in seen:
+                    key = (r, obs, t)
+                    row[key] = row.get(key, 0.0) + c / len(seen)
+        self._mid_counts, self._mid = pooled, {}
+
+    def _middle_outcomes(self, s: int, b: int) -> dict[tuple[float, int, bool], float] | None:
+        """``p_2(r, o, t | h_2, b) = (n_2 + beta p_1) / (N_2 + beta)`` over the pooled counts of
+        ``s``'s k = 2 suffix (``None`` where the suffix never tried ``b``); cached per plan."""
+        key = (self._middle_code(s), b)
+        out = self._mid.get(key)
+        if out is not None or key not in self._mid_counts:
+            return out
+        counts = self._mid_counts[key]
+        blend = dict(counts)
+        (_, s1), flip = self._short_node(self.suffix(s))
+        for r, t, p, seen in self._short_outcomes(s1, self._amap[b] if flip else b):
+            for obs in seen:
+                o = (r, self._omap[obs] if flip else obs, t)
+                blend[o] = blend.get(o, 0.0) + self.beta * p / len(seen)
+        total = sum(blend.values())
+        out = self._mid[key] = {o: c / total for o, c in blend.items()}
+        return out
 
     def _short_outcomes(self, s1: int, b1: int) -> list[tuple[float, bool, float, tuple[int, ...]]]:
         """The short level's outcomes of CRM ``b1`` in ``s1``: reward, terminal, probability,
