@@ -101,6 +101,9 @@ def test_deep_continuous_smoke():
     spec.loader.exec_module(mod)
     res = mod.main(steps=256, episodes=5)
     assert len(res) == 3 + 4 and all(0.0 <= v["success"] <= 1.0 for k, v in res.items() if isinstance(v, dict))
+    res = mod.sac(episodes=4, trials=1, eval_episodes=3)
+    rows = [v for v in res.values() if isinstance(v, dict)]
+    assert len(rows) == 2 and all(len(r["greedy_crms"]) == 1 and 1 <= r["greedy_crms"][0] <= 10 for r in rows)
 
 
 def test_offset_learning_smoke():
