@@ -373,7 +373,8 @@ class StepperRows:
     """[`Rows`][] of one episode each from given starts (a configuration of ``task``, or a
     [`World`][crmgrasp.tasks.World] of a family task: its object and configuration), each
     row stepped through its own [`Stepper`][] (``make`` of its task: the reference
-    [`TaskSteps`][] unless given); readings draw from ``rng`` in row order."""
+    [`TaskSteps`][] unless given); readings draw from ``rng`` in row order. A row begun
+    again starts from its start again."""
 
     def __init__(
         self,
