@@ -86,18 +86,15 @@ class _Episodes:
         self.count = 0
         self.policy = _TablePolicy(self.enc, task.error_cost)
         self.steps = _MemoSteps(self)
+        self.unused = np.random.default_rng(0)  # what the loop hands the memoised steps, which draw nothing
 
     def run(self, w: int, table: dict[int, int], backoff: dict[int, int]) -> tuple[float, list[int]]:
         """Cost (CRMs, plus ``error_cost`` per errored CRM) and visited history codes of
         start ``w`` ([`_TablePolicy`][] through the one episode loop, on the memoised steps)."""
         self.count += 1
         self.policy.table, self.policy.backoff = table, backoff
-        run_episode(self.model.task, self.policy, _UNUSED, start=self.states[w], kernel=self.steps)  # type: ignore[arg-type]
+        run_episode(self.model.task, self.policy, self.unused, start=self.states[w], kernel=self.steps)  # type: ignore[arg-type]
         return self.policy.cost, self.policy.codes
-
-
-_UNUSED = np.random.default_rng(0)
-"""The generator the loop passes to the memoised steps, which draw nothing."""
 
 
 class _TablePolicy:
@@ -136,7 +133,7 @@ def _projected(task: Task, starts: Sequence[Start], ep: _Episodes) -> tuple[dict
     the belief-space optimum of the starts."""
     voter = _Voter(BeliefPolicy(task, starts), ep.enc)
     for state in ep.states:
-        run_episode(task, voter, _UNUSED, start=state, kernel=ep.steps)  # type: ignore[arg-type]
+        run_episode(task, voter, ep.unused, start=state, kernel=ep.steps)  # type: ignore[arg-type]
     table = {code: min(v.items(), key=lambda kv: (-kv[1], kv[0]))[0] for code, v in voter.votes.items()}
     return table, voter.policy.optimum()
 
