@@ -16,6 +16,7 @@ from crmgrasp.agents import train_trials
 from crmgrasp.envs.single import FAMILY_ENVS
 from crmgrasp.model import families as fam
 from crmgrasp.model.contacts import Config, Contact
+from crmgrasp.model.family_base import _uniform
 from crmgrasp.model.geometry import Disc, Polygon, Rectangle
 from crmgrasp.model.hand import Error, Hand, execute_crm, feasible
 from crmgrasp.model.quality import min_friction
@@ -109,6 +110,43 @@ def test_mixed_family_draws_each_member_by_weight() -> None:
     rng = np.random.default_rng(4)
     discs = sum(isinstance(f.sample(rng), Disc) for _ in range(N))
     assert abs(discs / N - 0.25) < 4 * math.sqrt(0.25 * 0.75 / N)
+
+
+def _bits(shape: Polygon) -> list[str]:
+    """Every coordinate's repr: equal lists are equal bit for bit, the sign of a zero included."""
+    return [repr(c) for v in shape.vertices for c in v]
+
+
+def test_the_box_family_draws_what_placing_its_rectangle_draws() -> None:
+    """`BoxFamily.sample` (five draws in one call, the rectangle built posed) gives the polygon
+    of the generic rule: the rectangle of two single draws, placed by three more."""
+    family = fam.BoxFamily()
+    for seed in range(3):
+        fast, generic = np.random.default_rng(seed), np.random.default_rng(seed)
+        for _ in range(500):
+            length, width = _uniform(generic, family.length), _uniform(generic, family.width)
+            pose = tuple(_uniform(generic, r) for r in (family.pose.angle, family.pose.offset, family.pose.offset))
+            assert _bits(family.sample(fast)) == _bits(fam.place(Rectangle(length, width), *pose))
+        assert fast.random() == generic.random()  # the streams stay in step
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    length=st.floats(1e-3, 10.0),
+    width=st.floats(1e-3, 10.0),
+    angle=st.floats(-10.0, 10.0),
+    dx=st.floats(-1.0, 1.0),
+    dy=st.floats(-1.0, 1.0),
+)
+def test_a_rectangle_built_posed_is_the_rectangle_moved(length, width, angle, dx, dy) -> None:  # type: ignore[no-untyped-def]
+    assert _bits(Rectangle(length, width, (angle, dx, dy))) == _bits(Rectangle(length, width).moved(angle, dx, dy))
+
+
+def test_a_rectangle_posed_beyond_the_bound_or_by_nan_is_refused() -> None:
+    with pytest.raises(CrmgraspError, match="not finite or beyond"):
+        Rectangle(0.3, 0.1, (0.0, 2e6, 0.0))
+    with pytest.raises(CrmgraspError, match="not finite or beyond"):
+        Rectangle(0.3, 0.1, (math.nan, 0.0, 0.0))
 
 
 def _move(c: Contact, angle: float, dx: float, dy: float) -> Contact:

@@ -425,6 +425,34 @@ def test_a_rebound_kernel_is_the_kernel_built_afresh(name):
             assert rebound.step_one(a.state, action, rng) == fresh.step_one(b.state, action, rng)
 
 
+@pytest.mark.parametrize("name", ["box-family", "mixed", "box-3d", "triangles-3f"])
+def test_a_family_kernel_moves_one_kernel_per_type_and_leaves_each_object_as_it_was(name):
+    """A family's compiled kernel moves itself onto each episode's object (one kernel per
+    object type, in place), and never writes into an object's own arrays: the first object's
+    edges (or planes) are the same after many others."""
+    from crmgrasp.kernels.base import Kernel
+    from crmgrasp.kernels.family import FamilyKernel
+
+    task = make_task(name)
+    kernel = kernel_for(task)
+    assert isinstance(kernel, FamilyKernel)
+    rng = np.random.default_rng(4)
+    kernel.sample_start(rng)
+    first = kernel.instance.obj
+    before = repr(getattr(first, "vertices", None)) + repr(getattr(first, "planes", None))
+    seen: dict[type, int] = {}
+    for _ in range(50):
+        kernel.sample_start(rng)
+        if type(kernel.current).rebind is Kernel.rebind:  # the readable rules: a new kernel
+            continue
+        seen.setdefault(type(kernel.instance.obj), id(kernel.current))
+        assert id(kernel.current) == seen[type(kernel.instance.obj)]
+    assert seen
+    assert repr(getattr(first, "vertices", None)) + repr(getattr(first, "planes", None)) == before
+    if hasattr(first, "edge_array"):
+        assert np.array_equal(first.edge_array, kernel_for(task.with_object(first)).e)
+
+
 @pytest.mark.parametrize("name", ["box-family", "polygon-family", "u-handle", "l-shape", "t-shape", "star", "mixed"])
 def test_compiled_edges_equal_the_polygon_edges(name):
     """`edge_rows`, which rebinds a family's kernel, gives `Polygon.edges` and `convex` bit for bit."""

@@ -58,6 +58,22 @@ def test_surface_points_lie_on_the_surface_with_inward_normals(solid) -> None:  
         assert solid.contains(x + 1e-4 * n) and not solid.contains(x - 1e-4 * n)
 
 
+def test_boxes_on_the_table_are_the_six_single_draws_of_their_rule() -> None:
+    """`BoxOnTable.sample` draws its six numbers in one call: the same solids, bit for bit, as
+    three single draws for the box and three for its yaw and offset, and the stream in step."""
+    from crmgrasp.model.family_base import _uniform
+
+    family = BoxOnTable()
+    fast, single = np.random.default_rng(8), np.random.default_rng(8)
+    for _ in range(500):
+        dims = [_uniform(single, r) for r in (family.length, family.width, family.height)]
+        pose = [_uniform(single, r) for r in (family.pose.angle, family.pose.offset, family.pose.offset)]
+        want, got = family._box(*dims).yawed(*pose), family.sample(fast)
+        assert np.array(got.planes).tobytes() == np.array(want.planes).tobytes()
+        assert got.vertices.tobytes() == want.vertices.tobytes()
+    assert fast.random() == single.random()
+
+
 def test_solid_families_sample_within_their_ranges_and_rest_on_the_table() -> None:
     rng = np.random.default_rng(1)
     fam = BoxOnTable()

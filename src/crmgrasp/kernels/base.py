@@ -86,7 +86,9 @@ class Kernel(ABC):
     def rebind(self, instance: Task) -> Kernel:
         """This kernel's path for ``instance``, the task on another object of the same kind
         (one episode of a family): a new kernel of the same class. A compiled kernel may
-        share what does not depend on the object instead of computing it again."""
+        instead move itself onto the new object, in place, keeping what does not depend on
+        the object (a family's kernel steps one object at a time: nothing else holds the
+        kernel of the object before)."""
         return type(self)(instance)
 
     @staticmethod

@@ -77,7 +77,7 @@ class FingersKernel(Kernel):
         self._fresh()
 
     def _fresh(self) -> None:
-        """The parts that belong to one object, or to one episode's buffers."""
+        """The parts that belong to one object (at construction and after each move): its start rule."""
         self.start_filter = _UniformFilter(self)  # type: ignore[assignment]
 
     def rebind(self, instance: Task) -> FingersKernel:
@@ -152,10 +152,13 @@ class FusedFingersKernel(FingersKernel):
 
     name = "numba-fingers-fused"
 
+    def __init__(self, task: Task) -> None:
+        n = task.model.n_contacts
+        self._v, self._out, self._vals = np.empty((1, 4 * n)), np.empty((1, 4 * n)), np.empty((1 + n, 1))
+        super().__init__(task)
+
     def _fresh(self) -> None:
         super()._fresh()
-        w = 4 * self.n
-        self._v, self._out, self._vals = np.empty((1, w)), np.empty((1, w)), np.empty((1 + self.n, 1))
         self._v_of: Any = None
         # whether _vals and _mu hold the observation and least friction of _v's row (an
         # errored CRM leaves the row as it was: its step reuses them)

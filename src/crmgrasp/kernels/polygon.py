@@ -33,20 +33,21 @@ K = TypeVar("K", bound=Kernel)
 
 
 def rebound(kernel: K, instance: Task) -> K:
-    """A compiled polygon kernel (two or more contacts) on ``instance``'s polygon: a copy whose
-    parameters are shared and whose edges and convexity are the new object's (what
-    [`params`][] would give, without recomputing the rest); the copy's ``_fresh`` then sets
-    what belongs to one object or one episode."""
+    """A compiled polygon kernel (two or more contacts) moved onto ``instance``'s polygon,
+    in place: its parameters stay, its edges and convexity become the new object's (what
+    [`params`][] would give, without recomputing the rest), and ``_fresh`` then sets what
+    else belongs to one object. The kernel itself is returned (a family's
+    kernel steps one object at a time, so nothing else holds the old one)."""
     obj = instance.obj
     assert isinstance(obj, Polygon)
-    new = object.__new__(type(kernel))  # copy.copy's result, without its generic machinery
-    new.__dict__.update(kernel.__dict__)
-    new.task = instance
-    new.e = np.empty((len(obj.vertices), 7))  # type: ignore[attr-defined]
-    new.q = kernel.q.copy()  # type: ignore[attr-defined]
-    new.q[jit.CONVEX] = jit.edge_rows(np.array(obj.vertices), new.e)  # type: ignore[attr-defined]
-    new._fresh()  # type: ignore[attr-defined]
-    return new
+    vertices = np.array(obj.vertices)
+    e = kernel.e  # type: ignore[attr-defined]
+    if len(vertices) != len(e) or not e.flags.writeable:  # a polygon's own edges are read-only
+        kernel.e = np.empty((len(vertices), 7))  # type: ignore[attr-defined]
+    kernel.q[jit.CONVEX] = jit.edge_rows(vertices, kernel.e)  # type: ignore[attr-defined]
+    kernel.task = instance
+    kernel._fresh()  # type: ignore[attr-defined]
+    return kernel
 
 
 def params(task: Task) -> tuple[F64, NDArray[np.int64], F64]:
@@ -78,6 +79,7 @@ class PolygonKernel(Kernel):
         assert isinstance(task.obj, Polygon)
         self.e = np.ascontiguousarray(task.obj.edge_array)
         self.p, self.q, self.th = params(task)
+        self.start_filter = self._accept
         self._fresh()
 
     def rebind(self, instance: Task) -> PolygonKernel:
@@ -86,8 +88,8 @@ class PolygonKernel(Kernel):
         return rebound(self, instance)
 
     def _fresh(self) -> None:
-        """Set what belongs to one object or one episode's buffers after a copy: the start filter."""
-        self.start_filter = self._accept
+        """Set what belongs to one object, beyond its edges (at construction and after each
+        [`rebound`][]): nothing here."""
 
     def execute_crms(self, cfg: F64, sen: F64, c: I64, f: I64, r: F64) -> tuple[F64, NDArray[np.int8]]:
         """The planar model's compiled CRMs: contact indices 0 (a) and 1 (b) become the
@@ -142,11 +144,14 @@ class FusedPolygonKernel(PolygonKernel):
 
     name = "numba-polygon-fused"
 
-    def _fresh(self) -> None:
-        super()._fresh()
+    def __init__(self, task: Task) -> None:
         # the configuration stepped from (columns 0-7) and the step's output (0-7: the new
         # configuration, 8-11: rho, m_a, m_b, min friction); swapped after a move
         self._v, self._out = np.empty((1, 12)), np.empty((1, 12))
+        super().__init__(task)
+
+    def _fresh(self) -> None:
+        """A new object: no configuration in the buffer yet."""
         self._v_of: Config | Grip | None = None
 
     def begin(self, config: Any, rng: np.random.Generator) -> OneStep:

@@ -96,15 +96,13 @@ class FusedSpatialKernel(SpatialKernel):
         self.start_filter = self._accept  # type: ignore[assignment]
 
     def rebind(self, instance: Any) -> FusedSpatialKernel:
-        """The kernel of ``instance`` (the same hand, CRMs, bins and table on another solid
-        of the same kind): the parameters shared, the solid's entries its own
+        """This kernel moved onto ``instance`` (the same hand, CRMs, bins and table on another
+        solid of the same kind), in place: the parameters kept, the solid's entries its own
         ([`solid_params`][], as [`spatial_params`][] would write them)."""
-        new = object.__new__(type(self))  # copy.copy's result, without its generic machinery
-        new.__dict__.update(self.__dict__)
-        new.task, new.p, new.q = instance, self.p.copy(), self.q.copy()
-        new.planes, new.cyl = solid_params(instance.solid, new.p, new.q)
-        new._fresh()
-        return new
+        self.task = instance
+        self.planes, self.cyl = solid_params(instance.solid, self.p, self.q)
+        self._v_of = None
+        return self
 
     def _load(self, config: Config3D) -> None:
         if config is not self._v_of:

@@ -35,6 +35,7 @@ from crmgrasp.model.family_base import (
     Pose,
     Range,
     ShapeFamily,
+    _at,
     _Family,
     _mid,
     _poly,
@@ -84,6 +85,14 @@ class BoxFamily(_Family):
 
     def _shape(self, rng: np.random.Generator) -> Shape:
         return Rectangle(_uniform(rng, self.length), _uniform(rng, self.width))
+
+    def sample(self, rng: np.random.Generator) -> Shape:
+        """One box: length and width, then the pose's three draws (as every family draws;
+        the five in one call to ``rng``, the same numbers), built posed as one polygon
+        ([`Rectangle`][crmgrasp.model.geometry.Rectangle]'s ``pose``: the same vertices as
+        placing ``_shape``'s rectangle, without building that one first)."""
+        u = rng.random(5).tolist()  # the stream of five single draws, in one call
+        return Rectangle(_at(self.length, u[0]), _at(self.width, u[1]), self.pose.at(*u[2:]))
 
     def nominal(self) -> Shape:
         """The box at the middle of both ranges."""

@@ -52,7 +52,11 @@ def _range(
 def _uniform(rng: np.random.Generator, r: Range) -> float:
     """One draw uniform in ``r`` (one draw even for a fixed value, so the stream's
     layout does not depend on the ranges)."""
-    u = float(rng.random())
+    return _at(r, float(rng.random()))
+
+
+def _at(r: Range, u: float) -> float:
+    """The point a fraction ``u`` (a uniform draw in [0, 1)) along ``r``: ``low + u (high - low)``."""
     return r[0] + u * (r[1] - r[0])
 
 
@@ -97,13 +101,17 @@ class Pose:
 
     def draw(self, rng: np.random.Generator) -> tuple[float, float, float]:
         """``(angle, dx, dy)``: three draws."""
-        return _uniform(rng, self.angle), _uniform(rng, self.offset), _uniform(rng, self.offset)
+        return self.at(*rng.random(3).tolist())
+
+    def at(self, u: float, v: float, w: float) -> tuple[float, float, float]:
+        """The pose of three uniform draws ``u, v, w`` in [0, 1): ``(angle, dx, dy)``."""
+        return _at(self.angle, u), _at(self.offset, v), _at(self.offset, w)
 
 
 def place(shape: Shape, angle: float, dx: float, dy: float) -> Shape:
     """``shape`` rotated by ``angle`` (radians) about the origin, then moved by ``(dx, dy)``."""
-    c, s = math.cos(angle), math.sin(angle)
     if isinstance(shape, Disc):
+        c, s = math.cos(angle), math.sin(angle)
         x, y = shape.center
         return Disc(shape.radius, (c * x - s * y + dx, s * x + c * y + dy))
     if isinstance(shape, Polygon):

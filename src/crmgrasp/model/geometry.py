@@ -26,7 +26,7 @@ import numpy as np
 
 from crmgrasp._validation import CrmgraspError, as_point, finite, positive
 from crmgrasp.model.disc import Disc
-from crmgrasp.model.polygon import Polygon
+from crmgrasp.model.polygon import Polygon, rigid_motion
 from crmgrasp.model.shape import EPS, LINE_TOL, S_TOL, BoundaryPoint, Entry, Shape
 
 __all__ = [
@@ -43,8 +43,13 @@ __all__ = [
 ]
 
 
-def Rectangle(length: float, width: float) -> Polygon:  # noqa: N802 - reads as a type
-    """Axis-aligned rectangle centred at the origin, long axis along x.
+def Rectangle(  # noqa: N802 - reads as a type
+    length: float, width: float, pose: tuple[float, float, float] | None = None
+) -> Polygon:
+    """Axis-aligned rectangle centred at the origin, long axis along x; with ``pose``
+    ``(angle, dx, dy)``, that rectangle rotated by ``angle`` (radians) about the origin,
+    then translated by ``(dx, dy)`` (metres): the vertices of
+    ``Rectangle(length, width).moved(*pose)``, bit for bit, built as one polygon.
 
     Parameters
     ----------
@@ -52,6 +57,8 @@ def Rectangle(length: float, width: float) -> Polygon:  # noqa: N802 - reads as 
         Extent along x in metres (> 0).
     width
         Extent along y in metres (> 0).
+    pose
+        ``(angle, dx, dy)``, or ``None`` for the rectangle at the origin.
 
     Examples
     --------
@@ -60,7 +67,8 @@ def Rectangle(length: float, width: float) -> Polygon:  # noqa: N802 - reads as 
     """
     hx = positive(length, "rectangle length") / 2.0
     hy = positive(width, "rectangle width") / 2.0
-    return Polygon([(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)], _simple=True)
+    corners = [(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)]
+    return Polygon(corners if pose is None else rigid_motion(corners, *pose), _simple=True)
 
 
 def regular_polygon(

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence, Sized
+from collections.abc import Iterable, Sequence, Sized
 from dataclasses import dataclass
 from functools import cached_property
 from itertools import chain
@@ -15,7 +15,17 @@ from numpy.typing import ArrayLike
 from crmgrasp._validation import CrmgraspError, as_point, finite, shown
 from crmgrasp.model.shape import EPS, LINE_TOL, S_TOL, Array, BoundaryPoint, Entry
 
-__all__ = ["Polygon", "Edges", "MAX_COORD", "MAX_VERTICES", "inside", "first_entry", "convex_edge", "convex_entry"]
+__all__ = [
+    "Polygon",
+    "Edges",
+    "MAX_COORD",
+    "MAX_VERTICES",
+    "rigid_motion",
+    "inside",
+    "first_entry",
+    "convex_edge",
+    "convex_entry",
+]
 
 MAX_COORD = 1e6
 
@@ -33,11 +43,19 @@ inward unit normal ([`Polygon.edges`][])."""
 def _bounded(pts: Sequence[tuple[float, float]]) -> float:
     """The largest ``|coordinate|`` of ``pts``; a one-line error if one is not finite
     (NaN included) or beyond [`MAX_COORD`][crmgrasp.model.polygon.MAX_COORD]."""
-    flat = list(chain.from_iterable(pts))
-    largest = max(map(abs, flat))
+    flat = [abs(c) for p in pts for c in p]
+    largest = max(flat)
     if not (largest <= MAX_COORD and math.isfinite(sum(flat))):  # the sum catches a NaN anywhere
         raise CrmgraspError(f"a vertex is not finite or beyond +-{MAX_COORD:g} m")
     return largest
+
+
+def rigid_motion(pts: Iterable[tuple[float, float]], angle: float, dx: float, dy: float) -> list[tuple[float, float]]:
+    """``pts`` rotated by ``angle`` (radians, counter-clockwise) about the origin, then
+    translated by ``(dx, dy)`` (metres): ``(c x - s y + dx, s x + c y + dy)`` with
+    ``c, s = cos(angle), sin(angle)``."""
+    c, s = math.cos(angle), math.sin(angle)
+    return [(c * x - s * y + dx, s * x + c * y + dy) for x, y in pts]
 
 
 def _segments_cross(p: tuple, q: tuple, r: tuple, s: tuple) -> bool:
@@ -85,10 +103,10 @@ class Polygon:
     vertices: tuple[tuple[float, float], ...]
 
     def __init__(self, vertices: ArrayLike, _simple: bool = False) -> None:
-        """``_simple=True`` (for the package's own constructions, a list of ``(x, y)``
-        pairs: rectangles, regular polygons) skips the self-intersection test, the only
-        check whose cost grows with the square of the vertices; every other check still
-        runs."""
+        """``_simple=True`` (for the package's own constructions, a new list of ``(x, y)``
+        pairs of Python floats: rectangles, regular polygons) skips the self-intersection
+        test, the only check whose cost grows with the square of the vertices, and takes the
+        list as it is; every other check still runs."""
         if _simple:  # the package's own list of (x, y) pairs
             raw: list[Any] = vertices  # type: ignore[assignment]
         else:
@@ -103,8 +121,8 @@ class Polygon:
             raise CrmgraspError(f"a polygon may have at most {MAX_VERTICES} vertices, got {len(raw)}")
         if len(raw) < 3:
             raise CrmgraspError(f"a polygon needs at least 3 vertices, got {len(raw)}")
-        if _simple:  # the package's own (x, y) pairs: one bound check for all
-            pts = [(float(x), float(y)) for x, y in raw]
+        if _simple:  # the package's own (x, y) pairs of floats: one bound check for all
+            pts = raw
             scale = _bounded(pts)
         else:
             pts = [as_point(v, f"vertex {i}") for i, v in enumerate(raw)]
@@ -112,7 +130,10 @@ class Polygon:
                 if abs(x) > MAX_COORD or abs(y) > MAX_COORD:
                     raise CrmgraspError(f"vertex {i} ({x:g}, {y:g}) is beyond +-{MAX_COORD:g} m")
             scale = max(map(abs, chain.from_iterable(pts)))
-        area2 = sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in zip(pts, pts[1:] + pts[:1]))
+        area2, (x0, y0) = 0.0, pts[0]  # twice the signed area, summed edge by edge from the first
+        for x1, y1 in pts[1:] + pts[:1]:
+            area2 += x0 * y1 - x1 * y0
+            x0, y0 = x1, y1
         scale = scale or 1.0
         if abs(area2) <= 1e-12 * scale * scale:
             raise CrmgraspError("polygon has zero area")
@@ -131,8 +152,7 @@ class Polygon:
         >>> Polygon([(0, 0), (1, 0), (0, 1)]).moved(0.0, 1.0, 2.0).vertices
         ((1.0, 2.0), (2.0, 2.0), (1.0, 3.0))
         """
-        c, s = math.cos(angle), math.sin(angle)
-        pts = tuple([(c * x - s * y + dx, s * x + c * y + dy) for x, y in self.vertices])
+        pts = tuple(rigid_motion(self.vertices, angle, dx, dy))
         _bounded(pts)
         out = object.__new__(Polygon)  # simple, with this polygon's area and orientation
         object.__setattr__(out, "vertices", pts)

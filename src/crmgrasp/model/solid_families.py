@@ -25,7 +25,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.model.family_base import Pose, Range, _mid, _range, _uniform, family_dict
+from crmgrasp.model.family_base import Pose, Range, _at, _mid, _range, _uniform, family_dict
 from crmgrasp.model.solids import Cylinder, Solid, box3d
 
 __all__ = ["SolidFamily", "BoxOnTable", "CylinderOnTable"]
@@ -71,8 +71,9 @@ class BoxOnTable:
         return box3d((-length / 2, -width / 2, 0.0), (length / 2, width / 2, height))
 
     def sample(self, rng: np.random.Generator) -> Solid:
-        dims = (_uniform(rng, self.length), _uniform(rng, self.width), _uniform(rng, self.height))
-        return _placed(self._box(*dims), rng, self.pose)
+        u = rng.random(6).tolist()  # the stream of six single draws, in one call
+        box = self._box(_at(self.length, u[0]), _at(self.width, u[1]), _at(self.height, u[2]))
+        return box.yawed(*self.pose.at(*u[3:]))
 
     def nominal(self) -> Solid:
         return self._box(_mid(self.length), _mid(self.width), _mid(self.height))
