@@ -260,7 +260,12 @@ class KOrderHistory(gym.Wrapper[int, np.int64, dict[str, Any], np.int64], gym.ut
         return self.encoder.encode(self._history), float(reward), terminated, truncated, info
 
 
-SPATIAL_ENVS = {"crmgrasp/Box3D-v0": "box-3d", "crmgrasp/Cup3D-v0": "cup-3d"}
+SPATIAL_ENVS = {
+    "crmgrasp/Box3D-v0": "box-3d",
+    "crmgrasp/Cup3D-v0": "cup-3d",
+    "crmgrasp/Box3D3F-v0": "box-3d-3f",
+    "crmgrasp/Cup3D3F-v0": "cup-3d-3f",
+}
 """Registered spatial environments (docs/model-3d.md): id -> task name (each episode draws its solid)."""
 
 FAMILY_ENVS = {

@@ -16,6 +16,7 @@ backend                      object                      kernel
 ``"auto"``, ``"numba"``      a solid, noise-free         ``FusedSpatialKernel``
 ``"auto"``                   a solid, sensing noise      ``SpatialKernel``
 ``"auto"``, ``"reference"``  a triangle mesh             ``SpatialKernel``
+``"auto"``, ``"reference"``  a solid, three+ contacts    ``SpatialKernel``
 any                          a family (one per episode)  ``FamilyKernel`` over the above
 ===========================  ==========================  ===============================
 
@@ -102,10 +103,16 @@ def _planar(task: Task, backend: str) -> Kernel:
 
 
 def _spatial(task: Task, backend: str) -> Kernel:
-    """Spatial two-contact model: compiled and fused on a polyhedron or a cylinder without
-    noise, else the reference rules (meshes, noise)."""
+    """Spatial model: two contacts compiled and fused on a polyhedron or a cylinder without
+    noise, else the reference rules (meshes, noise, three or more contacts)."""
     from crmgrasp.kernels.spatial import FusedSpatialKernel, SpatialKernel
 
+    if task.model.n_contacts > 2:
+        if backend == "numba":
+            raise CrmgraspError(
+                "no compiled kernel for a spatial hand of three or more contacts; use 'auto' or 'reference'"
+            )
+        return SpatialKernel(task)
     if backend == "numba" and task.noise.active:
         raise CrmgraspError("the compiled spatial kernel is noise-free; use backend 'auto' or 'reference'")
     mesh = isinstance(task.obj, TriangleMesh)

@@ -1,6 +1,7 @@
 """The spatial kernel: the spatial model's rules row by row.
 
-Rows are ``(N, 12)``: ``[x_a, n_a, x_b, n_b]`` (metres; inward unit normals). Each rule
+Rows are ``(N, 12)`` for two contacts: ``[x_a, n_a, x_b, n_b]`` (metres; inward unit
+normals), six floats more per further contact. Each rule
 is the task's ([`crmgrasp.tasks.spatial.SpatialTask`][], which calls
 [`crmgrasp.model.spatial`][]): [`SpatialKernel`][] is the definition (any sensing noise);
 [`FusedSpatialKernel`][] steps a noise-free task in compiled code
@@ -30,8 +31,9 @@ _ERRORS = tuple(Error)
 
 
 class SpatialKernel(ReferenceKernel):
-    """The reference kernel on a spatial task's 12-rows (the rows, CRMs and readings come
-    from the task's [`SpatialModel`][crmgrasp.model.spatial_model.SpatialModel])."""
+    """The reference kernel on a spatial task's rows (the rows, CRMs and readings come
+    from the task's [`SpatialModel`][crmgrasp.model.spatial_model.SpatialModel]), any number
+    of contacts."""
 
     name = "spatial"
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import NamedTuple, cast
+from typing import NamedTuple, Self, TypeVar, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -28,6 +28,7 @@ __all__ = [
     "Contact",
     "Config",
     "Grip",
+    "Labelled",
     "make_config",
     "replaced",
     "two_contacts",
@@ -144,7 +145,29 @@ class Config(NamedTuple):
         return {lab: {"point": list(c.point), "normal": list(c.normal)} for lab, c in zip(LABELS, self)}
 
 
-class Grip(tuple[Contact, ...]):
+C = TypeVar("C")
+
+
+class Labelled(tuple[C, ...]):
+    """Contacts ``a, b, c, ...`` in label order, indexed by position or by label: what the
+    planar [`Grip`][] and the spatial [`Grip3D`][crmgrasp.model.spatial.Grip3D] share."""
+
+    __slots__ = ()
+
+    def __new__(cls, *contacts: C) -> Self:
+        return tuple.__new__(cls, contacts)
+
+    def __getnewargs__(self) -> tuple[C, ...]:  # pickling and copying
+        return tuple(self)
+
+    def __getitem__(self, key: int | str) -> C:  # type: ignore[override]
+        return tuple.__getitem__(self, label_index(key) if isinstance(key, str) else key)  # type: ignore[return-value]
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({', '.join(map(repr, self))})"
+
+
+class Grip(Labelled[Contact]):
     """Configuration of a hand with three or more contacts: ``a, b, c, ...`` in order.
 
     Examples
@@ -155,20 +178,6 @@ class Grip(tuple[Contact, ...]):
     """
 
     __slots__ = ()
-
-    def __new__(cls, *contacts: Contact) -> Grip:
-        return tuple.__new__(cls, contacts)
-
-    def __getnewargs__(self) -> tuple[Contact, ...]:  # pickling and copying
-        return tuple(self)
-
-    def __getitem__(self, key: int | str) -> Contact:  # type: ignore[override]
-        if isinstance(key, str):
-            key = label_index(key)
-        return tuple.__getitem__(self, key)  # type: ignore[return-value]
-
-    def __repr__(self) -> str:
-        return f"Grip({', '.join(map(repr, self))})"
 
     def replace(self, label: str, contact: Contact) -> Grip:
         """A copy with contact ``label`` replaced."""

@@ -11,6 +11,13 @@ Conventions: points in metres, shape ``(n, 3)``; inward unit normals, shape ``(n
   about it is unresisted (a soft finger's torsional friction would be needed). The
   two-contact success rule of the spatial model is therefore ``min_friction_3d <=
   mu_goal``, as in the plane.
+* [`least_friction_3d`][], three or more contacts (docs/model-3d.md section 9): the least
+  ``mu`` at which [`force_closure_3d`][] holds, ``tan`` of the least cone half-angle,
+  bracketed by bisection to [`THETA_TOL_3D`][] (the upper end); ``inf`` if the contacts do
+  not close even at 1e6. Closure only grows with ``mu`` (each polyhedral cone contains the
+  one of a smaller ``mu``, up to the scaling of its edges, which leaves positive spanning
+  unchanged), so the bisection is exact up to its tolerance. Two contacts never close: their
+  rule stays the squeeze of [`min_friction_3d`][].
 * [`primitive_wrenches`][]: each contact's friction cone ``{f : |f_t| <= mu f_n}``
   is replaced by the inscribed polyhedral cone of ``edges`` edges
   ``f_ij = n_i + mu (cos phi_j t1_i + sin phi_j t2_i)``, ``phi_j = 2 pi j / edges``,
@@ -37,7 +44,15 @@ from crmgrasp._validation import CrmgraspError, non_negative
 from crmgrasp.model.quality import ANTIPODAL_TOL, positively_spans
 from crmgrasp.model.solids import cross, dot, norm
 
-__all__ = ["min_friction_3d", "primitive_wrenches", "force_closure_3d", "ferrari_canny", "tangent_basis"]
+__all__ = [
+    "min_friction_3d",
+    "least_friction_3d",
+    "THETA_TOL_3D",
+    "primitive_wrenches",
+    "force_closure_3d",
+    "ferrari_canny",
+    "tangent_basis",
+]
 
 F64 = NDArray[np.float64]
 
@@ -94,6 +109,40 @@ def min_friction_3d(points: ArrayLike, normals: ArrayLike) -> float:
         tan = sin / cos
         worst = max(worst, 0.0 if tan < ANTIPODAL_TOL else tan)
     return worst
+
+
+THETA_TOL_3D = 1e-7
+"""The bisection's resolution of the least friction cone half-angle, radians
+([`least_friction_3d`][]): about 24 linear programs per configuration."""
+
+_THETA_MAX_3D = math.atan(1e6)  # no closure at this half-angle counts as none: inf
+
+
+def least_friction_3d(points: ArrayLike, normals: ArrayLike, edges: int = 8) -> float:
+    """The least friction coefficient at which ``n >= 3`` contacts are force closure with
+    polyhedral cones of ``edges`` edges (see the module docstring): ``inf`` for two.
+
+    Examples
+    --------
+    Three contacts on a cylinder's equator, 120 degrees apart, their normals through its
+    axis: a frictionless equilibrium, which closes with any friction:
+
+    >>> pts = [(np.cos(a), np.sin(a), 0.0) for a in (0.0, 2 * np.pi / 3, 4 * np.pi / 3)]
+    >>> least_friction_3d(pts, [(-x, -y, 0.0) for x, y, _ in pts]) < 1e-6
+    True
+    """
+    p, n = _contacts(points, normals)
+    if len(p) < 3:
+        return math.inf
+    closes = lambda theta: positively_spans(primitive_wrenches(p, n, math.tan(theta), edges))  # noqa: E731
+    if not closes(_THETA_MAX_3D):
+        return math.inf
+    lo, hi = 0.0, _THETA_MAX_3D
+    while hi - lo > THETA_TOL_3D:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if closes(mid) else (mid, hi)
+    mu = math.tan(hi)
+    return 0.0 if mu < ANTIPODAL_TOL else mu
 
 
 def primitive_wrenches(points: ArrayLike, normals: ArrayLike, mu: float, edges: int = 8) -> F64:

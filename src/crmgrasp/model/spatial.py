@@ -1,10 +1,10 @@
-"""The spatial model's objects, hand and CRM transition (docs/model-3d.md sections 1-4).
+"""The spatial model's objects, hand and CRM transition (docs/model-3d.md sections 1-4 and 9).
 
-The two-contact hand ([`Hand3D`][]: aperture, palm depth, back-off, the vertical and
-forward axes ``h`` and ``g``), the palm point ([`palm_point3d`][]), feasibility with
+The hand of two or more contacts ([`Hand3D`][]: aperture, palm depth, back-off, the vertical
+and forward axes ``h`` and ``g``), the palm point ([`palm_point3d`][]), feasibility with
 an optional table ([`feasible3d`][]), the CRM transition ([`execute_crm3d`][],
 offsets ``r = (r_1, r_2)`` in the tangent frame of [`tangent_frame`][]), the
-observation ([`observe3d`][]: ``rho``, ``|m_a|``, ``|m_b|``) and sensing noise
+observation ([`observe3d`][]: ``rho``, ``|m_a|``, ``|m_b|``, ...) and sensing noise
 ([`sense3d`][]), on any solid of [`crmgrasp.model.solids`][] or
 `crmgrasp.model.mesh`. Written on plain floats and small numpy vectors, readably;
 it is the definition the compiled spatial kernel is tested against.
@@ -13,6 +13,7 @@ it is the definition the compiled spatial kernel is tested against.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -20,13 +21,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from crmgrasp._validation import CrmgraspError, non_negative, positive
-from crmgrasp.model.contacts import LABELS
+from crmgrasp.model.contacts import Labelled, label_index, labels_of
 from crmgrasp.model.hand import Error
 from crmgrasp.model.solids import SURFACE, ConvexPolyhedron, Cylinder, Solid, _unit, box3d, cross, dot, norm
 
 __all__ = [
     "Contact3D",
     "Config3D",
+    "Grip3D",
+    "config3d",
     "ConvexPolyhedron",
     "box3d",
     "Cylinder",
@@ -67,10 +70,29 @@ class Config3D(NamedTuple):
     b: Contact3D
 
 
+class Grip3D(Labelled[Contact3D]):
+    """The contacts ``a, b, c, ...`` of a hand with three or more, in label order (indexed
+    by position or label)."""
+
+    __slots__ = ()
+
+
+def config3d(contacts: Sequence[Contact3D]) -> Config3D | Grip3D:
+    """The configuration of ``contacts`` in label order: a [`Config3D`][] for two, a
+    [`Grip3D`][] for more (the one place that picks the type)."""
+    if len(contacts) == 2:
+        return Config3D(contacts[0], contacts[1])
+    return Grip3D(*contacts)
+
+
+Contacts3D = Config3D | Grip3D
+
+
 @dataclass(frozen=True)
 class Hand3D:
     """Aperture ``A``, palm depth, back-off, vertical axis ``h`` and forward axis ``g``
-    (docs/model-3d.md section 2); ``r_max`` bounds ``|r|`` (default: the aperture)."""
+    (docs/model-3d.md section 2); ``r_max`` bounds ``|r|`` (default: the aperture);
+    ``contacts`` fingers (2 to 4, labelled ``a, b, c, d``: section 9)."""
 
     aperture: float
     palm_depth: float
@@ -80,8 +102,10 @@ class Hand3D:
     r_max: float | None = None
     min_separation: float = 0.0
     palm_normal_tol: float = 1e-9
+    contacts: int = 2
     _h: F64 = field(init=False, repr=False, compare=False)
     _g: F64 = field(init=False, repr=False, compare=False)
+    _labels: tuple[str, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "aperture", positive(self.aperture, "aperture"))
@@ -92,11 +116,12 @@ class Hand3D:
             raise CrmgraspError("the hand's axes h and g must be perpendicular")
         object.__setattr__(self, "_h", h)
         object.__setattr__(self, "_g", g)
+        object.__setattr__(self, "_labels", labels_of(self.contacts))  # a one-line error outside 2 to 4
 
     @property
     def labels(self) -> tuple[str, ...]:
-        """The contacts' labels, ``('a', 'b')``."""
-        return LABELS
+        """The contacts' labels, ``('a', 'b')`` for two."""
+        return self._labels
 
     @property
     def reach(self) -> float:
@@ -104,12 +129,14 @@ class Hand3D:
         return self.aperture if self.r_max is None else self.r_max
 
     def check_crm(self, crm: object) -> CRM3D:
-        """``crm`` if it is a [`CRM3D`][] with labels ``a``/``b`` and a finite offset of
+        """``crm`` if it is a [`CRM3D`][] naming the hand's contacts and a finite offset of
         length at most [`reach`][]; else a one-line `CrmgraspError`."""
         if not isinstance(crm, CRM3D):
             raise CrmgraspError(f"expected a CRM3D, got {crm!r}")
-        if crm.c not in ("a", "b") or crm.f not in ("a", "b"):
-            raise CrmgraspError(f"contact labels must be 'a' or 'b', got {crm.c!r} and {crm.f!r}")
+        labels = self.labels
+        if crm.c not in labels or crm.f not in labels:
+            names = " or ".join(f"{x!r}" for x in labels) if len(labels) == 2 else ", ".join(labels)
+            raise CrmgraspError(f"contact labels must be {names}, got {crm.c!r} and {crm.f!r}")
         r = np.asarray(crm.r, dtype=np.float64)
         if r.shape != (2,) or not np.all(np.isfinite(r)) or math.hypot(*r.tolist()) > self.reach:
             raise CrmgraspError(f"CRM offset r = {crm.r!r} must be a finite 2-vector, |r| <= r_max = {self.reach:g}")
@@ -131,7 +158,7 @@ class CRM3D(NamedTuple):
 class Outcome3D(NamedTuple):
     """The configuration after the CRM (unchanged on an error) and the error."""
 
-    config: Config3D
+    config: Contacts3D
     error: Error
 
 
@@ -145,8 +172,12 @@ def tangent_frame(n: ArrayLike, hand: Hand3D) -> tuple[F64, F64]:
     return t1, cross(t1, nv)
 
 
-def _palm_axis(cfg: Config3D, hand: Hand3D) -> tuple[float, F64]:
-    xa, xb = np.array(cfg.a.x), np.array(cfg.b.x)
+def _palm_axis(cfg: Contacts3D, hand: Hand3D) -> tuple[float, F64]:
+    """``(|x_z - x_a|, u)``: the outer contacts' distance (first ``a``, last ``z``) and the
+    palm side ``u = d x h / |d x h|`` (``d x g`` if ``d`` is parallel to ``h``), ``d`` the unit
+    vector from ``a`` to ``z``; ``u`` is NaN if they coincide."""
+    a, *_, z = cfg
+    xa, xb = np.array(a.x), np.array(z.x)
     dist = norm(xb - xa)
     if dist == 0.0:
         return 0.0, np.full(3, np.nan)
@@ -163,40 +194,79 @@ def on_table(z: float, table: float | None) -> bool:
     return table is not None and z <= table + SURFACE
 
 
-def faces_palm3d(cfg: Config3D, hand: Hand3D) -> bool:
-    """True if a contact's surface faces the palm side: ``n . u > palm_normal_tol`` for
-    ``n_a`` or ``n_b`` (the object would lie between palm and finger); False if the
-    contacts coincide."""
+def faces_palm3d(cfg: Contacts3D, hand: Hand3D) -> bool:
+    """True if an outer contact's surface faces the palm side: ``n . u > palm_normal_tol`` for
+    ``n_a`` or ``n_z`` (the object would lie between palm and finger); False if they
+    coincide."""
     dist, u = _palm_axis(cfg, hand)
     return dist > 0.0 and _faces(cfg, hand, u)
 
 
-def _faces(cfg: Config3D, hand: Hand3D, u: F64) -> bool:
-    return dot(cfg.a.n, u) > hand.palm_normal_tol or dot(cfg.b.n, u) > hand.palm_normal_tol
+def _faces(cfg: Contacts3D, hand: Hand3D, u: F64) -> bool:
+    a, *_, z = cfg
+    return dot(a.n, u) > hand.palm_normal_tol or dot(z.n, u) > hand.palm_normal_tol
 
 
-def feasible3d(obj: Solid, hand: Hand3D, cfg: Config3D, table: float | None = None) -> Error:
-    """Section 2: APERTURE beyond the aperture; PALM for colliding contacts, a surface
-    facing the palm ([`faces_palm3d`][]), the palm point inside the object, or (with a
-    table at height ``table``) a contact or the palm point on or below the table."""
+def _spread(cfg: Contacts3D) -> tuple[float, float]:
+    """The largest and the smallest distance between two contacts (m)."""
+    far, near = 0.0, math.inf
+    contacts = list(cfg)
+    for i, p in enumerate(contacts):
+        for q in contacts[i + 1 :]:
+            dist = norm(np.array(q.x) - np.array(p.x))
+            far, near = max(far, dist), min(near, dist)
+    return far, near
+
+
+def _crossed(cfg: Contacts3D) -> bool:
+    """True if the contacts' positions along ``d`` (from ``a`` toward ``z``) do not increase
+    strictly in label order (never for two contacts)."""
+    a, *rest = cfg
+    xa = np.array(a.x)
+    d = np.array(rest[-1].x) - xa
+    last = 0.0
+    for c in rest:
+        s = dot(np.array(c.x) - xa, d)
+        if s <= last:
+            return True
+        last = s
+    return False
+
+
+def feasible3d(obj: Solid, hand: Hand3D, cfg: Contacts3D, table: float | None = None) -> Error:
+    """Sections 2 and 9: APERTURE if two contacts are more than ``A`` apart; PALM for
+    colliding contacts, an outer contact facing the palm ([`faces_palm3d`][]), crossed
+    fingers (three or more: positions along a -> z not increasing), the palm point inside
+    the object, or (with a table at height ``table``) a contact or the palm point on or
+    below the table."""
     dist, u = _palm_axis(cfg, hand)
     if dist > hand.aperture:
         return Error.APERTURE
-    if dist <= hand.min_separation or on_table(cfg.a.x[2], table) or on_table(cfg.b.x[2], table):
+    near = dist
+    if len(cfg) > 2:
+        far, near = _spread(cfg)
+        if far > hand.aperture:
+            return Error.APERTURE
+    if near <= hand.min_separation or any(on_table(c.x[2], table) for c in cfg):
         return Error.PALM
-    if _faces(cfg, hand, u):
+    if _faces(cfg, hand, u) or (len(cfg) > 2 and _crossed(cfg)):
         return Error.PALM
     palm = _palm_at(cfg, hand, u)
     return Error.PALM if obj.contains(palm) or on_table(float(palm[2]), table) else Error.NONE
 
 
-def _palm_at(cfg: Config3D, hand: Hand3D, u: F64) -> F64:
-    return 0.5 * (np.array(cfg.a.x) + np.array(cfg.b.x)) + hand.palm_depth * u
+def _palm_at(cfg: Contacts3D, hand: Hand3D, u: F64) -> F64:
+    """``mean_i x_i + p u``, the sum taken in label order (``(x_a + x_b) / 2 + p u`` for two)."""
+    first, *rest = cfg
+    total = np.array(first.x)
+    for c in rest:
+        total = total + np.array(c.x)
+    return total / len(cfg) + hand.palm_depth * u
 
 
-def palm_point3d(cfg: Config3D, hand: Hand3D) -> F64 | None:
-    """Section 2: ``P = (x_a + x_b) / 2 + p u``, ``u`` the palm side; ``None`` when the
-    contacts coincide."""
+def palm_point3d(cfg: Contacts3D, hand: Hand3D) -> F64 | None:
+    """Sections 2 and 9: ``P = mean_i x_i + p u``, ``u`` the palm side; ``None`` when the
+    outer contacts coincide."""
     dist, u = _palm_axis(cfg, hand)
     return None if dist == 0.0 else _palm_at(cfg, hand, u)
 
@@ -211,20 +281,26 @@ class Chord3D(NamedTuple):
     length: float
 
 
-def goal_chord3d(hand: Hand3D, crm: CRM3D, frame: Contact3D, still: Contact3D) -> Chord3D | None:
-    """Section 3: the goal line ``x_f + r_1 t_1 + r_2 t_2 + t n_f`` (``frame`` is contact
-    ``f`` as sensed) and its chord ``|x(t) - x_still| <= A``; ``None`` (an aperture error)
-    if the line misses that sphere."""
+def goal_chord3d(hand: Hand3D, crm: CRM3D, frame: Contact3D, stills: Sequence[Contact3D]) -> Chord3D | None:
+    """Sections 3 and 9: the goal line ``x_f + r_1 t_1 + r_2 t_2 + t n_f`` (``frame`` is
+    contact ``f`` as sensed) and its chord within ``A`` of every contact that stays still
+    (``|x(t) - x_s| <= A`` for each ``s`` in ``stills``: the intersection of their chords);
+    ``None`` (an aperture error) if the line misses one of those spheres or the chords do
+    not overlap."""
     r1, r2 = (float(v) for v in crm.r)
     n_f = np.array(frame.n)
     t1, t2 = tangent_frame(n_f, hand)
     base = np.array(frame.x) + r1 * t1 + r2 * t2
-    w = base - np.array(still.x)  # |w + t n_f|^2 = A^2, |n_f| = 1
-    qb, qc = dot(w, n_f), dot(w, w) - hand.aperture * hand.aperture
-    disc = qb * qb - qc
-    if disc < 0.0:
+    t_lo, t_hi = -math.inf, math.inf
+    for still in stills:
+        w = base - np.array(still.x)  # |w + t n_f|^2 = A^2, |n_f| = 1
+        qb, qc = dot(w, n_f), dot(w, w) - hand.aperture * hand.aperture
+        disc = qb * qb - qc
+        if disc < 0.0:
+            return None
+        t_lo, t_hi = max(t_lo, -qb - math.sqrt(disc)), min(t_hi, -qb + math.sqrt(disc))
+    if t_lo > t_hi:
         return None
-    t_lo, t_hi = -qb - math.sqrt(disc), -qb + math.sqrt(disc)
     same = crm.c == crm.f
     t0, t1_ = (t_lo, t_hi) if same else (t_hi, t_lo)
     return Chord3D(base + t0 * n_f, (n_f if same else -n_f), abs(t1_ - t0))
@@ -243,9 +319,9 @@ def table_lift(chord: Chord3D, table: float | None) -> float:
 def execute_crm3d(
     obj: Solid,
     hand: Hand3D,
-    cfg: Config3D,
+    cfg: Contacts3D,
     crm: CRM3D,
-    sensed: Config3D | None = None,
+    sensed: Contacts3D | None = None,
     table: float | None = None,
 ) -> Outcome3D:
     """The CRM transition of section 3 (the goal line from ``sensed``, default ``cfg``).
@@ -256,8 +332,9 @@ def execute_crm3d(
     point is inside the object, the CRM is a palm error (the hand would meet the table)."""
     hand.check_crm(crm)
     sensed = cfg if sensed is None else sensed
-    still = cfg.a if crm.c == "b" else cfg.b
-    chord = goal_chord3d(hand, crm, sensed.a if crm.f == "a" else sensed.b, still)
+    moving = label_index(crm.c)
+    stills = [c for i, c in enumerate(cfg) if i != moving]
+    chord = goal_chord3d(hand, crm, sensed[label_index(crm.f)], stills)
     if chord is None:
         return Outcome3D(cfg, Error.APERTURE)
     start, ahead, length = chord
@@ -273,25 +350,37 @@ def execute_crm3d(
         return Outcome3D(cfg, Error.APERTURE)
     point, normal = entry
     moved = Contact3D(tuple(point.tolist()), tuple(normal.tolist()))  # type: ignore[arg-type]
-    new = Config3D(cfg.a, moved) if crm.c == "b" else Config3D(moved, cfg.b)
+    new = config3d([moved if i == moving else c for i, c in enumerate(cfg)])
     err = feasible3d(obj, hand, new, table)
     return Outcome3D(cfg, err) if err is not Error.NONE else Outcome3D(new, Error.NONE)
 
 
-def observe3d(cfg: Config3D) -> tuple[float, float, float]:
-    """``(rho, |m_a|, |m_b|)``: ``rho = |n_a + n_b|^2``, ``m_a = (x_b - x_a) x n_b``,
-    ``m_b = (x_a - x_b) x n_a`` (section 4)."""
-    xa, xb, na, nb = (np.array(v) for v in (cfg.a.x, cfg.b.x, cfg.a.n, cfg.b.n))
-    s = na + nb
-    return dot(s, s), norm(cross(xb - xa, nb)), norm(cross(xa - xb, na))
+def observe3d(cfg: Contacts3D) -> tuple[float, ...]:
+    """``(rho, |m_a|, |m_b|, ...)``: ``rho = |sum_i n_i|^2`` and, per contact ``j``, the moment
+    magnitude ``|m_j|``, ``m_j = sum_{i != j} (x_i - x_j) x n_i`` (sections 4 and 9; for two
+    contacts ``m_a = (x_b - x_a) x n_b``, ``m_b = (x_a - x_b) x n_a``). Sums run in label order
+    from the first term, so that two contacts give the two-contact formulas bit for bit."""
+    xs, ns = [np.array(c.x) for c in cfg], [np.array(c.n) for c in cfg]
+    s = ns[0]
+    for n in ns[1:]:
+        s = s + n
+    moments = []
+    for j, xj in enumerate(xs):
+        terms = [cross(xi - xj, ni) for i, (xi, ni) in enumerate(zip(xs, ns)) if i != j]
+        m = terms[0]
+        for t in terms[1:]:
+            m = m + t
+        moments.append(norm(m))
+    return (dot(s, s), *moments)
 
 
-def sense3d(cfg: Config3D, sigma_n: float, sigma_p: float, rng: np.random.Generator, hand: Hand3D) -> Config3D:
+def sense3d(cfg: Contacts3D, sigma_n: float, sigma_p: float, rng: np.random.Generator, hand: Hand3D) -> Contacts3D:
     """One noisy reading of ``cfg`` (docs/model-3d.md section 4): each contact's normal is
     rotated by an angle ``N(0, sigma_n)`` (radians) about the tangent axis
     ``cos(phi) t_1 + sin(phi) t_2`` with ``phi`` uniform in ``[0, 2 pi)``, and its position
     moved by ``N(0, sigma_p^2 I_3)`` (metres). Draws, per contact a then b: ``phi`` (one
-    uniform), then four standard normals (angle, x, y, z). No draw when both sigmas are 0.
+    uniform), then four standard normals (angle, x, y, z), contacts in label order. No draw
+    when both sigmas are 0.
     ``sigma_n <= pi/4`` and ``sigma_p <= 0.1`` as in the plane."""
     if not (0.0 <= sigma_n <= math.pi / 4) or not (0.0 <= sigma_p <= 0.1):
         raise CrmgraspError(
@@ -310,4 +399,4 @@ def sense3d(cfg: Config3D, sigma_n: float, sigma_p: float, rng: np.random.Genera
         n2 = n * math.cos(theta) + cross(k, n) * math.sin(theta)
         x2 = np.array(c.x) + sigma_p * np.array([dx, dy, dz])
         out.append(Contact3D(tuple(x2.tolist()), tuple((n2 / np.linalg.norm(n2)).tolist())))  # type: ignore[arg-type]
-    return Config3D(out[0], out[1])
+    return config3d(out)

@@ -1,13 +1,15 @@
-"""The spatial two-contact model (docs/model-3d.md) as a `ContactModel`.
+"""The spatial model of two or more contacts (docs/model-3d.md) as a `ContactModel`.
 
 [`SpatialModel`][] holds the 3-D hand, the sensing noise and the table, and applies
 the rules of [`crmgrasp.model.spatial`][] (CRM transition, feasibility with the table,
-readings, observation) and [`crmgrasp.model.quality3d`][] (min friction). What the agent
-sees is the planar model's observation: ``rho``, ``|m_a|``, ``|m_b|``.
+readings, observation) and [`crmgrasp.model.quality3d`][] (min friction of two contacts'
+squeeze, least friction of three or more). What the agent sees is the planar model's
+observation: ``rho``, ``|m_a|``, ``|m_b|`` (and ``|m_c|``, ... for more contacts).
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -17,18 +19,19 @@ from numpy.typing import ArrayLike, NDArray
 
 from crmgrasp._validation import CrmgraspError, finite
 from crmgrasp.model.contact_model import LabelledContacts
-from crmgrasp.model.contacts import LABELS
 from crmgrasp.model.hand import Error
-from crmgrasp.model.planar_model import SWAP
-from crmgrasp.model.quality3d import min_friction_3d
+from crmgrasp.model.quality3d import least_friction_3d, min_friction_3d
 from crmgrasp.model.sensing import Observation, SensorNoise
 from crmgrasp.model.solids import surface_point
 from crmgrasp.model.spatial import (
     CRM3D,
     Config3D,
     Contact3D,
+    Contacts3D,
+    Grip3D,
     Hand3D,
     Outcome3D,
+    config3d,
     execute_crm3d,
     feasible3d,
     observe3d,
@@ -47,11 +50,19 @@ def contact3d(point: ArrayLike, normal: ArrayLike) -> Contact3D:
     return Contact3D(tuple(np.asarray(point).tolist()), tuple(np.asarray(normal).tolist()))  # type: ignore[arg-type]
 
 
+@functools.lru_cache(maxsize=1 << 14)
+def _least_friction(config: Grip3D) -> float:
+    """[`least_friction_3d`][crmgrasp.model.quality3d.least_friction_3d] of a configuration,
+    cached (a configuration is a hashable tuple; the least recently used of ``2**14`` go
+    first): about 24 linear programs each."""
+    return least_friction_3d([c.x for c in config], [c.n for c in config])
+
+
 @dataclass(frozen=True)
 class SpatialModel(LabelledContacts):
-    """Two contacts ``a``, ``b`` on a solid: rows ``[x_a, n_a, x_b, n_b]`` (12 floats), CRMs
-    ``(c, f, (r_1, r_2))`` with the offset in ``f``'s tangent frame, observation
-    ``(rho, |m_a|, |m_b|)``.
+    """The hand's contacts ``a, b, ...`` on a solid: rows ``[x_a, n_a, x_b, n_b, ...]`` (six
+    floats per contact, 12 for two), CRMs ``(c, f, (r_1, r_2))`` with the offset in ``f``'s
+    tangent frame, observation ``(rho, |m_a|, |m_b|, ...)``.
 
     Parameters
     ----------
@@ -68,21 +79,33 @@ class SpatialModel(LabelledContacts):
     table: float | None = 0.0
 
     kind: ClassVar[str] = "spatial"
-    labels: ClassVar[tuple[str, ...]] = LABELS  # type: ignore[misc]
     axes: ClassVar[str] = "xyz"
     offset_dim: ClassVar[int] = 2
 
+    @property
+    def labels(self) -> tuple[str, ...]:  # type: ignore[override]
+        """The hand's contact labels (``('a', 'b')`` for two)."""
+        return self.hand.labels
+
     # -- configurations and CRMs
-    def config_of(self, row: Sequence[float]) -> Config3D:
-        return Config3D(
-            Contact3D((row[0], row[1], row[2]), (row[3], row[4], row[5])),
-            Contact3D((row[6], row[7], row[8]), (row[9], row[10], row[11])),
+    def config_of(self, row: Sequence[float]) -> Contacts3D:
+        """The configuration of the first six floats per contact of ``row`` (a kernel's row
+        may carry more after them)."""
+        if self.n_contacts == 2:
+            return Config3D(
+                Contact3D((row[0], row[1], row[2]), (row[3], row[4], row[5])),
+                Contact3D((row[6], row[7], row[8]), (row[9], row[10], row[11])),
+            )
+        parts = (
+            Contact3D((row[i], row[i + 1], row[i + 2]), (row[i + 3], row[i + 4], row[i + 5]))
+            for i in range(0, 6 * self.n_contacts, 6)
         )
+        return Grip3D(*parts)
 
-    def row_of(self, config: Config3D) -> list[float]:
-        return [*config.a.x, *config.a.n, *config.b.x, *config.b.n]
+    def row_of(self, config: Contacts3D) -> list[float]:
+        return [v for c in config for part in c for v in part]
 
-    def rows_of(self, configs: Sequence[Config3D]) -> NDArray[np.float64]:
+    def rows_of(self, configs: Sequence[Contacts3D]) -> NDArray[np.float64]:
         return np.array([self.row_of(c) for c in configs], dtype=np.float64).reshape(len(configs), self.row_width)
 
     def crm(self, c: int, f: int, r: Any) -> CRM3D:
@@ -104,17 +127,17 @@ class SpatialModel(LabelledContacts):
         return [float(v) for v in r]
 
     def mirror_crm(self, crm: CRM3D) -> CRM3D:
-        """Labels swapped, ``(r_1, r_2) -> (-r_1, r_2)``: a reflection in a vertical plane
-        through the hand's forward axis maps ``t_1`` to ``-M t_1`` and ``t_2`` to ``M t_2``
-        (docs/model-3d.md)."""
-        return CRM3D(SWAP[crm.c], SWAP[crm.f], (-crm.r[0], crm.r[1]))
+        """Labels reversed (``a <-> b`` for two contacts, ``a <-> c`` for three), ``(r_1, r_2)
+        -> (-r_1, r_2)``: a reflection in a vertical plane through the hand's forward axis
+        maps ``t_1`` to ``-M t_1`` and ``t_2`` to ``M t_2`` (docs/model-3d.md)."""
+        return CRM3D(self.mirror_label(crm.c), self.mirror_label(crm.f), (-crm.r[0], crm.r[1]))
 
     # -- the rules
-    def execute(self, obj: Any, config: Config3D, crm: CRM3D, sensed: Config3D | None) -> Outcome3D:
+    def execute(self, obj: Any, config: Contacts3D, crm: CRM3D, sensed: Contacts3D | None) -> Outcome3D:
         """[`execute_crm3d`][crmgrasp.model.spatial.execute_crm3d] with the table."""
         return execute_crm3d(obj, self.hand, config, crm, sensed, self.table)
 
-    def read(self, config: Config3D, rng: np.random.Generator) -> Config3D:
+    def read(self, config: Contacts3D, rng: np.random.Generator) -> Contacts3D:
         """[`sense3d`][crmgrasp.model.spatial.sense3d]."""
         return sense3d(config, self.noise.sigma_n, self.noise.sigma_p, rng, self.hand)
 
@@ -124,23 +147,33 @@ class SpatialModel(LabelledContacts):
             return rows.copy()
         return self.rows_of([self.read(self.config_of(r), rng) for r in rows.tolist()])
 
-    def observe(self, sensed: Config3D) -> Observation:
-        """[`observe3d`][crmgrasp.model.spatial.observe3d]."""
-        return Observation(*observe3d(sensed))
+    def observe(self, sensed: Contacts3D) -> tuple[float, ...]:
+        """[`observe3d`][crmgrasp.model.spatial.observe3d]: an [`Observation`][crmgrasp.model.sensing.Observation]
+        for two contacts, ``(rho, |m_a|, |m_b|, |m_c|, ...)`` for more."""
+        values = observe3d(sensed)
+        return Observation(*values) if len(values) == 3 else values
 
-    def quality(self, config: Config3D) -> float:
-        """[`min_friction_3d`][crmgrasp.model.quality3d.min_friction_3d] of the two contacts."""
-        return min_friction_3d([config.a.x, config.b.x], [config.a.n, config.b.n])
+    def quality(self, config: Contacts3D) -> float:
+        """Two contacts: [`min_friction_3d`][crmgrasp.model.quality3d.min_friction_3d], the
+        friction their squeeze needs; three or more: the least friction at which they are
+        force closure ([`least_friction_3d`][crmgrasp.model.quality3d.least_friction_3d], cached)."""
+        if len(config) == 2:
+            a, b = config
+            return min_friction_3d([a.x, b.x], [a.n, b.n])
+        return _least_friction(config)  # type: ignore[arg-type]
 
-    def feasible(self, obj: Any, config: Config3D) -> Error:
+    def feasible(self, obj: Any, config: Contacts3D) -> Error:
         """[`feasible3d`][crmgrasp.model.spatial.feasible3d] with the table."""
         return feasible3d(obj, self.hand, config, self.table)
 
-    def check_config(self, obj: Any, config: object, name: str = "configuration") -> Config3D:
-        """``config`` if it is a [`Config3D`][] of finite contacts with unit normals on
-        the solid's surface (within [`SURFACE_TOL`][]), else a one-line error."""
-        if not isinstance(config, Config3D) or not all(isinstance(c, Contact3D) for c in config):
-            raise CrmgraspError(f"{name} must be a Config3D of two Contact3D, got {config!r}")
+    def check_config(self, obj: Any, config: object, name: str = "configuration") -> Contacts3D:
+        """``config`` if it is a [`Config3D`][] (two contacts) or a [`Grip3D`][] (more) of
+        one finite contact per finger with unit normals on the solid's surface (within
+        [`SURFACE_TOL`][]), else a one-line error."""
+        count = self.n_contacts
+        kind = Config3D if count == 2 else Grip3D
+        if not isinstance(config, kind) or len(config) != count or not all(isinstance(c, Contact3D) for c in config):
+            raise CrmgraspError(f"{name} must be a {kind.__name__} of {count} Contact3D, got {config!r:.200}")
         for label, c in zip(self.labels, config):
             x, n = np.asarray(c.x, dtype=float), np.asarray(c.n, dtype=float)
             if x.shape != (3,) or n.shape != (3,) or not (np.all(np.isfinite(x)) and np.all(np.isfinite(n))):
@@ -152,7 +185,7 @@ class SpatialModel(LabelledContacts):
                 raise CrmgraspError(f"{name}: contact {label} at {c.x} is {off:.3g} m off the object")
         return config
 
-    def place(self, obj: Any, points: Sequence[ArrayLike]) -> Config3D:
+    def place(self, obj: Any, points: Sequence[ArrayLike]) -> Contacts3D:
         """Each contact where the ray from the solid's centre toward its point (finite
         ``(x, y, z)``, metres) leaves the solid."""
         if len(points) != self.n_contacts:
@@ -168,7 +201,7 @@ class SpatialModel(LabelledContacts):
             if hit is None:
                 raise CrmgraspError(f"the ray from the object's centre toward contact {label}'s point misses it")
             out.append(contact3d(*hit))
-        return Config3D(out[0], out[1])
+        return config3d(out)
 
-    def numbers(self, config: Config3D) -> list[float]:
+    def numbers(self, config: Contacts3D) -> list[float]:
         return [v for c in config for part in c for v in part]

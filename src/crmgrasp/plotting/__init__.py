@@ -19,6 +19,7 @@ from matplotlib.patches import Polygon as PolygonPatch
 from crmgrasp.model.contacts import ALL_LABELS, Config, Grip
 from crmgrasp.model.geometry import Disc, Polygon, Shape
 from crmgrasp.model.hand import Hand, Outcome
+from crmgrasp.plotting.colors import COLORS
 
 __all__ = [
     "draw_object",
@@ -34,9 +35,6 @@ __all__ = [
     "cluster_figure",
     "scene_legend",
 ]
-
-COLORS = {"a": "tab:blue", "b": "tab:orange", "c": "tab:green", "d": "tab:red"}
-
 
 def draw_object(ax: Axes, obj: Shape) -> None:
     """Fill the object's region."""

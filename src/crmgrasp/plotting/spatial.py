@@ -16,11 +16,10 @@ from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, Solid
-from crmgrasp.model.spatial import Config3D, Hand3D, palm_point3d
+from crmgrasp.model.spatial import Contacts3D, Hand3D, palm_point3d
+from crmgrasp.plotting.colors import COLORS
 
 __all__ = ["draw_solid", "draw_scene3d", "scene_figure3d", "rollout_panels3d", "rollout_animation3d"]
-
-COLORS = {"a": "tab:blue", "b": "tab:orange"}
 
 
 def _faces(poly: ConvexPolyhedron) -> list[np.ndarray]:
@@ -68,15 +67,15 @@ def draw_solid(ax: Any, solid: Solid) -> None:
         ax.add_collection3d(Poly3DCollection(same, **style), autolim=False)
 
 
-def _draw_config(ax: Any, hand: Hand3D, cfg: Config3D, scale: float, alpha: float, primed: bool) -> None:
-    for lab, c in zip("ab", cfg):
+def _draw_config(ax: Any, hand: Hand3D, cfg: Contacts3D, scale: float, alpha: float, primed: bool) -> None:
+    for lab, c in zip(hand.labels, cfg):
         x, n = np.array(c.x), np.array(c.n)
         ax.scatter(*x, color=COLORS[lab], s=40, alpha=alpha, depthshade=False)
         ax.quiver(*x, *(scale * n), color=COLORS[lab], alpha=alpha, arrow_length_ratio=0.3)
         ax.text(*(x - 0.4 * scale * n), lab + ("'" if primed else ""), color=COLORS[lab], alpha=alpha)
     palm = palm_point3d(cfg, hand)
     if palm is not None:
-        pts = np.array([cfg.a.x, palm, cfg.b.x])
+        pts = np.array([cfg[0].x, palm, cfg[-1].x])  # the outer contacts and the palm between them
         ax.plot(pts[:, 0], pts[:, 1], pts[:, 2], "-", color="0.4", lw=0.8, alpha=alpha)
         ax.scatter(*palm, marker="s", color="0.3", s=30, alpha=alpha, depthshade=False)
 
@@ -85,8 +84,8 @@ def draw_scene3d(
     ax: Any,
     solid: Solid,
     hand: Hand3D,
-    config: Config3D,
-    after: Config3D | None = None,
+    config: Contacts3D,
+    after: Contacts3D | None = None,
     *,
     title: str | None = None,
     table: float | None = 0.0,
@@ -125,7 +124,7 @@ def draw_scene3d(
 
 
 def scene_figure3d(
-    solid: Solid, hand: Hand3D, config: Config3D, after: Config3D | None = None, title: str | None = None
+    solid: Solid, hand: Hand3D, config: Contacts3D, after: Contacts3D | None = None, title: str | None = None
 ) -> Figure:
     """A one-panel figure of [`draw_scene3d`][]."""
     fig = Figure(figsize=(6, 5.2), layout="constrained")

@@ -11,26 +11,28 @@ the one episode loop ([`crmgrasp.sim`][]), the learners, the references and the 
 step it unchanged. What the agent sees is the planar model's: ``rho``, ``|m_a|``,
 ``|m_b|`` in the same bins (24 discretized observations) and the error flag.
 
-Registered tasks: ``box-3d`` (``crmgrasp/Box3D-v0``) and ``cup-3d`` (``crmgrasp/Cup3D-v0``).
+Registered tasks: ``box-3d`` (``crmgrasp/Box3D-v0``) and ``cup-3d`` (``crmgrasp/Cup3D-v0``),
+and their tripods ``box-3d-3f`` and ``cup-3d-3f`` (``crmgrasp/Box3D3F-v0``,
+``crmgrasp/Cup3D3F-v0``: a third finger, [`tripod_crms`][], [`TRIPOD_BINS`][]; the same
+families and goal; docs/model-3d.md section 9).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
 from typing import Any, ClassVar
 
 import numpy as np
 
 from crmgrasp._validation import CrmgraspError, finite, tries
+from crmgrasp.model.contact_model import observation_names
 from crmgrasp.model.hand import Error
 from crmgrasp.model.mesh import TriangleMesh
+from crmgrasp.model.sensing import Discretizer
 from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable, SolidFamily
 from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, Solid, dot, surface_point
-from crmgrasp.model.spatial import (
-    CRM3D,
-    Config3D,
-    Hand3D,
-)
+from crmgrasp.model.spatial import CRM3D, Contacts3D, Hand3D, config3d
 from crmgrasp.model.spatial_model import SpatialModel, contact3d
 from crmgrasp.tasks.core import PAPER_BINS, Symmetry, Task, register_task
 
@@ -40,13 +42,41 @@ __all__ = [
     "spatial_crms",
     "spatial_symmetry",
     "SPATIAL_HAND",
+    "TRIPOD_HAND",
+    "TRIPOD_BINS",
+    "tripod_crms",
     "box_3d",
     "cup_3d",
+    "box_3d_3f",
+    "cup_3d_3f",
     "SPATIAL_TASKS",
 ]
 
 SPATIAL_HAND = Hand3D(aperture=0.16, palm_depth=0.12, backoff=0.01)
 """The paper's hand in space: aperture 0.16 m, palm depth 0.12 m, vertical axis z."""
+
+
+TRIPOD_HAND = replace(SPATIAL_HAND, contacts=3)
+"""The spatial hand with a third finger (aperture 0.16 m, palm depth 0.12 m)."""
+
+TRIPOD_BINS = Discretizer(
+    names=observation_names(TRIPOD_HAND.labels), rho=(1.0,), m_a=(0.04,), m_b=(0.04,), m_c=(0.04,)
+)
+"""The tripod tasks' bins: ``rho >= 1`` and each moment's magnitude at 0.04 m (the planar
+three-finger tasks' bins; 32 observations with the error flag's)."""
+
+
+def tripod_crms(labels: Sequence[str] = ("a", "b", "c"), step: float = 0.05) -> tuple[CRM3D, ...]:
+    """Every opposition ``(c, f, (0, 0))`` over ordered pairs of distinct contacts (six for
+    three), then each contact's four slides by ``step`` metres along ``+-t_1`` and ``+-t_2``
+    of its own tangent frame (18 for three).
+
+    >>> len(tripod_crms())
+    18
+    """
+    slides = ((step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step))
+    out = [CRM3D(c, f, (0.0, 0.0)) for c in labels for f in labels if c != f]
+    return (*out, *(CRM3D(c, c, r) for c in labels for r in slides))
 
 
 def spatial_crms(step: float = 0.05) -> tuple[CRM3D, ...]:
@@ -66,12 +96,12 @@ def spatial_crms(step: float = 0.05) -> tuple[CRM3D, ...]:
 class SurfaceStarts:
     """Spatial starts: each contact is the radial projection ([`surface_point`][crmgrasp.model.solids.surface_point])
     of a direction drawn uniformly on the sphere (three standard normals, normalised),
-    contact ``a`` first; the pair is resampled until feasible (within the aperture, palm
-    clear, neither contact on the table), not already a grasp, and not both on surfaces
-    facing up (inward normals ``n . h <= -up``, default within 60 degrees of straight
-    down): from there no CRM leaves the top, since every goal line of either contact
-    is vertical and an opposition would have to come from under the table. Draws per
-    try: six standard normals."""
+    contacts in label order; the contacts are resampled together until feasible (within
+    the aperture, palm clear, no contact on the table), not already a grasp, and not all on
+    surfaces facing up (inward normals ``n . h <= -up``, default within 60 degrees of
+    straight down): from there no CRM leaves the top, since every goal line is vertical
+    and an opposition would have to come from under the table. Draws per try: three
+    standard normals per contact (six for two)."""
 
     max_tries: int = 10_000
     up: float = 0.5
@@ -84,12 +114,12 @@ class SurfaceStarts:
             raise CrmgraspError(f"starts.up is a cosine and must be in [-1, 1], got {up:g}")
         object.__setattr__(self, "up", up)
 
-    def __call__(self, task: SpatialTask, rng: np.random.Generator, accept: Any = None) -> Config3D:
+    def __call__(self, task: SpatialTask, rng: np.random.Generator, accept: Any = None) -> Contacts3D:
         """A start on ``task``'s object; ``accept`` (a compiled decision of one try's
         directions, given by a kernel) makes the same decisions, so the stream is the same."""
-        h = task.hand3d._h
+        h, n = task.hand3d._h, task.model.n_contacts
         for _ in range(self.max_tries):
-            d = rng.standard_normal((2, 3))
+            d = rng.standard_normal((n, 3))
             if accept is not None:
                 got = accept(d)
                 if got is not None:
@@ -97,12 +127,12 @@ class SurfaceStarts:
                 continue
             if np.any(np.linalg.norm(d, axis=1) == 0.0):
                 continue
-            pa, pb = surface_point(task.solid, d[0]), surface_point(task.solid, d[1])
-            if pa is None or pb is None:
+            hits = [surface_point(task.solid, di) for di in d]
+            if any(hit is None for hit in hits):
                 continue
-            cfg = Config3D(contact3d(*pa), contact3d(*pb))
-            both_on_top = all(dot(c.n, h) <= -self.up for c in cfg)
-            if not both_on_top and task.acceptable(cfg):
+            cfg = config3d([contact3d(*hit) for hit in hits])  # type: ignore[misc]
+            all_on_top = all(dot(c.n, h) <= -self.up for c in cfg)
+            if not all_on_top and task.acceptable(cfg):
                 return cfg
         raise CrmgraspError(f"no feasible surface start found in {self.max_tries} tries")
 
@@ -143,7 +173,7 @@ class SpatialTask(Task):
         """The hand (typed as a [`Hand3D`][])."""
         return self.hand  # type: ignore[return-value]
 
-    def acceptable(self, config: Config3D) -> bool:
+    def acceptable(self, config: Contacts3D) -> bool:
         """The start rule: feasible (with the table) and not already a grasp."""
         return self.feasible(config) is Error.NONE and not self.is_success(config)
 
@@ -154,7 +184,7 @@ class SpatialTask(Task):
         return self.starts(self, rng, accept)
 
     def sample_starts(self, rng: np.random.Generator, n: int, accept: Any = None) -> np.ndarray:
-        """``n`` starts as ``(n, 12)`` rows ``[x_a, n_a, x_b, n_b]``."""
+        """``n`` starts as rows ``[x_a, n_a, x_b, n_b, ...]`` (``(n, 12)`` for two contacts)."""
         self._one_object()
         return self.model.rows_of([self.sample_start(rng) for _ in range(n)])
 
@@ -182,13 +212,16 @@ def spatial_symmetry(actions: tuple[CRM3D, ...]) -> Symmetry:
         raise CrmgraspError(f"the CRM set has no mirror of {exc.args[0]}") from None
 
 
-def _spatial_task(name: str, family: SolidFamily, description: str, reference: float | None) -> SpatialTask:
+def _spatial_task(
+    name: str, family: SolidFamily, description: str, reference: float | None, fingers: int = 2
+) -> SpatialTask:
+    tripod = fingers == 3
     return SpatialTask(
         name=name,
         obj=family.nominal(),  # type: ignore[arg-type]
-        hand=SPATIAL_HAND,  # type: ignore[arg-type]
-        actions=spatial_crms(),  # type: ignore[arg-type]
-        discretizer=PAPER_BINS,
+        hand=TRIPOD_HAND if tripod else SPATIAL_HAND,  # type: ignore[arg-type]
+        actions=tripod_crms() if tripod else spatial_crms(),  # type: ignore[arg-type]
+        discretizer=TRIPOD_BINS if tripod else PAPER_BINS,
         mu_goal=0.05,
         max_steps=10,
         reference_mean_steps=reference,
@@ -210,7 +243,19 @@ def cup_3d() -> SpatialTask:
     )
 
 
-SPATIAL_TASKS = {"box-3d": box_3d, "cup-3d": cup_3d}
+def box_3d_3f() -> SpatialTask:
+    """``box-3d-3f``: ``box-3d``'s boxes held by three fingers."""
+    text = "boxes 0.15-0.30 x 0.06-0.12 x 0.06-0.20 m on a table, any yaw; success at friction 0.05"
+    return _spatial_task("box-3d-3f", BoxOnTable(), text, None, fingers=3)
+
+
+def cup_3d_3f() -> SpatialTask:
+    """``cup-3d-3f``: ``cup-3d``'s cylinders held by three fingers."""
+    text = "cylinders r 0.03-0.07 m, h 0.06-0.20 m, upright or lying, any yaw; success at friction 0.05"
+    return _spatial_task("cup-3d-3f", CylinderOnTable(), text, None, fingers=3)
+
+
+SPATIAL_TASKS = {"box-3d": box_3d, "cup-3d": cup_3d, "box-3d-3f": box_3d_3f, "cup-3d-3f": cup_3d_3f}
 """The registered spatial tasks."""
 
 for _name, _factory in SPATIAL_TASKS.items():

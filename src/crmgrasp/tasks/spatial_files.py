@@ -6,7 +6,8 @@ The schema follows the planar one ([`crmgrasp.tasks.files`][]) with spatial part
     model = "spatial"
     table = 0.0                      # the table's height, m (omit the key for no table)
     [hand]                           # aperture, palm_depth, backoff, r_max, min_separation,
-    aperture = 0.16                  # palm_normal_tol, h = [0, 0, 1], g = [1, 0, 0]
+    aperture = 0.16                  # palm_normal_tol, h = [0, 0, 1], g = [1, 0, 0],
+                                     # contacts = 2 (2 to 4: a, b, c, d)
     palm_depth = 0.12
     [[crm]]                          # r = [r1, r2] in the reference contact's tangent frame
     c = "a"
@@ -153,8 +154,9 @@ def spatial_from_dict(doc: Any) -> SpatialTask:
     name = checked_name(d["name"])
     if ("solid" in d) == ("family" in d):
         raise CrmgraspError("a spatial task file needs exactly one of [solid] and [family]")
-    actions, ranges = section("crm", lambda v: crm_tables(v, _crm, dim=2), d["crm"])
-    kw: dict[str, Any] = {"hand": section("hand", _hand, d["hand"]), "actions": actions, "ranges": ranges}
+    hand = section("hand", _hand, d["hand"])
+    actions, ranges = section("crm", lambda v: crm_tables(v, _crm, labels=hand.labels, dim=2), d["crm"])
+    kw: dict[str, Any] = {"hand": hand, "actions": actions, "ranges": ranges}
     if "family" in d:
         kw["family"] = section("family", _family, d["family"])
         kw["obj"] = kw["family"].nominal()

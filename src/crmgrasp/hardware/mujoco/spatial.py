@@ -278,7 +278,7 @@ class MujocoHand3D(MujocoHand):
         s: Config3D = got  # type: ignore[assignment]
         i = 0 if crm.c == "a" else 1
         mover, still = s[i], s[1 - i]
-        chord = goal_chord3d(self.hand, crm, s.a if crm.f == "a" else s.b, still)
+        chord = goal_chord3d(self.hand, crm, s.a if crm.f == "a" else s.b, [still])
         if chord is None:
             return Error.APERTURE
         up = table_lift(chord, self.task.table)  # type: ignore[attr-defined]
