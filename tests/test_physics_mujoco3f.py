@@ -71,3 +71,36 @@ def test_learning_steps_run_on_three_fingertips():
     episode = run_episode(task, First(), np.random.default_rng(4), kernel=steps, trace=True)
     assert 1 <= episode.steps <= task.max_steps and steps.episodes == 1
     assert episode.success == bool(episode.trace[-1].after.min_friction <= task.mu_goal)
+
+
+# ---------------------------------------------------------------- the tripod in 3-D
+@pytest.fixture(scope="module")
+def tripod_world():
+    return make_task("cup-3d-3f").sample_world(np.random.default_rng(3))
+
+
+def test_the_spatial_scene_has_one_fingertip_per_contact(tripod_world):
+    from crmgrasp.hardware.mujoco.spatial import spatial_mjcf
+
+    text = spatial_mjcf(tripod_world.task)
+    assert all(f'name="tip_{x}"' in text and f'name="torque_{x}"' in text for x in "abc")
+    assert 'name="tip_c"' not in spatial_mjcf(make_task("cup-3d").sample_world(np.random.default_rng(0)).task)
+
+
+def test_three_fingertips_sense_their_contacts_in_space(tripod_world):
+    from crmgrasp.model.spatial import Grip3D
+
+    task = hardware_task(tripod_world.task, 10.0)
+    hand = mujoco_hand(task, tripod_world.config, np.random.default_rng(1))
+    sensed, true = hand.sense(), hand.true_config()
+    assert isinstance(sensed, Grip3D) and isinstance(true, Grip3D) and len(sensed) == 3
+    for s, t in zip(sensed, true):
+        assert np.linalg.norm(np.subtract(s.x, t.x)) < 1e-3 and np.dot(s.n, t.n) > np.cos(np.radians(2.0))
+    assert set(hand.raw_reading()) == {"a", "b", "c"}
+    error = hand.execute(task.actions[0])  # oppose a onto b: its chord within the aperture of b and c
+    assert isinstance(error, Error) and isinstance(hand.sense(), Grip3D) and hand.true_config() is not None
+
+
+def test_the_tripod_hand_conforms():
+    task = hardware_task(make_task("cup-3d-3f"), 10.0)
+    assert check_hand(mujoco_hand, task, worlds=1) == list(CHECKS)

@@ -38,7 +38,7 @@ from crmgrasp.hardware.runner import KinematicHand, PolicyRunner, log_columns
 from crmgrasp.model.contacts import Config, Grip, two_contacts
 from crmgrasp.model.hand import CRM, Error, execute_crm
 from crmgrasp.model.quality import min_friction
-from crmgrasp.model.spatial import Config3D
+from crmgrasp.model.spatial import Contacts3D
 from crmgrasp.plotting import friction_histogram
 from crmgrasp.tasks import Task, make_task
 
@@ -77,7 +77,7 @@ class SensingErrors:
         self.position: list[float] = []
         self.normal: list[float] = []
 
-    def add(self, sensed: Config | Grip | Config3D | NoContact, true: Config | Grip | Config3D | None) -> None:
+    def add(self, sensed: Config | Grip | Contacts3D | NoContact, true: Config | Grip | Contacts3D | None) -> None:
         """Record every contact of one reading (skipped if either side has no contact)."""
         if isinstance(sensed, NoContact) or true is None:
             return

@@ -28,7 +28,7 @@ from crmgrasp.hardware.contact_sensing import NoContact
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import CRM, Error
 from crmgrasp.model.sensing import SensorNoise
-from crmgrasp.model.spatial import CRM3D, Config3D
+from crmgrasp.model.spatial import CRM3D, Contacts3D
 from crmgrasp.sim import OneStep, Percept, SimState, run_episode, step_reward
 from crmgrasp.tasks import Task
 
@@ -51,7 +51,7 @@ def log_columns(task: Task) -> list[str]:
 class HandInterface(Protocol):
     """What a hand must offer to run CRM policies."""
 
-    def sense(self) -> Config | Grip | Config3D | NoContact: ...
+    def sense(self) -> Config | Grip | Contacts3D | NoContact: ...
 
     def execute(self, crm: Any) -> Error:
         """Perform ``crm`` (a [`CRM`][crmgrasp.model.hand.CRM], or a
@@ -64,13 +64,13 @@ class KinematicHand:
     readings through ``noise`` (default: the task's)."""
 
     def __init__(
-        self, task: Task, start: Config | Grip | Config3D, rng: np.random.Generator, noise: SensorNoise | None = None
+        self, task: Task, start: Config | Grip | Contacts3D, rng: np.random.Generator, noise: SensorNoise | None = None
     ):
         self.task = task if noise is None else dataclasses.replace(task, noise=noise)
         self.config, self.rng = task.check_config(start, "start"), rng
-        self._reading: Config | Grip | Config3D | None = None
+        self._reading: Config | Grip | Contacts3D | None = None
 
-    def sense(self) -> Config | Grip | Config3D:
+    def sense(self) -> Config | Grip | Contacts3D:
         """One noisy reading of the current configuration."""
         self._reading = self.task.read(self.config, self.rng)
         return self._reading
@@ -167,7 +167,7 @@ class HandSteps:
         self.lost: str | None = None
         self.first: OneStep
 
-    def score(self, reading: Config | Grip | Config3D, sensed: float) -> float:
+    def score(self, reading: Config | Grip | Contacts3D, sensed: float) -> float:
         """The ``min_friction`` a step reports, given the sensed configuration's
         (``sensed``): that one."""
         return sensed

@@ -36,6 +36,7 @@ Conventions: points in metres, shape ``(n, 3)``; inward unit normals, shape ``(n
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -131,10 +132,10 @@ def least_friction_3d(points: ArrayLike, normals: ArrayLike, edges: int = 8) -> 
     >>> least_friction_3d(pts, [(-x, -y, 0.0) for x, y, _ in pts]) < 1e-6
     True
     """
-    p, n = _contacts(points, normals)
-    if len(p) < 3:
+    frames = _cone_frames(points, normals)
+    if len(frames.arms) < 3:
         return math.inf
-    closes = lambda theta: positively_spans(primitive_wrenches(p, n, math.tan(theta), edges))  # noqa: E731
+    closes = lambda theta: positively_spans(_wrenches(frames, math.tan(theta), edges))  # noqa: E731
     if not closes(_THETA_MAX_3D):
         return math.inf
     lo, hi = 0.0, _THETA_MAX_3D
@@ -147,19 +148,36 @@ def least_friction_3d(points: ArrayLike, normals: ArrayLike, edges: int = 8) -> 
 
 def primitive_wrenches(points: ArrayLike, normals: ArrayLike, mu: float, edges: int = 8) -> F64:
     """The ``(6, n edges)`` primitive wrenches of the module docstring."""
+    return _wrenches(_cone_frames(points, normals), mu, edges)
+
+
+class _Frames(NamedTuple):
+    """What the primitive wrenches take from the contacts, whatever ``mu``: the arms
+    ``x_i - c``, the inward normals, each contact's tangents, and the torque scale ``rho``."""
+
+    arms: F64
+    normals: F64
+    tangents: list[tuple[F64, F64]]
+    rho: float
+
+
+def _cone_frames(points: ArrayLike, normals: ArrayLike) -> _Frames:
     p, n = _contacts(points, normals)
+    arms = p - p.mean(axis=0)
+    rho = max(float(np.max(np.linalg.norm(arms, axis=1))), 1e-12)
+    return _Frames(arms, n, [tangent_basis(normal) for normal in n], rho)
+
+
+def _wrenches(frames: _Frames, mu: float, edges: int) -> F64:
     mu = non_negative(mu, "friction coefficient mu")
     if isinstance(edges, bool) or not isinstance(edges, int) or not 3 <= edges <= 64:
         raise CrmgraspError(f"edges must be an integer in [3, 64], got {edges!r}")
     phi = 2.0 * math.pi * np.arange(edges) / edges
-    arms = p - p.mean(axis=0)
-    rho = max(float(np.max(np.linalg.norm(arms, axis=1))), 1e-12)
     cols = []
-    for x, normal in zip(arms, n, strict=True):
-        t1, t2 = tangent_basis(normal)
+    for x, normal, (t1, t2) in zip(frames.arms, frames.normals, frames.tangents, strict=True):
         f = normal[None, :] + mu * (np.cos(phi)[:, None] * t1 + np.sin(phi)[:, None] * t2)
         f /= math.sqrt(1.0 + mu * mu)
-        cols.append(np.hstack([f, np.cross(x, f) / rho]))
+        cols.append(np.hstack([f, np.cross(x, f) / frames.rho]))
     return np.vstack(cols).T
 
 

@@ -36,6 +36,7 @@ __all__ = [
     "scene_legend",
 ]
 
+
 def draw_object(ax: Axes, obj: Shape) -> None:
     """Fill the object's region."""
     style = dict(facecolor="0.85", edgecolor="0.2", linewidth=1.5, zorder=1)

@@ -351,7 +351,7 @@ def key_reference() -> str:
     rows += [("[hand]", *r) for r in field_rows(Hand)]
     rows += [("[hand] (spatial)", *r) for r in field_rows(Hand3D)]
     rows += [("[[crm]]", "c", 'string: a contact label of the hand, "a", "b", ... (the moving contact)', "required")]
-    rows += [("[[crm]]", "f", 'string: a contact label of the hand (the frame contact)', "required")]
+    rows += [("[[crm]]", "f", "string: a contact label of the hand (the frame contact)", "required")]
     rows += [("[[crm]]", "r", "number, or a range [low, high] (spatial: 2 numbers, or 2 ranges)", "0")]
     rows += [("[[crm]]", "grid", "integer >= 0: CRMs of an offset range among the actions", str(DEFAULT_GRID))]
     rows += [("[noise]", *r) for r in field_rows(SensorNoise)]

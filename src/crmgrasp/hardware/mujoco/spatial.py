@@ -1,9 +1,11 @@
-"""The MuJoCo stand-in in space: a solid free on a frictional table, two spherical
-fingertips with force/torque sensors, 3-D CRMs as real motions.
+"""The MuJoCo stand-in in space: a solid free on a frictional table, one spherical
+fingertip with force/torque sensors per contact (two, or three for a tripod), 3-D CRMs as
+real motions.
 
 [`MujocoHand3D`][] implements [`HandInterface`][crmgrasp.hardware.runner.HandInterface] for
 spatial tasks ([`SpatialTask`][crmgrasp.tasks.spatial.SpatialTask]): ``sense()`` returns a
-[`Config3D`][crmgrasp.model.spatial.Config3D] from the fingertip wrenches alone (intrinsic
+[`Config3D`][crmgrasp.model.spatial.Config3D] (a [`Grip3D`][crmgrasp.model.spatial.Grip3D] for
+three or more) from the fingertip wrenches alone (intrinsic
 contact sensing on a [`Sphere`][crmgrasp.hardware.contact_sensing.Sphere]), ``execute``
 runs a [`CRM3D`][crmgrasp.model.spatial.CRM3D]. It shares the planar hand's servos,
 sensor model (bias, drift, white noise, tare, averaging) and contact detector
@@ -23,12 +25,13 @@ the table, as in the kinematic model) nor with each other.
 
 A CRM ``(c, f, r)`` runs as (docs/model-3d.md section 3 made physical):
 
-1. the chord of the goal line from the *sensed* configuration
-   ([`goal_chord3d`][crmgrasp.model.spatial.goal_chord3d]; none: aperture error, no motion), its
+1. the chord of the goal line from the *sensed* configuration, within the aperture of every
+   fingertip that stays ([`goal_chord3d`][crmgrasp.model.spatial.goal_chord3d]; none: aperture
+   error, no motion), its
    start moved up to the table plane by [`table_lift`][crmgrasp.model.spatial.table_lift]
    (never above the table before the chord ends: palm error, no motion);
 2. the moving fingertip backs off by ``hand.backoff`` along its sensed outward normal
-   and tares its sensor (the other keeps pressing);
+   and tares its sensor (the others keep pressing);
 3. *transit* to the chord's start with the fingertip's collisions off: a real arm would
    plan a path around the object; the stand-in does not simulate that path. Collisions
    back on: a fingertip overlapping the object there means the start is inside it
@@ -51,14 +54,17 @@ import numpy as np
 
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.hardware.contact_sensing import NoContact, Sphere, contact_from_wrench
-from crmgrasp.hardware.mujoco.hand import LABELS, MujocoHand
+from crmgrasp.hardware.mujoco.hand import MujocoHand
 from crmgrasp.hardware.mujoco.model import PhysicsParams, hand_mjcf, preamble
 from crmgrasp.model.hand import Error
 from crmgrasp.model.solids import ConvexPolyhedron, Cylinder
 from crmgrasp.model.spatial import (
     Config3D,
     Contact3D,
+    Contacts3D,
+    Grip3D,
     Hand3D,
+    config3d,
     faces_palm3d,
     goal_chord3d,
     palm_point3d,
@@ -94,15 +100,15 @@ def _solid_geom(task: SpatialTask, p: PhysicsParams) -> tuple[str, str]:
 
 
 def spatial_mjcf(task: SpatialTask, params: PhysicsParams | None = None) -> str:
-    """MJCF text of the spatial stand-in scene: ``task``'s solid on the table and the
-    two-fingertip hand (``params.height`` and ``params.lift`` are the planar scene's and
-    unused here)."""
+    """MJCF text of the spatial stand-in scene: ``task``'s solid on the table and a hand
+    with one fingertip per contact label of the task's model (``params.height`` and
+    ``params.lift`` are the planar scene's and unused here)."""
     if task.model.kind != "spatial":
         raise CrmgraspError(f"the spatial MuJoCo stand-in needs a spatial task, got {task.name!r}")
     p = PhysicsParams() if params is None else params
     asset, geom = _solid_geom(task, p)
     table = 0.0 if task.table is None else float(task.table)
-    fingers, drives = hand_mjcf(p, 0.0)
+    fingers, drives = hand_mjcf(p, 0.0, tuple(task.model.labels))
     return f"""{preamble(f"crmgrasp-{task.name}-3d", p, asset)}
     <camera name="view" pos="0.33 -0.33 0.30" xyaxes="0.7071 0.7071 0 -0.38 0.38 0.843"/>
     <geom name="floor" type="plane" size="2 2 0.1" pos="0 0 {table!r}" material="grid"
@@ -158,7 +164,7 @@ class MujocoHand3D(MujocoHand):
     camera = "view"
 
     def __init__(
-        self, task: SpatialTask, start: Config3D, rng: np.random.Generator, params: PhysicsParams | None = None
+        self, task: SpatialTask, start: Contacts3D, rng: np.random.Generator, params: PhysicsParams | None = None
     ) -> None:
         if task.model.kind != "spatial" or task.family is not None:
             raise CrmgraspError(
@@ -178,9 +184,8 @@ class MujocoHand3D(MujocoHand):
         return [self._object, floor]
 
     def _palm_target(self) -> np.ndarray | None:
-        a, b = self._centre(0), self._centre(1)
-        cfg = Config3D(Contact3D(tuple(a), _UP), Contact3D(tuple(b), _UP))  # type: ignore[arg-type]
-        return palm_point3d(cfg, self.hand)
+        tips = [Contact3D(tuple(self._centre(i)), _UP) for i in range(len(self.labels))]  # type: ignore[arg-type]
+        return palm_point3d(config3d(tips), self.hand)
 
     @property
     def hand(self) -> Hand3D:
@@ -212,7 +217,7 @@ class MujocoHand3D(MujocoHand):
         self.mj.mj_forward(self.model, d)
         for _ in range(20):  # the object settles on the table
             self._tick()
-        for i in range(2):
+        for i in range(len(self.labels)):
             self._tare_tip(i)
         for i, c in enumerate(start):
             n = np.array(c.n)
@@ -220,11 +225,11 @@ class MujocoHand3D(MujocoHand):
                 self._hold(i, n)
         self._set_palm(True)
 
-    def sense(self) -> Config3D | NoContact:  # type: ignore[override]
-        """Both contacts from the tared, averaged fingertip wrenches (world frame)."""
+    def sense(self) -> Contacts3D | NoContact:  # type: ignore[override]
+        """Every contact from the tared, averaged fingertip wrenches (world frame)."""
         wrench = self._read_wrench()
         contacts = []
-        for i, x in enumerate(LABELS):
+        for i, x in enumerate(self.labels):
             got = contact_from_wrench(self._sphere, wrench[i, :3], wrench[i, 3:], self.params.contact_threshold)
             if isinstance(got, NoContact):
                 self._sensed = None
@@ -232,7 +237,7 @@ class MujocoHand3D(MujocoHand):
             point = self._centre(i) + np.array(got.point)
             contacts.append(Contact3D(tuple(point.tolist()), got.normal))  # type: ignore[arg-type]
         self._wrench = wrench
-        self._sensed = Config3D(*contacts)  # type: ignore[assignment]
+        self._sensed = config3d(contacts)  # type: ignore[assignment]
         return self._sensed  # type: ignore[return-value]
 
     @property
@@ -241,12 +246,12 @@ class MujocoHand3D(MujocoHand):
 
     def raw_reading(self) -> dict[str, Any]:
         """The tared wrench behind the last reading: force (N) and torque (N m) per fingertip."""
-        return {x: [round(float(v), 6) for v in self._wrench[i]] for i, x in enumerate(LABELS)}
+        return {x: [round(float(v), 6) for v in self._wrench[i]] for i, x in enumerate(self.labels)}
 
-    def true_config(self) -> Config3D | None:  # type: ignore[override]
+    def true_config(self) -> Contacts3D | None:  # type: ignore[override]
         """The true contacts from MuJoCo's contact list (the deepest per fingertip), None if a tip is free."""
         d = self.data
-        found: list[tuple[float, Contact3D] | None] = [None, None]
+        found: list[tuple[float, Contact3D] | None] = [None] * len(self.labels)
         for k in range(d.ncon):
             con = d.contact[k]
             pair = (int(con.geom1), int(con.geom2))
@@ -256,9 +261,9 @@ class MujocoHand3D(MujocoHand):
                     c = Contact3D(tuple(float(v) for v in con.pos), tuple((n / np.linalg.norm(n)).tolist()))  # type: ignore[arg-type]
                     if found[i] is None or con.dist < found[i][0]:  # type: ignore[index]
                         found[i] = (float(con.dist), c)
-        if found[0] is None or found[1] is None:
+        if any(f is None for f in found):
             return None
-        return Config3D(found[0][1], found[1][1])
+        return config3d([f[1] for f in found])  # type: ignore[index]
 
     def object_pose(self) -> tuple[float, ...]:  # type: ignore[override]
         """The object's position (m) and orientation quaternion ``(w, x, y, z)``."""
@@ -275,10 +280,10 @@ class MujocoHand3D(MujocoHand):
         got = self._sensed if self._sensed is not None else self.sense()
         if isinstance(got, NoContact):
             raise CrmgraspError(f"cannot execute a CRM without contact ({got.reason})")
-        s: Config3D = got  # type: ignore[assignment]
-        i = 0 if crm.c == "a" else 1
-        mover, still = s[i], s[1 - i]
-        chord = goal_chord3d(self.hand, crm, s.a if crm.f == "a" else s.b, [still])
+        s: Contacts3D = got  # type: ignore[assignment]
+        i = self.labels.index(crm.c)
+        mover, stills = s[i], [c for j, c in enumerate(s) if j != i]
+        chord = goal_chord3d(self.hand, crm, s[self.labels.index(crm.f)], stills)
         if chord is None:
             return Error.APERTURE
         up = table_lift(chord, self.task.table)  # type: ignore[attr-defined]
@@ -300,7 +305,7 @@ class MujocoHand3D(MujocoHand):
             return self._recover(i, mover, home, Error.APERTURE if outcome == "end" else Error.PALM)
         self._hold(i, chord.ahead)
         new = self.sense()
-        if self._palm_hit or (isinstance(new, Config3D) and faces_palm3d(new, self.hand)):
+        if self._palm_hit or (isinstance(new, (Config3D, Grip3D)) and faces_palm3d(new, self.hand)):
             return self._recover(i, mover, home, Error.PALM)
         return Error.NONE
 

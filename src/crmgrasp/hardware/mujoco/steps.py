@@ -45,7 +45,7 @@ from crmgrasp.hardware.mujoco.model import PhysicsParams
 from crmgrasp.hardware.runner import HandSteps
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import Error
-from crmgrasp.model.spatial import Config3D
+from crmgrasp.model.spatial import Contacts3D
 from crmgrasp.sim import STEP_REWARD, OneStep, SimState
 from crmgrasp.tasks import Task
 
@@ -104,7 +104,7 @@ class MujocoSteps(HandSteps):
         self.instance = hardware_task(instance, self.palm_tolerance_deg)
 
     # -- truth -------------------------------------------------------------------
-    def score(self, reading: Config | Grip | Config3D, sensed: float) -> float:
+    def score(self, reading: Config | Grip | Contacts3D, sensed: float) -> float:
         """The true ``min_friction``, from MuJoCo's contacts (``inf`` with a fingertip free),
         in place of the sensed one."""
         true = self.hand.true_config()  # type: ignore[attr-defined]
