@@ -63,10 +63,6 @@ class PhysicsError(CrmgraspError):
         self.kind = kind
 
 
-LABELS = ("a", "b")
-"""The fingertips of the two-contact hand (a hand of N contacts has its model's labels)."""
-
-
 class MujocoHand:
     """The MuJoCo stand-in hand holding ``task.obj`` from ``start`` (object frame = world).
 
