@@ -27,6 +27,9 @@ def test_run_py_smoke(capsys):
     res = json.loads(capsys.readouterr().out)
     for key in ("step_ratio_vs_cartpole", "batch_ratio_vs_cartpole_vec", "sarsa_fig7_seconds", "batch_peak_mb"):
         assert res[key] > 0
+    assert (
+        -1.0 < res["import_over_gymnasium_seconds"] < 10.0
+    )  # a difference of two timings: its sign is noise-free only at scale
     run = BENCH.parent / "run.py"
     assert "from bench_env import main" in run.read_text()
 
@@ -176,3 +179,14 @@ def test_error_cost_learning_smoke(capsys, monkeypatch, learner):
     (row,) = json.loads(capsys.readouterr().out)["rows"]
     assert row["cost"] == 30.0 and row["optimum"]["mean_cost"] >= 1.0 and len(row["per_seed"]) == 1
     assert row["learner"] == learner and row["per_seed"][0]["success"] >= 0.9  # evaluated on its own histories
+
+
+def test_step_breakdown_smoke(capsys):
+    """The breakdown times consecutive batches of a running vector env on both backends."""
+    spec = importlib.util.spec_from_file_location("step_breakdown", BENCH.parent / "step_breakdown.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    res = mod.main()
+    assert res["numba"]["vector_step_batch_1024_us"] > 0 and res["reference"]["vector_step_batch_128_us"] > 0
+    assert res["corner_acceptance_uniform_proposal"] < res["corner_acceptance_tight_proposal"]
+    assert json.loads(capsys.readouterr().out) == res

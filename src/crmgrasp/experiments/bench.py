@@ -12,7 +12,9 @@ ratios compare minimum times measured in the same run:
 * ``sarsa_fig7_seconds``: 20 trials x 2,000 episodes of the paper's SARSA
   (training only), minimum over rounds;
 * ``reproduce_quick_seconds``: ``crmgrasp reproduce --quick`` in a subprocess;
-* ``batch_peak_mb``: peak traced memory of 100 steps of the 1,024-env vector env.
+* ``batch_peak_mb``: peak traced memory of 100 steps of the 1,024-env vector env;
+* ``import_over_gymnasium_seconds``: a fresh interpreter's ``import crmgrasp`` less its
+  ``import gymnasium`` (the least of 7 alternating subprocess runs each).
 
 Run ``crmgrasp bench`` (an installed package, or a source checkout), ``python
 benchmarks/bench_env.py`` or ``python benchmarks/run.py``; ``--smoke`` for tiny sizes.
@@ -59,6 +61,18 @@ def _vector_steps(env: Any, actions: np.ndarray) -> Callable[[], None]:
     return run
 
 
+def _import_cost(rounds: int) -> float:
+    """Seconds ``import crmgrasp`` adds to ``import gymnasium`` in a fresh interpreter
+    (each the least of ``rounds`` alternating runs; the interpreter's start cancels)."""
+    best = {"gymnasium": float("inf"), "crmgrasp": float("inf")}
+    for _ in range(rounds):
+        for module in best:
+            t0 = time.perf_counter()
+            subprocess.run([sys.executable, "-c", f"import {module}"], check=True)
+            best[module] = min(best[module], time.perf_counter() - t0)
+    return best["crmgrasp"] - best["gymnasium"]
+
+
 def _timed(fn: Callable[[], None]) -> float:
     t0 = time.perf_counter()
     fn()
@@ -76,6 +90,7 @@ def run_benchmarks(
     sarsa_episodes: int = 2000,
     quick: bool = True,
     seed: int = 0,
+    import_rounds: int = 7,
 ) -> dict[str, Any]:
     """Run every workload; return the results (see the module docstring)."""
     rng = np.random.default_rng(seed)
@@ -116,6 +131,7 @@ def run_benchmarks(
         "paperbox_vec_steps_per_s": round(vec_steps * num_envs / best["vpb"]),
         "cartpole_vec_steps_per_s": round(vec_steps * num_envs / best["vcp"]),
         "batch_peak_mb": round(peak / 2**20, 2),
+        "import_over_gymnasium_seconds": round(_import_cost(import_rounds), 3),
         "kernel": pb.unwrapped.kernel.name,  # type: ignore[attr-defined]
         "rounds": rounds,
         "num_envs": num_envs,
@@ -155,6 +171,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             sarsa_episodes=20,
             quick=False,
             seed=args.seed,
+            import_rounds=1,
         )
     else:
         res = run_benchmarks(rounds=args.rounds, seed=args.seed)

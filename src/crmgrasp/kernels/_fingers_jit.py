@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from crmgrasp.kernels._compile import compiled
 from crmgrasp.kernels._polygon_jit import (
     ANTIPODAL_TOL,
     APERTURE,
@@ -32,7 +33,7 @@ CLOSURE_TOL, SPAN_TOL, THETA_MAX, ANGLE_TOL, ARM_MIN = range(5)
 N_FP = 5
 
 
-@njit(cache=True)
+@compiled
 def _crm(cfg, sen, j, n, ci, fi, r, e, p, q, new, jn):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.hand.execute_crm`][] on row ``j`` of ``cfg`` (true) and ``sen``
     (sensed), contact ``ci`` moving onto contact ``fi``'s line: the result into row ``jn`` of
@@ -67,7 +68,7 @@ def _crm(cfg, sen, j, n, ci, fi, r, e, p, q, new, jn):  # type: ignore[no-untype
     return code
 
 
-@njit(cache=True)
+@compiled
 def _observe(s, j, n, out, jo):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.sensing.observe`][] of row ``j`` of the sensed rows ``s``: ``rho``
     then the moment about each contact into row ``jo`` of ``out``."""
@@ -163,7 +164,7 @@ def _mu(c, j, n, fp, antipodal_tol):  # type: ignore[no-untyped-def]
     return 0.0 if mu < antipodal_tol else mu
 
 
-@njit(cache=True)
+@compiled
 def _index(out, jo, code, th, strides, abs_m):  # type: ignore[no-untyped-def]
     """`crmgrasp.model.sensing.Discretizer.index` of column ``jo`` of ``out``."""
     idx = code
@@ -177,7 +178,7 @@ def _index(out, jo, code, th, strides, abs_m):  # type: ignore[no-untyped-def]
     return idx
 
 
-@njit(cache=True)
+@compiled
 def execute_rows(cfg, sen, n, ci, fi, r, e, p, q, new, err):  # type: ignore[no-untyped-def]
     """One CRM per row: ``new[j]``, ``err[j]`` from ``cfg[j]`` (true) and ``sen[j]`` (sensed)."""
     for j in range(cfg.shape[0]):

@@ -6,7 +6,9 @@ reference rules in the same order: the inside test and first entry
 ([`crmgrasp.model.hand`][]), the observation and bins ([`crmgrasp.model.sensing`][]), min
 friction ([`crmgrasp.model.quality`][]) and the start rule ([`crmgrasp.tasks`][]).
 numba compiles without ``fastmath``, so LLVM neither reassociates nor fuses them,
-and the results equal the reference bit for bit (the tests check it).
+and the results equal the reference bit for bit (the tests check it). The per-row
+loops and their helpers compile without reference counting, the helpers inlined
+(``crmgrasp.kernels._compile``).
 
 No constant of the model is written here: every tolerance and parameter arrives
 in the array ``p`` (layout below, built by [`crmgrasp.kernels.polygon.params`][]
@@ -22,7 +24,8 @@ of CRMs ``(c is b, f is b, r)``; ``th`` the ``(3, K)`` bin thresholds of ``rho``
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from crmgrasp.kernels._compile import compiled, inlined
 
 # indices into the parameter array p
 APERTURE, DEPTH, PALM_TOL, EPS, S_TOL, LINE_TOL, ANTIPODAL_TOL, MU_GOAL, BOUND, MIN_SEP = range(10)
@@ -31,14 +34,14 @@ CONVEX, NA, NB, ABS_M = range(4)
 N_P, N_Q = 10, 4
 
 
-@njit(cache=True)
+@inlined
 def _unpack(p, q):  # type: ignore[no-untyped-def]
     """The parameter arrays as tuples: values the compiler keeps in registers (an
     array's loads would be repeated after every store to an output array)."""
     return (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9]), (q[0], q[1], q[2], q[3])
 
 
-@njit(cache=True)
+@inlined
 def _inside(px, py, e, convex, eps):  # type: ignore[no-untyped-def]
     """`crmgrasp.model.polygon.inside`."""
     n = e.shape[0]
@@ -64,7 +67,7 @@ def _inside(px, py, e, convex, eps):  # type: ignore[no-untyped-def]
     return True
 
 
-@njit(cache=True)
+@inlined
 def feasible(c, j, n, e, p, q):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.hand.feasible`][] of row ``j`` of ``c`` (``n`` contacts): 0 none, 1
     aperture, 2 palm. Shared by every planar kernel."""
@@ -103,12 +106,12 @@ def feasible(c, j, n, e, p, q):  # type: ignore[no-untyped-def]
     return 0
 
 
-@njit(cache=True)
+@inlined
 def _side(c, tol):  # type: ignore[no-untyped-def]
     return 1 if c > tol else (-1 if c < -tol else 0)
 
 
-@njit(cache=True)
+@inlined
 def _convex_edge(ox, oy, dx, dy, e, line_tol):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.polygon.convex_edge`][] (-1 if none)."""
     n = e.shape[0]
@@ -123,7 +126,7 @@ def _convex_edge(ox, oy, dx, dy, e, line_tol):  # type: ignore[no-untyped-def]
     return -1
 
 
-@njit(cache=True)
+@inlined
 def _entry(ox, oy, dx, dy, u_max, e, convex, p):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.polygon.Polygon.ray_entry`][]: ``(entered, x, y, nx, ny)``."""
     eps = p[EPS]
@@ -159,7 +162,7 @@ def _entry(ox, oy, dx, dy, u_max, e, convex, p):  # type: ignore[no-untyped-def]
     return best != np.inf, bx, by, bnx, bny
 
 
-@njit(cache=True)
+@inlined
 def chord(bx, by, fnx, fny, sx, sy, aperture):  # type: ignore[no-untyped-def]
     """Step 2 of [`crmgrasp.model.hand.execute_crm`][] for one still contact at ``(sx, sy)``:
     ``(reached, t_lo, t_hi)``, where the goal line ``b + t n_f`` is within the aperture of
@@ -175,7 +178,7 @@ def chord(bx, by, fnx, fny, sx, sy, aperture):  # type: ignore[no-untyped-def]
     return True, (-qb - root) / qa, (-qb + root) / qa
 
 
-@njit(cache=True)
+@inlined
 def approach(bx, by, fnx, fny, t_lo, t_hi, same, e, p, q):  # type: ignore[no-untyped-def]
     """Steps 3-5 of [`crmgrasp.model.hand.execute_crm`][] on the goal line ``b + t n_f`` with
     chord ``[t_lo, t_hi]``: start at the chord's far end (``t_lo`` when the contact moves
@@ -193,7 +196,7 @@ def approach(bx, by, fnx, fny, t_lo, t_hi, same, e, p, q):  # type: ignore[no-un
     return 0, px, py, nx, ny
 
 
-@njit(cache=True)
+@inlined
 def _crm(cfg, sen, j, c_is_b, f_is_b, r, e, p, q, new, jn):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.hand.execute_crm`][] on row ``j`` of ``cfg`` (true) and ``sen``
     (sensed): writes the resulting configuration into row ``jn`` of ``new``; returns
@@ -219,7 +222,7 @@ def _crm(cfg, sen, j, c_is_b, f_is_b, r, e, p, q, new, jn):  # type: ignore[no-u
     return code
 
 
-@njit(cache=True)
+@inlined
 def _tan(x, y, nx, ny, ox, oy, antipodal_tol):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.quality.tan_term`][]."""
     dx, dy = ox - x, oy - y
@@ -230,7 +233,7 @@ def _tan(x, y, nx, ny, ox, oy, antipodal_tol):  # type: ignore[no-untyped-def]
     return 0.0 if t < antipodal_tol else t
 
 
-@njit(cache=True)
+@inlined
 def _mu(c, j, antipodal_tol):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.quality.min_friction`][] of row ``j`` of ``c``."""
     ta = _tan(c[j, 0], c[j, 1], c[j, 2], c[j, 3], c[j, 4], c[j, 5], antipodal_tol)
@@ -238,7 +241,7 @@ def _mu(c, j, antipodal_tol):  # type: ignore[no-untyped-def]
     return max(ta, tb)
 
 
-@njit(cache=True)
+@inlined
 def _observe(s, j):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.sensing.observe`][] of row ``j`` of the sensed rows ``s``:
     ``(rho, m_a, m_b)``."""
@@ -247,32 +250,33 @@ def _observe(s, j):  # type: ignore[no-untyped-def]
     return sx * sx + sy * sy, dx * s[j, 7] - dy * s[j, 6], -dx * s[j, 3] + dy * s[j, 2]
 
 
-@njit(cache=True)
-def _bin(v, t):  # type: ignore[no-untyped-def]
-    """[`crmgrasp.model.sensing._bin`][]: how many thresholds ``v`` reaches."""
+@inlined
+def _bin(v, th, row):  # type: ignore[no-untyped-def]
+    """[`crmgrasp.model.sensing._bin`][]: how many thresholds of row ``row`` of ``th``
+    ``v`` reaches."""
     k = 0
-    for i in range(t.shape[0]):
-        if v >= t[i]:
+    for i in range(th.shape[1]):
+        if v >= th[row, i]:
             k += 1
     return k
 
 
-@njit(cache=True)
+@inlined
 def bin_index(rho, m_a, m_b, code, th, na, nb, abs_m):  # type: ignore[no-untyped-def]
     """`crmgrasp.model.sensing.Discretizer.index_of` (``na``, ``nb``: the moment bin
     counts; ``abs_m``: moments binned by magnitude)."""
     if abs_m:
         m_a, m_b = abs(m_a), abs(m_b)
-    return ((_bin(rho, th[0]) * na + _bin(m_a, th[1])) * nb + _bin(m_b, th[2])) * 3 + code
+    return ((_bin(rho, th, 0) * na + _bin(m_a, th, 1)) * nb + _bin(m_b, th, 2)) * 3 + code
 
 
-@njit(cache=True)
+@inlined
 def _index(rho, m_a, m_b, code, th, q):  # type: ignore[no-untyped-def]
     """[`bin_index`][] with the bin counts of ``q``."""
     return bin_index(rho, m_a, m_b, code, th, q[NA], q[NB], q[ABS_M])
 
 
-@njit(cache=True)
+@compiled
 def execute_rows(cfg, sen, c_is_b, f_is_b, r, e, p, q, new, err):  # type: ignore[no-untyped-def]
     """One CRM per row: ``new[j]``, ``err[j]`` from ``cfg[j]`` (true) and ``sen[j]`` (sensed)."""
     p, q = _unpack(p, q)
@@ -280,7 +284,7 @@ def execute_rows(cfg, sen, c_is_b, f_is_b, r, e, p, q, new, err):  # type: ignor
         err[j] = _crm(cfg, sen, j, c_is_b[j], f_is_b[j], r[j], e, p, q, new, j)
 
 
-@njit(cache=True)
+@compiled
 def observe_rows(cfg, sen, err, th, p, q, rho, m_a, m_b, index, mu):  # type: ignore[no-untyped-def]
     """Observation and bin index of each sensed row, min friction of each true row."""
     p, q = _unpack(p, q)
@@ -291,7 +295,7 @@ def observe_rows(cfg, sen, err, th, p, q, rho, m_a, m_b, index, mu):  # type: ig
         mu[j] = _mu(cfg, j, p[ANTIPODAL_TOL])
 
 
-@njit(cache=True)
+@compiled
 def step_one(v, action, acts, e, th, p, q, out):  # type: ignore[no-untyped-def]
     """One noise-free CRM of the single environment from the configuration in the first
     8 columns of ``v`` (one row): the new configuration into ``out[0, :8]``, then ``rho, m_a, m_b,
@@ -304,7 +308,7 @@ def step_one(v, action, acts, e, th, p, q, out):  # type: ignore[no-untyped-def]
     return code, _index(o0, o1, o2, code, th, q)
 
 
-@njit(cache=True)
+@compiled
 def begin_one(v, th, p, q, out):  # type: ignore[no-untyped-def]
     """The observation of the configuration in the first 8 columns of ``v`` (one row,
     noise-free) into
@@ -317,14 +321,14 @@ def begin_one(v, th, p, q, out):  # type: ignore[no-untyped-def]
     return _index(o0, o1, o2, 0, th, q)
 
 
-@njit(cache=True)
+@inlined
 def _clip(x, lo, hi):  # type: ignore[no-untyped-def]
     """``np.minimum(np.maximum(x, lo), hi)`` (NaN stays NaN)."""
     y = lo if x < lo else x
     return hi if y > hi else y
 
 
-@njit(cache=True)
+@compiled
 def step_rows(cfg, actions, acts, reset, starts, e, th, p, q, new, rho, m_a, m_b, err, index, mu):  # type: ignore[no-untyped-def]
     """One noise-free vector-environment step in one pass: per row ``j``, the next start
     (``starts[k]``, in order) where ``reset[j]``, else the CRM ``acts[actions[j]]``; then
@@ -351,7 +355,7 @@ def step_rows(cfg, actions, acts, reset, starts, e, th, p, q, new, rho, m_a, m_b
         mu[j] = _mu(new, j, p[ANTIPODAL_TOL])
 
 
-@njit(cache=True)
+@compiled
 def corner_rows(u, e, p, q, out):  # type: ignore[no-untyped-def]
     """[`crmgrasp.tasks.accept_corner_candidates`][]: the accepted corner-start
     candidates of the uniforms ``u`` (``(4, m)``) into ``out[:count]``; returns count."""
@@ -379,7 +383,7 @@ def corner_rows(u, e, p, q, out):  # type: ignore[no-untyped-def]
     return count
 
 
-@njit(cache=True)
+@compiled
 def edge_rows(v, e):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.polygon.Polygon.edges`][] of the counter-clockwise vertices ``v``
     (``(E, 2)``) into ``e`` (``(E, 7)``: start, edge vector, squared length, inward unit

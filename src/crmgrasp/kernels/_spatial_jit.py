@@ -21,8 +21,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
+from crmgrasp.kernels._compile import compiled
 from crmgrasp.kernels._polygon_jit import bin_index
 
 # indices into p
@@ -35,32 +34,32 @@ N_Q = 5
 INF = math.inf
 
 
-@njit(cache=True)
+@compiled
 def _min(a, b):  # type: ignore[no-untyped-def]
     return b if b < a else a
 
 
-@njit(cache=True)
+@compiled
 def _max(a, b):  # type: ignore[no-untyped-def]
     return b if b > a else a
 
 
-@njit(cache=True)
+@compiled
 def _dot(ax, ay, az, bx, by, bz):  # type: ignore[no-untyped-def]
     return ax * bx + ay * by + az * bz
 
 
-@njit(cache=True)
+@compiled
 def _cross(ax, ay, az, bx, by, bz):  # type: ignore[no-untyped-def]
     return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
-@njit(cache=True)
+@compiled
 def _norm(x, y, z):  # type: ignore[no-untyped-def]
     return math.sqrt(x * x + y * y + z * z)
 
 
-@njit(cache=True)
+@compiled
 def _local(x, y, z, cyl):  # type: ignore[no-untyped-def]
     """[`Cylinder._local`][]: axial coordinate and radial vector."""
     rx, ry, rz = x - cyl[0], y - cyl[1], z - cyl[2]
@@ -68,7 +67,7 @@ def _local(x, y, z, cyl):  # type: ignore[no-untyped-def]
     return s, rx - s * cyl[3], ry - s * cyl[4], rz - s * cyl[5]
 
 
-@njit(cache=True)
+@compiled
 def _contains(x, y, z, planes, cyl, kind, surf):  # type: ignore[no-untyped-def]
     if kind == 0:
         for k in range(planes.shape[0]):
@@ -79,7 +78,7 @@ def _contains(x, y, z, planes, cyl, kind, surf):  # type: ignore[no-untyped-def]
     return surf < s and s < cyl[7] - surf and _norm(qx, qy, qz) < cyl[6] - surf
 
 
-@njit(cache=True)
+@compiled
 def _entry_poly(o, d, umax, planes, surf, tie):  # type: ignore[no-untyped-def]
     t_in, t_out, face = -INF, INF, -1
     for k in range(planes.shape[0]):
@@ -109,7 +108,7 @@ def _entry_poly(o, d, umax, planes, surf, tie):  # type: ignore[no-untyped-def]
     )
 
 
-@njit(cache=True)
+@compiled
 def _entry_cyl(o, d, umax, cyl, surf, tie):  # type: ignore[no-untyped-def]
     ex, ey, ez, radius, height = cyl[3], cyl[4], cyl[5], cyl[6], cyl[7]
     s0, r0x, r0y, r0z = _local(o[0], o[1], o[2], cyl)
@@ -151,14 +150,14 @@ def _entry_cyl(o, d, umax, cyl, surf, tie):  # type: ignore[no-untyped-def]
     return True, px, py, pz, -ex, -ey, -ez
 
 
-@njit(cache=True)
+@compiled
 def _entry(o, d, umax, planes, cyl, kind, surf, tie):  # type: ignore[no-untyped-def]
     if kind == 0:
         return _entry_poly(o, d, umax, planes, surf, tie)
     return _entry_cyl(o, d, umax, cyl, surf, tie)
 
 
-@njit(cache=True)
+@compiled
 def _axis(vx, vy, vz, p):  # type: ignore[no-untyped-def]
     """``v x h / |v x h|`` (``v x g`` when ``v`` is parallel to ``h``): the tangent
     ``t_1`` of a normal and the palm direction ``u`` of a contact direction."""
@@ -169,12 +168,12 @@ def _axis(vx, vy, vz, p):  # type: ignore[no-untyped-def]
     return tx / n, ty / n, tz / n
 
 
-@njit(cache=True)
+@compiled
 def _on_table(z, p, q):  # type: ignore[no-untyped-def]
     return q[HAS_TABLE] != 0 and z <= p[TABLE] + p[SURF]
 
 
-@njit(cache=True)
+@compiled
 def _feasible(c, planes, cyl, p, q):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.spatial.feasible3d`][] of the row ``c``: 0 none, 1 aperture, 2 palm."""
     dx, dy, dz = c[6] - c[0], c[7] - c[1], c[8] - c[2]
@@ -196,7 +195,7 @@ def _feasible(c, planes, cyl, p, q):  # type: ignore[no-untyped-def]
     return 0
 
 
-@njit(cache=True)
+@compiled
 def _crm(v, c_is_b, f_is_b, r1, r2, planes, cyl, p, q, out):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.spatial.execute_crm3d`][] (noise-free: the goal line from the
     true frame) from the row ``v`` into the row ``out``; returns the error code."""
@@ -246,7 +245,7 @@ def _crm(v, c_is_b, f_is_b, r1, r2, planes, cyl, p, q, out):  # type: ignore[no-
     return code
 
 
-@njit(cache=True)
+@compiled
 def _observe(c):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.spatial.observe3d`][]: ``rho``, ``|m_a|``, ``|m_b|``."""
     sx, sy, sz = c[3] + c[9], c[4] + c[10], c[5] + c[11]
@@ -255,7 +254,7 @@ def _observe(c):  # type: ignore[no-untyped-def]
     return _dot(sx, sy, sz, sx, sy, sz), _norm(ma[0], ma[1], ma[2]), _norm(mb[0], mb[1], mb[2])
 
 
-@njit(cache=True)
+@compiled
 def _mu(c, antipodal_tol):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.quality3d.min_friction_3d`][] of the row ``c``."""
     worst = 0.0
@@ -275,13 +274,13 @@ def _mu(c, antipodal_tol):  # type: ignore[no-untyped-def]
     return worst
 
 
-@njit(cache=True)
+@compiled
 def _index(rho, m_a, m_b, code, th, q):  # type: ignore[no-untyped-def]
     """`crmgrasp.model.sensing.Discretizer.index_of`."""
     return bin_index(rho, m_a, m_b, code, th, q[NA], q[NB], q[ABS_M])
 
 
-@njit(cache=True)
+@compiled
 def step_one(v, action, acts, planes, cyl, th, p, q, out):  # type: ignore[no-untyped-def]
     """One noise-free CRM from the state ``v`` (12): the new state into ``out[:12]``,
     ``rho, m_a, m_b, min friction`` into ``out[12:16]``; returns ``(error code, bin index)``."""
@@ -294,7 +293,7 @@ def step_one(v, action, acts, planes, cyl, th, p, q, out):  # type: ignore[no-un
     return code, _index(o0, o1, o2, code, th, q)
 
 
-@njit(cache=True)
+@compiled
 def begin_one(v, th, p, q, out):  # type: ignore[no-untyped-def]
     """The observation and min friction of the state ``v`` into ``out[12:16]``; returns its
     bin index (error none)."""
@@ -304,7 +303,7 @@ def begin_one(v, th, p, q, out):  # type: ignore[no-untyped-def]
     return _index(o0, o1, o2, 0, th, q)
 
 
-@njit(cache=True)
+@compiled
 def _project(d, planes, cyl, p, q, out, at):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.solids.surface_point`][] of the direction ``d`` into ``out[at:at + 6]``."""
     n = _norm(d[0], d[1], d[2])
@@ -316,7 +315,7 @@ def _project(d, planes, cyl, p, q, out, at):  # type: ignore[no-untyped-def]
     return hit
 
 
-@njit(cache=True)
+@compiled
 def accept_start(d, planes, cyl, p, q, out):  # type: ignore[no-untyped-def]
     """[`crmgrasp.tasks.spatial.SurfaceStarts`][]' decision on one try's directions
     ``d`` (2 x 3): the candidate into ``out`` (12); True when it is a start."""

@@ -15,10 +15,10 @@ with outcomes ``first[k] .. first[k + 1] - 1``: probability, reward, the next st
 
 from __future__ import annotations
 
-from numba import njit
+from crmgrasp.kernels._compile import compiled
 
 
-@njit(cache=True)
+@compiled
 def _v_act(qa, row, q_act):  # type: ignore[no-untyped-def]
     if row < 0:
         return q_act
@@ -29,7 +29,7 @@ def _v_act(qa, row, q_act):  # type: ignore[no-untyped-def]
     return best
 
 
-@njit(cache=True)
+@compiled
 def _v_greedy(qg, tried, row, unknown):  # type: ignore[no-untyped-def]
     if row < 0:
         return unknown
@@ -41,7 +41,7 @@ def _v_greedy(qg, tried, row, unknown):  # type: ignore[no-untyped-def]
     return best if found else unknown
 
 
-@njit(cache=True)
+@compiled
 def sweeps(qa, qg, tried, pair_row, pair_a, first, out_p, out_r, out_row, out_t, q_act, unknown, gamma, limit, tol):  # type: ignore[no-untyped-def]
     """Value iteration of both value functions in place until the largest change is below
     ``tol`` or ``limit`` sweeps; returns the sweeps done."""

@@ -27,6 +27,7 @@ from crmgrasp.tasks import Task
 __all__ = ["PolygonKernel", "FusedPolygonKernel", "params", "rebound"]
 
 _ERRORS = tuple(Error)  # code -> Error, faster than Error(code)
+_new = tuple.__new__  # builds the step's NamedTuples without their Python-level __new__ (the hot path)
 
 
 K = TypeVar("K", bound=Kernel)
@@ -159,7 +160,8 @@ class FusedPolygonKernel(PolygonKernel):
         self._v_of = config
         index = jit.begin_one(self._v, self.th, self.p, self.q, self._out)
         _, _, _, _, _, _, _, _, rho, m_a, m_b, mu = self._out[0].tolist()
-        return OneStep(SimState(config, config, 0), Observation(rho, m_a, m_b), Error.NONE, index, mu)
+        state, obs = _new(SimState, (config, config, 0)), _new(Observation, (rho, m_a, m_b))
+        return _new(OneStep, (state, obs, Error.NONE, index, mu, 0.0, False, False))
 
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
         if isinstance(action, CRM):  # a CRM of the hand's continuous action space
@@ -185,10 +187,9 @@ class FusedPolygonKernel(PolygonKernel):
             self._v_of = config
         steps = state.steps + 1
         terminated, truncated = episode_end(self.task, o[11], steps)
-        state = SimState(config, config, steps)
+        state, obs = _new(SimState, (config, config, steps)), _new(Observation, (o[8], o[9], o[10]))
         reward = step_reward(self.task, terminated, code)
-        obs = Observation(o[8], o[9], o[10])
-        return OneStep(state, obs, _ERRORS[code], index, o[11], reward, terminated, truncated)
+        return _new(OneStep, (state, obs, _ERRORS[code], index, o[11], reward, terminated, truncated))
 
     def step_batch(
         self, cfg: F64, sen: F64, actions: I64, resets: NDArray[np.bool_], starts: F64, rng: np.random.Generator

@@ -214,7 +214,8 @@ def replaced(config: Config | Grip, index: int, contact: Contact) -> Config | Gr
 def config_from_row(row: Sequence[float]) -> Config:
     """The two-contact configuration of one row ``[ax, ay, anx, any, bx, by, bnx, bny]`` of
     plain floats (no checks: for rows the package made itself)."""
-    return Config(Contact(row[0], row[1], row[2], row[3]), Contact(row[4], row[5], row[6], row[7]))
+    new = tuple.__new__  # the NamedTuples' own construction, without their Python-level __new__ (a hot path)
+    return new(Config, (new(Contact, (row[0], row[1], row[2], row[3])), new(Contact, (row[4], row[5], row[6], row[7]))))
 
 
 def contacts_from_row(row: Sequence[float]) -> Config | Grip:
