@@ -190,3 +190,11 @@ def test_step_breakdown_smoke(capsys):
     assert res["numba"]["vector_step_batch_1024_us"] > 0 and res["reference"]["vector_step_batch_128_us"] > 0
     assert res["corner_acceptance_uniform_proposal"] < res["corner_acceptance_tight_proposal"]
     assert json.loads(capsys.readouterr().out) == res
+
+
+def test_bench_tripod_smoke():
+    spec = importlib.util.spec_from_file_location("bench_tripod", BENCH.parent / "bench_tripod.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    res = mod.main(steps=5, rounds=1)
+    assert res["box3d3f_us"] > 0 and res["cup3d3f_reference_us"] > 0 and res["cartpole_us"] > 0

@@ -102,6 +102,7 @@ _COMPILE = "crmgrasp.kernels._compile"
         ("_spatial_jit", {"__future__", "math", _COMPILE, "crmgrasp.kernels._polygon_jit"}),
         ("_vi_jit", {"__future__", _COMPILE}),
         ("_fingers_jit", {"__future__", "numpy", "numba", _COMPILE, "crmgrasp.kernels._polygon_jit"}),
+        ("_closure_jit", {"__future__", "math", "numpy", "numba"}),
     ],
 )
 def test_compiled_code_holds_no_constant_of_the_model(module, allowed):

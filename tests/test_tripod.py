@@ -171,8 +171,9 @@ def test_tripod_tasks_start_feasible_step_and_round_trip(name: str) -> None:
         assert nxt.state.steps == 1 and len(nxt.observation) == 4
     again = task_from_dict(task_to_dict(task))
     assert task_to_dict(again) == task_to_dict(task) and again.hand.contacts == 3
-    with pytest.raises(CrmgraspError, match="no compiled kernel for a spatial hand of three"):
-        kernel_for(task.instance(rng), "numba")
+    compiled, readable = kernel_for(task.instance(rng), "numba"), kernel_for(task.instance(rng), "reference")
+    assert compiled.name == "numba-spatial-fingers" and compiled.task.model.least_friction is not None
+    assert readable.name == "spatial" and readable.task.model.least_friction is None
 
 
 @pytest.mark.parametrize("env_id", ["crmgrasp/Cup3D3F-v0", "crmgrasp/Box3D3F-v0"])

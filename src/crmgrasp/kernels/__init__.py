@@ -16,7 +16,8 @@ backend                      object                      kernel
 ``"auto"``, ``"numba"``      a solid, noise-free         ``FusedSpatialKernel``
 ``"auto"``                   a solid, sensing noise      ``SpatialKernel``
 ``"auto"``, ``"reference"``  a triangle mesh             ``SpatialKernel``
-``"auto"``, ``"reference"``  a solid, three+ contacts    ``SpatialKernel``
+``"reference"``              a solid, three+ contacts    ``SpatialKernel``
+``"auto"``, ``"numba"``      a solid, three+ contacts    ``FingersSpatialKernel``
 any                          a family (one per episode)  ``FamilyKernel`` over the above
 ===========================  ==========================  ===============================
 
@@ -104,15 +105,16 @@ def _planar(task: Task, backend: str) -> Kernel:
 
 def _spatial(task: Task, backend: str) -> Kernel:
     """Spatial model: two contacts compiled and fused on a polyhedron or a cylinder without
-    noise, else the reference rules (meshes, noise, three or more contacts)."""
+    noise, else the reference rules (meshes, noise); three or more contacts by the readable
+    rules with the least friction compiled (any solid and noise)."""
     from crmgrasp.kernels.spatial import FusedSpatialKernel, SpatialKernel
 
     if task.model.n_contacts > 2:
-        if backend == "numba":
-            raise CrmgraspError(
-                "no compiled kernel for a spatial hand of three or more contacts; use 'auto' or 'reference'"
-            )
-        return SpatialKernel(task)
+        if backend == "reference":
+            return SpatialKernel(task)
+        from crmgrasp.kernels.closure import FingersSpatialKernel
+
+        return FingersSpatialKernel(task)
     if backend == "numba" and task.noise.active:
         raise CrmgraspError("the compiled spatial kernel is noise-free; use backend 'auto' or 'reference'")
     mesh = isinstance(task.obj, TriangleMesh)

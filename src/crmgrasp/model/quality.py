@@ -48,6 +48,7 @@ from numpy.typing import ArrayLike
 
 from crmgrasp._validation import CrmgraspError, non_negative
 from crmgrasp.model.contacts import Config, Grip, check_contacts
+from crmgrasp.model.lp import max_least_weight
 
 __all__ = [
     "min_friction",
@@ -58,11 +59,15 @@ __all__ = [
     "force_closure",
     "positively_spans",
     "LP_TOL",
+    "RANK_TOL",
     "ANTIPODAL_TOL",
 ]
 
 LP_TOL = 1e-9
 """Margin the force-closure LP's optimum must exceed (unitless, wrenches normalised)."""
+
+RANK_TOL = 1e-10
+"""Singular values of the wrench matrix above this count toward its rank (unitless)."""
 
 ANTIPODAL_TOL = 1e-12
 """``tan(theta)`` below this is rounding error of an antipodal pair and counts as 0."""
@@ -263,24 +268,11 @@ def force_closure(points: ArrayLike, normals: ArrayLike, mu: float) -> bool:
 def positively_spans(wrenches: np.ndarray) -> bool:
     """Whether the columns of ``wrenches`` (``(k, m)``) positively span R^k: the origin is
     strictly inside their convex hull. Linear program
-    ``max d  s.t.  W lambda = 0, sum lambda = 1, lambda_j >= d``; true iff
-    ``rank W = k`` and ``d* > LP_TOL``. The one force-closure test of the planar
+    ``max d  s.t.  W lambda = 0, sum lambda = 1, lambda_j >= d``
+    ([`crmgrasp.model.lp.max_least_weight`][], solved by the simplex method as written); true
+    iff ``rank W = k`` and ``d* > LP_TOL``. The one force-closure test of the planar
     ([`force_closure`][]) and the spatial ([`crmgrasp.model.quality3d`][]) models."""
-    from scipy.optimize import linprog  # heavy: imported where used
-
-    k, m = wrenches.shape
-    if np.linalg.matrix_rank(wrenches, tol=1e-10) < k:
+    k, _ = wrenches.shape
+    if np.linalg.matrix_rank(wrenches, tol=RANK_TOL) < k:
         return False
-    # variables: lambda_1..m, d ; maximise d
-    c = np.zeros(m + 1)
-    c[-1] = -1.0
-    a_eq = np.zeros((k + 1, m + 1))
-    a_eq[:k, :m] = wrenches
-    a_eq[k, :m] = 1.0
-    b_eq = np.zeros(k + 1)
-    b_eq[k] = 1.0
-    a_ub = np.hstack([-np.eye(m), np.ones((m, 1))])  # d - lambda_j <= 0
-    res = linprog(
-        c, A_ub=a_ub, b_ub=np.zeros(m), A_eq=a_eq, b_eq=b_eq, bounds=[(0, None)] * m + [(None, 1)], method="highs"
-    )
-    return bool(res.status == 0 and -res.fun > LP_TOL)
+    return max_least_weight(wrenches) > LP_TOL

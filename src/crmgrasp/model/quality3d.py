@@ -53,6 +53,8 @@ __all__ = [
     "force_closure_3d",
     "ferrari_canny",
     "tangent_basis",
+    "ARM_MIN",
+    "EDGES",
 ]
 
 F64 = NDArray[np.float64]
@@ -76,12 +78,15 @@ def _contacts(points: ArrayLike, normals: ArrayLike, count: int | None = None) -
 
 def tangent_basis(normal: F64) -> tuple[F64, F64]:
     """``(t1, t2)``: unit tangents with ``(t1, t2, n)`` right-handed; ``t1`` is
-    ``n x e`` normalised, ``e`` the coordinate axis least aligned with ``n``."""
+    ``n x e`` normalised, ``e`` the coordinate axis least aligned with ``n`` (the first of
+    equals). Written out ([`crmgrasp.model.solids.cross`][], [`crmgrasp.model.solids.norm`][]),
+    so that the compiled least friction repeats it bit for bit."""
+    mags = [abs(v) for v in normal]
     e = np.zeros(3)
-    e[int(np.argmin(np.abs(normal)))] = 1.0
-    t1 = np.cross(normal, e)
-    t1 /= np.linalg.norm(t1)
-    return t1, np.cross(normal, t1)
+    e[mags.index(min(mags))] = 1.0
+    t1 = cross(normal, e)
+    t1 = t1 / norm(t1)
+    return t1, cross(normal, t1)
 
 
 def min_friction_3d(points: ArrayLike, normals: ArrayLike) -> float:
@@ -116,10 +121,14 @@ THETA_TOL_3D = 1e-7
 """The bisection's resolution of the least friction cone half-angle, radians
 ([`least_friction_3d`][]): about 24 linear programs per configuration."""
 
-_THETA_MAX_3D = math.atan(1e6)  # no closure at this half-angle counts as none: inf
+_THETA_MAX_3D = math.atan(1e6)  # no closure below this half-angle counts as none: inf
 
 
-def least_friction_3d(points: ArrayLike, normals: ArrayLike, edges: int = 8) -> float:
+EDGES = 8
+"""Edges of each contact's polyhedral friction cone in [`least_friction_3d`][] (its default)."""
+
+
+def least_friction_3d(points: ArrayLike, normals: ArrayLike, edges: int = EDGES) -> float:
     """The least friction coefficient at which ``n >= 3`` contacts are force closure with
     polyhedral cones of ``edges`` edges (see the module docstring): ``inf`` for two.
 
@@ -136,12 +145,12 @@ def least_friction_3d(points: ArrayLike, normals: ArrayLike, edges: int = 8) -> 
     if len(frames.arms) < 3:
         return math.inf
     closes = lambda theta: positively_spans(_wrenches(frames, math.tan(theta), edges))  # noqa: E731
-    if not closes(_THETA_MAX_3D):
-        return math.inf
     lo, hi = 0.0, _THETA_MAX_3D
     while hi - lo > THETA_TOL_3D:
         mid = 0.5 * (lo + hi)
         lo, hi = (lo, mid) if closes(mid) else (mid, hi)
+    if hi == _THETA_MAX_3D:  # no probe closed
+        return math.inf
     mu = math.tan(hi)
     return 0.0 if mu < ANTIPODAL_TOL else mu
 
@@ -151,34 +160,49 @@ def primitive_wrenches(points: ArrayLike, normals: ArrayLike, mu: float, edges: 
     return _wrenches(_cone_frames(points, normals), mu, edges)
 
 
+ARM_MIN = 1e-12
+"""The least torque scale ``rho``, metres (contacts all at one point still get wrenches)."""
+
+
 class _Frames(NamedTuple):
     """What the primitive wrenches take from the contacts, whatever ``mu``: the arms
     ``x_i - c``, the inward normals, each contact's tangents, and the torque scale ``rho``."""
 
-    arms: F64
-    normals: F64
+    arms: list[F64]
+    normals: list[F64]
     tangents: list[tuple[F64, F64]]
     rho: float
 
 
 def _cone_frames(points: ArrayLike, normals: ArrayLike) -> _Frames:
+    """The contacts' frames: the centroid ``c`` summed contact by contact, each arm
+    ``x_i - c``, ``rho`` the longest arm (at least [`ARM_MIN`][])."""
     p, n = _contacts(points, normals)
-    arms = p - p.mean(axis=0)
-    rho = max(float(np.max(np.linalg.norm(arms, axis=1))), 1e-12)
-    return _Frames(arms, n, [tangent_basis(normal) for normal in n], rho)
+    count = len(p)
+    centre = p[0].copy()
+    for i in range(1, count):
+        centre = centre + p[i]
+    centre = centre / count
+    arms = [p[i] - centre for i in range(count)]
+    rho = max(max(norm(a) for a in arms), ARM_MIN)
+    return _Frames(arms, list(n), [tangent_basis(normal) for normal in n], rho)
 
 
 def _wrenches(frames: _Frames, mu: float, edges: int) -> F64:
+    """The ``(6, n edges)`` unit edge wrenches, contact by contact, edge by edge (the angle
+    ``phi_j = 2 pi j / edges``), each written out so that the compiled copy repeats it."""
     mu = non_negative(mu, "friction coefficient mu")
     if isinstance(edges, bool) or not isinstance(edges, int) or not 3 <= edges <= 64:
         raise CrmgraspError(f"edges must be an integer in [3, 64], got {edges!r}")
-    phi = 2.0 * math.pi * np.arange(edges) / edges
+    scale = math.sqrt(1.0 + mu * mu)
     cols = []
     for x, normal, (t1, t2) in zip(frames.arms, frames.normals, frames.tangents, strict=True):
-        f = normal[None, :] + mu * (np.cos(phi)[:, None] * t1 + np.sin(phi)[:, None] * t2)
-        f /= math.sqrt(1.0 + mu * mu)
-        cols.append(np.hstack([f, np.cross(x, f) / frames.rho]))
-    return np.vstack(cols).T
+        for j in range(edges):
+            phi = 2.0 * math.pi * j / edges
+            co, si = math.cos(phi), math.sin(phi)
+            f = (normal + mu * (co * t1 + si * t2)) / scale
+            cols.append(np.concatenate([f, cross(x, f) / frames.rho]))
+    return np.array(cols).T
 
 
 def force_closure_3d(points: ArrayLike, normals: ArrayLike, mu: float, edges: int = 8) -> bool:

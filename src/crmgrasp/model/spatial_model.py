@@ -10,7 +10,7 @@ observation: ``rho``, ``|m_a|``, ``|m_b|`` (and ``|m_c|``, ... for more contacts
 from __future__ import annotations
 
 import functools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -72,11 +72,16 @@ class SpatialModel(LabelledContacts):
         Sensing noise of every reading ([`sense3d`][crmgrasp.model.spatial.sense3d]).
     table
         Height of the table plane, metres (``None``: no table).
+    least_friction
+        Three or more contacts' least friction: ``None`` for the readable rule
+        ([`least_friction_3d`][crmgrasp.model.quality3d.least_friction_3d], cached); a kernel
+        may give a compiled copy that returns the same values bit for bit.
     """
 
     hand: Hand3D
     noise: SensorNoise = field(default_factory=SensorNoise)
     table: float | None = 0.0
+    least_friction: Callable[[Grip3D], float] | None = field(default=None, compare=False, repr=False)
 
     kind: ClassVar[str] = "spatial"
     axes: ClassVar[str] = "xyz"
@@ -160,7 +165,7 @@ class SpatialModel(LabelledContacts):
         if len(config) == 2:
             a, b = config
             return min_friction_3d([a.x, b.x], [a.n, b.n])
-        return _least_friction(config)  # type: ignore[arg-type]
+        return (self.least_friction or _least_friction)(config)  # type: ignore[arg-type]
 
     def feasible(self, obj: Any, config: Contacts3D) -> Error:
         """[`feasible3d`][crmgrasp.model.spatial.feasible3d] with the table."""

@@ -281,6 +281,13 @@ class Task:
         family's draws from ``rng``); the task itself if it has no family."""
         return self if self.family is None else self.with_object(self.family.sample(rng))
 
+    def with_model(self, model: ContactModel) -> Task:
+        """This task with its rules applied through ``model``: the same model with a rule
+        a kernel computes in compiled code, equal bit for bit (nothing is checked again)."""
+        out = object.__new__(type(self))
+        out.__dict__.update(self.__dict__, model=model)
+        return out
+
     def with_object(self, obj: Shape) -> Task:
         """This task on the object ``obj``, without a family (the object is not checked
         again: families draw valid shapes)."""

@@ -1,0 +1,67 @@
+"""The tripod environments' step time, compiled least friction against the readable rules.
+
+For ``crmgrasp/Box3D3F-v0`` and ``crmgrasp/Cup3D3F-v0`` on the default backend (the
+least friction compiled: ``FingersSpatialKernel``) and on ``backend="reference"`` (the
+readable rules), with ``CartPole-v1`` as the peer: random actions through ``gymnasium.make``,
+``steps`` per round, the environments alternating round by round, the least round kept.
+Every round starts with both least-friction caches empty, so a step pays for each new
+configuration's least friction as in a fresh run. Times are per step, counting the resets
+(a new solid and a start, whose acceptance needs the start's least friction).
+
+Prints one JSON object (microseconds and ratios). Usage:
+``python benchmarks/bench_tripod.py [STEPS] [ROUNDS]`` (defaults 1000 and 3).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import crmgrasp  # noqa: F401  (registers the environments)
+from crmgrasp.kernels.closure import _cached
+from crmgrasp.model.spatial_model import _least_friction
+
+
+def _round(env: Any, actions: list[int]) -> float:
+    """Seconds per step (resets included) of one pass over ``actions``, caches emptied first."""
+    _least_friction.cache_clear()
+    _cached.cache_clear()
+    t0 = time.perf_counter()
+    for a in actions:
+        _, _, term, trunc, _ = env.step(a)
+        if term or trunc:
+            env.reset()
+    return (time.perf_counter() - t0) / len(actions)
+
+
+def main(steps: int = 1000, rounds: int = 3) -> dict[str, Any]:
+    envs: dict[str, Any] = {"cartpole": gym.make("CartPole-v1")}
+    for env_id in ("crmgrasp/Box3D3F-v0", "crmgrasp/Cup3D3F-v0"):
+        name = env_id.split("/")[1].split("-")[0].lower()
+        envs[name] = gym.make(env_id)
+        envs[f"{name}_reference"] = gym.make(env_id, backend="reference")
+    actions, best = {}, {}
+    for name, env in envs.items():
+        env.reset(seed=0)
+        actions[name] = np.random.default_rng(0).integers(env.action_space.n, size=steps).tolist()
+        best[name] = float("inf")
+    for _ in range(rounds):
+        for name, env in envs.items():
+            best[name] = min(best[name], _round(env, actions[name]))
+    cart = best.pop("cartpole")
+    out: dict[str, Any] = {"steps": steps, "rounds": rounds, "cartpole_us": round(cart * 1e6, 2)}
+    for name, seconds in best.items():
+        out[f"{name}_us"] = round(seconds * 1e6, 1)
+        out[f"{name}_over_cartpole"] = round(seconds / cart, 1)
+    for name in ("box3d3f", "cup3d3f"):
+        out[f"{name}_reference_over_compiled"] = round(best[f"{name}_reference"] / best[name], 1)
+    return out
+
+
+if __name__ == "__main__":
+    print(json.dumps(main(*(int(a) for a in sys.argv[1:3])), indent=2))

@@ -1,0 +1,73 @@
+"""The compiled least friction of three or more spatial contacts, and the kernel that uses it.
+
+A spatial hand of three or more contacts (a tripod) spends nearly all of a step on the least
+friction of the new configuration: a bisection over the friction cone's half-angle, one linear
+program per probe ([`crmgrasp.model.quality3d.least_friction_3d`][]).
+[`FingersSpatialKernel`][] steps such a task by its readable rules, but with the least
+friction computed in compiled code (`crmgrasp.kernels._closure_jit`: the same frames,
+wrenches, rank test, simplex pivots and bisection, bit for bit). It hands the compiled rule
+to the task's [`SpatialModel`][crmgrasp.model.spatial_model.SpatialModel] (its
+``least_friction``), so every path that asks for a configuration's quality (steps, starts,
+success) takes it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from crmgrasp.kernels.spatial import SpatialKernel
+from crmgrasp.tasks import Task
+
+__all__ = ["closure_params", "compiled_least_friction", "FingersSpatialKernel"]
+
+F64 = NDArray[np.float64]
+
+
+def closure_params() -> F64:
+    """The tolerances of `crmgrasp.kernels._closure_jit`, read from the model's modules now
+    ([`crmgrasp.model.quality3d`][], [`crmgrasp.model.quality`][], [`crmgrasp.model.lp`][])."""
+    import crmgrasp.kernels._closure_jit as jit
+    from crmgrasp.model import lp, quality, quality3d
+
+    tol = np.empty(jit.N_TOL)
+    tol[jit.THETA_MAX], tol[jit.THETA_TOL] = quality3d._THETA_MAX_3D, quality3d.THETA_TOL_3D
+    tol[jit.RANK_TOL], tol[jit.LP_TOL], tol[jit.ANTIPODAL_TOL] = quality.RANK_TOL, quality.LP_TOL, quality.ANTIPODAL_TOL
+    tol[jit.OPT_TOL], tol[jit.PIVOT_TOL], tol[jit.FEASIBILITY_TOL] = lp.OPT_TOL, lp.PIVOT_TOL, lp.FEASIBILITY_TOL
+    tol[jit.ARM_MIN], tol[jit.MAX_PIVOTS] = quality3d.ARM_MIN, lp.MAX_PIVOTS
+    return tol
+
+
+@functools.lru_cache(maxsize=1 << 14)
+def _cached(config: Any, tol: tuple[float, ...], edges: int) -> float:
+    import crmgrasp.kernels._closure_jit as jit
+
+    points = np.array([c.x for c in config], dtype=np.float64)
+    normals = np.array([c.n for c in config], dtype=np.float64)
+    return float(jit.least_friction(points, normals, edges, np.array(tol)))
+
+
+def compiled_least_friction(tol: F64 | None = None) -> Any:
+    """The least friction of a configuration of three or more spatial contacts, compiled:
+    ``config -> float``, equal bit for bit to
+    [`least_friction_3d`][crmgrasp.model.quality3d.least_friction_3d] with its default cone
+    edges, cached per configuration and tolerances (``tol``: [`closure_params`][] by default)."""
+    from crmgrasp.model.quality3d import EDGES
+
+    key = tuple((closure_params() if tol is None else tol).tolist())
+    return functools.partial(_cached, tol=key, edges=EDGES)
+
+
+class FingersSpatialKernel(SpatialKernel):
+    """[`SpatialKernel`][crmgrasp.kernels.spatial.SpatialKernel] on a task whose model's least
+    friction is [`compiled_least_friction`][] (three or more contacts, any noise, any solid)."""
+
+    name = "numba-spatial-fingers"
+
+    def __init__(self, task: Task) -> None:
+        model = dataclasses.replace(task.model, least_friction=compiled_least_friction())  # type: ignore[type-var]
+        super().__init__(task.with_model(model))

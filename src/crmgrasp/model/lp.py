@@ -1,0 +1,135 @@
+"""The force-closure linear program, solved as written ([docs/model.md section 5][model-5]).
+
+Columns ``w_1 .. w_m`` of ``W`` (``(k, m)``) positively span R^k, the origin strictly inside
+their convex hull, iff ``rank W = k`` and some convex combination of them with every weight
+positive is the origin. The largest least weight of such a combination is the optimum of
+
+    max d  s.t.  W mu + (W 1) d = 0,  1 . mu + m d = 1,  mu >= 0,  d >= 0
+
+(weights ``lambda_j = mu_j + d``, so ``d`` is their least); [`max_least_weight`][] returns it
+(``-inf`` when no convex combination is the origin at all).
+
+It is solved by the two-phase simplex method on a dense tableau: phase 1 starts from one
+artificial variable per row and minimises their sum (a positive minimum: infeasible);
+phase 2 maximises ``d`` from the basis phase 1 found. Each pivot enters the first column whose
+reduced cost is below ``-OPT_TOL`` and leaves the row of least ratio, the one with the
+smallest basic variable on ties (Bland's rule: the method cannot cycle, which matters here,
+where every right-hand side but one is 0). Sums run left to right and each update is written
+out, element by element, so that a compiled copy (`crmgrasp.kernels`) repeats every
+floating-point operation and returns the same optimum bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["max_least_weight", "OPT_TOL", "PIVOT_TOL", "FEASIBILITY_TOL", "MAX_PIVOTS"]
+
+F64 = NDArray[np.float64]
+
+OPT_TOL = 1e-10
+"""A reduced cost below ``-OPT_TOL`` improves the objective (the column may enter)."""
+
+PIVOT_TOL = 1e-9
+"""Only tableau entries above ``PIVOT_TOL`` take part in the ratio test."""
+
+FEASIBILITY_TOL = 1e-9
+"""Phase 1 ending with the artificial variables' sum above this: no feasible point."""
+
+MAX_PIVOTS = 10_000
+"""More pivots than this in one phase: the method has broken down (NaN)."""
+
+
+def _tableau(w: F64) -> F64:
+    """The tableau ``[W, W 1, I, 0; 1, m, I, 1]`` of the program (``k + 1`` rows; columns:
+    ``mu_1 .. mu_m``, ``d``, the ``k + 1`` artificial variables, the right-hand side)."""
+    k, m = w.shape
+    rows = k + 1
+    t = np.zeros((rows, m + 1 + rows + 1))
+    t[:k, :m] = w
+    for j in range(m):  # W 1, summed left to right
+        t[:k, m] += w[:, j]
+    t[k, :m] = 1.0
+    t[k, m] = float(m)
+    for i in range(rows):
+        t[i, m + 1 + i] = 1.0
+    t[k, -1] = 1.0
+    return t
+
+
+def _pivot(t: F64, cost: F64, basis: list[int], r: int, j: int) -> None:
+    """Make column ``j`` basic in row ``r``: the row divided by its pivot, then ``f`` times it
+    subtracted from each other row and from the cost row, ``f`` their entry in column ``j``."""
+    t[r] = t[r] / t[r, j]
+    for i in range(len(t)):
+        if i != r:
+            t[i] = t[i] - t[i, j] * t[r]
+    cost[:] = cost - cost[j] * t[r]
+    basis[r] = j
+
+
+def _simplex(t: F64, cost: F64, basis: list[int], columns: int) -> bool:
+    """Pivot until no column below ``columns`` has a reduced cost below ``-OPT_TOL``
+    (Bland's rule, above): true. False when the pivots have lost the precision to go on:
+    an improving column with no entry above ``PIVOT_TOL`` (the program is bounded, so only
+    rounding makes one), or more pivots than Bland's rule can need on a tableau this size."""
+    for _ in range(MAX_PIVOTS):
+        j = next((c for c in range(columns) if cost[c] < -OPT_TOL), -1)
+        if j < 0:
+            return True
+        r, best = -1, math.inf
+        for i in range(len(t)):
+            if t[i, j] > PIVOT_TOL:
+                ratio = t[i, -1] / t[i, j]
+                if ratio < best or (ratio == best and basis[i] < basis[r]):
+                    r, best = i, ratio
+        if r < 0:
+            return False
+        _pivot(t, cost, basis, r, j)
+    return False
+
+
+def max_least_weight(w: F64) -> float:
+    """The program's optimum ``d*`` for the columns of ``w`` (``(k, m)``, finite), ``-inf``
+    when no convex combination of them is the origin (see the module docstring), or NaN
+    when rounding stops the method (near-degenerate columns: on the spatial model's
+    wrenches this was met only at frictions below 1e-6, near a frictionless equilibrium;
+    [`crmgrasp.model.quality.positively_spans`][] counts it as not spanning).
+
+    Examples
+    --------
+    The columns ``e_1, e_2, -e_1 - e_2`` make the origin with weights 1/3 each:
+
+    >>> max_least_weight(np.array([[1.0, 0.0, -1.0], [0.0, 1.0, -1.0]]))
+    0.3333333333333333
+    >>> max_least_weight(np.array([[1.0, 0.0], [0.0, 1.0]]))
+    -inf
+    """
+    k, m = w.shape
+    t = _tableau(w)
+    rows, structural = k + 1, m + 1
+    basis = [structural + i for i in range(rows)]
+    cost = np.zeros(t.shape[1])  # phase 1: the artificials' sum, priced out of their rows
+    for i in range(rows):
+        cost[:structural] = cost[:structural] - t[i, :structural]
+        cost[-1] = cost[-1] - t[i, -1]
+    if not _simplex(t, cost, basis, structural):
+        return math.nan
+    if -cost[-1] > FEASIBILITY_TOL:
+        return -math.inf
+    for r in range(rows):  # an artificial still basic (at 0) leaves for any structural column
+        if basis[r] >= structural:
+            j = next((c for c in range(structural) if abs(t[r, c]) > PIVOT_TOL), -1)
+            if j >= 0:
+                _pivot(t, cost, basis, r, j)
+    cost = np.zeros(t.shape[1])  # phase 2: minimise -d, priced out of the basic rows
+    cost[m] = -1.0
+    for r in range(rows):
+        if basis[r] == m:
+            cost[:] = cost + t[r]
+    if not _simplex(t, cost, basis, structural):
+        return math.nan
+    return float(cost[-1])

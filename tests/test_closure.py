@@ -1,0 +1,74 @@
+"""The compiled least friction of three or more spatial contacts (crmgrasp.kernels.closure)
+against the readable rule, bit for bit, and the tripod kernel that uses it."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from crmgrasp.kernels import kernel_for
+from crmgrasp.kernels.closure import compiled_least_friction
+from crmgrasp.model import lp
+from crmgrasp.model.quality3d import least_friction_3d
+from crmgrasp.model.spatial import Grip3D
+from crmgrasp.model.spatial_model import contact3d
+from crmgrasp.tasks import make_task
+
+
+def _grip(points: np.ndarray, normals: np.ndarray) -> Grip3D:
+    return Grip3D(*(contact3d(p, n) for p, n in zip(points, normals, strict=True)))
+
+
+def _random_grips(seed: int, count: int) -> list[Grip3D]:
+    """Three or four contacts, normals roughly inward and some exactly through one point
+    (frictionless equilibria, where the program is nearly degenerate)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for i in range(count):
+        n = 3 + (i % 5 == 0)
+        points = rng.normal(size=(n, 3))
+        toward = points.mean(axis=0) - points
+        normals = toward + (0.0 if i % 4 == 0 else 0.6) * rng.normal(size=(n, 3))
+        out.append(_grip(points, normals / np.linalg.norm(normals, axis=1, keepdims=True)))
+    return out
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_compiled_least_friction_equals_the_readable_rule(seed: int) -> None:
+    """Random grips, equilibria among them: the same float, bit for bit (or both inf)."""
+    compiled = compiled_least_friction()
+    for grip in _random_grips(seed, 40):
+        want = least_friction_3d([c.x for c in grip], [c.n for c in grip])
+        got = compiled(grip)
+        assert got == want or (math.isinf(got) and math.isinf(want)), (grip, got, want)
+
+
+def test_compiled_least_friction_on_the_tripod_tasks_episodes() -> None:
+    """Along random episodes of both tripod tasks the compiled kernel's steps equal the
+    readable kernel's: configurations, observations, rewards and least friction."""
+    for name in ("cup-3d-3f", "box-3d-3f"):
+        task = make_task(name)
+        fast, slow = kernel_for(task, "auto"), kernel_for(task, "reference")
+        assert fast.name == "family" and fast.current.name == "numba-spatial-fingers"
+        rng_f, rng_s = np.random.default_rng(5), np.random.default_rng(5)
+        acts = np.random.default_rng(6).integers(len(task.actions), size=60).tolist()
+        a, b = fast.begin(fast.sample_start(rng_f), rng_f), slow.begin(slow.sample_start(rng_s), rng_s)
+        for action in acts:
+            assert a == b
+            if a.terminated or a.truncated:
+                a, b = fast.begin(fast.sample_start(rng_f), rng_f), slow.begin(slow.sample_start(rng_s), rng_s)
+            else:
+                a, b = fast.step_one(a.state, action, rng_f), slow.step_one(b.state, action, rng_s)
+        assert a == b
+
+
+def test_a_changed_tolerance_reaches_the_compiled_rule(monkeypatch) -> None:
+    """The tolerances are read when the rule is made: with a phase-1 tolerance of -1 every
+    program is infeasible, so nothing closes, readable and compiled alike."""
+    grip = _random_grips(0, 1)[0]
+    assert math.isfinite(compiled_least_friction()(grip))
+    monkeypatch.setattr(lp, "FEASIBILITY_TOL", -1.0)
+    assert math.isinf(least_friction_3d([c.x for c in grip], [c.n for c in grip]))
+    assert math.isinf(compiled_least_friction()(grip))
