@@ -72,3 +72,19 @@ def test_a_changed_tolerance_reaches_the_compiled_rule(monkeypatch) -> None:
     monkeypatch.setattr(lp, "FEASIBILITY_TOL", -1.0)
     assert math.isinf(least_friction_3d([c.x for c in grip], [c.n for c in grip]))
     assert math.isinf(compiled_least_friction()(grip))
+
+
+def test_the_references_take_the_compiled_rule(monkeypatch) -> None:
+    """`compiled_rules` leaves a planar task as it is and hands a tripod task's model the
+    compiled least friction; the references computed with it equal the readable ones."""
+    from crmgrasp.kernels import compiled_rules
+    from crmgrasp.planners import references
+
+    box = make_task("paper-box")
+    assert compiled_rules(box) is box
+    task = make_task("cup-3d-3f")
+    assert compiled_rules(task).model.least_friction is not None and task.model.least_friction is None
+    starts = references.sample_starts(task, 6, 3)
+    fast = (references.belief_optimum(task, starts), references.clairvoyant_bound(task, starts))
+    monkeypatch.setattr(references, "compiled_rules", lambda t: t)
+    assert (references.belief_optimum(task, starts), references.clairvoyant_bound(task, starts)) == fast

@@ -55,6 +55,7 @@ __all__ = [
     "Backend",
     "PATHS",
     "kernel_for",
+    "compiled_rules",
     "execute_batch",
     "Kernel",
     "OneStep",
@@ -122,6 +123,19 @@ def _spatial(task: Task, backend: str) -> Kernel:
         raise CrmgraspError("the compiled spatial kernel takes polyhedra and cylinders; a mesh runs on 'reference'")
     slow = backend == "reference" or task.noise.active or mesh
     return SpatialKernel(task) if slow else FusedSpatialKernel(task)
+
+
+def compiled_rules(task: Task) -> Task:
+    """``task`` with each rule that the kernels compile for its model handed to that model:
+    today the least friction of three or more spatial contacts
+    ([`crmgrasp.kernels.closure.with_compiled_least_friction`][]); ``task`` itself otherwise.
+    For code that applies the task's rules directly rather than through a kernel (the
+    reference values and the k-order search); the results are the same bit for bit."""
+    if task.model.kind == "spatial" and task.model.n_contacts > 2:
+        from crmgrasp.kernels.closure import with_compiled_least_friction
+
+        return with_compiled_least_friction(task)
+    return task
 
 
 PATHS: dict[str, Callable[[Task, str], Kernel]] = {"planar": _planar, "spatial": _spatial}

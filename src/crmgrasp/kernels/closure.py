@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 from crmgrasp.kernels.spatial import SpatialKernel
 from crmgrasp.tasks import Task
 
-__all__ = ["closure_params", "compiled_least_friction", "FingersSpatialKernel"]
+__all__ = ["closure_params", "compiled_least_friction", "with_compiled_least_friction", "FingersSpatialKernel"]
 
 F64 = NDArray[np.float64]
 
@@ -62,12 +62,18 @@ def compiled_least_friction(tol: F64 | None = None) -> Any:
     return functools.partial(_cached, tol=key, edges=EDGES)
 
 
+def with_compiled_least_friction(task: Task) -> Task:
+    """``task`` whose model's least friction is [`compiled_least_friction`][] (a spatial task of
+    three or more contacts; the same values, bit for bit)."""
+    model = dataclasses.replace(task.model, least_friction=compiled_least_friction())  # type: ignore[type-var]
+    return task.with_model(model)
+
+
 class FingersSpatialKernel(SpatialKernel):
-    """[`SpatialKernel`][crmgrasp.kernels.spatial.SpatialKernel] on a task whose model's least
-    friction is [`compiled_least_friction`][] (three or more contacts, any noise, any solid)."""
+    """[`SpatialKernel`][crmgrasp.kernels.spatial.SpatialKernel] on the task
+    [`with_compiled_least_friction`][] (three or more contacts, any noise, any solid)."""
 
     name = "numba-spatial-fingers"
 
     def __init__(self, task: Task) -> None:
-        model = dataclasses.replace(task.model, least_friction=compiled_least_friction())  # type: ignore[type-var]
-        super().__init__(task.with_model(model))
+        super().__init__(with_compiled_least_friction(task))

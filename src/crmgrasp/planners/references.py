@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from crmgrasp._validation import CrmgraspError
+from crmgrasp.kernels import compiled_rules
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import Error
 from crmgrasp.sim import Percept, run_episode
@@ -56,7 +57,7 @@ class _Model:
     [`World`][crmgrasp.tasks.World] adds its object."""
 
     def __init__(self, task: Task) -> None:
-        self.task = task
+        self.task = task = compiled_rules(task)
         self.tasks: list[Task] = [task]
         self._ids: dict[int, int] = {}
         self._step: dict[tuple[State, int], Step] = {}
@@ -70,7 +71,7 @@ class _Model:
             i = self._ids.get(id(start.task))
             if i is None:
                 i = self._ids[id(start.task)] = len(self.tasks)
-                self.tasks.append(start.task)
+                self.tasks.append(compiled_rules(start.task))
             return (i, start.config)
         if self.task.family is not None:
             raise CrmgraspError(f"task {self.task.name!r} draws an object per episode: give worlds, not configurations")
