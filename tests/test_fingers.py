@@ -307,3 +307,16 @@ def test_the_third_contact_experiment_compares_two_fingers_with_three(tmp_path):
     assert three["final_friction"] is None or three["final_friction"] <= 0.15  # a grasp meets its goal
     for name in ("third_contact.csv", "third_contact.png", "summary.json"):
         assert (tmp_path / name).stat().st_size > 0
+
+
+def test_the_third_contact_experiment_holds_cups_in_space(tmp_path):
+    """The default pairs end with cups in 3-D; a small run of that pair gives a two-finger
+    and a tripod row with the same goal, the tripod's optimum above its bound."""
+    from crmgrasp.experiments.third_contact import ThirdContactConfig, third_contact
+
+    assert ThirdContactConfig().pairs[-1] == ("cup-3d", "cup-3d-3f")
+    cfg = ThirdContactConfig(pairs=(("cup-3d", "cup-3d-3f"),), mu_goals=(0.05,), starts=4, trials=1, episodes=20)
+    two, three = third_contact(tmp_path, cfg)["rows"]
+    assert (two["fingers"], three["fingers"], two["family"], three["task"]) == (2, 3, "cup-3d", "cup-3d-3f")
+    assert two["graspable_share"] == three["graspable_share"] == 1.0
+    assert 1.0 <= three["clairvoyant_bound"] <= three["belief_optimum"] <= 10

@@ -370,7 +370,8 @@ EXPERIMENTS: dict[str, tuple[str, Runner]] = {
         _spatial,
     ),
     "third-contact": (
-        "Introduction: two fingers against three on triangles and odd regular polygons, friction 0.15 and 0.05",
+        "Introduction: two fingers against three on triangles, odd regular polygons, boxes, discs and cups in 3-D, "
+        "friction 0.15 and 0.05",
         _third_contact,
     ),
     "continuous-offsets": (
