@@ -302,6 +302,11 @@ def _physics_learning(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) ->
     return s, rows
 
 
+def _share(value: float | None) -> str:
+    """A share as a percentage, or "-" where there is none."""
+    return "-" if value is None else f"{value:.0%}"
+
+
 def _third_contact(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tuple[dict[str, Any], list[Row]]:
     from crmgrasp.experiments.third_contact import ThirdContactConfig, third_contact
 
@@ -314,9 +319,9 @@ def _third_contact(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tu
         rows.append(
             (
                 f"{fam}, mu_goal {mu:g}: graspable starts, two / three fingers; three-finger optimum / "
-                "model-vi, CRMs; friction of its final grasps (median)",
+                "model-vi, CRMs; friction of its final grasps (median); its worlds grasped on MuJoCo",
                 f"{two['graspable_share']:.0%} / {three['graspable_share']:.0%}; {fmt(three['belief_optimum'])} / "
-                f"{fmt(three['learned_crms'])}; {fmt(three['final_friction'])}",
+                f"{fmt(three['learned_crms'])}; {fmt(three['final_friction'])}; {_share(three['mujoco_success'])}",
                 "more than two contacts 'with little modification' (Introduction, no experiment)",
             )
         )

@@ -5,13 +5,15 @@ modification". For each pair of twin tasks (``triangles``/``triangles-3f``,
 ``odd-polygons``/``odd-polygons-3f``: the same family, the same CRM kinds, two or three
 fingers; ``box-family``/``box-family-3f`` and ``cup-family``/``cup-family-3f``: the same
 family, each hand with its own CRMs and starts; docs/families.md; and in space
-``cup-3d``/``cup-3d-3f``, cups on a table, two fingers against a tripod, docs/model-3d.md) and each goal ``mu_goal``
-(0.15 and 0.05), on the same number of sampled starts: the share of starts from which some
+``cup-3d``/``cup-3d-3f``, cups on a table, two fingers against a tripod, docs/model-3d.md)
+and each goal ``mu_goal`` (0.15 and 0.05), on the same number of sampled starts: the share of starts from which some
 sequence of at most ``max_steps`` CRMs grasps (the clairvoyant search, knowing the object),
 and where some do, the clairvoyant bound and the belief-space optimum (observations only),
 in CRMs per episode, and model-vi (k = 1) learned from episodes and run from the same starts:
 its CRMs per episode, success share and the least friction its final grasps need (the
-median). Writes ``third_contact.csv``, ``third_contact.png`` and ``summary.json``.
+median), and the first trial's policy transferred to the MuJoCo stand-in (the hand's fingertips
+on the object free on the table; success: the true least friction from MuJoCo's contacts at or
+below the goal). Writes ``third_contact.csv``, ``third_contact.png`` and ``summary.json``.
 """
 
 from __future__ import annotations
@@ -43,13 +45,15 @@ COLUMNS = (
     "learned_crms",
     "learned_success",
     "final_friction",
+    "mujoco_success",
 )
 
 
 @dataclass(frozen=True)
 class ThirdContactConfig:
     """Twin tasks (two fingers, three), goals, sampled starts per task and goal, the
-    learner's trials and episodes per trial, seed."""
+    learner's trials and episodes per trial, MuJoCo worlds for the first trial's policy (0:
+    none; none either without the extra ``crmgrasp[mujoco]``), seed."""
 
     pairs: tuple[tuple[str, str], ...] = (
         ("triangles", "triangles-3f"),
@@ -62,13 +66,20 @@ class ThirdContactConfig:
     starts: int = 100
     trials: int = 3
     episodes: int = 3000
+    mujoco_worlds: int = 20
     seed: int = 0
 
     @classmethod
     def quick(cls, seed: int = 0) -> ThirdContactConfig:
-        """Triangles at 0.15 on 20 starts, 1 trial x 200 episodes: a smoke run."""
+        """Triangles at 0.15 on 20 starts, 1 trial x 200 episodes, 4 MuJoCo worlds: a smoke run."""
         return cls(
-            pairs=(("triangles", "triangles-3f"),), mu_goals=(0.15,), starts=20, trials=1, episodes=200, seed=seed
+            pairs=(("triangles", "triangles-3f"),),
+            mu_goals=(0.15,),
+            starts=20,
+            trials=1,
+            episodes=200,
+            mujoco_worlds=4,
+            seed=seed,
         )
 
 
@@ -90,7 +101,7 @@ def _row(name: str, mu: float, cfg: ThirdContactConfig) -> dict[str, Any]:
         **(
             _learned(task, starts, cfg)
             if found
-            else {"learned_crms": None, "learned_success": None, "final_friction": None}
+            else {"learned_crms": None, "learned_success": None, "final_friction": None, "mujoco_success": None}
         ),
     }
 
@@ -101,13 +112,30 @@ def _learned(task: Any, starts: Any, cfg: ThirdContactConfig) -> dict[str, Any]:
     CRMs per episode, the success share, and the median least friction of the final grasps."""
     from crmgrasp.experiments._episodes import greedy_records, train_model_vi
 
-    records = greedy_records(task, train_model_vi(task, cfg.trials, cfg.episodes, cfg.seed), starts, cfg.seed)
+    agents = train_model_vi(task, cfg.trials, cfg.episodes, cfg.seed)
+    records = greedy_records(task, agents, starts, cfg.seed)
     finals = [task.quality(r.final) for trial in records for r in trial if r.success]
     return {
         "learned_crms": float(np.median([np.mean([len(r.actions) for r in trial]) for trial in records])),
         "learned_success": float(np.mean([r.success for trial in records for r in trial])),
         "final_friction": float(np.median(finals)) if finals else None,
+        "mujoco_success": _on_mujoco(task, agents[0], cfg),
     }
+
+
+def _on_mujoco(task: Any, agent: Any, cfg: ThirdContactConfig) -> float | None:
+    """The share of ``cfg.mujoco_worlds`` MuJoCo worlds (drawn from ``cfg.seed``) that the first
+    trial's greedy policy grasps, judged by the true least friction from MuJoCo's contacts
+    ([`crmgrasp.experiments.physics_learning.score_on_mujoco`][]); ``None`` without worlds or
+    without the extra."""
+    from crmgrasp.hardware.mujoco import mujoco_available
+
+    if cfg.mujoco_worlds == 0 or not mujoco_available():
+        return None
+    from crmgrasp.agents.training import encoder_for
+    from crmgrasp.experiments.physics_learning import score_on_mujoco
+
+    return float(score_on_mujoco(task, agent, encoder_for(task, 1), cfg.mujoco_worlds, cfg.seed)["success"])
 
 
 def third_contact(
@@ -130,7 +158,8 @@ def third_contact(
     save_figure(_figure(rows, cfg), out / "third_contact.png")
     budget = (
         f"{cfg.starts} sampled starts per task and goal, seed {cfg.seed}; model-vi k=1, {cfg.trials} trials x "
-        f"{cfg.episodes} task episodes per task and goal, greedy on those starts"
+        f"{cfg.episodes} task episodes per task and goal, greedy on those starts; the first trial's policy on "
+        f"{cfg.mujoco_worlds} MuJoCo worlds"
     )
     summary = {"budget": budget, "rows": rows}
     write_json(out / "summary.json", summary)
@@ -150,14 +179,19 @@ def _figure(rows: list[dict[str, Any]], cfg: ThirdContactConfig) -> Any:
     left, right = fig.subplots(2, 1)
     for k, (fingers, color) in enumerate(((2, "tab:gray"), (3, "tab:blue"))):
         share = [100 * by[(f, m, fingers)]["graspable_share"] for f, m in groups]
-        bars = left.bar(x + (k - 0.5) * 0.38, share, 0.38, color=color, label=f"{fingers} fingers")
+        bars = left.bar(x + (k - 1) * 0.27, share, 0.27, color=color, label=f"{fingers} fingers: graspable")
+        left.bar_label(bars, fmt="%.0f%%", fontsize=7)
+    if any(by[(f, m, 3)]["mujoco_success"] is not None for f, m in groups):
+        grasped = [100 * (by[(f, m, 3)]["mujoco_success"] or 0.0) for f, m in groups]
+        label = f"3 fingers, model-vi on MuJoCo ({cfg.mujoco_worlds} worlds): grasped"
+        bars = left.bar(x + 0.27, grasped, 0.27, color="tab:purple", label=label)
         left.bar_label(bars, fmt="%.0f%%", fontsize=7)
     left.set_xticks(x, labels, fontsize=8)
     left.set_ylim(0, 130)
     left.set_yticks(range(0, 101, 20))
-    left.set_ylabel("starts some CRM sequence\ngrasps (%)")
+    left.set_ylabel("share of starts\nor worlds (%)")
     left.set_title("what a third contact makes graspable", fontsize=10)
-    left.legend(fontsize=8, loc="upper right", ncols=2)
+    left.legend(fontsize=8, loc="upper right", ncols=3)
     parts = (
         ("clairvoyant_bound", "tab:green", "clairvoyant bound"),
         ("belief_optimum", "tab:blue", "belief-space optimum"),
