@@ -15,9 +15,9 @@ reassociates nor contracts, and each result equals the readable rules bit for bi
 tests check every kernel). Measured on the 2-core development machine (``python
 benchmarks/bench_env.py``; ``python benchmarks/step_breakdown.py``): the 1,024-env
 vector step of ``paper-box`` from about 142 to about 104 us (its compiled pass over the
-rows from 87 to 56 ns per row), the first compilation of the polygon kernels from 4.0 to
-4.5 s. numba's IR-level inlining (``inline="always"``) gave the same speed and
-compiled in 10 s.
+1,024 rows from 90 to 56 us); the first compilation of the polygon kernels took 4.1 s
+against 4.2 s before (``python benchmarks/bench_compile.py``). numba's IR-level inlining
+(``inline="always"``) was tried: the same speed, a slower first compilation.
 """
 
 from __future__ import annotations
