@@ -14,8 +14,8 @@ Neither changes a floating-point expression: no ``fastmath``, so LLVM neither
 reassociates nor contracts, and each result equals the readable rules bit for bit (the
 tests check every kernel). Measured on the 2-core development machine (``python
 benchmarks/bench_env.py``; ``python benchmarks/step_breakdown.py``): the 1,024-env
-vector step of ``paper-box`` from about 142 to about 104 us (its compiled pass over the
-1,024 rows from 90 to 56 us); the first compilation of the polygon kernels took 4.1 s
+vector env of ``paper-box`` from 7.8 M to 9.6-10.6 M env-steps per second (its compiled
+pass over the 1,024 rows from 90 to 56 us); the first compilation of the polygon kernels took 4.1 s
 against 4.2 s before (``python benchmarks/bench_compile.py``). numba's IR-level inlining
 (``inline="always"``) was tried: the same speed, a slower first compilation.
 """

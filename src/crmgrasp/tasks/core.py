@@ -284,15 +284,18 @@ class Task:
     def with_model(self, model: ContactModel) -> Task:
         """This task with its rules applied through ``model``: the same model with a rule
         a kernel computes in compiled code, equal bit for bit (nothing is checked again)."""
-        out = object.__new__(type(self))
-        out.__dict__.update(self.__dict__, model=model)
-        return out
+        return self._copied(model=model)
 
     def with_object(self, obj: Shape) -> Task:
         """This task on the object ``obj``, without a family (the object is not checked
         again: families draw valid shapes)."""
-        out = object.__new__(type(self))  # copy.copy's result, without its generic machinery
-        out.__dict__.update(self.__dict__, obj=obj, family=None)
+        return self._copied(obj=obj, family=None)
+
+    def _copied(self, **fields: Any) -> Task:
+        """A copy with ``fields`` replaced, unchecked: copy.copy's result, without its
+        generic machinery (a family builds one per episode)."""
+        out = object.__new__(type(self))
+        out.__dict__.update(self.__dict__, **fields)
         return out
 
     def _one_object(self) -> None:
