@@ -1,8 +1,10 @@
-"""The tripod environments' step time, compiled least friction against the readable rules.
+"""The tripod environments' step time: compiled, least friction compiled only, readable.
 
-For ``crmgrasp/Box3D3F-v0`` and ``crmgrasp/Cup3D3F-v0`` on the default backend (the
-least friction compiled: ``FingersSpatialKernel``) and on ``backend="reference"`` (the
-readable rules), with ``CartPole-v1`` as the peer: random actions through ``gymnasium.make``,
+For ``crmgrasp/Box3D3F-v0`` and ``crmgrasp/Cup3D3F-v0`` on the default backend (every rule
+compiled: ``FusedFingersSpatialKernel``), with only the least friction compiled (the
+readable CRMs, starts and observations: ``FingersSpatialKernel``, the path before the fused
+kernel and still the one for sensing noise), and on ``backend="reference"`` (the readable
+rules), with ``CartPole-v1`` as the peer: random actions through ``gymnasium.make``,
 ``steps`` per round, the environments alternating round by round, the least round kept.
 Every round starts with both least-friction caches empty, so a step pays for each new
 configuration's least friction as in a fresh run. Times are per step, counting the resets
@@ -23,7 +25,8 @@ import gymnasium as gym
 import numpy as np
 
 import crmgrasp  # noqa: F401  (registers the environments)
-from crmgrasp.kernels.closure import _cached
+from crmgrasp.kernels.closure import FingersSpatialKernel, _cached
+from crmgrasp.kernels.family import FamilyKernel
 from crmgrasp.model.spatial_model import _least_friction
 
 
@@ -44,6 +47,8 @@ def main(steps: int = 1000, rounds: int = 3) -> dict[str, Any]:
     for env_id in ("crmgrasp/Box3D3F-v0", "crmgrasp/Cup3D3F-v0"):
         name = env_id.split("/")[1].split("-")[0].lower()
         envs[name] = gym.make(env_id)
+        envs[f"{name}_lf_only"] = gym.make(env_id)
+        envs[f"{name}_lf_only"].unwrapped.kernel = FamilyKernel(envs[name].unwrapped.task, FingersSpatialKernel)
         envs[f"{name}_reference"] = gym.make(env_id, backend="reference")
     actions, best = {}, {}
     for name, env in envs.items():
@@ -60,6 +65,7 @@ def main(steps: int = 1000, rounds: int = 3) -> dict[str, Any]:
         out[f"{name}_over_cartpole"] = round(seconds / cart, 1)
     for name in ("box3d3f", "cup3d3f"):
         out[f"{name}_reference_over_compiled"] = round(best[f"{name}_reference"] / best[name], 1)
+        out[f"{name}_lf_only_over_compiled"] = round(best[f"{name}_lf_only"] / best[name], 2)
     return out
 
 

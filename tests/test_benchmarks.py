@@ -198,3 +198,35 @@ def test_bench_tripod_smoke():
     spec.loader.exec_module(mod)
     res = mod.main(steps=5, rounds=1)
     assert res["box3d3f_us"] > 0 and res["cup3d3f_reference_us"] > 0 and res["cartpole_us"] > 0
+    assert res["box3d3f_lf_only_us"] > 0 and res["cup3d3f_lf_only_over_compiled"] > 0
+
+
+def test_family_learning_pool_and_reference_bias_smoke():
+    spec = importlib.util.spec_from_file_location("family_learning", BENCH.parent / "family_learning.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    from crmgrasp.experiments._episodes import episode_records
+    from crmgrasp.planners.references import BeliefPolicy, belief_optimum, sample_starts
+    from crmgrasp.tasks import make_task
+
+    task = make_task("u-handle")
+    small = mod.task_row("u-handle", ("pooled-vi",), 10, range(1), 12)
+    pooled = mod.task_row("u-handle", ("pooled-vi",), 10, range(1), 12, pool=36)
+    same = mod.task_row("u-handle", ("pooled-vi",), 10, range(1), 12, pool=12)
+    assert (same["optimum"], same["pooled-vi"]["gap"]) == (small["optimum"], small["pooled-vi"]["gap"])
+    assert (small["pool"], pooled["pool"]) == (12, 36) and small["graspable"] == pooled["graspable"]
+    planned = sample_starts(task, 36, 10_000)
+    planner = BeliefPolicy(task, planned)
+    costs = [len(r.actions) for r in episode_records(task, lambda: planner, planned[:12], 0)]
+    assert pooled["optimum"] == round(sum(costs) / 12, 4)  # the 36-world policy, scored on the first 12
+    spec = importlib.util.spec_from_file_location("reference_bias", BENCH.parent / "reference_bias.py")
+    bias = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bias)
+    res = bias.main(["u-handle"], [6, 12], 12, 10)["u-handle"]
+    worlds = sample_starts(task, 12, 10_000)
+    assert res["12"]["lower"] == round(belief_optimum(task, worlds), 4)  # in-sample per world = the optimum
+    blocks = (belief_optimum(task, worlds[:6]) + belief_optimum(task, worlds[6:])) / 2
+    assert res["6"]["lower"] == round(blocks, 4) and res["6"]["blocks"] == 2
+    assert res["clairvoyant_heldout"] <= res["6"]["upper"] and res["12"]["upper"] <= task.max_steps
+    with pytest.raises(SystemExit, match="divide the pool"):
+        bias.main(["u-handle"], [5], 12, 10)

@@ -51,7 +51,7 @@ def test_compiled_least_friction_on_the_tripod_tasks_episodes() -> None:
     for name in ("cup-3d-3f", "box-3d-3f"):
         task = make_task(name)
         fast, slow = kernel_for(task, "auto"), kernel_for(task, "reference")
-        assert fast.name == "family" and fast.current.name == "numba-spatial-fingers"
+        assert fast.name == "family" and fast.current.name == "numba-spatial-fingers-fused"
         rng_f, rng_s = np.random.default_rng(5), np.random.default_rng(5)
         acts = np.random.default_rng(6).integers(len(task.actions), size=60).tolist()
         a, b = fast.begin(fast.sample_start(rng_f), rng_f), slow.begin(slow.sample_start(rng_s), rng_s)

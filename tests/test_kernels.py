@@ -103,6 +103,11 @@ _COMPILE = "crmgrasp.kernels._compile"
         ("_vi_jit", {"__future__", _COMPILE}),
         ("_fingers_jit", {"__future__", "numpy", "numba", _COMPILE, "crmgrasp.kernels._polygon_jit"}),
         ("_closure_jit", {"__future__", "math", "numpy", "numba"}),
+        (
+            "_fingers3d_jit",
+            {"__future__", "math", "numpy", "numba", _COMPILE}
+            | {f"crmgrasp.kernels._{m}_jit" for m in ("closure", "fingers", "spatial")},
+        ),
     ],
 )
 def test_compiled_code_holds_no_constant_of_the_model(module, allowed):

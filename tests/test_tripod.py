@@ -172,7 +172,7 @@ def test_tripod_tasks_start_feasible_step_and_round_trip(name: str) -> None:
     again = task_from_dict(task_to_dict(task))
     assert task_to_dict(again) == task_to_dict(task) and again.hand.contacts == 3
     compiled, readable = kernel_for(task.instance(rng), "numba"), kernel_for(task.instance(rng), "reference")
-    assert compiled.name == "numba-spatial-fingers" and compiled.task.model.least_friction is not None
+    assert compiled.name == "numba-spatial-fingers-fused" and compiled.task.model.least_friction is not None
     assert readable.name == "spatial" and readable.task.model.least_friction is None
 
 

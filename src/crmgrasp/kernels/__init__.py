@@ -17,7 +17,8 @@ backend                      object                      kernel
 ``"auto"``                   a solid, sensing noise      ``SpatialKernel``
 ``"auto"``, ``"reference"``  a triangle mesh             ``SpatialKernel``
 ``"reference"``              a solid, three+ contacts    ``SpatialKernel``
-``"auto"``, ``"numba"``      a solid, three+ contacts    ``FingersSpatialKernel``
+``"auto"``, ``"numba"``      a solid, three+, noise-free ``FusedFingersSpatialKernel``
+``"auto"``                   a solid, three+, noise/mesh ``FingersSpatialKernel``
 any                          a family (one per episode)  ``FamilyKernel`` over the above
 ===========================  ==========================  ===============================
 
@@ -105,23 +106,24 @@ def _planar(task: Task, backend: str) -> Kernel:
 
 
 def _spatial(task: Task, backend: str) -> Kernel:
-    """Spatial model: two contacts compiled and fused on a polyhedron or a cylinder without
-    noise, else the reference rules (meshes, noise); three or more contacts by the readable
-    rules with the least friction compiled (any solid and noise)."""
+    """Spatial model on a polyhedron or a cylinder without noise: compiled and fused (two
+    contacts, or three and more); with noise or on a mesh the reference rules, for three
+    and more contacts with their least friction compiled."""
     from crmgrasp.kernels.spatial import FusedSpatialKernel, SpatialKernel
 
-    if task.model.n_contacts > 2:
-        if backend == "reference":
-            return SpatialKernel(task)
-        from crmgrasp.kernels.closure import FingersSpatialKernel
-
-        return FingersSpatialKernel(task)
     if backend == "numba" and task.noise.active:
         raise CrmgraspError("the compiled spatial kernel is noise-free; use backend 'auto' or 'reference'")
     mesh = isinstance(task.obj, TriangleMesh)
     if backend == "numba" and mesh:
         raise CrmgraspError("the compiled spatial kernel takes polyhedra and cylinders; a mesh runs on 'reference'")
-    slow = backend == "reference" or task.noise.active or mesh
+    if backend == "reference":
+        return SpatialKernel(task)
+    slow = task.noise.active or mesh
+    if task.model.n_contacts > 2:
+        from crmgrasp.kernels.closure import FingersSpatialKernel
+        from crmgrasp.kernels.fingers3d import FusedFingersSpatialKernel
+
+        return FingersSpatialKernel(task) if slow else FusedFingersSpatialKernel(task)
     return SpatialKernel(task) if slow else FusedSpatialKernel(task)
 
 

@@ -196,19 +196,54 @@ def _feasible(c, planes, cyl, p, q):  # type: ignore[no-untyped-def]
 
 
 @compiled
-def _crm(v, c_is_b, f_is_b, r1, r2, planes, cyl, p, q, out):  # type: ignore[no-untyped-def]
-    """[`crmgrasp.model.spatial.execute_crm3d`][] (noise-free: the goal line from the
-    true frame) from the row ``v`` into the row ``out``; returns the error code."""
-    for i in range(12):
-        out[i] = v[i]
-    sf = 6 if f_is_b else 0
-    still = 0 if c_is_b else 6
+def _goal_line(v, sf, r1, r2, p):  # type: ignore[no-untyped-def]
+    """The goal line of a CRM whose frame contact starts at column ``sf`` of ``v``: its base
+    ``x_f + r_1 t_1 + r_2 t_2`` and direction ``n_f``
+    ([`crmgrasp.model.spatial.goal_chord3d`][], [`tangent_frame`][crmgrasp.model.spatial.tangent_frame])."""
     nx, ny, nz = v[sf + 3], v[sf + 4], v[sf + 5]
     t1x, t1y, t1z = _axis(nx, ny, nz, p)
     t2x, t2y, t2z = _cross(t1x, t1y, t1z, nx, ny, nz)
     bx = v[sf] + r1 * t1x + r2 * t2x
     by = v[sf + 1] + r1 * t1y + r2 * t2y
     bz = v[sf + 2] + r1 * t1z + r2 * t2z
+    return bx, by, bz, nx, ny, nz
+
+
+@compiled
+def _land(bx, by, bz, nx, ny, nz, t_lo, t_hi, same, planes, cyl, p, q):  # type: ignore[no-untyped-def]
+    """The approach of [`crmgrasp.model.spatial.execute_crm3d`][] along its chord: the goal
+    line ``b + t n`` within ``[t_lo, t_hi]``, walked along ``n`` from ``t_lo`` for an
+    opposition of a contact onto itself (``same``), against it from ``t_hi`` otherwise,
+    lifted above the table; returns ``(error code, x, y, z, n_x, n_y, n_z)`` of the new
+    contact (the code 0 when it lands; feasibility is the caller's)."""
+    t0, t1 = (t_lo, t_hi) if same else (t_hi, t_lo)
+    start = (bx + t0 * nx, by + t0 * ny, bz + t0 * nz)
+    ahead = (nx, ny, nz) if same else (-nx, -ny, -nz)
+    length = abs(t1 - t0)
+    kind, surf = q[KIND], p[SURF]
+    if _contains(start[0], start[1], start[2], planes, cyl, kind, surf):
+        return 1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    if q[HAS_TABLE] != 0 and _on_table(start[2], p, q):
+        rise = ahead[2]
+        up = (p[TABLE] + 2.0 * surf - start[2]) / rise if rise > 0.0 else INF
+        if up >= length:
+            return 2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        moved = (start[0] + up * ahead[0], start[1] + up * ahead[1], start[2] + up * ahead[2])
+        if _contains(moved[0], moved[1], moved[2], planes, cyl, kind, surf):
+            return 2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        start, length = moved, length - up
+    hit, px, py, pz, mx, my, mz = _entry(start, ahead, length, planes, cyl, kind, surf, p[TIE])
+    return (0 if hit else 1), px, py, pz, mx, my, mz
+
+
+@compiled
+def _crm(v, c_is_b, f_is_b, r1, r2, planes, cyl, p, q, out):  # type: ignore[no-untyped-def]
+    """[`crmgrasp.model.spatial.execute_crm3d`][] (noise-free: the goal line from the
+    true frame) from the row ``v`` into the row ``out``; returns the error code."""
+    for i in range(12):
+        out[i] = v[i]
+    still = 0 if c_is_b else 6
+    bx, by, bz, nx, ny, nz = _goal_line(v, 6 if f_is_b else 0, r1, r2, p)
     wx, wy, wz = bx - v[still], by - v[still + 1], bz - v[still + 2]
     qb = _dot(wx, wy, wz, nx, ny, nz)
     qc = _dot(wx, wy, wz, wx, wy, wz) - p[APERTURE] * p[APERTURE]
@@ -216,26 +251,9 @@ def _crm(v, c_is_b, f_is_b, r1, r2, planes, cyl, p, q, out):  # type: ignore[no-
     if disc < 0.0:
         return 1
     t_lo, t_hi = -qb - math.sqrt(disc), -qb + math.sqrt(disc)
-    same = c_is_b == f_is_b
-    t0, t1 = (t_lo, t_hi) if same else (t_hi, t_lo)
-    start = (bx + t0 * nx, by + t0 * ny, bz + t0 * nz)
-    ahead = (nx, ny, nz) if same else (-nx, -ny, -nz)
-    length = abs(t1 - t0)
-    kind, surf = q[KIND], p[SURF]
-    if _contains(start[0], start[1], start[2], planes, cyl, kind, surf):
-        return 1
-    if q[HAS_TABLE] != 0 and _on_table(start[2], p, q):
-        rise = ahead[2]
-        up = (p[TABLE] + 2.0 * surf - start[2]) / rise if rise > 0.0 else INF
-        if up >= length:
-            return 2
-        moved = (start[0] + up * ahead[0], start[1] + up * ahead[1], start[2] + up * ahead[2])
-        if _contains(moved[0], moved[1], moved[2], planes, cyl, kind, surf):
-            return 2
-        start, length = moved, length - up
-    hit, px, py, pz, mx, my, mz = _entry(start, ahead, length, planes, cyl, kind, surf, p[TIE])
-    if not hit:
-        return 1
+    code, px, py, pz, mx, my, mz = _land(bx, by, bz, nx, ny, nz, t_lo, t_hi, c_is_b == f_is_b, planes, cyl, p, q)
+    if code != 0:
+        return code
     m = 6 if c_is_b else 0
     out[m], out[m + 1], out[m + 2], out[m + 3], out[m + 4], out[m + 5] = px, py, pz, mx, my, mz
     code = _feasible(out, planes, cyl, p, q)

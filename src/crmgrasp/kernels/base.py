@@ -21,12 +21,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.model.hand import CRM
+from crmgrasp.model.hand import CRM, Error
 from crmgrasp.model.sensing import Discretizer
-from crmgrasp.sim import OneStep, SimState, begin, step
+from crmgrasp.sim import OneStep, SimState, begin, episode_end, step, step_reward
 from crmgrasp.tasks import StartFilter, Task
 
-__all__ = ["Kernel", "OneStep", "BatchStep", "bin_thresholds"]
+__all__ = ["Kernel", "FusedSingleStep", "OneStep", "BatchStep", "bin_thresholds"]
+
+_ERRORS = tuple(Error)
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -209,3 +211,69 @@ class Kernel(ABC):
                 out[name] = np.minimum(np.maximum(v, low), high)[:, None]
         out["error"] = np.asarray(err, dtype=np.int64)
         return out
+
+
+class FusedSingleStep(Kernel):
+    """The single step of a kernel that runs a noise-free CRM, its observation, bin and
+    least friction as one compiled call, keeping the configuration in a buffer from one
+    step to the next. A subclass (listed before its kernel class) sets the buffers ``_v``
+    and ``_out`` (a configuration's row, any shape) and ``_vals`` (the observation as a
+    column) and implements [`_begin_call`][] and [`_step_call`][]; after an errored CRM
+    (the row unchanged) the call may return the observation and least friction it already
+    holds (``_known``, ``_mu``)."""
+
+    _v: F64
+    _out: F64
+    _vals: F64
+
+    def _forget(self) -> None:
+        """No configuration in the buffer (at construction and on a new object)."""
+        self._v_of: Any = None
+        # whether _vals and _mu hold the observation and least friction of _v's row
+        self._known, self._mu = False, 0.0
+
+    def _load(self, config: Any) -> None:
+        if config is not self._v_of:
+            self._v.reshape(-1)[:] = self.model.row_of(config)
+            self._v_of, self._known = config, False
+
+    @abstractmethod
+    def _begin_call(self) -> tuple[int, float]:
+        """``(bin index, least friction)`` of ``_v``'s row, its observation into ``_vals``."""
+
+    @abstractmethod
+    def _step_call(self, action: int, table: F64) -> tuple[int, int, float]:
+        """``(error code, bin index, least friction)`` of the CRM ``table[action]`` from
+        ``_v``'s row: the new row into ``_out``, its observation into ``_vals``."""
+
+    def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
+        self._load(config)
+        index, mu = self._begin_call()
+        self._known, self._mu = True, mu
+        return OneStep(SimState(config, config, 0), tuple(self._vals[:, 0].tolist()), Error.NONE, index, mu)
+
+    def step_one(self, state: SimState, action: Any, rng: np.random.Generator) -> OneStep:
+        if self.model.is_crm(action):  # a CRM of the hand's continuous action space
+            return self._step(state, 0, self.crm_row(action))
+        if not 0 <= action < len(self.acts):  # as the readable step treats it
+            return Kernel.step_one(self, state, action, rng)
+        return self._step(state, action, self.acts)
+
+    def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:
+        return self._step(state, 0, row)
+
+    def _step(self, state: SimState, action: int, table: F64) -> OneStep:
+        """The CRM ``table[action]`` from ``state``, one compiled call."""
+        config = state.config
+        self._load(config)
+        code, index, mu = self._step_call(action, table)
+        self._known, self._mu = True, mu
+        if not code:
+            config = self.model.config_of(self._out.reshape(-1).tolist())
+            self._v, self._out = self._out, self._v  # the output is the next step's input
+            self._v_of = config
+        steps = state.steps + 1
+        terminated, truncated = episode_end(self.task, mu, steps)
+        reward = step_reward(self.task, terminated, code)
+        obs = tuple(self._vals[:, 0].tolist())
+        return OneStep(SimState(config, config, steps), obs, _ERRORS[code], index, mu, reward, terminated, truncated)

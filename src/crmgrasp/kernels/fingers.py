@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import crmgrasp.kernels._fingers_jit as jit
-from crmgrasp.kernels.base import F64, I64, Kernel, bin_thresholds
+from crmgrasp.kernels.base import F64, I64, FusedSingleStep, Kernel, bin_thresholds
 from crmgrasp.kernels.polygon import params, rebound
 from crmgrasp.model import quality
 from crmgrasp.model.geometry import Polygon
@@ -145,10 +145,10 @@ class FingersKernel(Kernel):
         return OneStep(SimState(config, sensed, steps), obs, _ERRORS[code], index, mu, reward, terminated, truncated)
 
 
-class FusedFingersKernel(FingersKernel):
+class FusedFingersKernel(FusedSingleStep, FingersKernel):
     """[`FingersKernel`][] for noise-free tasks: a single step (the CRM, its observation, bin
     and least friction) is one compiled call, and the configuration stays in a buffer from
-    one step to the next."""
+    one step to the next ([`FusedSingleStep`][crmgrasp.kernels.base.FusedSingleStep])."""
 
     name = "numba-fingers-fused"
 
@@ -159,48 +159,13 @@ class FusedFingersKernel(FingersKernel):
 
     def _fresh(self) -> None:
         super()._fresh()
-        self._v_of: Any = None
-        # whether _vals and _mu hold the observation and least friction of _v's row (an
-        # errored CRM leaves the row as it was: its step reuses them)
-        self._known, self._mu = False, 0.0
+        self._forget()
 
-    def _load(self, config: Any) -> None:
-        if config is not self._v_of:
-            self._v[0] = [x for c in config for x in c]
-            self._v_of = config
-            self._known = False
+    def _begin_call(self) -> tuple[int, float]:
+        return jit.begin_one(self._v, self.n, self.th, self.strides, self.abs_m, self.p, self.fp, self._vals)  # type: ignore[no-any-return]
 
-    def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
-        self._load(config)
-        index, mu = jit.begin_one(self._v, self.n, self.th, self.strides, self.abs_m, self.p, self.fp, self._vals)
-        self._known, self._mu = True, mu
-        return OneStep(SimState(config, config, 0), tuple(self._vals[:, 0].tolist()), Error.NONE, index, mu)
-
-    def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
-        if isinstance(action, CRM):  # a CRM of the hand's continuous action space
-            return self._step(state, 0, self.crm_row(action))
-        if not 0 <= action < len(self.acts):  # as the readable step treats it
-            return Kernel.step_one(self, state, action, rng)
-        return self._step(state, action, self.acts)
-
-    def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:
-        return self._step(state, 0, row)
-
-    def _step(self, state: SimState, action: int, table: F64) -> OneStep:
-        """The CRM ``table[action]`` from ``state``, one compiled call."""
-        config = state.config
-        self._load(config)
-        code, index, mu = jit.step_one(
+    def _step_call(self, action: int, table: F64) -> tuple[int, int, float]:
+        return jit.step_one(  # type: ignore[no-any-return]
             self._v, action, table, self.n, self.e, self.th, self.strides, self.abs_m, self.p, self.q, self.fp,
             self._out, self._vals, self._known, self._mu,
         )  # fmt: skip
-        self._known, self._mu = True, mu
-        if not code:
-            config = self.model.config_of(self._out[0].tolist())
-            self._v, self._out = self._out, self._v  # the output is the next step's input
-            self._v_of = config
-        steps = state.steps + 1
-        terminated, truncated = episode_end(self.task, mu, steps)
-        reward = step_reward(self.task, terminated, code)
-        obs = tuple(self._vals[:, 0].tolist())
-        return OneStep(SimState(config, config, steps), obs, _ERRORS[code], index, mu, reward, terminated, truncated)
