@@ -218,7 +218,7 @@ class FusedSingleStep(Kernel):
     least friction as one compiled call, keeping the configuration in a buffer from one
     step to the next. A subclass (listed before its kernel class) sets the buffers ``_v``
     and ``_out`` (a configuration's row, any shape) and ``_vals`` (the observation as a
-    column) and implements [`_begin_call`][] and [`_step_call`][]; after an errored CRM
+    column) and implements `_begin_call` and `_step_call`; after an errored CRM
     (the row unchanged) the call may return the observation and least friction it already
     holds (``_known``, ``_mu``)."""
 

@@ -1,7 +1,7 @@
 """The compiled kernel of a planar hand with three or more contacts on a polygon.
 
 [`FingersKernel`][] runs the model's CRM transition, observation, bins and least friction
-as compiled loops ([`crmgrasp.kernels._fingers_jit`][]), batched and one step at a time,
+as compiled loops (`crmgrasp.kernels._fingers_jit`), batched and one step at a time,
 with or without sensing noise (readings are drawn by the model, as on every path). Its
 results equal the readable rules bit for bit (the tests check it).
 """
