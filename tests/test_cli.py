@@ -159,6 +159,28 @@ def test_references_command(capsys):
     assert res["aliasing_price"] == pytest.approx(res["belief_optimum"] - res["clairvoyant_bound"])
 
 
+def test_references_blocks(capsys):
+    """``--blocks``: the optimum over disjoint blocks of the starts, never above the optimum
+    over all of them (a policy for the union is one for each block); a count that does not
+    divide the starts is a one-line error before any work."""
+    from crmgrasp._validation import CrmgraspError
+    from crmgrasp.planners.references import block_optima, sample_starts
+    from crmgrasp.tasks import make_task
+
+    assert main(["references", "--task", "u-handle", "--starts", "60", "--blocks", "4", "--json", "--quiet"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    task = make_task("u-handle")
+    assert res["block_optima"] == block_optima(task, sample_starts(task, 60, 0), 4) and res["blocks"] == 4
+    assert res["block_optimum_mean"] <= res["belief_optimum"] + 1e-12
+    lo, hi = res["block_optimum_ci95"]
+    assert lo <= res["block_optimum_mean"] <= hi
+    assert main(["references", "--starts", "60", "--blocks", "7", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--blocks 7 must divide --starts 60" in err
+    with pytest.raises(CrmgraspError, match="divides the 60 starts"):
+        block_optima(task, sample_starts(task, 60, 0), 7)
+
+
 def test_pomdp_command(tmp_path, capsys):
     out = tmp_path / "box.pomdp"
     assert (

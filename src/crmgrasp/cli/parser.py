@@ -205,6 +205,14 @@ def _parser_references(sub: Any) -> None:
     _add_task(p)
     p.add_argument("--starts", type=_STARTS, default=4000, help="sampled starts (default 4000; 1 to 1,000,000)")
     p.add_argument("--seed", type=_SEED, default=0, help="seed of the starts (default 0; 0 to 2**63-1)")
+    p.add_argument(
+        "--blocks",
+        type=_STARTS,
+        default=1,
+        help="also the belief-space optimum over each of this many disjoint blocks of the starts, their mean "
+        "and standard error: how far the sample size still moves the optimum, which on a family is optimistic "
+        "and rises with more starts (default 1: none; must divide --starts)",
+    )
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
     _add_quiet(p)
 

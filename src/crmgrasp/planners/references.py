@@ -40,6 +40,7 @@ __all__ = [
     "clairvoyant_steps",
     "clairvoyant_bound",
     "belief_optimum",
+    "block_optima",
     "ungraspable_fraction",
     "graspable_warning",
     "sample_starts",
@@ -213,6 +214,23 @@ def belief_optimum(task: Task, starts: Sequence[Start], horizon: int | None = No
     memo: dict[tuple[tuple[State, ...], int], float] = {}
     total = sum(len(g) * _value(model, g, h, memo) for g in _first_groups(model, starts).values())
     return total / len(starts)
+
+
+def block_optima(task: Task, starts: Sequence[Start], blocks: int, horizon: int | None = None) -> list[float]:
+    """[`belief_optimum`][] over each of ``blocks`` disjoint runs of ``starts`` (in order,
+    equally long: ``blocks`` must divide their number).
+
+    On a family, whose worlds vary continuously, the optimum over ``n`` sampled worlds is
+    optimistic: once a history is left with one of them it acts as if it knew that world.
+    Its expectation is at most the family's own optimum and rises toward it as ``n`` grows
+    (over a union of disjoint sets the optimum is at least the sets' size-weighted mean), so
+    the blocks' mean against the optimum over all ``starts`` shows how far the sample size
+    still moves it."""
+    n = len(starts)
+    if isinstance(blocks, bool) or not isinstance(blocks, int) or blocks < 1 or n % blocks:
+        raise CrmgraspError(f"blocks must be a whole number that divides the {n} starts, got {blocks!r}")
+    size = n // blocks
+    return [belief_optimum(task, starts[i : i + size], horizon) for i in range(0, n, size)]
 
 
 def _value(model: _Model, belief: tuple[State, ...], h: int, memo: dict, acts: dict | None = None) -> float:
