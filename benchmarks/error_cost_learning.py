@@ -10,7 +10,7 @@ the learned greedy policy's mean cost, its gap to the optimum's, success and err
 within 15% of the optimum with at least 95% success (issue 29's target).
 
 Usage: ``python benchmarks/error_cost_learning.py [--task notch-or-box --task box-family]
-[--cost 30] [--episodes 3000] [--seeds 5] [--worlds 400] [--test 1000] [--learner backoff-vi]
+[--cost 30] [--episodes 3000] [--seeds 5] [--first 0] [--worlds 400] [--test 1000] [--learner backoff-vi]
 [--param KEY=NUMBER ...]`` (``--param``: a learner parameter, e.g. ``explore=1`` for ``backoff-vi``). Prints one JSON
 object; progress on stderr. About 5 min at the defaults on 2 cores.
 """
@@ -42,6 +42,7 @@ def one(
     n_test: int,
     learner: str = "pooled-vi",
     extra: dict | None = None,
+    first: int = 0,
 ) -> dict:
     task = dataclasses.replace(make_task(name), error_cost=float(cost))
     worlds, test = sample_starts(task, n_worlds, 0), sample_starts(task, n_test, 1)
@@ -49,7 +50,7 @@ def one(
     optimum = policy_rows(episode_records(task, lambda: belief, test, 0), cost)
     params = {**({"symmetric": True} if task.symmetry is not None else {}), **(extra or {})}
     rows = []
-    for seed in range(seeds):
+    for seed in range(first, first + seeds):
         t0 = time.perf_counter()
         k = ORDERS[learner]
         res = train_trials(task, learner, trials=1, episodes=episodes, seed=seed, k=k, eval_episodes=0, params=params)
@@ -84,6 +85,7 @@ def main() -> None:
     p.add_argument("--cost", action="append", type=float, help="error cost c (repeatable; default 30)")
     p.add_argument("--episodes", type=int, default=3000)
     p.add_argument("--seeds", type=int, default=5)
+    p.add_argument("--first", type=int, default=0, help="first seed (default 0)")
     p.add_argument("--worlds", type=int, default=400)
     p.add_argument("--test", type=int, default=1000)
     p.add_argument("--learner", choices=tuple(ORDERS), default="pooled-vi")
@@ -91,7 +93,7 @@ def main() -> None:
     a = p.parse_args()
     extra = {k: float(v) for k, v in (item.split("=", 1) for item in a.param)}
     out = [
-        one(name, cost, a.episodes, a.seeds, a.worlds, a.test, a.learner, extra)
+        one(name, cost, a.episodes, a.seeds, a.worlds, a.test, a.learner, extra, a.first)
         for name in (a.task or ["notch-or-box", "box-family"])
         for cost in (a.cost or [30.0])
     ]

@@ -36,12 +36,16 @@ class LearnerPreset:
         Learn on the mirror quotient where the task declares a symmetry (tabular agents only).
     description
         One line for ``--help``.
+    params
+        The agent's keyword parameters the preset sets, ``(name, value)`` pairs: each applies
+        where the user gives no value of their own, and only when the preset's agent runs.
     """
 
     agent: str
     k: int
     symmetric: bool = False
     description: str = ""
+    params: tuple[tuple[str, float], ...] = ()
 
 
 PRESETS: dict[str, LearnerPreset] = {
@@ -58,17 +62,28 @@ PRESETS: dict[str, LearnerPreset] = {
         symmetric=True,
         description="backoff-vi, k = 6: whole histories backed off to k = 1, for object families; from scratch",
     ),
+    "costly-errors": LearnerPreset(
+        "backoff-vi",
+        6,
+        symmetric=True,
+        params=(("explore", 2.0),),
+        description="backoff-vi, k = 6, explore = 2: for tasks where an errored CRM costs more (error_cost); "
+        "from scratch",
+    ),
 }
 """The presets of ``crmgrasp learn --preset``."""
 
 
 class LearnerChoice(NamedTuple):
-    """What a learner run uses: agent, history order, mirror quotient, prior task (or None)."""
+    """What a learner run uses: agent, history order, mirror quotient, prior task (or None),
+    and the preset's agent parameters (``(name, value)`` pairs) for the caller to apply
+    where the user gave none."""
 
     agent: str
     k: int
     symmetric: bool
     prior_task: str | None
+    params: tuple[tuple[str, float], ...] = ()
 
 
 def apply_preset(
@@ -83,7 +98,7 @@ def apply_preset(
     """The preset ``name`` with the user's choices on top: a given ``agent`` or ``k`` wins;
     ``prior_task`` is the user's alone (no preset adds one); the mirror quotient is on if
     asked for, or if the preset wants it, the agent is tabular and the task declares a
-    symmetry."""
+    symmetry; the preset's parameters come along only when its own agent runs."""
     try:
         preset = PRESETS[name]
     except KeyError:
@@ -92,4 +107,5 @@ def apply_preset(
     made = AGENTS.get(chosen)
     tabular = isinstance(made, type) and issubclass(made, TabularAgent)
     mirror = symmetric or (preset.symmetric and tabular and task.symmetry is not None)
-    return LearnerChoice(chosen, preset.k if k is None else k, mirror, prior_task)
+    params = preset.params if chosen == preset.agent else ()
+    return LearnerChoice(chosen, preset.k if k is None else k, mirror, prior_task, params)

@@ -103,14 +103,18 @@ def _learner_params(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _apply_preset(args: argparse.Namespace, task: Any) -> None:
-    """Fill ``--agent``, ``--k``, ``--symmetric`` and ``--prior-task`` from ``--preset``
-    where not given ([`crmgrasp.agents.presets.apply_preset`][])."""
+    """Fill ``--agent``, ``--k``, ``--symmetric``, ``--prior-task`` and the preset's agent
+    parameters (``--explore``, ...) from ``--preset`` where not given
+    ([`crmgrasp.agents.presets.apply_preset`][])."""
     from crmgrasp.agents.presets import apply_preset
 
     choice = apply_preset(
         args.preset, task, agent=args.agent, k=args.k, symmetric=args.symmetric, prior_task=args.prior_task
     )
-    args.agent, args.k, args.symmetric, args.prior_task = choice
+    args.agent, args.k, args.symmetric, args.prior_task, params = choice
+    for key, value in params:
+        if getattr(args, key) is None:
+            setattr(args, key, value)
 
 
 def _warn_if_ungraspable(task: Task, seed: int) -> None:
