@@ -43,7 +43,7 @@ def test_fused_tripod_steps_equal_the_readable_rules(name: str) -> None:
     configurations, observations, bins, least friction, rewards and ends."""
     task = make_task(name)
     assert kernel_for(task).current.name == "numba-spatial-fingers-fused"
-    actions = np.random.default_rng(1).integers(len(task.actions), size=400).tolist()
+    actions = np.random.default_rng(1).integers(len(task.actions), size=250).tolist()
     assert _same_episodes(task, actions, 3) >= 20
 
 
@@ -57,14 +57,14 @@ def test_fused_tripod_continuous_crms_and_no_table(name: str) -> None:
     crms = [
         CRM3D(labels[int(c)], labels[int(f)], (float(r1), float(r2)))
         for c, f, r1, r2 in zip(
-            rng.integers(3, size=150), rng.integers(3, size=150), *rng.uniform(-reach, reach, size=(2, 150))
+            rng.integers(3, size=100), rng.integers(3, size=100), *rng.uniform(-reach, reach, size=(2, 100))
         )
     ]
     _same_episodes(task, crms, 4)
     inst = task.instance(np.random.default_rng(0))
     bare = dataclasses.replace(inst, table=None, family=None)
     assert kernel_for(bare).name == "numba-spatial-fingers-fused"
-    _same_episodes(bare, np.random.default_rng(2).integers(len(task.actions), size=150).tolist(), 5)
+    _same_episodes(bare, np.random.default_rng(2).integers(len(task.actions), size=100).tolist(), 5)
 
 
 def test_fused_tripod_step_row_and_the_seam() -> None:
