@@ -210,8 +210,8 @@ def _parser_references(sub: Any) -> None:
         type=_STARTS,
         default=1,
         help="also the belief-space optimum over each of this many disjoint blocks of the starts, their mean "
-        "and standard error: how far the sample size still moves the optimum, which on a family is optimistic "
-        "and rises with more starts (default 1: none; must divide --starts)",
+        "and a 95%% interval over the blocks: how far the sample size still moves the optimum, which on a "
+        "family is optimistic and rises with more starts (default 1: none; must divide --starts)",
     )
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
     _add_quiet(p)

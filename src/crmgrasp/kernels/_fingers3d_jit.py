@@ -29,7 +29,6 @@ from crmgrasp.kernels._closure_jit import least_friction
 from crmgrasp.kernels._compile import compiled
 from crmgrasp.kernels._fingers_jit import _index
 from crmgrasp.kernels._spatial_jit import (
-    ANTIPODAL_TOL,
     APERTURE,
     DEPTH,
     HX,
@@ -229,4 +228,4 @@ def accept_start(d, n, planes, cyl, p, q, tol, edges, mu_goal, out):  # type: ig
     return not (_mu(out, n, tol, edges) <= mu_goal)
 
 
-__all__ = ["ANTIPODAL_TOL", "accept_start", "begin_one", "step_one"]
+__all__ = ["accept_start", "begin_one", "step_one"]
