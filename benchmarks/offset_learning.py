@@ -5,11 +5,13 @@ reruns its learner (model-vi, k = 1, mirror quotient where declared, 5 trials) w
 issue's budget, 5,000 task episodes per trial, on the U handle (grid of 9 offsets per pair)
 and cup-3d (3 x 3 per pair), and runs each greedy policy from the optimum's own 100 starts.
 ``--learner backoff-vi`` runs the whole-history learner instead (k = 6, mirror quotient
-where declared, the same trials, seed and starts).
+where declared, the same trials, seed and starts); ``--learner refine-vi`` the learner that
+chooses its offsets (k = 1, mirror quotient where declared), on the grid of 33 offsets per pair
+from its five (U handle) and of 9 x 9 from its 3 x 3 (cup-3d), its optimum being the grid's.
 
 Prints one JSON object: per task, CRMs per episode per trial, their median, the grid's
 belief-space optimum on those starts and the median's gap to it. Usage:
-``python benchmarks/offset_learning.py [--episodes 5000] [--learner model-vi|backoff-vi]``
+``python benchmarks/offset_learning.py [--episodes 5000] [--learner model-vi|backoff-vi|refine-vi]``
 (model-vi about 8 minutes on 2 cores).
 """
 
@@ -29,16 +31,20 @@ from crmgrasp.tasks import Task, make_task
 from crmgrasp.tasks.offsets import offset_grid
 
 GRIDS = {"u-handle": 9, "cup-3d": 3}
-ORDERS = {"model-vi": 1, "backoff-vi": 6}
+ORDERS = {"model-vi": 1, "backoff-vi": 6, "refine-vi": 1}
 """The learners this script runs, with their history order."""
+REFINE = {"u-handle": (33, 2), "cup-3d": (9, 1)}
+"""refine-vi's grid and start level per task."""
 
 
-def per_trial(task: Task, learner: str, cfg: ContinuousOffsetsConfig) -> list[float]:
+def per_trial(task: Task, learner: str, cfg: ContinuousOffsetsConfig, start_level: int = 2) -> list[float]:
     """CRMs per episode of each trial's greedy policy on the optimum's starts."""
     if learner == "model-vi":
         return _learned(task, task.name, cfg)["per_trial"]
     k = ORDERS[learner]
-    params = {"symmetric": task.symmetry is not None}
+    params: dict[str, object] = {"symmetric": task.symmetry is not None}
+    if learner == "refine-vi":
+        params["start_level"] = start_level
     res = train_trials(
         task, learner, trials=cfg.trials, episodes=cfg.episodes, seed=cfg.seed, k=k, eval_episodes=0, params=params
     )
@@ -46,13 +52,22 @@ def per_trial(task: Task, learner: str, cfg: ContinuousOffsetsConfig) -> list[fl
     return [float(np.mean([len(r.actions) for r in trial])) for trial in records]
 
 
-def main(episodes: int = 5000, trials: int = 5, starts: int = 100, learner: str = "model-vi") -> dict[str, Any]:
+def main(
+    episodes: int = 5000,
+    trials: int = 5,
+    starts: int = 100,
+    learner: str = "model-vi",
+    refine: dict[str, tuple[int, int]] | None = None,
+) -> dict[str, Any]:
+    """Per task: the learner's CRMs per episode per trial, their median, the optimum and the
+    gap (``refine``: refine-vi's grid and start level per task, default [`REFINE`][])."""
+    refine = REFINE if refine is None else refine
     cfg = ContinuousOffsetsConfig(trials=trials, episodes=episodes, starts=starts)
     out: dict[str, Any] = {"episodes": episodes, "trials": trials, "starts": starts, "learner": learner}
     for name, n in GRIDS.items():
-        task = offset_grid(make_task(name), n)
+        task = offset_grid(make_task(name), refine[name][0] if learner == "refine-vi" else n)
         optimum = belief_optimum(task, sample_starts(task, starts, cfg.seed))
-        values = per_trial(task, learner, cfg)
+        values = per_trial(task, learner, cfg, refine[name][1])
         median = float(np.median(values))
         out[task.name] = {
             "per_trial": values,

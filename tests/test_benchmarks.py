@@ -114,7 +114,7 @@ def test_offset_learning_smoke():
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     for learner in mod.ORDERS:
-        res = mod.main(episodes=20, trials=1, starts=10, learner=learner)
+        res = mod.main(episodes=20, trials=1, starts=10, learner=learner, refine={"u-handle": (9, 2), "cup-3d": (3, 0)})
         for key in ("u-handle-grid9", "cup-3d-grid3"):
             assert res[key]["median"] >= res[key]["optimum"] - 1e-12
 

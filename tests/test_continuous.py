@@ -309,6 +309,8 @@ def test_the_continuous_offsets_experiment_prices_the_hand_picked_crms(tmp_path)
         starts=12,
         trials=2,
         episodes=40,
+        refine_grid=9,
+        refine_spatial_grid=3,
     )
     s = continuous_offsets(tmp_path, cfg)
     box = {r["crms"]: r for r in s["rows"] if r["task"] == "paper-box"}
@@ -318,12 +320,17 @@ def test_the_continuous_offsets_experiment_prices_the_hand_picked_crms(tmp_path)
     assert cup["grid 3"]["offsets_per_pair"] == 9 and cup["grid 3"]["actions"] == 36
     for r in s["rows"]:
         assert 1.0 <= r["clairvoyant_bound"] <= r["belief_optimum"] <= 10.0
-    assert [(r["task"], r["crms"]) for r in s["learned"]] == [
-        ("paper-box", "hand-picked"),
-        ("paper-box", "grid 9"),
-        ("cup-3d", "hand-picked"),
-        ("cup-3d", "grid 3"),
+    assert [(r["task"], r["learner"], r["crms"]) for r in s["learned"]] == [
+        ("paper-box", "model-vi", "hand-picked"),
+        ("paper-box", "model-vi", "grid 9"),
+        ("paper-box", "refine-vi", "grid 9"),
+        ("cup-3d", "model-vi", "hand-picked"),
+        ("cup-3d", "model-vi", "grid 3"),
+        ("cup-3d", "refine-vi", "grid 3"),
     ]
+    assert all(1 <= r["crms_tried"] <= r["actions"] for r in s["learned"])
+    refined = next(r for r in s["learned"] if r["learner"] == "refine-vi" and r["task"] == "paper-box")
+    assert refined["offsets_per_pair"] == 9 and refined["crms_tried"] < 36  # it starts from five offsets per pair
     assert all(r["greedy_low"] is None and len(r["per_trial"]) == 2 for r in s["learned"])  # no interval below 5
     optimum = {(r["task"], r["crms"]): r["belief_optimum"] for r in s["rows"]}
     for r in s["learned"]:  # a policy run from the optimum's own starts cannot beat it

@@ -23,6 +23,7 @@ from crmgrasp.agents.baselines import FixedSequence, RandomAgent
 from crmgrasp.agents.model_based import ModelVI
 from crmgrasp.agents.peers import PSRL, UCBVI, EpisodicModel
 from crmgrasp.agents.pooled import HistoryFrame, PooledVI
+from crmgrasp.agents.refine import RefineVI
 from crmgrasp.agents.symmetric import SymmetricAgent
 from crmgrasp.agents.tabular import DynaQ, QLearning, Sarsa, SarsaLambda
 from crmgrasp.kernels import kernel_for
@@ -64,6 +65,7 @@ AGENTS: dict[str, Callable[..., Agent]] = {
     "model-vi": ModelVI,
     "pooled-vi": PooledVI,
     "backoff-vi": BackoffVI,
+    "refine-vi": RefineVI,
     "psrl": PSRL,
     "ucbvi": UCBVI,
     "random": RandomAgent,
@@ -131,7 +133,8 @@ def build_agent(task: Task, encoder: KOrderEncoder, name: str, params: dict[str,
     when ``params`` has ``symmetric=True`` (the task must declare a symmetry).
 
     A learner that needs to know how its states are built (``pooled-vi``, the peers
-    ``psrl`` and ``ucbvi``) is given its [`HistoryFrame`][crmgrasp.agents.pooled.HistoryFrame].
+    ``psrl`` and ``ucbvi``) or its task's offsets (``refine-vi``) is given its
+    [`HistoryFrame`][crmgrasp.agents.pooled.HistoryFrame].
 
     ``prior_task`` (a task name, file or factory with the same CRMs and bins, e.g. an
     object family) gives a model-based agent (``model-vi``, ``pooled-vi``) a prior: the model one agent with the
@@ -149,7 +152,7 @@ def build_agent(task: Task, encoder: KOrderEncoder, name: str, params: dict[str,
         known = ", ".join(n for n in AGENTS if takes_prior(n))
         raise CrmgraspError(f"prior_task needs a model-based agent ({known}), not {name!r}")
     wrapped = SymmetricAgent(agent, task, encoder) if symmetric else None  # type: ignore[arg-type]
-    if isinstance(agent, (PooledVI, BackoffVI, EpisodicModel)):
+    if isinstance(agent, (PooledVI, BackoffVI, EpisodicModel, RefineVI)):
         agent.bind(HistoryFrame(task, encoder, wrapped))
     if prior and isinstance(agent, ModelVI):
         model, weight = _prior(task, encoder.k, name, p, symmetric, prior)

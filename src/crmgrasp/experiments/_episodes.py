@@ -59,12 +59,13 @@ def episode_records(
     return out
 
 
-def train_model_vi(task: Task, trials: int, episodes: int, seed: int) -> list[Agent]:
-    """``trials`` model-vi agents (k = 1, mirror quotient where declared), trained on ``task``."""
-    params: dict[str, object] = {"symmetric": task.symmetry is not None}
-    res = train_trials(
-        task, "model-vi", trials=trials, episodes=episodes, seed=seed, k=1, eval_episodes=0, params=params
-    )
+def train_model_vi(
+    task: Task, trials: int, episodes: int, seed: int, learner: str = "model-vi", **params: object
+) -> list[Agent]:
+    """``trials`` model-vi agents (k = 1, mirror quotient where declared), trained on ``task``
+    (or another k = 1 ``learner`` of ModelVI's kind, such as ``refine-vi``, with ``params``)."""
+    params = {"symmetric": task.symmetry is not None, **params}
+    res = train_trials(task, learner, trials=trials, episodes=episodes, seed=seed, k=1, eval_episodes=0, params=params)
     return res.agents
 
 

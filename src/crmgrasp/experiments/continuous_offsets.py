@@ -7,8 +7,10 @@ contact pair on grids of ``n`` offsets per coordinate over ``[-r_max, r_max]``
 ([`crmgrasp.tasks.offsets.offset_grid`][]). Odd grids nest (5 in 9 in 17 in 33, each holding
 ``r = 0``), so their optimum can only fall as the grid refines; even grids leave out
 ``r = 0``, the offset that opposes a contact straight across. Then model-vi (k = 1) learns
-from episodes on the task's CRMs and on one grid, with the same budget, and its greedy
-policy runs from the same sampled starts as the references.
+from episodes on the task's CRMs and on one grid, and refine-vi
+([`crmgrasp.agents.refine.RefineVI`][]: it chooses its offsets, refining a coarse grid
+around the best offset of each history) on a fine dyadic grid, all with the same budget;
+each greedy policy runs from the same sampled starts as the references.
 
 Writes ``continuous_offsets.csv``, ``continuous_offsets.png`` and ``summary.json``.
 """
@@ -31,15 +33,30 @@ from crmgrasp.tasks.offsets import offset_grid
 __all__ = ["ContinuousOffsetsConfig", "continuous_offsets"]
 
 COLUMNS = ("task", "crms", "grid", "offsets_per_pair", "actions", "starts", "clairvoyant_bound", "belief_optimum")
-LEARNED = ("task", "crms", "actions", "trials", "episodes", "greedy_mean", "greedy_low", "greedy_high", "success")
+LEARNED = (
+    "task",
+    "learner",
+    "crms",
+    "actions",
+    "offsets_per_pair",
+    "crms_tried",
+    "trials",
+    "episodes",
+    "greedy_mean",
+    "greedy_low",
+    "greedy_high",
+    "success",
+)
 
 
 @dataclass(frozen=True)
 class ContinuousOffsetsConfig:
     """Tasks; grids (offsets per coordinate: ``grids`` in the plane, ``spatial_grids`` in
     space, where a pair gets ``n**2``); sampled starts per task (the references' and the
-    learned policies' evaluation); the learner's grid (per coordinate, planar and spatial),
-    trials and training episodes per trial; seed."""
+    learned policies' evaluation); model-vi's grid (per coordinate, planar and spatial);
+    refine-vi's fine grid and the level it starts from (``2**level + 1`` offsets per
+    coordinate: five in the plane, three in space); trials and training episodes per trial;
+    seed."""
 
     tasks: tuple[str, ...] = ("paper-box", "box-family", "u-handle", "notch-or-box", "cup-3d")
     grids: tuple[int, ...] = (4, 5, 9, 17, 33)
@@ -47,6 +64,10 @@ class ContinuousOffsetsConfig:
     starts: int = 100
     learn_grid: int = 9
     learn_spatial_grid: int = 3
+    refine_grid: int = 33
+    refine_spatial_grid: int = 9
+    refine_start_level: int = 2
+    refine_spatial_start_level: int = 1
     trials: int = 5
     episodes: int = 2000
     seed: int = 0
@@ -86,21 +107,29 @@ def _references(task: Task, label: str, n: int | None, cfg: ContinuousOffsetsCon
     return row
 
 
-def _learned(task: Task, label: str, cfg: ContinuousOffsetsConfig) -> dict[str, Any]:
-    """model-vi (k = 1, on the mirror quotient where the task declares a symmetry) trained on
-    ``task``, its greedy policy run on the references' sampled starts: CRMs per episode per
-    trial, their mean and a bootstrap 95% interval over trials (none below 5), the success
-    rate. The same starts as the optimum, so the two compare without sampling noise."""
+def _learned(
+    task: Task, label: str, cfg: ContinuousOffsetsConfig, learner: str = "model-vi", **params: object
+) -> dict[str, Any]:
+    """``learner`` (k = 1, on the mirror quotient where the task declares a symmetry; model-vi
+    by default) trained on ``task``, its greedy policy run on the references' sampled starts:
+    CRMs per episode per trial, their mean and a bootstrap 95% interval over trials (none
+    below 5), the success rate, and the distinct CRMs tried in any history (mean over
+    trials). The same starts as the optimum, so the two compare without sampling noise."""
     from crmgrasp.experiments._episodes import greedy_records, train_model_vi
     from crmgrasp.experiments.stats import bootstrap_ci
 
-    agents = train_model_vi(task, cfg.trials, cfg.episodes, cfg.seed)
+    agents = train_model_vi(task, cfg.trials, cfg.episodes, cfg.seed, learner, **params)
     records = greedy_records(task, agents, sample_starts(task, cfg.starts, cfg.seed), cfg.seed)
     per_trial = np.array([np.mean([len(r.actions) for r in trial]) for trial in records])
     low, high = (None if np.isnan(v) else float(v) for v in bootstrap_ci(per_trial, seed=cfg.seed))
+    n = _grid_of(label)
+    tried = [len(set().union(*agent.tried.values())) for agent in agents]  # type: ignore[attr-defined]
     return {
+        "learner": learner,
         "crms": label,
         "actions": len(task.actions),
+        "offsets_per_pair": None if n is None else n**task.model.offset_dim,
+        "crms_tried": float(np.mean(tried)),
         "trials": cfg.trials,
         "episodes": cfg.episodes,
         "per_trial": [float(v) for v in per_trial],
@@ -111,16 +140,37 @@ def _learned(task: Task, label: str, cfg: ContinuousOffsetsConfig) -> dict[str, 
     }
 
 
+def _grid_of(label: str) -> int | None:
+    """Offsets per coordinate of a CRM set's label (``"grid 9"``: 9; ``"hand-picked"``: None)."""
+    return int(label.split()[1]) if label.startswith("grid") else None
+
+
+def _learners(task: Task, cfg: ContinuousOffsetsConfig) -> list[tuple[Task, str, str, dict[str, object]]]:
+    """What learns on ``task``: model-vi on its own CRMs and on a grid, refine-vi on a fine
+    grid from its coarse start (task, CRM-set label, learner, parameters)."""
+    spatial = task.model.offset_dim > 1
+    grid = offset_grid(task, cfg.learn_spatial_grid if spatial else cfg.learn_grid)
+    fine = offset_grid(task, cfg.refine_spatial_grid if spatial else cfg.refine_grid)
+    start = cfg.refine_spatial_start_level if spatial else cfg.refine_start_level
+    label = grid.name.rsplit("-", 1)[1].replace("grid", "grid ")
+    return [
+        (task, "hand-picked", "model-vi", {}),
+        (grid, label, "model-vi", {}),
+        (fine, fine.name.rsplit("-", 1)[1].replace("grid", "grid "), "refine-vi", {"start_level": start}),
+    ]
+
+
 def continuous_offsets(
     out_dir: str | Path, cfg: ContinuousOffsetsConfig = ContinuousOffsetsConfig(), progress: Progress | None = None
 ) -> dict[str, Any]:
     """Compute the tables, draw them, write them; return the summary (``rows``: references
-    per task and CRM set; ``learned``: model-vi per task on its CRMs and on a grid;
+    per task and CRM set; ``learned``: model-vi per task on its CRMs and on a grid, refine-vi
+    on a fine grid;
     ``budget``)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     tasks = [make_task(name) for name in cfg.tasks]
-    units = sum(len(_grids(t, cfg)) + 3 for t in tasks)
+    units = sum(len(_grids(t, cfg)) + 4 for t in tasks)
     stage = progress.stage("continuous offsets", units, "units") if progress else None
     rows: list[dict[str, Any]] = []
     learned: list[dict[str, Any]] = []
@@ -130,9 +180,8 @@ def continuous_offsets(
             rows.append({"task": task.name, **_references(t, label, n, cfg)})
             if stage is not None:
                 stage.advance(1)
-        grid = offset_grid(task, cfg.learn_grid if task.model.offset_dim == 1 else cfg.learn_spatial_grid)
-        for t, label in ((task, "hand-picked"), (grid, grid.name.rsplit("-", 1)[1].replace("grid", "grid "))):
-            learned.append({"task": task.name, **_learned(t, label, cfg)})
+        for t, label, learner, params in _learners(task, cfg):
+            learned.append({"task": task.name, **_learned(t, label, cfg, learner, **params)})
             if stage is not None:
                 stage.advance(1)
     if stage is not None:
@@ -142,7 +191,11 @@ def continuous_offsets(
     save_figure(_figure(rows, learned, cfg), out / "continuous_offsets.png")
     budget = (
         f"{cfg.starts} sampled starts per task, seed {cfg.seed}, for the references and the greedy policies; "
-        f"model-vi k=1 (mirror quotient where declared), {cfg.trials} trials x {cfg.episodes} task episodes per CRM set"
+        f"model-vi k=1 (mirror quotient where declared), {cfg.trials} trials x {cfg.episodes} task episodes "
+        "per CRM set; "
+        f"refine-vi the same on grids {cfg.refine_grid} (planar, from {2**cfg.refine_start_level + 1}) and "
+        f"{cfg.refine_spatial_grid} x {cfg.refine_spatial_grid} (spatial, from "
+        f"{2**cfg.refine_spatial_start_level + 1} x {2**cfg.refine_spatial_start_level + 1})"
     )
     summary = {"budget": budget, "rows": rows, "learned": learned}
     write_json(out / "summary.json", summary)
@@ -152,8 +205,9 @@ def continuous_offsets(
 def _figure(rows: list[dict[str, Any]], learned: list[dict[str, Any]], cfg: ContinuousOffsetsConfig) -> Any:
     """One panel per task: the belief-space optimum against offsets per pair (odd grids, which
     hold ``r = 0``, joined; even grids as crosses, drawn at the top edge with their value when
-    beyond it), the hand-picked CRMs' optimum as a line, and model-vi's greedy mean on each CRM
-    set as stars (the hand-picked set's at the left, "hand")."""
+    beyond it), the hand-picked CRMs' optimum as a line, model-vi's greedy mean on each CRM
+    set as stars (the hand-picked set's at the left, "hand") and refine-vi's as a plus at its
+    finest grid."""
     from matplotlib.figure import Figure
 
     names = list(dict.fromkeys(r["task"] for r in rows))
@@ -186,17 +240,19 @@ def _figure(rows: list[dict[str, Any]], learned: list[dict[str, Any]], cfg: Cont
                     xytext=(3, -9),
                     textcoords="offset points",
                 )
-        for r, color in zip(mine_learned, ("tab:gray", "tab:blue"), strict=True):
-            at = next((g["offsets_per_pair"] for g in mine if g["crms"] == r["crms"]), None) or 1
+        for r in mine_learned:
+            at = r["offsets_per_pair"] or 1
+            refined = r["learner"] == "refine-vi"
+            label = "model-vi, hand-picked CRMs" if at == 1 else f"model-vi, grid ({at} offsets per pair)"
             ax.plot(
                 [at],
                 [r["greedy_mean"]],
-                "*",
-                ms=11,
-                color=color,
-                label=f"model-vi, grid ({at} offsets per pair)" if at > 1 else "model-vi, hand-picked CRMs",
+                "P" if refined else "*",
+                ms=9 if refined else 11,
+                color="tab:green" if refined else "tab:gray" if at == 1 else "tab:blue",
+                label=f"refine-vi, refined up to {at} per pair" if refined else label,
             )
-        ticks = [1, *sorted({r["offsets_per_pair"] for r in grids})]
+        ticks = [1, *sorted({r["offsets_per_pair"] for r in [*grids, *mine_learned] if r["offsets_per_pair"]})]
         ax.set_xscale("log", base=2)
         ax.set_xticks(ticks, ["hand", *map(str, ticks[1:])], fontsize=7)
         ax.minorticks_off()
@@ -210,7 +266,7 @@ def _figure(rows: list[dict[str, Any]], learned: list[dict[str, Any]], cfg: Cont
     fig.legend(unique.values(), unique.keys(), loc="outside lower center", ncols=3, fontsize=7)
     fig.suptitle(
         f"the price of hand-picked CRMs: {cfg.starts} sampled starts per point, the same for every point;\n"
-        f"model-vi k=1: {cfg.trials} trials x {cfg.episodes} task episodes, its greedy policy on those starts",
+        f"model-vi and refine-vi k=1: {cfg.trials} trials x {cfg.episodes} task episodes, greedy on those starts",
         fontsize=9,
     )
     return fig

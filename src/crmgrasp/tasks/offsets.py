@@ -9,12 +9,13 @@ gridded task, so the belief-space optimum over a fine grid prices a hand-picked 
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass
 from typing import Any
 
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.tasks.core import Symmetry, Task
 
-__all__ = ["offset_grid", "grid_crms", "mirror_symmetry"]
+__all__ = ["offset_grid", "grid_crms", "mirror_symmetry", "OffsetTree", "offset_tree", "MAX_DEPTH"]
 
 
 def grid_crms(task: Task, n: int) -> tuple[Any, ...]:
@@ -59,3 +60,84 @@ def offset_grid(task: Task, n: int) -> Task:
         symmetry=mirror_symmetry(task, actions),
         reference_mean_steps=None,
     )
+
+
+MAX_DEPTH = 7
+"""Deepest dyadic grid [`offset_tree`][] recognises: ``2**7 + 1 = 129`` offsets per coordinate."""
+
+
+@dataclass(frozen=True)
+class OffsetTree:
+    """The dyadic refinement structure of a task whose CRMs are a grid of ``2**depth + 1``
+    offsets per coordinate (what [`offset_grid`][] builds for such ``n``).
+
+    Coordinate ``i`` of a grid point, ``0 <= i <= 2**depth``, first appears on the grid
+    of ``2**l + 1`` offsets with ``l = depth - min(v(i), depth)``, ``v(i)`` the number of
+    times 2 divides ``i`` (``v(0) = depth``); a point's ``level`` is the largest of its
+    coordinates' (a fixed CRM has level 0). So the CRMs of level ``<= l`` are exactly the
+    grid of ``2**l + 1`` offsets per coordinate. The ``children`` of a point of level
+    ``l < depth`` are the grid points at ``h = 2**(depth - l - 1)`` grid steps from it in
+    each coordinate (``-h``, ``0`` or ``+h``; not all ``0``), within the range: the
+    ``3**dim - 1`` neighbours at half the spacing of its level, all of level ``l + 1``.
+
+    Attributes
+    ----------
+    depth
+        ``2**depth + 1`` offsets per coordinate.
+    level
+        Per action of the task, its level (``0 .. depth``).
+    children
+        Per action, the actions one level finer around it (empty at ``depth``).
+    """
+
+    depth: int
+    level: tuple[int, ...]
+    children: tuple[tuple[int, ...], ...]
+
+    def coarse(self, level: int) -> tuple[int, ...]:
+        """The actions of level at most ``level``: the grid of ``2**level + 1`` offsets per
+        coordinate, in action order."""
+        return tuple(a for a, lv in enumerate(self.level) if lv <= level)
+
+
+def _level(i: int, depth: int) -> int:
+    twos = depth if i == 0 else (i & -i).bit_length() - 1
+    return depth - min(twos, depth)
+
+
+def offset_tree(task: Task) -> OffsetTree:
+    """The [`OffsetTree`][] of ``task``, whose CRMs must be exactly
+    [`grid_crms`][] ``(task, 2**depth + 1)`` for a ``depth`` of 1 to [`MAX_DEPTH`][]
+    (``--offset-grid`` 3, 5, 9, 17, 33, 65 or 129); a one-line error otherwise."""
+    from itertools import product
+
+    for depth in range(1, MAX_DEPTH + 1):
+        if grid_crms(task, 2**depth + 1) == task.actions:
+            break
+    else:
+        raise CrmgraspError(
+            f"task {task.name!r}: refining offsets needs its CRMs on a grid of 2**d + 1 offsets per pair "
+            f"(--offset-grid 3, 5, 9, 17, 33, 65 or 129)"
+        )
+    n = 2**depth + 1
+    index = {crm: a for a, crm in enumerate(task.actions)}
+    level = [0] * len(task.actions)
+    children: list[set[int]] = [set() for _ in task.actions]
+    for rg in task.crm_ranges:
+        if rg.fixed:
+            continue
+        points = rg.grid(n)
+        at = {}
+        for cell, r in zip(product(range(n), repeat=rg.dim), points, strict=True):
+            a = index[task.model.range_crm(rg, r)]
+            at[cell] = a
+            level[a] = max(_level(i, depth) for i in cell)
+        for cell, a in at.items():
+            if level[a] == depth:
+                continue
+            h = 2 ** (depth - level[a] - 1)
+            for step in product((-h, 0, h), repeat=rg.dim):
+                near = at.get(tuple(i + s for i, s in zip(cell, step, strict=True)))
+                if any(step) and near is not None:
+                    children[a].add(near)
+    return OffsetTree(depth, tuple(level), tuple(tuple(sorted(c)) for c in children))
