@@ -27,7 +27,9 @@ that over the square root of ``blocks``), the standard error of the upper estima
 held-out worlds), and the wall time per size.
 
 Usage: ``python benchmarks/reference_bias.py [--task NAME ...] [--sizes 50,100,200,400]
-[--pool 400] [--heldout 300]`` (every size must divide the pool). Prints one JSON object;
+[--pool 400] [--heldout 300] [--offset-grid N]`` (every size must divide the pool;
+``--offset-grid N``: each task's CRMs replaced by ``N`` offsets per coordinate and contact
+pair, the continuous-offsets target's reference). Prints one JSON object;
 progress on stderr.
 """
 
@@ -44,6 +46,7 @@ import numpy as np
 from crmgrasp.experiments._episodes import episode_records
 from crmgrasp.planners.references import BeliefPolicy, clairvoyant_bound, sample_starts, ungraspable_fraction
 from crmgrasp.tasks import make_task
+from crmgrasp.tasks.offsets import offset_grid
 
 
 def _costs(task: object, planner: BeliefPolicy, worlds: list) -> np.ndarray:
@@ -55,9 +58,10 @@ def _r(x: float) -> float:
     return round(float(x), 4)
 
 
-def task_rows(name: str, sizes: list[int], pool: int, heldout: int) -> dict:
-    """The lower and upper estimates per size for one task (see the module docstring)."""
-    task = make_task(name)
+def task_rows(name: str, sizes: list[int], pool: int, heldout: int, grid: int | None = None) -> dict:
+    """The lower and upper estimates per size for one task (see the module docstring), its
+    CRMs a grid of ``grid`` offsets per coordinate and pair if given."""
+    task = make_task(name) if grid is None else offset_grid(make_task(name), grid)
     worlds = sample_starts(task, pool, 10_000)
     fresh = sample_starts(task, heldout, 20_000)
     ok = np.array([ungraspable_fraction(task, [w]) == 0.0 for w in worlds])
@@ -90,12 +94,16 @@ def task_rows(name: str, sizes: list[int], pool: int, heldout: int) -> dict:
     return out
 
 
-def main(tasks: list[str], sizes: list[int], pool: int, heldout: int) -> dict:
+def main(tasks: list[str], sizes: list[int], pool: int, heldout: int, grid: int | None = None) -> dict:
     """Every task; see the module docstring."""
     bad = [n for n in sizes if n <= 0 or pool % n]
     if bad:
         raise SystemExit(f"every size must divide the pool ({pool}); not {bad}")
-    return {"sizes": sizes, **{name: task_rows(name, sizes, pool, heldout) for name in tasks}}
+    return {
+        "sizes": sizes,
+        "offset_grid": grid,
+        **{name: task_rows(name, sizes, pool, heldout, grid) for name in tasks},
+    }
 
 
 if __name__ == "__main__":
@@ -104,6 +112,13 @@ if __name__ == "__main__":
     ap.add_argument("--sizes", default="50,100,200,400")
     ap.add_argument("--pool", type=int, default=400)
     ap.add_argument("--heldout", type=int, default=300)
+    ap.add_argument("--offset-grid", type=int, default=None)
     a = ap.parse_args()
-    res = main(a.tasks or ["u-handle", "polygon-family"], [int(s) for s in a.sizes.split(",")], a.pool, a.heldout)
+    res = main(
+        a.tasks or ["u-handle", "polygon-family"],
+        [int(s) for s in a.sizes.split(",")],
+        a.pool,
+        a.heldout,
+        a.offset_grid,
+    )
     print(json.dumps(res, indent=1))

@@ -6,6 +6,9 @@ from pathlib import Path
 
 import pytest
 
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.tasks.offsets import offset_grid
+
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_core.py"
 
 
@@ -230,3 +233,9 @@ def test_family_learning_pool_and_reference_bias_smoke():
     assert res["clairvoyant_heldout"] <= res["6"]["upper"] and res["12"]["upper"] <= task.max_steps
     with pytest.raises(SystemExit, match="divide the pool"):
         bias.main(["u-handle"], [5], 12, 10)
+    gridded = bias.main(["u-handle"], [6], 6, 4, grid=3)
+    assert gridded["offset_grid"] == 3
+    grid = offset_grid(task, 3)
+    assert gridded["u-handle"]["6"]["lower"] == round(belief_optimum(grid, sample_starts(grid, 6, 10_000)), 4)
+    with pytest.raises(CrmgraspError, match="other CRMs than task 'u-handle-grid3'"):
+        belief_optimum(grid, worlds[:6])

@@ -138,3 +138,13 @@ def test_learn_writes_a_policy_with_its_offsets_that_evaluate_reads(tmp_path, ca
     capsys.readouterr()
     assert main(["evaluate", "--policy", str(out / "policy.json"), "--episodes", "20", "--json", "--quiet"]) == 0
     assert json.loads(capsys.readouterr().out)["task"] == "paper-box-grid9"
+
+
+def test_a_prior_opens_the_crms_it_has_outcomes_of():
+    task = offset_grid(make_task("paper-box"), 9)
+    agent = build_agent(task, encoder_for(task, 1), "refine-vi")
+    closed = next(a for a in range(agent.n_actions) if a not in agent.coarse)
+    agent.set_prior({(7, closed): {(-1.0, 0, True): 2.0}})
+    assert closed in agent.opened(7) and agent.q[7][closed] == -1.0
+    assert closed not in agent.opened(8)
+    agent.update(7, closed, -1.0, 0, None, True, np.random.default_rng(0))

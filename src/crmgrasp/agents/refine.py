@@ -85,6 +85,13 @@ class RefineVI(ModelVI):
             raise CrmgraspError(f"start_level {self.start_level} is finer than the task's grid (depth {tree.depth})")
         self.children, self.coarse = tree.children, tree.coarse(self.start_level)
 
+    def set_prior(self, prior: Any, weight: float = 1.0) -> None:
+        """[`ModelVI.set_prior`][crmgrasp.agents.model_based.ModelVI.set_prior], each
+        prior pair's CRM opened in its history."""
+        for s, a in prior:
+            self.open.setdefault(s, set(self.coarse)).add(a)
+        super().set_prior(prior, weight)
+
     def opened(self, s: int) -> set[int]:
         """The CRMs open in history ``s``."""
         return self.open.get(s) or set(self.coarse)

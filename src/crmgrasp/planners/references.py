@@ -71,6 +71,11 @@ class _Model:
         if isinstance(start, World):
             i = self._ids.get(id(start.task))
             if i is None:
+                if start.task.actions != self.task.actions:
+                    raise CrmgraspError(
+                        f"a world of {start.task.name!r} has other CRMs than task {self.task.name!r}: "
+                        "draw the worlds from the task itself"
+                    )
                 i = self._ids[id(start.task)] = len(self.tasks)
                 self.tasks.append(compiled_rules(start.task))
             return (i, start.config)
