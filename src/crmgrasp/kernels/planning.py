@@ -42,12 +42,13 @@ def value_iteration(agent: Any, tol: float) -> int:
             out_row.append(row.get(s2, -1))
             out_t.append(t)
         first.append(len(out_p))
+    rows, cols = np.array(pair_row, dtype=np.int64), np.array(pair_a, dtype=np.int64)
     done = _vi_jit.sweeps(
         qa,
         qg,
         tried,
-        np.array(pair_row, dtype=np.int64),
-        np.array(pair_a, dtype=np.int64),
+        rows,
+        cols,
         np.array(first, dtype=np.int64),
         np.array(out_p, dtype=np.float64),
         np.array(out_r, dtype=np.float64),
@@ -59,8 +60,9 @@ def value_iteration(agent: Any, tol: float) -> int:
         int(agent.sweeps),
         float(tol),
     )
-    for s, va, vg in zip(states, qa.tolist(), qg.tolist(), strict=True):
-        agent.q[s][:] = va
-        if s in agent.q_greedy:
-            agent.q_greedy[s][:] = vg
+    greedy = agent.q_greedy
+    for (s, a), va, vg in zip(agent.model, qa[rows, cols].tolist(), qg[rows, cols].tolist(), strict=True):
+        agent.q[s][a] = va  # the sweeps write only the model's pairs: the rest of each row stands
+        if s in greedy:
+            greedy[s][a] = vg
     return int(done)
