@@ -11,8 +11,10 @@ from its five (U handle) and of 9 x 9 from its 3 x 3 (cup-3d), its optimum being
 
 Prints one JSON object: per task, CRMs per episode per trial, their median, the grid's
 belief-space optimum on those starts and the median's gap to it. Usage:
-``python benchmarks/offset_learning.py [--episodes 5000] [--learner model-vi|backoff-vi|refine-vi]``
-(model-vi about 8 minutes on 2 cores).
+``python benchmarks/offset_learning.py [--episodes 5000] [--learner model-vi|backoff-vi|refine-vi]
+[--task u-handle|cup-3d ...] [--grid N] [--param KEY=NUMBER ...]`` (model-vi about 8 minutes on
+2 cores; ``--grid``: every task's grid, offsets per coordinate; ``--param``: a learner
+parameter, e.g. ``start_level=3`` or ``refine_after=1`` for refine-vi).
 """
 
 from __future__ import annotations
@@ -37,14 +39,12 @@ REFINE = {"u-handle": (33, 2), "cup-3d": (9, 1)}
 """refine-vi's grid and start level per task."""
 
 
-def per_trial(task: Task, learner: str, cfg: ContinuousOffsetsConfig, start_level: int = 2) -> list[float]:
+def per_trial(task: Task, learner: str, cfg: ContinuousOffsetsConfig, params: dict[str, Any]) -> list[float]:
     """CRMs per episode of each trial's greedy policy on the optimum's starts."""
-    if learner == "model-vi":
+    if learner == "model-vi" and not params:
         return _learned(task, task.name, cfg)["per_trial"]
     k = ORDERS[learner]
-    params: dict[str, object] = {"symmetric": task.symmetry is not None}
-    if learner == "refine-vi":
-        params["start_level"] = start_level
+    params = {"symmetric": task.symmetry is not None, **params}
     res = train_trials(
         task, learner, trials=cfg.trials, episodes=cfg.episodes, seed=cfg.seed, k=k, eval_episodes=0, params=params
     )
@@ -58,16 +58,31 @@ def main(
     starts: int = 100,
     learner: str = "model-vi",
     refine: dict[str, tuple[int, int]] | None = None,
+    tasks: tuple[str, ...] = tuple(GRIDS),
+    grid: int | None = None,
+    params: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Per task: the learner's CRMs per episode per trial, their median, the optimum and the
-    gap (``refine``: refine-vi's grid and start level per task, default [`REFINE`][])."""
+    gap. ``refine``: refine-vi's grid and start level per task (default [`REFINE`][]);
+    ``grid``: every task's grid instead; ``params``: the learner's parameters (refine-vi's
+    ``start_level`` overrides ``refine``'s)."""
     refine = REFINE if refine is None else refine
     cfg = ContinuousOffsetsConfig(trials=trials, episodes=episodes, starts=starts)
-    out: dict[str, Any] = {"episodes": episodes, "trials": trials, "starts": starts, "learner": learner}
-    for name, n in GRIDS.items():
-        task = offset_grid(make_task(name), refine[name][0] if learner == "refine-vi" else n)
+    out: dict[str, Any] = {
+        "episodes": episodes,
+        "trials": trials,
+        "starts": starts,
+        "learner": learner,
+        "params": params or {},
+    }
+    for name in tasks:
+        mine = dict(params or {})
+        if learner == "refine-vi":
+            mine.setdefault("start_level", refine[name][1])
+        n = grid or (refine[name][0] if learner == "refine-vi" else GRIDS[name])
+        task = offset_grid(make_task(name), n)
         optimum = belief_optimum(task, sample_starts(task, starts, cfg.seed))
-        values = per_trial(task, learner, cfg, refine[name][1])
+        values = per_trial(task, learner, cfg, mine)
         median = float(np.median(values))
         out[task.name] = {
             "per_trial": values,
@@ -82,5 +97,10 @@ if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--episodes", type=int, default=5000)
     ap.add_argument("--learner", choices=tuple(ORDERS), default="model-vi")
+    ap.add_argument("--task", action="append", dest="tasks", choices=tuple(GRIDS))
+    ap.add_argument("--grid", type=int, default=None, help="offsets per coordinate and pair, every task")
+    ap.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER")
     a = ap.parse_args()
-    print(json.dumps(main(a.episodes, learner=a.learner), indent=2))
+    extra = {k: int(v) if v.lstrip("-").isdigit() else float(v) for k, v in (p.split("=", 1) for p in a.param)}
+    res = main(a.episodes, learner=a.learner, tasks=tuple(a.tasks or GRIDS), grid=a.grid, params=extra)
+    print(json.dumps(res, indent=2))

@@ -243,14 +243,14 @@ def _figure(rows: list[dict[str, Any]], learned: list[dict[str, Any]], cfg: Cont
         for r in mine_learned:
             at = r["offsets_per_pair"] or 1
             refined = r["learner"] == "refine-vi"
-            label = "model-vi, hand-picked CRMs" if at == 1 else f"model-vi, grid ({at} offsets per pair)"
+            label = "model-vi, hand-picked CRMs" if at == 1 else "model-vi, on a grid"
             ax.plot(
                 [at],
                 [r["greedy_mean"]],
                 "P" if refined else "*",
                 ms=9 if refined else 11,
                 color="tab:green" if refined else "tab:gray" if at == 1 else "tab:blue",
-                label=f"refine-vi, refined up to {at} per pair" if refined else label,
+                label="refine-vi, offsets chosen on its finest grid" if refined else label,
             )
         ticks = [1, *sorted({r["offsets_per_pair"] for r in [*grids, *mine_learned] if r["offsets_per_pair"]})]
         ax.set_xscale("log", base=2)
