@@ -12,9 +12,10 @@ from its five (U handle) and of 9 x 9 from its 3 x 3 (cup-3d), its optimum being
 Prints one JSON object: per task, CRMs per episode per trial, their median, the grid's
 belief-space optimum on those starts and the median's gap to it. Usage:
 ``python benchmarks/offset_learning.py [--episodes 5000] [--learner model-vi|backoff-vi|refine-vi]
-[--task u-handle|cup-3d ...] [--grid N] [--param KEY=NUMBER ...]`` (model-vi about 8 minutes on
+[--task u-handle|cup-3d ...] [--grid N] [--param KEY=NUMBER ...] [--heldout N]`` (model-vi about 8 minutes on
 2 cores; ``--grid``: every task's grid, offsets per coordinate; ``--param``: a learner
-parameter, e.g. ``start_level=3`` or ``refine_after=1`` for refine-vi).
+parameter, e.g. ``start_level=3`` or ``refine_after=1`` for refine-vi; ``--heldout N``: also
+score each greedy policy on N fresh worlds, those of ``reference_bias.py --heldout N``).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ import numpy as np
 
 from crmgrasp.agents.training import train_trials
 from crmgrasp.experiments._episodes import greedy_records
-from crmgrasp.experiments.continuous_offsets import ContinuousOffsetsConfig, _learned
+from crmgrasp.experiments.continuous_offsets import ContinuousOffsetsConfig
 from crmgrasp.planners.references import belief_optimum, sample_starts
 from crmgrasp.tasks import Task, make_task
 from crmgrasp.tasks.offsets import offset_grid
@@ -39,17 +40,22 @@ REFINE = {"u-handle": (33, 2), "cup-3d": (9, 1)}
 """refine-vi's grid and start level per task."""
 
 
-def per_trial(task: Task, learner: str, cfg: ContinuousOffsetsConfig, params: dict[str, Any]) -> list[float]:
-    """CRMs per episode of each trial's greedy policy on the optimum's starts."""
-    if learner == "model-vi" and not params:
-        return _learned(task, task.name, cfg)["per_trial"]
+def per_trial(
+    task: Task, learner: str, cfg: ContinuousOffsetsConfig, params: dict[str, Any], heldout: int = 0
+) -> tuple[list[float], list[float]]:
+    """CRMs per episode of each trial's greedy policy on the optimum's starts, and on
+    ``heldout`` fresh worlds (seed 20,000: ``reference_bias.py``'s held-out worlds; none
+    for 0)."""
     k = ORDERS[learner]
     params = {"symmetric": task.symmetry is not None, **params}
     res = train_trials(
         task, learner, trials=cfg.trials, episodes=cfg.episodes, seed=cfg.seed, k=k, eval_episodes=0, params=params
     )
-    records = greedy_records(task, res.agents, sample_starts(task, cfg.starts, cfg.seed), cfg.seed, k=k)
-    return [float(np.mean([len(r.actions) for r in trial])) for trial in records]
+    out = []
+    for worlds in (sample_starts(task, cfg.starts, cfg.seed), sample_starts(task, heldout, 20_000) if heldout else []):
+        records = greedy_records(task, res.agents, worlds, cfg.seed, k=k) if worlds else []
+        out.append([float(np.mean([len(r.actions) for r in trial])) for trial in records])
+    return out[0], out[1]
 
 
 def main(
@@ -61,11 +67,13 @@ def main(
     tasks: tuple[str, ...] = tuple(GRIDS),
     grid: int | None = None,
     params: dict[str, Any] | None = None,
+    heldout: int = 0,
 ) -> dict[str, Any]:
     """Per task: the learner's CRMs per episode per trial, their median, the optimum and the
     gap. ``refine``: refine-vi's grid and start level per task (default [`REFINE`][]);
     ``grid``: every task's grid instead; ``params``: the learner's parameters (refine-vi's
-    ``start_level`` overrides ``refine``'s)."""
+    ``start_level`` overrides ``refine``'s); ``heldout``: also each greedy policy on that many
+    fresh worlds."""
     refine = REFINE if refine is None else refine
     cfg = ContinuousOffsetsConfig(trials=trials, episodes=episodes, starts=starts)
     out: dict[str, Any] = {
@@ -82,7 +90,7 @@ def main(
         n = grid or (refine[name][0] if learner == "refine-vi" else GRIDS[name])
         task = offset_grid(make_task(name), n)
         optimum = belief_optimum(task, sample_starts(task, starts, cfg.seed))
-        values = per_trial(task, learner, cfg, mine)
+        values, fresh = per_trial(task, learner, cfg, mine, heldout)
         median = float(np.median(values))
         out[task.name] = {
             "per_trial": values,
@@ -90,6 +98,8 @@ def main(
             "optimum": optimum,
             "gap": round(median / optimum - 1.0, 4),
         }
+        if heldout:
+            out[task.name].update(heldout=heldout, heldout_per_trial=fresh, heldout_median=float(np.median(fresh)))
     return out
 
 
@@ -100,7 +110,9 @@ if __name__ == "__main__":
     ap.add_argument("--task", action="append", dest="tasks", choices=tuple(GRIDS))
     ap.add_argument("--grid", type=int, default=None, help="offsets per coordinate and pair, every task")
     ap.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER")
+    ap.add_argument("--heldout", type=int, default=0, help="also score each policy on this many fresh worlds")
     a = ap.parse_args()
     extra = {k: int(v) if v.lstrip("-").isdigit() else float(v) for k, v in (p.split("=", 1) for p in a.param)}
-    res = main(a.episodes, learner=a.learner, tasks=tuple(a.tasks or GRIDS), grid=a.grid, params=extra)
+    tasks = tuple(a.tasks or GRIDS)
+    res = main(a.episodes, learner=a.learner, tasks=tasks, grid=a.grid, params=extra, heldout=a.heldout)
     print(json.dumps(res, indent=2))

@@ -120,8 +120,10 @@ def test_offset_learning_smoke():
         res = mod.main(episodes=20, trials=1, starts=10, learner=learner, refine={"u-handle": (9, 2), "cup-3d": (3, 0)})
         for key in ("u-handle-grid9", "cup-3d-grid3"):
             assert res[key]["median"] >= res[key]["optimum"] - 1e-12
-    res = mod.main(10, 1, 6, "refine-vi", tasks=("u-handle",), grid=5, params={"start_level": 1, "refine_after": 1})
-    assert res["params"] == {"start_level": 1, "refine_after": 1} and list(res)[-1] == "u-handle-grid5"
+    params = {"start_level": 1, "refine_after": 1}
+    res = mod.main(10, 1, 6, "refine-vi", tasks=("u-handle",), grid=5, params=params, heldout=4)
+    assert res["params"] == params and list(res)[-1] == "u-handle-grid5"
+    assert res["u-handle-grid5"]["heldout"] == 4 and len(res["u-handle-grid5"]["heldout_per_trial"]) == 1
 
 
 def test_family_learning_smoke():
