@@ -163,3 +163,13 @@ def test_its_compiled_planning_equals_the_readable_sweeps():
     a, b = (r.agents[0].inner for r in runs)
     assert a.q == b.q and a.q_greedy == b.q_greedy and a.open == b.open
     assert any(len(v) > len(a.coarse) for v in a.open.values())
+
+
+def test_its_options_are_refused_to_other_agents_naming_only_real_flags(capsys):
+    from crmgrasp.cli import main
+
+    argv = ["learn", "--task", "paper-box", "--agent", "model-vi", "--refine-after", "2", "--episodes", "5"]
+    assert main([*argv, "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--refine-after does not apply to --agent model-vi" in err[0]
+    assert "--q-act" in err[0] and "--sweeps" not in err[0] and "--compiled" not in err[0]  # no flag exists for those

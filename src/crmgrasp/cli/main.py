@@ -87,11 +87,12 @@ def _learner_params(args: argparse.Namespace) -> dict[str, Any]:
         accepted = tuple(deep_defaults(args.agent))
     else:
         accepted = agent_parameters(args.agent) + (PRIOR_KEYS[:2] if takes_prior(args.agent) else ())
-    for flag, _, _ in _AGENT_FLAGS:
-        key = flag.lstrip("-").replace("-", "_")
+    flags = {flag.lstrip("-").replace("-", "_"): flag for flag, _, _ in _AGENT_FLAGS}
+    for key, flag in flags.items():
         if getattr(args, key) is not None:
             if key not in accepted:
-                takes = ", ".join("--" + k.replace("_", "-") for k in accepted) or "none"
+                named = {**flags, "continuous": "--continuous"}
+                takes = ", ".join(named[k] for k in accepted if k in named) or "none"
                 raise CrmgraspError(f"{flag} does not apply to --agent {args.agent} (its options: {takes})")
             params[key] = getattr(args, key)
     for flag, key, applies in (("--symmetric", "symmetric", False), ("--continuous", "continuous", True)):
