@@ -26,6 +26,7 @@ tries are the few around the best of each history.
 from __future__ import annotations
 
 import math
+from collections.abc import Set as AbstractSet
 from typing import Any
 
 import numpy as np
@@ -57,7 +58,6 @@ class RefineVI(ModelVI):
         Tries of a history's best CRM before its children open there (3 by default).
     **kwargs
         [`ModelVI`][crmgrasp.agents.model_based.ModelVI]'s parameters.
-
     """
 
     name = "refine-vi"
@@ -68,6 +68,7 @@ class RefineVI(ModelVI):
         self.refine_after = integer(refine_after, "refine_after", 1, 1_000_000)
         self.children: tuple[tuple[int, ...], ...] = ()
         self.coarse: tuple[int, ...] = tuple(range(n_actions))
+        self._coarse_set: frozenset[int] = frozenset(self.coarse)
         self.open: dict[int, set[int]] = {}
         """History code -> its open CRMs (histories not listed: the coarse grid)."""
 
@@ -84,6 +85,7 @@ class RefineVI(ModelVI):
         if self.start_level > tree.depth:
             raise CrmgraspError(f"start_level {self.start_level} is finer than the task's grid (depth {tree.depth})")
         self.children, self.coarse = tree.children, tree.coarse(self.start_level)
+        self._coarse_set = frozenset(self.coarse)
 
     def set_prior(self, prior: Any, weight: float = 1.0) -> None:
         """[`ModelVI.set_prior`][crmgrasp.agents.model_based.ModelVI.set_prior], each
@@ -92,9 +94,9 @@ class RefineVI(ModelVI):
             self.open.setdefault(s, set(self.coarse)).add(a)
         super().set_prior(prior, weight)
 
-    def opened(self, s: int) -> set[int]:
-        """The CRMs open in history ``s``."""
-        return self.open.get(s) or set(self.coarse)
+    def opened(self, s: int) -> AbstractSet[int]:
+        """The CRMs open in history ``s`` (a view: not to be changed)."""
+        return self.open.get(s) or self._coarse_set
 
     def _row(self, s: int) -> list[float]:
         row = self.q.get(s)
