@@ -108,13 +108,14 @@ def _references(task: Task, label: str, n: int | None, cfg: ContinuousOffsetsCon
 
 
 def _learned(
-    task: Task, label: str, cfg: ContinuousOffsetsConfig, learner: str = "model-vi", **params: object
+    task: Task, n: int | None, cfg: ContinuousOffsetsConfig, learner: str = "model-vi", **params: object
 ) -> dict[str, Any]:
     """``learner`` (k = 1, on the mirror quotient where the task declares a symmetry; model-vi
-    by default) trained on ``task``, its greedy policy run on the references' sampled starts:
-    CRMs per episode per trial, their mean and a bootstrap 95% interval over trials (none
-    below 5), the success rate, and the distinct CRMs tried in any history (mean over
-    trials). The same starts as the optimum, so the two compare without sampling noise."""
+    by default) trained on ``task`` (its own CRMs for ``n`` None, else a grid of ``n`` offsets
+    per coordinate), its greedy policy run on the references' sampled starts: CRMs per
+    episode per trial, their mean and a bootstrap 95% interval over trials (none below 5),
+    the success rate, and the distinct CRMs tried in any history (mean over trials). The
+    same starts as the optimum, so the two compare without sampling noise."""
     from crmgrasp.experiments._episodes import greedy_records, train_model_vi
     from crmgrasp.experiments.stats import bootstrap_ci
 
@@ -122,11 +123,10 @@ def _learned(
     records = greedy_records(task, agents, sample_starts(task, cfg.starts, cfg.seed), cfg.seed)
     per_trial = np.array([np.mean([len(r.actions) for r in trial]) for trial in records])
     low, high = (None if np.isnan(v) else float(v) for v in bootstrap_ci(per_trial, seed=cfg.seed))
-    n = _grid_of(label)
     tried = [len(set().union(*agent.tried.values())) for agent in agents]  # type: ignore[attr-defined]
     return {
         "learner": learner,
-        "crms": label,
+        "crms": "hand-picked" if n is None else f"grid {n}",
         "actions": len(task.actions),
         "offsets_per_pair": None if n is None else n**task.model.offset_dim,
         "crms_tried": float(np.mean(tried)),
@@ -140,23 +140,17 @@ def _learned(
     }
 
 
-def _grid_of(label: str) -> int | None:
-    """Offsets per coordinate of a CRM set's label (``"grid 9"``: 9; ``"hand-picked"``: None)."""
-    return int(label.split()[1]) if label.startswith("grid") else None
-
-
-def _learners(task: Task, cfg: ContinuousOffsetsConfig) -> list[tuple[Task, str, str, dict[str, object]]]:
+def _learners(task: Task, cfg: ContinuousOffsetsConfig) -> list[tuple[Task, int | None, str, dict[str, object]]]:
     """What learns on ``task``: model-vi on its own CRMs and on a grid, refine-vi on a fine
-    grid from its coarse start (task, CRM-set label, learner, parameters)."""
+    grid from its coarse start (task, offsets per coordinate or None, learner, parameters)."""
     spatial = task.model.offset_dim > 1
-    grid = offset_grid(task, cfg.learn_spatial_grid if spatial else cfg.learn_grid)
-    fine = offset_grid(task, cfg.refine_spatial_grid if spatial else cfg.refine_grid)
+    n = cfg.learn_spatial_grid if spatial else cfg.learn_grid
+    fine = cfg.refine_spatial_grid if spatial else cfg.refine_grid
     start = cfg.refine_spatial_start_level if spatial else cfg.refine_start_level
-    label = grid.name.rsplit("-", 1)[1].replace("grid", "grid ")
     return [
-        (task, "hand-picked", "model-vi", {}),
-        (grid, label, "model-vi", {}),
-        (fine, fine.name.rsplit("-", 1)[1].replace("grid", "grid "), "refine-vi", {"start_level": start}),
+        (task, None, "model-vi", {}),
+        (offset_grid(task, n), n, "model-vi", {}),
+        (offset_grid(task, fine), fine, "refine-vi", {"start_level": start}),
     ]
 
 
@@ -180,8 +174,8 @@ def continuous_offsets(
             rows.append({"task": task.name, **_references(t, label, n, cfg)})
             if stage is not None:
                 stage.advance(1)
-        for t, label, learner, params in _learners(task, cfg):
-            learned.append({"task": task.name, **_learned(t, label, cfg, learner, **params)})
+        for t, n, learner, params in _learners(task, cfg):
+            learned.append({"task": task.name, **_learned(t, n, cfg, learner, **params)})
             if stage is not None:
                 stage.advance(1)
     if stage is not None:

@@ -111,7 +111,10 @@ def offset_tree(task: Task) -> OffsetTree:
     (``--offset-grid`` 3, 5, 9, 17, 33, 65 or 129); a one-line error otherwise."""
     from itertools import product
 
+    sizes = [rg.dim for rg in task.crm_ranges if not rg.fixed]
     for depth in range(1, MAX_DEPTH + 1):
+        if any((2**depth + 1) ** dim > len(task.actions) for dim in sizes):
+            continue  # one range's grid alone has more CRMs than the task: this and finer grids cannot match
         if grid_crms(task, 2**depth + 1) == task.actions:
             break
     else:
