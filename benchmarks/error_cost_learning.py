@@ -11,8 +11,9 @@ within 15% of the optimum with at least 95% success (issue 29's target).
 
 Usage: ``python benchmarks/error_cost_learning.py [--task notch-or-box --task box-family]
 [--cost 30] [--episodes 3000] [--seeds 5] [--first 0] [--worlds 400] [--test 1000] [--learner backoff-vi]
-[--param KEY=NUMBER ...]`` (``--param``: a learner parameter, e.g. ``explore=1`` for ``backoff-vi``). Prints one JSON
-object; progress on stderr. About 5 min at the defaults on 2 cores.
+[--param KEY=NUMBER ...] [--k K]`` (``--param``: a learner parameter, e.g. ``explore=1`` for ``backoff-vi``;
+``--k``: the history order instead of [`ORDERS`][]'s). Prints one JSON object; progress on stderr.
+About 5 min at the defaults on 2 cores.
 """
 
 from __future__ import annotations
@@ -43,6 +44,7 @@ def one(
     learner: str = "pooled-vi",
     extra: dict | None = None,
     first: int = 0,
+    k: int | None = None,
 ) -> dict:
     task = dataclasses.replace(make_task(name), error_cost=float(cost))
     worlds, test = sample_starts(task, n_worlds, 0), sample_starts(task, n_test, 1)
@@ -50,9 +52,9 @@ def one(
     optimum = policy_rows(episode_records(task, lambda: belief, test, 0), cost)
     params = {**({"symmetric": True} if task.symmetry is not None else {}), **(extra or {})}
     rows = []
+    k = ORDERS[learner] if k is None else k
     for seed in range(first, first + seeds):
         t0 = time.perf_counter()
-        k = ORDERS[learner]
         res = train_trials(task, learner, trials=1, episodes=episodes, seed=seed, k=k, eval_episodes=0, params=params)
         (records,) = greedy_records(task, res.agents, test, seed, k=k)
         got = policy_rows(records, cost)
@@ -69,6 +71,7 @@ def one(
     return {
         "task": name,
         "learner": learner,
+        "k": k,
         "params": extra or {},
         "cost": cost,
         "optimum": {
@@ -90,10 +93,11 @@ def main() -> None:
     p.add_argument("--test", type=int, default=1000)
     p.add_argument("--learner", choices=tuple(ORDERS), default="pooled-vi")
     p.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER")
+    p.add_argument("--k", type=int, default=None, help="the learner's history order (default: ORDERS)")
     a = p.parse_args()
     extra = {k: float(v) for k, v in (item.split("=", 1) for item in a.param)}
     out = [
-        one(name, cost, a.episodes, a.seeds, a.worlds, a.test, a.learner, extra, a.first)
+        one(name, cost, a.episodes, a.seeds, a.worlds, a.test, a.learner, extra, a.first, a.k)
         for name in (a.task or ["notch-or-box", "box-family"])
         for cost in (a.cost or [30.0])
     ]

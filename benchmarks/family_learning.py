@@ -5,7 +5,7 @@ For each task: W evaluation worlds are sampled once (``sample_starts(task, W, 10
 a world is graspable when some sequence of at most ``max_steps`` CRMs grasps it knowing
 the true configuration (``ungraspable_fraction``). The belief-space optimal policy over
 those worlds (``BeliefPolicy``) runs on each: its mean is the optimum. For each seed, one
-agent per learner trains for EPISODES episodes of the task itself (k = 1, on the mirror
+agent per learner trains for EPISODES episodes of the task itself (k from [`ORDERS`][], on the mirror
 quotient where the task declares one, no prior), then its greedy policy runs on the same
 worlds. The gap is ``mean(learner) / mean(optimum) - 1``, over all worlds and over the
 graspable ones (an ungraspable world costs the step limit to both, which dilutes the
@@ -19,8 +19,9 @@ closer to the gap to the family's own optimum, of which it stays an upper bound 
 expectation. A learner may then come out below the optimum on the W worlds.
 
 Usage: ``python benchmarks/family_learning.py [--episodes 3000] [--seeds 10] [--first 0]
-[--worlds 300] [--pool P] [--task NAME ...] [--learner NAME ...] [--param KEY=NUMBER ...]`` (``--param``:
-a learner parameter, e.g. ``explore=1`` for ``backoff-vi``, given to every learner run).
+[--worlds 300] [--pool P] [--task NAME ...] [--learner NAME ...] [--param KEY=NUMBER ...] [--k K]`` (``--param``:
+a learner parameter, e.g. ``explore=1`` for ``backoff-vi``, given to every learner run; ``--k``: every
+learner's history order instead of [`ORDERS`][]).
 Prints one JSON object; progress on stderr.
 """
 
@@ -58,8 +59,9 @@ every learner and the optimum spend the step limit) nor, by default, the three-f
 THREE_FINGERS = ("triangles-3f", "odd-polygons-3f")
 """Three-finger twins a run may name with ``--task`` (not run by default)."""
 LEARNERS = ("backoff-vi", "pooled-vi", "model-vi")
-ORDERS = {"backoff-vi": 6}
-"""History order per learner (1 where not listed)."""
+ORDERS = {"backoff-vi": 2}
+"""History order per learner (1 where not listed): ``backoff-vi`` runs with k = 2, as ``--preset
+families`` does (docs/results.md compares k = 6, ``--k 6``)."""
 
 
 def _steps(records: list) -> np.ndarray:
@@ -74,6 +76,7 @@ def task_row(
     n_worlds: int,
     extra: dict | None = None,
     pool: int = 0,
+    k: int | None = None,
 ) -> dict:
     """One task: the optimum, then every learner over the seeds (see the module docstring)."""
     task = make_task(name)
@@ -90,8 +93,9 @@ def task_row(
         "optimum_graspable": round(float(optimum[graspable].mean()), 4),
     }
     params = {"symmetric": task.symmetry is not None, **(extra or {})}
+    order = k
     for agent in learners:
-        k = ORDERS.get(agent, 1)
+        k = ORDERS.get(agent, 1) if order is None else order
         gaps, gaps_g, success, seconds = [], [], [], 0.0
         for seed in seeds:
             t0 = time.perf_counter()
@@ -125,12 +129,15 @@ def main(
     learners: tuple[str, ...] = LEARNERS,
     extra: dict | None = None,
     pool: int = 0,
+    k: int | None = None,
 ) -> dict:
     """Every task and learner; see the module docstring."""
     out: dict = {"episodes": episodes, "seeds": [first, first + seeds - 1], "worlds": n_worlds, "params": extra or {}}
+    if k is not None:
+        out["k"] = k
     for name in tasks:
         print(f"{name} ...", file=sys.stderr, flush=True)
-        out[name] = task_row(name, learners, episodes, range(first, first + seeds), n_worlds, extra, pool)
+        out[name] = task_row(name, learners, episodes, range(first, first + seeds), n_worlds, extra, pool, k)
     return out
 
 
@@ -144,11 +151,20 @@ if __name__ == "__main__":
     ap.add_argument("--task", action="append", dest="tasks", choices=TASKS + THREE_FINGERS)
     ap.add_argument("--learner", action="append", dest="learners")
     ap.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER|true|false")
+    ap.add_argument("--k", type=int, default=None, help="every learner's history order (default: ORDERS)")
     a = ap.parse_args()
     flags = {"true": True, "false": False}
     pairs = (item.split("=", 1) for item in a.param)
     extra = {k: flags[v.lower()] if v.lower() in flags else float(v) for k, v in pairs}
     res = main(
-        a.episodes, a.seeds, a.first, a.worlds, tuple(a.tasks or TASKS), tuple(a.learners or LEARNERS), extra, a.pool
+        a.episodes,
+        a.seeds,
+        a.first,
+        a.worlds,
+        tuple(a.tasks or TASKS),
+        tuple(a.learners or LEARNERS),
+        extra,
+        a.pool,
+        a.k,
     )
     print(json.dumps(res, indent=1))

@@ -1,7 +1,8 @@
 """Three-finger policies on the three-fingertip MuJoCo stand-in: learned on the kinematic model, transferred.
 
 Per task (``triangles-3f``, ``box-family-3f``, ``cup-family-3f`` by default) and seed: one
-``pooled-vi`` agent (k = 1, the mirror quotient where the task declares one) learns for
+``pooled-vi`` agent (k = 1, the mirror quotient where the task declares one; ``--learner`` and
+``--k`` choose another learner and history order) learns for
 EPISODES kinematic episodes; its greedy policy then runs WORLDS MuJoCo episodes
 (``crmgrasp.experiments.physics_learning.score_on_mujoco``: worlds drawn from one generator
 per seed, the object free on the table, three fingertips with the stand-in's sensor model;
@@ -11,8 +12,8 @@ below ``mu_goal``. Printed per task: MuJoCo successes out of WORLDS and CRMs per
 kinematic greedy success and CRMs, and the episodes MuJoCo ended early.
 
 Usage: ``python benchmarks/mujoco_three_fingers.py [--task triangles-3f ...] [--episodes 3000]
-[--worlds 20] [--seeds 3]``. Prints one JSON object; progress on stderr. About 4 min at the
-defaults on 2 cores.
+[--worlds 20] [--seeds 3] [--learner pooled-vi] [--k 1]``. Prints one JSON object; progress on
+stderr. About 4 min at the defaults on 2 cores.
 """
 
 from __future__ import annotations
@@ -29,12 +30,12 @@ from crmgrasp.experiments.physics_learning import score_on_mujoco
 from crmgrasp.tasks import make_task
 
 
-def one(name: str, episodes: int, worlds: int, seed: int) -> dict:
+def one(name: str, episodes: int, worlds: int, seed: int, learner: str = "pooled-vi", k: int = 1) -> dict:
     task = make_task(name)
     params = {"symmetric": True} if task.symmetry is not None else {}
     t0 = time.perf_counter()
-    res = train_trials(task, "pooled-vi", trials=1, episodes=episodes, seed=seed, k=1, eval_episodes=0, params=params)
-    agent, encoder = res.agents[0], encoder_for(task, 1)
+    res = train_trials(task, learner, trials=1, episodes=episodes, seed=seed, k=k, eval_episodes=0, params=params)
+    agent, encoder = res.agents[0], encoder_for(task, k)
     steps, success = evaluate(task, agent, encoder, 1000, np.random.default_rng(seed + 1))
     got = score_on_mujoco(task, agent, encoder, worlds, seed)
     row = {
@@ -56,11 +57,13 @@ def main() -> None:
     p.add_argument("--episodes", type=int, default=3000, help="kinematic training episodes")
     p.add_argument("--worlds", type=int, default=20, help="MuJoCo worlds per policy")
     p.add_argument("--seeds", type=int, default=3)
+    p.add_argument("--learner", default="pooled-vi", help="the learner (an agent of crmgrasp learn)")
+    p.add_argument("--k", type=int, default=1, help="its history order")
     a = p.parse_args()
     tasks = a.task or ["triangles-3f", "box-family-3f", "cup-family-3f"]
-    out = {"episodes": a.episodes, "worlds": a.worlds, "tasks": {}}
+    out = {"episodes": a.episodes, "worlds": a.worlds, "learner": a.learner, "k": a.k, "tasks": {}}
     for name in tasks:
-        rows = [one(name, a.episodes, a.worlds, seed) for seed in range(a.seeds)]
+        rows = [one(name, a.episodes, a.worlds, seed, a.learner, a.k) for seed in range(a.seeds)]
         out["tasks"][name] = {
             "per_seed": rows,
             "median_mujoco_successes": float(np.median([r["mujoco_successes"] for r in rows])),

@@ -12,10 +12,11 @@ from its five (U handle) and of 9 x 9 from its 3 x 3 (cup-3d), its optimum being
 Prints one JSON object: per task, CRMs per episode per trial, their median, the grid's
 belief-space optimum on those starts and the median's gap to it. Usage:
 ``python benchmarks/offset_learning.py [--episodes 5000] [--learner model-vi|backoff-vi|refine-vi]
-[--task u-handle|cup-3d ...] [--grid N] [--param KEY=NUMBER ...] [--heldout N]`` (model-vi about 8 minutes on
-2 cores; ``--grid``: every task's grid, offsets per coordinate; ``--param``: a learner
+[--task u-handle|cup-3d ...] [--grid N] [--param KEY=NUMBER ...] [--heldout N] [--k K]`` (model-vi about 8
+minutes on 2 cores; ``--grid``: every task's grid, offsets per coordinate; ``--param``: a learner
 parameter, e.g. ``start_level=3`` or ``refine_after=1`` for refine-vi; ``--heldout N``: also
-score each greedy policy on N fresh worlds, those of ``reference_bias.py --heldout N``).
+score each greedy policy on N fresh worlds, those of ``reference_bias.py --heldout N``; ``--k``:
+the learner's history order instead of [`ORDERS`][]'s).
 """
 
 from __future__ import annotations
@@ -41,12 +42,17 @@ REFINE = {"u-handle": (33, 2), "cup-3d": (9, 1)}
 
 
 def per_trial(
-    task: Task, learner: str, cfg: ContinuousOffsetsConfig, params: dict[str, Any], heldout: int = 0
+    task: Task,
+    learner: str,
+    cfg: ContinuousOffsetsConfig,
+    params: dict[str, Any],
+    heldout: int = 0,
+    k: int | None = None,
 ) -> tuple[list[float], list[float]]:
     """CRMs per episode of each trial's greedy policy on the optimum's starts, and on
     ``heldout`` fresh worlds (seed 20,000: ``reference_bias.py``'s held-out worlds; none
     for 0)."""
-    k = ORDERS[learner]
+    k = ORDERS[learner] if k is None else k
     params = {"symmetric": task.symmetry is not None, **params}
     res = train_trials(
         task, learner, trials=cfg.trials, episodes=cfg.episodes, seed=cfg.seed, k=k, eval_episodes=0, params=params
@@ -68,12 +74,13 @@ def main(
     grid: int | None = None,
     params: dict[str, Any] | None = None,
     heldout: int = 0,
+    k: int | None = None,
 ) -> dict[str, Any]:
     """Per task: the learner's CRMs per episode per trial, their median, the optimum and the
     gap. ``refine``: refine-vi's grid and start level per task (default [`REFINE`][]);
     ``grid``: every task's grid instead; ``params``: the learner's parameters (refine-vi's
     ``start_level`` overrides ``refine``'s); ``heldout``: also each greedy policy on that many
-    fresh worlds."""
+    fresh worlds; ``k``: the history order instead of [`ORDERS`][]'s."""
     refine = REFINE if refine is None else refine
     cfg = ContinuousOffsetsConfig(trials=trials, episodes=episodes, starts=starts)
     out: dict[str, Any] = {
@@ -82,6 +89,7 @@ def main(
         "starts": starts,
         "learner": learner,
         "params": params or {},
+        "k": ORDERS[learner] if k is None else k,
     }
     for name in tasks:
         mine = dict(params or {})
@@ -90,7 +98,7 @@ def main(
         n = grid or (refine[name][0] if learner == "refine-vi" else GRIDS[name])
         task = offset_grid(make_task(name), n)
         optimum = belief_optimum(task, sample_starts(task, starts, cfg.seed))
-        values, fresh = per_trial(task, learner, cfg, mine, heldout)
+        values, fresh = per_trial(task, learner, cfg, mine, heldout, k)
         median = float(np.median(values))
         out[task.name] = {
             "per_trial": values,
@@ -111,8 +119,9 @@ if __name__ == "__main__":
     ap.add_argument("--grid", type=int, default=None, help="offsets per coordinate and pair, every task")
     ap.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER")
     ap.add_argument("--heldout", type=int, default=0, help="also score each policy on this many fresh worlds")
+    ap.add_argument("--k", type=int, default=None, help="the learner's history order (default: ORDERS)")
     a = ap.parse_args()
     extra = {k: int(v) if v.lstrip("-").isdigit() else float(v) for k, v in (p.split("=", 1) for p in a.param)}
     tasks = tuple(a.tasks or GRIDS)
-    res = main(a.episodes, learner=a.learner, tasks=tasks, grid=a.grid, params=extra, heldout=a.heldout)
+    res = main(a.episodes, learner=a.learner, tasks=tasks, grid=a.grid, params=extra, heldout=a.heldout, k=a.k)
     print(json.dumps(res, indent=2))

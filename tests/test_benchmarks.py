@@ -124,6 +124,7 @@ def test_offset_learning_smoke():
     res = mod.main(10, 1, 6, "refine-vi", tasks=("u-handle",), grid=5, params=params, heldout=4)
     assert res["params"] == params and list(res)[-1] == "u-handle-grid5"
     assert res["u-handle-grid5"]["heldout"] == 4 and len(res["u-handle-grid5"]["heldout_per_trial"]) == 1
+    assert res["k"] == 1 and mod.main(10, 1, 6, "backoff-vi", tasks=("u-handle",), grid=3, k=2)["k"] == 2
 
 
 def test_family_learning_smoke():
@@ -132,6 +133,9 @@ def test_family_learning_smoke():
     spec.loader.exec_module(mod)
     res = mod.main(episodes=20, seeds=2, n_worlds=12, tasks=("cup-family",), learners=("pooled-vi", "backoff-vi"))
     row = res["cup-family"]
+    assert "k" not in res and row["pooled-vi"]["k"] == 1 and row["backoff-vi"]["k"] == mod.ORDERS["backoff-vi"]
+    other = mod.main(episodes=5, seeds=1, n_worlds=4, tasks=("cup-family",), learners=("backoff-vi",), k=3)
+    assert other["k"] == 3 and other["cup-family"]["backoff-vi"]["k"] == 3
     assert row["worlds"] == 12 and 0 <= row["graspable"] <= 12 and row["optimum"] >= 1.0
     learner = row["pooled-vi"]
     assert len(learner["gap_graspable"]) == 2 and 0 <= learner["seeds_within_10pct_graspable"] <= 2
@@ -157,9 +161,10 @@ def test_mujoco_three_fingers_smoke(capsys, monkeypatch):
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     argv = ["mujoco_three_fingers.py", "--task", "cup-family-3f", "--episodes", "5", "--worlds", "2", "--seeds", "1"]
-    monkeypatch.setattr("sys.argv", argv)
+    monkeypatch.setattr("sys.argv", [*argv, "--learner", "backoff-vi", "--k", "2"])
     mod.main()
     out = json.loads(capsys.readouterr().out)
+    assert out["learner"] == "backoff-vi" and out["k"] == 2
     (row,) = out["tasks"]["cup-family-3f"]["per_seed"]
     assert 0 <= row["mujoco_successes"] <= 2 and 0.0 <= row["kinematic_success"] <= 1.0
 
@@ -186,6 +191,7 @@ def test_error_cost_learning_smoke(capsys, monkeypatch, learner):
     (row,) = json.loads(capsys.readouterr().out)["rows"]
     assert row["cost"] == 30.0 and row["optimum"]["mean_cost"] >= 1.0 and len(row["per_seed"]) == 1
     assert row["learner"] == learner and row["per_seed"][0]["success"] >= 0.9  # evaluated on its own histories
+    assert row["k"] == mod.ORDERS[learner]
 
 
 def test_step_breakdown_smoke(capsys):

@@ -120,7 +120,7 @@ def test_learner_presets_fill_what_the_user_left_out():
     box, cup = make_task("paper-box"), make_task("cup-3d")
     assert apply_preset("paper", box) == LearnerChoice("sarsa", 2, False, None)
     assert apply_preset("fastest", box) == LearnerChoice("pooled-vi", 1, True, None)  # from scratch
-    assert apply_preset("families", box) == LearnerChoice("backoff-vi", 6, True, None)
+    assert apply_preset("families", box) == LearnerChoice("backoff-vi", 2, True, None)
     assert apply_preset("fastest", cup) == LearnerChoice("pooled-vi", 1, False, None)  # no symmetry declared
     assert apply_preset("fastest", box, agent="dyna-q", k=2) == LearnerChoice("dyna-q", 2, True, None)
     assert apply_preset("fastest", box, prior_task="mixed").prior_task == "mixed"

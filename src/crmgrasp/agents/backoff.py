@@ -1,4 +1,4 @@
-"""Model-based learning over whole histories, backed off to k = 1: `BackoffVI` (``backoff-vi``).
+"""Model-based learning over long histories, backed off to k = 1: `BackoffVI` (``backoff-vi``).
 
 A learner on k = 1 histories ([`PooledVI`][crmgrasp.agents.pooled.PooledVI]) plans as if
 ``(o_t, a_{t-1})`` were a state. It is not: which worlds lie behind it depends on the
@@ -13,8 +13,11 @@ whole histories is planning in belief space. Whole histories are many and each i
 rarely, so the model has two levels:
 
 * **long** counts ``n(h, a, o)`` of each outcome ``o = (r, h', terminal)`` after CRM ``a``
-  in the learner's k-order history ``h``, with ``k`` at least the length of most episodes
-  (a whole history then; beyond ``k`` CRMs, its last ``k``);
+  in the learner's k-order history ``h`` (a whole history when ``k`` is at least the
+  episode's length; beyond ``k`` CRMs, its last ``k``). Shorter histories are met more
+  often, so their counts fill sooner, at the price of planning as if two worlds behind the
+  same last ``k`` CRMs were alike; ``--preset families`` uses ``k = 2``, measured against
+  ``k = 6`` on the families in ``docs/results.md``;
 * **short**: a ``PooledVI`` learner on the k = 1 suffix ``h_1 = (o_t, a_{t-1})`` of every
   history, taught every transition; its greedy model (own counts and the bins-pooled
   prior) gives ``p_1(o | h_1, a)``.

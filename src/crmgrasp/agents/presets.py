@@ -58,9 +58,9 @@ PRESETS: dict[str, LearnerPreset] = {
     ),
     "families": LearnerPreset(
         "backoff-vi",
-        6,
+        2,
         symmetric=True,
-        description="backoff-vi, k = 6: whole histories backed off to k = 1, for object families; from scratch",
+        description="backoff-vi, k = 2: two-CRM histories backed off to k = 1, for object families; from scratch",
     ),
     "costly-errors": LearnerPreset(
         "backoff-vi",
