@@ -25,7 +25,7 @@ import time
 
 import numpy as np
 
-from crmgrasp.agents.training import encoder_for, evaluate, train_trials
+from crmgrasp.agents.training import AGENTS, encoder_for, evaluate, train_trials
 from crmgrasp.experiments.physics_learning import score_on_mujoco
 from crmgrasp.tasks import make_task
 
@@ -57,7 +57,9 @@ def main() -> None:
     p.add_argument("--episodes", type=int, default=3000, help="kinematic training episodes")
     p.add_argument("--worlds", type=int, default=20, help="MuJoCo worlds per policy")
     p.add_argument("--seeds", type=int, default=3)
-    p.add_argument("--learner", default="pooled-vi", help="the learner (an agent of crmgrasp learn)")
+    p.add_argument(
+        "--learner", choices=tuple(AGENTS), default="pooled-vi", help="the learner (an agent of crmgrasp learn)"
+    )
     p.add_argument("--k", type=int, default=1, help="its history order")
     a = p.parse_args()
     tasks = a.task or ["triangles-3f", "box-family-3f", "cup-family-3f"]
