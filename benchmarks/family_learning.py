@@ -93,21 +93,22 @@ def task_row(
         "optimum_graspable": round(float(optimum[graspable].mean()), 4),
     }
     params = {"symmetric": task.symmetry is not None, **(extra or {})}
-    order = k
     for agent in learners:
-        k = ORDERS.get(agent, 1) if order is None else order
+        order = ORDERS.get(agent, 1) if k is None else k
         gaps, gaps_g, success, seconds = [], [], [], 0.0
         for seed in seeds:
             t0 = time.perf_counter()
-            res = train_trials(task, agent, trials=1, episodes=episodes, seed=seed, k=k, eval_episodes=0, params=params)
+            res = train_trials(
+                task, agent, trials=1, episodes=episodes, seed=seed, k=order, eval_episodes=0, params=params
+            )
             seconds += time.perf_counter() - t0
-            records = greedy_records(task, res.agents, worlds, seed, k=k)[0]
+            records = greedy_records(task, res.agents, worlds, seed, k=order)[0]
             steps = _steps(records)
             gaps.append(round(float(steps.mean() / optimum.mean() - 1.0), 4))
             gaps_g.append(round(float(steps[graspable].mean() / optimum[graspable].mean() - 1.0), 4))
             success.append(float(np.mean([r.success for r in records])))
         row[agent] = {
-            "k": k,
+            "k": order,
             "gap": gaps,
             "gap_graspable": gaps_g,
             "median_gap": statistics.median(gaps),
