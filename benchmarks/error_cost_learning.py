@@ -24,6 +24,7 @@ import json
 import sys
 import time
 
+from crmgrasp._validation import setting
 from crmgrasp.agents.training import train_trials
 from crmgrasp.experiments._episodes import episode_records, greedy_records
 from crmgrasp.experiments.cost_of_failure import policy_rows
@@ -92,10 +93,10 @@ def main() -> None:
     p.add_argument("--worlds", type=int, default=400)
     p.add_argument("--test", type=int, default=1000)
     p.add_argument("--learner", choices=tuple(ORDERS), default="pooled-vi")
-    p.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER")
+    p.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER|true|false", type=setting)
     p.add_argument("--k", type=int, default=None, help="the learner's history order (default: ORDERS)")
     a = p.parse_args()
-    extra = {k: float(v) for k, v in (item.split("=", 1) for item in a.param)}
+    extra = dict(a.param)
     out = [
         one(name, cost, a.episodes, a.seeds, a.worlds, a.test, a.learner, extra, a.first, a.k)
         for name in (a.task or ["notch-or-box", "box-family"])

@@ -35,6 +35,7 @@ import time
 
 import numpy as np
 
+from crmgrasp._validation import setting
 from crmgrasp.agents.training import train_trials
 from crmgrasp.experiments._episodes import episode_records, greedy_records
 from crmgrasp.planners.references import BeliefPolicy, sample_starts, ungraspable_fraction
@@ -151,12 +152,10 @@ if __name__ == "__main__":
     ap.add_argument("--pool", type=int, default=0, help="worlds the optimum plans over (default: --worlds)")
     ap.add_argument("--task", action="append", dest="tasks", choices=TASKS + THREE_FINGERS)
     ap.add_argument("--learner", action="append", dest="learners")
-    ap.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER|true|false")
+    ap.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER|true|false", type=setting)
     ap.add_argument("--k", type=int, default=None, help="every learner's history order (default: ORDERS)")
     a = ap.parse_args()
-    flags = {"true": True, "false": False}
-    pairs = (item.split("=", 1) for item in a.param)
-    extra = {k: flags[v.lower()] if v.lower() in flags else float(v) for k, v in pairs}
+    extra = dict(a.param)
     res = main(
         a.episodes,
         a.seeds,

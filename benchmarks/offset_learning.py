@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from crmgrasp._validation import setting
 from crmgrasp.agents.training import train_trials
 from crmgrasp.experiments._episodes import greedy_records
 from crmgrasp.experiments.continuous_offsets import ContinuousOffsetsConfig
@@ -117,11 +118,11 @@ if __name__ == "__main__":
     ap.add_argument("--learner", choices=tuple(ORDERS), default="model-vi")
     ap.add_argument("--task", action="append", dest="tasks", choices=tuple(GRIDS))
     ap.add_argument("--grid", type=int, default=None, help="offsets per coordinate and pair, every task")
-    ap.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER")
+    ap.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER|true|false", type=setting)
     ap.add_argument("--heldout", type=int, default=0, help="also score each policy on this many fresh worlds")
     ap.add_argument("--k", type=int, default=None, help="the learner's history order (default: ORDERS)")
     a = ap.parse_args()
-    extra = {k: int(v) if v.lstrip("-").isdigit() else float(v) for k, v in (p.split("=", 1) for p in a.param)}
+    extra = dict(a.param)
     tasks = tuple(a.tasks or GRIDS)
     res = main(a.episodes, learner=a.learner, tasks=tasks, grid=a.grid, params=extra, heldout=a.heldout, k=a.k)
     print(json.dumps(res, indent=2))

@@ -465,3 +465,20 @@ def test_a_ctrl_c_that_python_swallows_still_stops_the_run(tmp_path):
     from crmgrasp.experiments.runs import read_status
 
     assert read_status(tmp_path) == "interrupted"
+
+
+@pytest.mark.parametrize("text", ["beta", "=1", "beta=", "beta=nan", "beta=inf", "beta=x"])
+def test_a_malformed_setting_names_the_item(text):
+    from crmgrasp._validation import setting
+
+    with pytest.raises(CrmgraspError) as err:
+        setting(text)
+    msg = str(err.value)
+    assert "\n" not in msg and ("beta" in msg or repr(text) in msg)
+
+
+def test_a_setting_keeps_integers_whole():
+    from crmgrasp._validation import setting
+
+    assert setting(" explore = 2 ") == ("explore", 2) and isinstance(setting("explore=2")[1], int)
+    assert setting("beta=-0.25") == ("beta", -0.25) and setting("sample=TRUE") == ("sample", True)

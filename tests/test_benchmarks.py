@@ -186,9 +186,11 @@ def test_error_cost_learning_smoke(capsys, monkeypatch, learner):
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     argv = ["error_cost_learning.py", "--task", "notch-or-box", "--episodes", "200", "--seeds", "1"]
-    monkeypatch.setattr("sys.argv", [*argv, "--worlds", "20", "--test", "30", "--learner", learner])
+    setting = ["--param", "plan_every=50"] if learner == "backoff-vi" else []  # an integer parameter
+    monkeypatch.setattr("sys.argv", [*argv, "--worlds", "20", "--test", "30", "--learner", learner, *setting])
     mod.main()
     (row,) = json.loads(capsys.readouterr().out)["rows"]
+    assert row["params"] == ({"plan_every": 50} if setting else {})
     assert row["cost"] == 30.0 and row["optimum"]["mean_cost"] >= 1.0 and len(row["per_seed"]) == 1
     assert row["learner"] == learner and row["per_seed"][0]["success"] >= 0.9  # evaluated on its own histories
     assert row["k"] == mod.ORDERS[learner]

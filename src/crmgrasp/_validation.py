@@ -14,6 +14,7 @@ __all__ = [
     "integer",
     "shown",
     "tries",
+    "setting",
     "SEED_MAX",
     "MAX_TRIES",
 ]
@@ -111,6 +112,27 @@ def integer(value: object, name: str, low: int, high: int) -> int:
     if not low <= value <= high:
         raise CrmgraspError(f"{name} must be an integer in [{low}, {high}], got {value}")
     return value
+
+
+def setting(text: str) -> tuple[str, bool | int | float]:
+    """``"KEY=VALUE"`` as ``(KEY, value)``: ``true``/``false`` (any case) as a ``bool``, a
+    decimal integer as an ``int``, anything else as a finite ``float``; a one-line
+    `CrmgraspError` names a malformed item.
+
+    Examples
+    --------
+    >>> setting("plan_every=5"), setting("beta=0.5"), setting("sample=False")
+    (('plan_every', 5), ('beta', 0.5), ('sample', False))
+    """
+    key, sep, raw = text.partition("=")
+    if not sep or not key.strip() or not raw.strip():
+        raise CrmgraspError(f"a setting must read KEY=VALUE, got {shown(text)}")
+    word = raw.strip()
+    if word.lower() in ("true", "false"):
+        return key.strip(), word.lower() == "true"
+    if word.lstrip("+-").isdigit() and word.isascii():
+        return key.strip(), int(word)
+    return key.strip(), finite(word, key.strip())
 
 
 def tries(value: object) -> int:
