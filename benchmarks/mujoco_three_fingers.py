@@ -12,7 +12,8 @@ below ``mu_goal``. Printed per task: MuJoCo successes out of WORLDS and CRMs per
 kinematic greedy success and CRMs, and the episodes MuJoCo ended early.
 
 Usage: ``python benchmarks/mujoco_three_fingers.py [--task triangles-3f ...] [--episodes 3000]
-[--worlds 20] [--seeds 3] [--learner pooled-vi] [--k 1]``. Prints one JSON object; progress on
+[--worlds 20] [--seeds 3] [--learner pooled-vi] [--k 1] [--param KEY=VALUE ...]`` (``--param``: a
+learner parameter, e.g. ``explore=1``). Prints one JSON object; progress on
 stderr. About 4 min at the defaults on 2 cores.
 """
 
@@ -25,14 +26,17 @@ import time
 
 import numpy as np
 
+from crmgrasp._validation import setting
 from crmgrasp.agents.training import AGENTS, encoder_for, evaluate, train_trials
 from crmgrasp.experiments.physics_learning import score_on_mujoco
 from crmgrasp.tasks import make_task
 
 
-def one(name: str, episodes: int, worlds: int, seed: int, learner: str = "pooled-vi", k: int = 1) -> dict:
+def one(
+    name: str, episodes: int, worlds: int, seed: int, learner: str = "pooled-vi", k: int = 1, extra: dict | None = None
+) -> dict:
     task = make_task(name)
-    params = {"symmetric": True} if task.symmetry is not None else {}
+    params = {**({"symmetric": True} if task.symmetry is not None else {}), **(extra or {})}
     t0 = time.perf_counter()
     res = train_trials(task, learner, trials=1, episodes=episodes, seed=seed, k=k, eval_episodes=0, params=params)
     agent, encoder = res.agents[0], encoder_for(task, k)
@@ -61,11 +65,20 @@ def main() -> None:
         "--learner", choices=tuple(AGENTS), default="pooled-vi", help="the learner (an agent of crmgrasp learn)"
     )
     p.add_argument("--k", type=int, default=1, help="its history order")
+    p.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="KEY=NUMBER|true|false",
+        type=setting,
+        help="a learner parameter",
+    )
     a = p.parse_args()
+    extra = dict(a.param)
     tasks = a.task or ["triangles-3f", "box-family-3f", "cup-family-3f"]
-    out = {"episodes": a.episodes, "worlds": a.worlds, "learner": a.learner, "k": a.k, "tasks": {}}
+    out = {"episodes": a.episodes, "worlds": a.worlds, "learner": a.learner, "k": a.k, "params": extra, "tasks": {}}
     for name in tasks:
-        rows = [one(name, a.episodes, a.worlds, seed, a.learner, a.k) for seed in range(a.seeds)]
+        rows = [one(name, a.episodes, a.worlds, seed, a.learner, a.k, extra) for seed in range(a.seeds)]
         out["tasks"][name] = {
             "per_seed": rows,
             "median_mujoco_successes": float(np.median([r["mujoco_successes"] for r in rows])),

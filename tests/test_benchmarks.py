@@ -161,10 +161,10 @@ def test_mujoco_three_fingers_smoke(capsys, monkeypatch):
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     argv = ["mujoco_three_fingers.py", "--task", "cup-family-3f", "--episodes", "5", "--worlds", "2", "--seeds", "1"]
-    monkeypatch.setattr("sys.argv", [*argv, "--learner", "backoff-vi", "--k", "2"])
+    monkeypatch.setattr("sys.argv", [*argv, "--learner", "backoff-vi", "--k", "2", "--param", "explore=1"])
     mod.main()
     out = json.loads(capsys.readouterr().out)
-    assert out["learner"] == "backoff-vi" and out["k"] == 2
+    assert out["learner"] == "backoff-vi" and out["k"] == 2 and out["params"] == {"explore": 1}
     (row,) = out["tasks"]["cup-family-3f"]["per_seed"]
     assert 0 <= row["mujoco_successes"] <= 2 and 0.0 <= row["kinematic_success"] <= 1.0
 
