@@ -10,7 +10,10 @@ quotient where the task declares one, no prior), then its greedy policy runs on 
 worlds. The gap is ``mean(learner) / mean(optimum) - 1``, over all worlds and over the
 graspable ones (an ungraspable world costs the step limit to both, which dilutes the
 gap). Per learner and task: the gaps per seed, their median, the seeds within 10% on the
-graspable worlds, success, and the wall time of training.
+graspable worlds, success, the graspable worlds the policy does not grasp within the step
+limit (``fails_graspable``) and the part of the graspable gap they make
+(``gap_from_fails``: their CRMs beyond the optimum's over the optimum's total), and the wall
+time of training.
 
 With ``--pool P`` (P > W) the optimum's policy plans over P worlds, the W evaluation worlds
 first, and is scored on the W. The optimum over sampled worlds is optimistic, less so the
@@ -96,7 +99,7 @@ def task_row(
     params = {"symmetric": task.symmetry is not None, **(extra or {})}
     for agent in learners:
         order = ORDERS.get(agent, 1) if k is None else k
-        gaps, gaps_g, success, seconds = [], [], [], 0.0
+        gaps, gaps_g, success, fails, from_fails, seconds = [], [], [], [], [], 0.0
         for seed in seeds:
             t0 = time.perf_counter()
             res = train_trials(
@@ -107,7 +110,11 @@ def task_row(
             steps = _steps(records)
             gaps.append(round(float(steps.mean() / optimum.mean() - 1.0), 4))
             gaps_g.append(round(float(steps[graspable].mean() / optimum[graspable].mean() - 1.0), 4))
-            success.append(float(np.mean([r.success for r in records])))
+            won = np.array([r.success for r in records])
+            success.append(float(won.mean()))
+            lost = graspable & ~won  # graspable worlds the policy never grasps (it runs to the step limit)
+            fails.append(int(lost.sum()))
+            from_fails.append(round(float((steps[lost] - optimum[lost]).sum() / optimum[graspable].sum()), 4))
         row[agent] = {
             "k": order,
             "gap": gaps,
@@ -116,6 +123,8 @@ def task_row(
             "median_gap_graspable": statistics.median(gaps_g),
             "seeds_within_10pct_graspable": sum(g <= 0.10 for g in gaps_g),
             "success": round(float(np.mean(success)), 4),
+            "fails_graspable": fails,
+            "gap_from_fails": from_fails,
             "train_seconds": round(seconds, 1),
         }
         print(f"{name}: {agent}: median gap {row[agent]['median_gap_graspable']:.1%} (graspable)", file=sys.stderr)

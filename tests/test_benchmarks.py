@@ -140,6 +140,8 @@ def test_family_learning_smoke():
     learner = row["pooled-vi"]
     assert len(learner["gap_graspable"]) == 2 and 0 <= learner["seeds_within_10pct_graspable"] <= 2
     assert all(g >= -1e-9 for g in learner["gap"])  # the belief-space optimum is a lower bound on these worlds
+    for f, ff in zip(learner["fails_graspable"], learner["gap_from_fails"], strict=True):
+        assert 0 <= f <= row["graspable"] and ff >= 0.0 and (f > 0 or ff == 0.0)  # a lost world costs the step limit
 
 
 def test_mujoco_learning_smoke(capsys, monkeypatch):
