@@ -467,7 +467,7 @@ def test_a_ctrl_c_that_python_swallows_still_stops_the_run(tmp_path):
     assert read_status(tmp_path) == "interrupted"
 
 
-@pytest.mark.parametrize("text", ["beta", "=1", "beta=", "beta=nan", "beta=inf", "beta=x"])
+@pytest.mark.parametrize("text", ["beta", "=1", "beta=", "beta=nan", "beta=inf", "beta=x", "beta=--5", "beta=+-5"])
 def test_a_malformed_setting_names_the_item(text):
     from crmgrasp._validation import setting
 

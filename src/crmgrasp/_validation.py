@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from typing import Any
 
 __all__ = [
@@ -130,7 +131,7 @@ def setting(text: str) -> tuple[str, bool | int | float]:
     word = raw.strip()
     if word.lower() in ("true", "false"):
         return key.strip(), word.lower() == "true"
-    if word.lstrip("+-").isdigit() and word.isascii():
+    if re.fullmatch(f"[+-]?[0-9]{{1,{_MAX_DIGITS}}}", word):
         return key.strip(), int(word)
     return key.strip(), finite(word, key.strip())
 
