@@ -84,11 +84,17 @@ def task_row(
 ) -> dict:
     """One task: the optimum, then every learner over the seeds (see the module docstring)."""
     task = make_task(name)
+    t_task = time.perf_counter()
     planned = sample_starts(task, max(pool, n_worlds), 10_000)  # the evaluation worlds first
     worlds = planned[:n_worlds]
     graspable = np.array([ungraspable_fraction(task, [w]) == 0.0 for w in worlds])
     planner = BeliefPolicy(task, planned)  # one planner for every world: its memo is shared
     optimum = _steps(episode_records(task, lambda: planner, worlds, 0))
+    print(
+        f"{name}: optimum over {len(planned)} worlds planned and run in {time.perf_counter() - t_task:.0f} s",
+        file=sys.stderr,
+        flush=True,
+    )
     row: dict = {
         "worlds": n_worlds,
         "pool": len(planned),
@@ -115,6 +121,12 @@ def task_row(
             lost = graspable & ~won  # graspable worlds the policy never grasps (it runs to the step limit)
             fails.append(int(lost.sum()))
             from_fails.append(round(float((steps[lost] - optimum[lost]).sum() / optimum[graspable].sum()), 4))
+            print(
+                f"{name}: {agent} seed {seed}: graspable gap {gaps_g[-1]:.1%}, {fails[-1]} graspable worlds "
+                f"not grasped ({seconds:.0f} s of training so far)",
+                file=sys.stderr,
+                flush=True,
+            )
         row[agent] = {
             "k": order,
             "gap": gaps,

@@ -253,3 +253,22 @@ def test_family_learning_pool_and_reference_bias_smoke():
     assert gridded["u-handle"]["6"]["lower"] == round(belief_optimum(grid, sample_starts(grid, 6, 10_000)), 4)
     with pytest.raises(CrmgraspError, match="other CRMs than task 'u-handle-grid3'"):
         belief_optimum(grid, worlds[:6])
+
+
+def test_handover_ends_are_the_two_policies():
+    """Handing over after 0 CRMs is the other policy alone, after the step limit the first alone;
+    the learner alone scores as `family_learning.py` scores the same seed's greedy policy."""
+    spec = importlib.util.spec_from_file_location("handover", BENCH.parent / "handover.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    row = mod.task_rows("u-handle", "backoff-vi", 2, 40, range(3, 4), 16, 0, (0, 1, 10))
+    alone = row["learner alone"]
+    assert row["learner then optimum, 0"]["gap_graspable"] == [0.0] and row["learner then optimum, 0"]["lost"] == [0]
+    assert row["optimum then learner, 0"] == alone and row["learner then optimum, 10"] == alone
+    assert row["optimum then learner, 10"]["gap_graspable"] == [0.0]
+    spec = importlib.util.spec_from_file_location("family_learning", BENCH.parent / "family_learning.py")
+    fam = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(fam)
+    same = fam.task_row("u-handle", ("backoff-vi",), 40, range(3, 4), 16, k=2)["backoff-vi"]
+    assert alone["gap_graspable"] == same["gap_graspable"] and alone["lost"] == same["fails_graspable"]
+    assert alone["gap_graspable"][0] > 0.0  # 40 episodes are not enough: the two ends differ

@@ -74,6 +74,41 @@ def test_belief_policy_executes_its_own_value(task):
     assert all(ok for _, ok in fresh) and 1.3 < np.mean([n for n, _ in fresh]) < 2.0
 
 
+def test_belief_policy_told_another_policys_action(task):
+    """A handover (benchmarks/handover.py): after a CRM the policy did not choose, told which
+    one was taken, the belief still holds the true start, so the policy grasps every start
+    it plans over; a CRM index the task does not have is a one-line error."""
+    from crmgrasp.planners.references import BeliefPolicy
+    from crmgrasp.sim import run_episode
+
+    class FirstForced:
+        def __init__(self, inner: BeliefPolicy, first: int) -> None:
+            self.inner, self.first, self.n = inner, first, 0
+
+        def begin(self, percept):
+            self.inner.begin(percept)
+            self.n = 0
+
+        def act(self):
+            own = self.inner.act()
+            self.a = self.first if self.n == 0 else own
+            self.n += 1
+            return self.a
+
+        def tell(self, percept):
+            self.inner.tell(percept, action=self.a)
+
+    starts = sample_starts(task, 40, seed=4)
+    policy = BeliefPolicy(task, starts)
+    rng = np.random.default_rng(0)
+    for forced in range(len(task.actions)):
+        episodes = [run_episode(task, FirstForced(policy, forced), rng, start=c) for c in starts]
+        assert all(ep.success for ep in episodes)
+        assert any(ep.steps > 1 for ep in episodes)
+    with pytest.raises(CrmgraspError, match="action"):
+        policy.tell(None, action=len(task.actions))  # type: ignore[arg-type]
+
+
 def test_the_optimum_over_more_worlds_is_never_lower():
     """Why the optimum over sampled worlds is optimistic (benchmarks/reference_bias.py): over
     one world it is that world's clairvoyant number, and over a union of disjoint sets it is

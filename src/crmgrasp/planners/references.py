@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, integer
 from crmgrasp.kernels import compiled_rules
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import Error
@@ -334,9 +334,14 @@ class BeliefPolicy:
         self._a = self._action(self._belief, self._left) if self._belief else 0
         return self._a
 
-    def tell(self, percept: Percept) -> None:
+    def tell(self, percept: Percept, action: int | None = None) -> None:
         """Keep the belief's configurations that the action leads to this observation
-        without a grasp (restart from the sample starts if none is left)."""
+        without a grasp (restart from the sample starts if none is left). ``action`` is
+        the CRM (its index) that was taken when it was not this policy's choice, as when
+        another policy acts for a while (``benchmarks/handover.py``); by default, the
+        action this policy chose."""
+        if action is not None:
+            self._a = integer(action, "action", 0, len(self.task.actions) - 1)
         if percept.terminated:
             return
         nxt = []
