@@ -35,8 +35,9 @@ import time
 
 import numpy as np
 
+from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents.base import Agent
-from crmgrasp.agents.training import encoder_for, train_trials
+from crmgrasp.agents.training import AGENTS, encoder_for, train_trials
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.planners.references import BeliefPolicy, sample_starts, ungraspable_fraction
 from crmgrasp.sim import Percept, run_episode
@@ -149,8 +150,19 @@ if __name__ == "__main__":
         ap.error(f"--after takes comma-separated integers, got {a.after!r}")
     if any(t < 0 for t in after):
         ap.error(f"--after takes CRM counts >= 0, got {a.after!r}")
+    for flag in ("seeds", "episodes", "worlds"):
+        if getattr(a, flag) < 1:
+            ap.error(f"--{flag} must be at least 1, got {getattr(a, flag)}")
     seeds = range(a.first, a.first + a.seeds)
     res = {"episodes": a.episodes, "seeds": [a.first, a.first + a.seeds - 1]}
-    for name in a.tasks or ["polygon-family", "u-handle"]:
-        res[name] = task_rows(name, a.learner, a.k, a.episodes, seeds, a.worlds, a.pool, after)
+    tasks = a.tasks or ["polygon-family", "u-handle"]
+    if a.learner not in AGENTS:
+        ap.error(f"unknown learner {a.learner!r}; known: {', '.join(AGENTS)}")
+    try:
+        for name in tasks:
+            make_task(name)  # every name checked before the first long run
+        for name in tasks:
+            res[name] = task_rows(name, a.learner, a.k, a.episodes, seeds, a.worlds, a.pool, after)
+    except CrmgraspError as exc:  # an unknown task or learner, a bad k: one line, exit 2
+        ap.error(str(exc))
     print(json.dumps(res, indent=1))
