@@ -70,9 +70,8 @@ class Handover:
 
     def act(self) -> int:
         mine = self.agent.greedy(self.encoder.encode(self._hist), self.rng)  # drawn every step: same ties
-        theirs = self.optimum.act()
         learner_acts = (self._n < self.after) == self.learner_first
-        self._a = mine if learner_acts else theirs
+        self._a = mine if learner_acts else self.optimum.act()  # the optimum plans only where it acts
         self._n += 1
         return self._a
 
