@@ -32,6 +32,8 @@ import json
 import statistics
 import sys
 import time
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -40,8 +42,8 @@ from crmgrasp.agents.base import Agent
 from crmgrasp.agents.training import AGENTS, encoder_for, train_trials
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.planners.references import BeliefPolicy, sample_starts, ungraspable_fraction
-from crmgrasp.sim import Percept, run_episode
-from crmgrasp.tasks import make_task
+from crmgrasp.sim import Percept, Policy, run_episode
+from crmgrasp.tasks import Task, make_task
 
 
 class Handover:
@@ -80,7 +82,14 @@ class Handover:
         self.optimum.tell(percept, action=self._a)
 
 
-def _score(task, make, worlds, graspable, optimum, seed) -> dict:
+def _score(
+    task: Task,
+    make: Callable[[], Policy],
+    worlds: Sequence[Any],
+    graspable: np.ndarray,
+    optimum: np.ndarray,
+    seed: int,
+) -> dict:
     """Graspable gap and graspable worlds not grasped of the policy ``make()`` on ``worlds``."""
     rng = np.random.default_rng(seed)
     eps = [run_episode(task, make(), rng, start=w) for w in worlds]
