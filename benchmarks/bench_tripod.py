@@ -10,6 +10,11 @@ Every round starts with both least-friction caches empty, so a step pays for eac
 configuration's least friction as in a fresh run. Times are per step, counting the resets
 (a new solid and a start, whose acceptance needs the start's least friction).
 
+The least friction alone, as well: the compiled rule (``least_friction`` of
+``crmgrasp.kernels._closure_jit``, no cache) and the readable one (``least_friction_3d``)
+on the configurations of ``steps`` random actions of each task (the least of ``rounds``
+passes; the readable rule on the first 50 configurations, once).
+
 Prints one JSON object (microseconds and ratios). Usage:
 ``python benchmarks/bench_tripod.py [STEPS] [ROUNDS]`` (defaults 1000 and 3).
 """
@@ -27,6 +32,7 @@ import numpy as np
 import crmgrasp  # noqa: F401  (registers the environments)
 from crmgrasp.kernels.closure import FingersSpatialKernel, _cached
 from crmgrasp.kernels.family import FamilyKernel
+from crmgrasp.model.quality3d import EDGES, least_friction_3d
 from crmgrasp.model.spatial_model import _least_friction
 
 
@@ -40,6 +46,35 @@ def _round(env: Any, actions: list[int]) -> float:
         if term or trunc:
             env.reset()
     return (time.perf_counter() - t0) / len(actions)
+
+
+def _least_friction_alone(env_id: str, steps: int, rounds: int) -> tuple[float, float]:
+    """Microseconds per configuration of the compiled and the readable least friction, on
+    the configurations a random-action run of ``env_id`` visits."""
+    import crmgrasp.kernels._closure_jit as jit
+    from crmgrasp.kernels.closure import closure_params
+
+    env = gym.make(env_id)
+    _, info = env.reset(seed=0)
+    configs = [info["config"]]
+    for a in np.random.default_rng(1).integers(env.action_space.n, size=steps).tolist():
+        _, _, term, trunc, info = env.step(a)
+        configs.append(info["config"])
+        if term or trunc:
+            configs.append(env.reset()[1]["config"])
+    pairs = [(np.array([c.x for c in cfg]), np.array([c.n for c in cfg])) for cfg in configs]
+    tol = closure_params()
+    jit.least_friction(*pairs[0], EDGES, tol)  # compiled before timing
+    compiled = float("inf")
+    for _ in range(rounds):
+        t0 = time.perf_counter()
+        for p, n in pairs:
+            jit.least_friction(p, n, EDGES, tol)
+        compiled = min(compiled, (time.perf_counter() - t0) / len(pairs))
+    t0 = time.perf_counter()
+    for p, n in pairs[:50]:
+        least_friction_3d(p, n)
+    return compiled * 1e6, (time.perf_counter() - t0) / len(pairs[:50]) * 1e6
 
 
 def main(steps: int = 1000, rounds: int = 3) -> dict[str, Any]:
@@ -66,6 +101,11 @@ def main(steps: int = 1000, rounds: int = 3) -> dict[str, Any]:
     for name in ("box3d3f", "cup3d3f"):
         out[f"{name}_reference_over_compiled"] = round(best[f"{name}_reference"] / best[name], 1)
         out[f"{name}_lf_only_over_compiled"] = round(best[f"{name}_lf_only"] / best[name], 2)
+    for env_id in ("crmgrasp/Box3D3F-v0", "crmgrasp/Cup3D3F-v0"):
+        name = env_id.split("/")[1].split("-")[0].lower()
+        compiled, readable = _least_friction_alone(env_id, steps, rounds)
+        out[f"{name}_least_friction_us"] = round(compiled, 1)
+        out[f"{name}_least_friction_readable_us"] = round(readable, 1)
     return out
 
 

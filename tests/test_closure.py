@@ -88,3 +88,60 @@ def test_the_references_take_the_compiled_rule(monkeypatch) -> None:
     fast = (references.belief_optimum(task, starts), references.clairvoyant_bound(task, starts))
     monkeypatch.setattr(references, "compiled_rules", lambda t: t)
     assert (references.belief_optimum(task, starts), references.clairvoyant_bound(task, starts)) == fast
+
+
+def _wrench_batches(seed: int) -> list[np.ndarray]:
+    """Primitive wrenches of random grips at frictions from 1e-4 to 10, the spatial model's
+    own (3 or 4 contacts, 8 edges), some of them from frictionless equilibria."""
+    from crmgrasp.model.quality3d import primitive_wrenches
+
+    rng = np.random.default_rng(seed)
+    out = []
+    for grip in _random_grips(seed, 15):
+        for mu in (1e-4, *rng.uniform(0.01, 10.0, size=3)):
+            out.append(primitive_wrenches([c.x for c in grip], [c.n for c in grip], float(mu)))
+    return out
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_the_compiled_program_equals_the_readable_one(seed: int) -> None:
+    """`max_least_weight` compiled (it leaves the never-read artificial columns stale) returns
+    the readable simplex method's optimum bit for bit, -inf and NaN included."""
+    import crmgrasp.kernels._closure_jit as jit
+    from crmgrasp.kernels.closure import closure_params
+
+    tol = closure_params()
+    for w in _wrench_batches(seed):
+        want, got = lp.max_least_weight(w), jit.max_least_weight(w, tol)
+        assert got == want or (math.isnan(got) and math.isnan(want)), (got, want)
+
+
+def test_the_rank_shortcut_decides_as_the_singular_values() -> None:
+    """The Cholesky certificate and numpy's rank agree on full-rank wrenches, on wrenches of
+    rank 5 (one row a copy of another: the certificate fails, the singular values decide),
+    on nearly dependent rows just above and below the rank tolerance, and with a rank
+    tolerance too large for the certificate (the singular values alone)."""
+    import crmgrasp.kernels._closure_jit as jit
+    from crmgrasp.kernels.closure import closure_params
+
+    tol, g = closure_params(), np.empty((6, 6))
+    cases = _wrench_batches(3)
+    rng = np.random.default_rng(4)
+    for w in list(cases):
+        low = w.copy()
+        low[5] = low[4]
+        cases.append(low)
+        for gap in (1e-11, 1e-9, 1e-3):
+            near = w.copy()
+            near[5] = near[4] + gap * rng.normal(size=w.shape[1])
+            cases.append(near)
+    kinds = set()
+    for w in cases:
+        want = np.linalg.matrix_rank(w, tol=tol[jit.RANK_TOL]) == 6
+        assert jit._full_rank(w, tol, g) == want
+        kinds.add(want)
+    assert kinds == {True, False}
+    coarse = tol.copy()
+    coarse[jit.RANK_TOL] = 10 * jit.CERTIFIED_RANK_TOL
+    for w in cases[:20]:
+        assert jit._full_rank(w, coarse, g) == (np.linalg.matrix_rank(w, tol=coarse[jit.RANK_TOL]) == 6)

@@ -2,13 +2,23 @@
 
 Each function evaluates exactly the floating-point expressions of the readable rules in
 the same order: the contacts' frames and unit edge wrenches of
-[`crmgrasp.model.quality3d`][] (``_cone_frames``, ``_wrenches``, `tangent_basis`), the
-rank test and the linear program of [`crmgrasp.model.quality.positively_spans`][] (the
-simplex method of [`crmgrasp.model.lp`][], pivot by pivot) and the bisection of
+[`crmgrasp.model.quality3d`][] (``_cone_frames``, ``_wrenches``, `tangent_basis`; the
+edges' cosines and sines computed once per configuration, the same values), the linear
+program and the rank test of [`crmgrasp.model.quality.positively_spans`][] (the simplex
+method of [`crmgrasp.model.lp`][], pivot by pivot) and the bisection of
 [`crmgrasp.model.quality3d.least_friction_3d`][]. numba compiles without ``fastmath`` and
 ``math.cos``, ``math.sin``, ``math.tan`` call the same C library as Python's, so the
-results equal the readable rules bit for bit (the tests check it). The rank comes from
-LAPACK's singular values, as numpy's does.
+results equal the readable rules bit for bit (the tests check it).
+
+Three shortcuts leave every returned value unchanged. The program runs before the rank
+test, and the rank is tested only when the program says the wrenches span (the answer is
+the conjunction of the two). The rank is certified by a Cholesky factorisation of
+``W W^T - CERTIFIED_GAP I`` when that succeeds (then LAPACK's singular values, which
+numpy's rank counts, are all far above the tolerance) and comes from the singular values
+otherwise. Pivots update only the columns the method reads: the artificial columns never
+enter the basis and are never read, so they are left stale. Together they took the
+compiled least friction from about 240 to 72 us per configuration on the tripod tasks'
+configurations (24 programs each); ``python benchmarks/bench_tripod.py`` measures the step.
 
 No constant of the model is written here: the tolerances arrive in ``tol`` (layout below,
 built by [`crmgrasp.kernels.closure.closure_params`][] from the model's modules).
@@ -58,42 +68,56 @@ def _frames(p, nrm, arm_min):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def _wrenches(arms, nrm, tang, rho, mu, edges):  # type: ignore[no-untyped-def]
-    """``_wrenches``: the ``(6, n edges)`` unit edge wrenches."""
-    count = arms.shape[0]
-    w = np.empty((6, count * edges))
+def _edge_angles(edges):  # type: ignore[no-untyped-def]
+    """``cos phi_j`` and ``sin phi_j``, ``phi_j = 2 pi j / edges``, as ``_wrenches`` computes them."""
+    co, si = np.empty(edges), np.empty(edges)
+    for j in range(edges):
+        phi = 2.0 * math.pi * j / edges
+        co[j], si[j] = math.cos(phi), math.sin(phi)
+    return co, si
+
+
+@njit(cache=True)
+def _wrenches(arms, nrm, tang, rho, mu, co, si, w):  # type: ignore[no-untyped-def]
+    """``_wrenches``: the ``(6, n edges)`` unit edge wrenches into ``w`` (the edges' angles
+    from [`_edge_angles`][])."""
+    count, edges = arms.shape[0], co.shape[0]
     scale = math.sqrt(1.0 + mu * mu)
     for i in range(count):
         for j in range(edges):
-            phi = 2.0 * math.pi * j / edges
-            co, si = math.cos(phi), math.sin(phi)
             col = i * edges + j
-            f0 = (nrm[i, 0] + mu * (co * tang[i, 0] + si * tang[i, 3])) / scale
-            f1 = (nrm[i, 1] + mu * (co * tang[i, 1] + si * tang[i, 4])) / scale
-            f2 = (nrm[i, 2] + mu * (co * tang[i, 2] + si * tang[i, 5])) / scale
+            f0 = (nrm[i, 0] + mu * (co[j] * tang[i, 0] + si[j] * tang[i, 3])) / scale
+            f1 = (nrm[i, 1] + mu * (co[j] * tang[i, 1] + si[j] * tang[i, 4])) / scale
+            f2 = (nrm[i, 2] + mu * (co[j] * tang[i, 2] + si[j] * tang[i, 5])) / scale
             x0, x1, x2 = arms[i, 0], arms[i, 1], arms[i, 2]
             w[0, col], w[1, col], w[2, col] = f0, f1, f2
             w[3, col] = (x1 * f2 - x2 * f1) / rho
             w[4, col] = (x2 * f0 - x0 * f2) / rho
             w[5, col] = (x0 * f1 - x1 * f0) / rho
-    return w
 
 
 @njit(cache=True)
-def _pivot(t, cost, basis, r, j):  # type: ignore[no-untyped-def]
-    """``crmgrasp.model.lp._pivot``."""
+def _pivot(t, cost, basis, r, j, live):  # type: ignore[no-untyped-def]
+    """``crmgrasp.model.lp._pivot`` on the columns the method reads: the first ``live`` and the
+    right-hand side. The artificial columns between them never enter and are never read (the
+    ratio test reads the entering column and the right-hand side; the basis records indices,
+    not columns), so leaving them stale changes no value the method returns."""
     width = t.shape[1]
+    rhs = width - 1
     p = t[r, j]
-    for c in range(width):
+    for c in range(live):
         t[r, c] = t[r, c] / p
+    t[r, rhs] = t[r, rhs] / p
     for i in range(t.shape[0]):
         if i != r:
             f = t[i, j]
-            for c in range(width):
+            for c in range(live):
                 t[i, c] = t[i, c] - f * t[r, c]
+            t[i, rhs] = t[i, rhs] - f * t[r, rhs]
     f = cost[j]
-    for c in range(width):
+    for c in range(live):
         cost[c] = cost[c] - f * t[r, c]
+    cost[rhs] = cost[rhs] - f * t[r, rhs]
     basis[r] = j
 
 
@@ -116,16 +140,18 @@ def _simplex(t, cost, basis, columns, tol):  # type: ignore[no-untyped-def]
                     r, best = i, ratio
         if r < 0:
             return False
-        _pivot(t, cost, basis, r, j)
+        _pivot(t, cost, basis, r, j, columns)
     return False
 
 
 @njit(cache=True)
 def max_least_weight(w, tol):  # type: ignore[no-untyped-def]
-    """[`crmgrasp.model.lp.max_least_weight`][]: ``d*``, ``-inf`` (infeasible) or NaN."""
+    """[`crmgrasp.model.lp.max_least_weight`][]: ``d*``, ``-inf`` (infeasible) or NaN. The
+    artificial columns are only written where the readable copy reads them (never)."""
     k, m = w.shape
     rows, structural = k + 1, m + 1
     width = structural + rows + 1
+    rhs = width - 1
     t = np.zeros((rows, width))
     for i in range(k):
         for j in range(m):
@@ -136,9 +162,7 @@ def max_least_weight(w, tol):  # type: ignore[no-untyped-def]
     for j in range(m):
         t[k, j] = 1.0
     t[k, m] = float(m)
-    for i in range(rows):
-        t[i, structural + i] = 1.0
-    t[k, width - 1] = 1.0
+    t[k, rhs] = 1.0
     basis = np.empty(rows, dtype=np.int64)
     for i in range(rows):
         basis[i] = structural + i
@@ -146,35 +170,83 @@ def max_least_weight(w, tol):  # type: ignore[no-untyped-def]
     for i in range(rows):
         for c in range(structural):
             cost[c] = cost[c] - t[i, c]
-        cost[width - 1] = cost[width - 1] - t[i, width - 1]
+        cost[rhs] = cost[rhs] - t[i, rhs]
     if not _simplex(t, cost, basis, structural, tol):
         return math.nan
-    if -cost[width - 1] > tol[FEASIBILITY_TOL]:
+    if -cost[rhs] > tol[FEASIBILITY_TOL]:
         return -math.inf
     for r in range(rows):
         if basis[r] >= structural:
             for c in range(structural):
                 if abs(t[r, c]) > tol[PIVOT_TOL]:
-                    _pivot(t, cost, basis, r, c)
+                    _pivot(t, cost, basis, r, c, structural)
                     break
     for c in range(width):
         cost[c] = 0.0
     cost[m] = -1.0
     for r in range(rows):
         if basis[r] == m:
-            for c in range(width):
+            for c in range(structural):
                 cost[c] = cost[c] + t[r, c]
+            cost[rhs] = cost[rhs] + t[r, rhs]
     if not _simplex(t, cost, basis, structural, tol):
         return math.nan
-    return cost[width - 1]
+    return cost[rhs]
+
+
+CERTIFIED_GAP = 1e-8
+"""The rank test's shortcut: a Cholesky factorisation of ``W W^T - CERTIFIED_GAP I`` that
+succeeds proves ``sigma_min(W) >= 1e-4`` up to rounding (``W``'s entries are at most 1 in
+magnitude, so the rounding of ``W W^T`` and of the factorisation is below 1e-12 for any
+cone this module builds); LAPACK's singular values are backward stable, so numpy's rank with
+a tolerance below [`CERTIFIED_RANK_TOL`][] then counts every row. Not a model constant: it
+decides only which of two computations gives the same answer."""
+
+CERTIFIED_RANK_TOL = 1e-6
+"""The shortcut is taken only while the model's rank tolerance is below this."""
 
 
 @njit(cache=True)
-def _spans(w, tol):  # type: ignore[no-untyped-def]
-    """[`crmgrasp.model.quality.positively_spans`][]: full rank and ``d* > LP_TOL``."""
-    if np.linalg.matrix_rank(w, tol[RANK_TOL]) < w.shape[0]:
+def _full_rank(w, tol, g):  # type: ignore[no-untyped-def]
+    """``rank W == rows`` as ``np.linalg.matrix_rank(W, RANK_TOL)`` decides it: certified
+    by a Cholesky factorisation of ``W W^T - CERTIFIED_GAP I`` (scratch ``g``, ``k x k``)
+    when it succeeds, the singular values otherwise."""
+    k, m = w.shape
+    if tol[RANK_TOL] < CERTIFIED_RANK_TOL:
+        for i in range(k):
+            for j in range(i + 1):
+                s = 0.0
+                for c in range(m):
+                    s += w[i, c] * w[j, c]
+                g[i, j] = s
+            g[i, i] -= CERTIFIED_GAP
+        certified = True
+        for j in range(k):
+            d = g[j, j]
+            for c in range(j):
+                d -= g[j, c] * g[j, c]
+            if not d > 0.0:
+                certified = False
+                break
+            d = math.sqrt(d)
+            g[j, j] = d
+            for i in range(j + 1, k):
+                s = g[i, j]
+                for c in range(j):
+                    s -= g[i, c] * g[j, c]
+                g[i, j] = s / d
+        if certified:
+            return True
+    return np.linalg.matrix_rank(w, tol[RANK_TOL]) >= k
+
+
+@njit(cache=True)
+def _spans(w, tol, g):  # type: ignore[no-untyped-def]
+    """[`crmgrasp.model.quality.positively_spans`][]: ``d* > LP_TOL`` and full rank (the
+    same conjunction; the program first, since a probe it rejects needs no rank)."""
+    if not max_least_weight(w, tol) > tol[LP_TOL]:
         return False
-    return max_least_weight(w, tol) > tol[LP_TOL]
+    return _full_rank(w, tol, g)
 
 
 @njit(cache=True)
@@ -182,10 +254,13 @@ def least_friction(p, nrm, edges, tol):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.quality3d.least_friction_3d`][] of the contacts ``p``, ``nrm``
     (``(n, 3)``, ``n >= 3``)."""
     arms, tang, rho = _frames(p, nrm, tol[ARM_MIN])
+    co, si = _edge_angles(edges)
+    w, g = np.empty((6, arms.shape[0] * edges)), np.empty((6, 6))
     lo, hi = 0.0, tol[THETA_MAX]
     while hi - lo > tol[THETA_TOL]:
         mid = 0.5 * (lo + hi)
-        if _spans(_wrenches(arms, nrm, tang, rho, math.tan(mid), edges), tol):
+        _wrenches(arms, nrm, tang, rho, math.tan(mid), co, si, w)
+        if _spans(w, tol, g):
             hi = mid
         else:
             lo = mid
