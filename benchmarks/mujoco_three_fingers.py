@@ -7,12 +7,20 @@ EPISODES kinematic episodes; its greedy policy then runs WORLDS MuJoCo episodes
 (``crmgrasp.experiments.physics_learning.score_on_mujoco``: worlds drawn from one generator
 per seed, the object free on the table, three fingertips with the stand-in's sensor model;
 an episode ends on the sensed grasp or after ``max_steps`` CRMs) and, for comparison, 1,000
-kinematic episodes. Success on MuJoCo: the true least friction from MuJoCo's contacts at or
-below ``mu_goal``. Printed per task: MuJoCo successes out of WORLDS and CRMs per seed, the
-kinematic greedy success and CRMs, and the episodes MuJoCo ended early.
+kinematic episodes. ``--learner policy-search`` (the k-order policy search of
+``crmgrasp.planners.korder`` from a blank table: a learner from simulated episodes, its budget
+the episodes it re-runs) and ``--learner korder-search`` (the same search from the
+belief-optimal policy projected onto k-order histories: a planner, it uses the hidden
+states) search on ``--search-worlds`` kinematic worlds (seed 10,000 + seed) instead of
+learning from EPISODES episodes; their row adds the policy's mean cost on the worlds searched
+(and the belief optimum there, for ``korder-search``). Success on MuJoCo: the true least
+friction from MuJoCo's contacts at or below ``mu_goal``. Printed per task: MuJoCo successes
+out of WORLDS and CRMs per seed, the kinematic greedy success and CRMs, and the episodes
+MuJoCo ended early.
 
 Usage: ``python benchmarks/mujoco_three_fingers.py [--task triangles-3f ...] [--episodes 3000]
-[--worlds 20] [--seeds 3] [--learner pooled-vi] [--k 1] [--param KEY=VALUE ...]`` (``--param``: a
+[--worlds 20] [--seeds 3] [--learner pooled-vi] [--k 1] [--param KEY=VALUE ...]
+[--search-worlds 1000]`` (``--param``: a
 learner parameter, e.g. ``explore=1``). Prints one JSON object; progress on
 stderr. About 4 min at the defaults on 2 cores.
 """
@@ -29,21 +37,43 @@ import numpy as np
 from crmgrasp._validation import setting
 from crmgrasp.agents.training import AGENTS, encoder_for, evaluate, train_trials
 from crmgrasp.experiments.physics_learning import score_on_mujoco
+from crmgrasp.planners.korder import korder_search
+from crmgrasp.planners.references import sample_starts
 from crmgrasp.tasks import make_task
+
+SEARCHES = {"policy-search": "blank", "korder-search": "belief"}
+"""The k-order policy search's two starts (``crmgrasp plan --init``), by the name ``--learner`` takes."""
 
 
 def one(
-    name: str, episodes: int, worlds: int, seed: int, learner: str = "pooled-vi", k: int = 1, extra: dict | None = None
+    name: str,
+    episodes: int,
+    worlds: int,
+    seed: int,
+    learner: str = "pooled-vi",
+    k: int = 1,
+    extra: dict | None = None,
+    search_worlds: int = 1000,
 ) -> dict:
     task = make_task(name)
-    params = {**({"symmetric": True} if task.symmetry is not None else {}), **(extra or {})}
     t0 = time.perf_counter()
-    res = train_trials(task, learner, trials=1, episodes=episodes, seed=seed, k=k, eval_episodes=0, params=params)
-    agent, encoder = res.agents[0], encoder_for(task, k)
+    encoder = encoder_for(task, k)
+    row: dict = {"seed": seed}
+    if learner in SEARCHES:
+        found = korder_search(task, sample_starts(task, search_worlds, 10_000 + seed), k=k, init=SEARCHES[learner])
+        agent = found.policy
+        row["kinematic_episodes"] = found.episodes
+        row["cost_on_worlds_searched"] = round(found.mean_cost, 3)
+        if found.belief_optimum is not None:
+            row["belief_optimum_on_worlds_searched"] = round(found.belief_optimum, 3)
+    else:
+        params = {**({"symmetric": True} if task.symmetry is not None else {}), **(extra or {})}
+        res = train_trials(task, learner, trials=1, episodes=episodes, seed=seed, k=k, eval_episodes=0, params=params)
+        agent = res.agents[0]
+        row["kinematic_episodes"] = episodes
     steps, success = evaluate(task, agent, encoder, 1000, np.random.default_rng(seed + 1))
     got = score_on_mujoco(task, agent, encoder, worlds, seed)
-    row = {
-        "seed": seed,
+    row |= {
         "mujoco_successes": round(got["success"] * worlds),
         "mujoco_crms": round(got["crms"], 3),
         "kinematic_success": round(float(success.mean()), 4),
@@ -62,8 +92,12 @@ def main() -> None:
     p.add_argument("--worlds", type=int, default=20, help="MuJoCo worlds per policy")
     p.add_argument("--seeds", type=int, default=3)
     p.add_argument(
-        "--learner", choices=tuple(AGENTS), default="pooled-vi", help="the learner (an agent of crmgrasp learn)"
+        "--learner",
+        choices=(*AGENTS, *SEARCHES),
+        default="pooled-vi",
+        help="the learner (an agent of crmgrasp learn, or the k-order policy search)",
     )
+    p.add_argument("--search-worlds", type=int, default=1000, help="kinematic worlds of the policy search")
     p.add_argument("--k", type=int, default=1, help="its history order")
     p.add_argument(
         "--param",
@@ -74,11 +108,17 @@ def main() -> None:
         help="a learner parameter",
     )
     a = p.parse_args()
+    if a.search_worlds < 1:
+        p.error(f"--search-worlds must be at least 1, got {a.search_worlds}")
     extra = dict(a.param)
     tasks = a.task or ["triangles-3f", "box-family-3f", "cup-family-3f"]
     out = {"episodes": a.episodes, "worlds": a.worlds, "learner": a.learner, "k": a.k, "params": extra, "tasks": {}}
+    if a.learner in SEARCHES:
+        out["search_worlds"] = a.search_worlds
     for name in tasks:
-        rows = [one(name, a.episodes, a.worlds, seed, a.learner, a.k, extra) for seed in range(a.seeds)]
+        rows = [
+            one(name, a.episodes, a.worlds, seed, a.learner, a.k, extra, a.search_worlds) for seed in range(a.seeds)
+        ]
         out["tasks"][name] = {
             "per_seed": rows,
             "median_mujoco_successes": float(np.median([r["mujoco_successes"] for r in rows])),

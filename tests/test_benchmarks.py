@@ -169,6 +169,28 @@ def test_mujoco_three_fingers_smoke(capsys, monkeypatch):
     assert out["learner"] == "backoff-vi" and out["k"] == 2 and out["params"] == {"explore": 1}
     (row,) = out["tasks"]["cup-family-3f"]["per_seed"]
     assert 0 <= row["mujoco_successes"] <= 2 and 0.0 <= row["kinematic_success"] <= 1.0
+    assert row["kinematic_episodes"] == 5
+
+
+def test_mujoco_three_fingers_policy_search(capsys, monkeypatch):
+    """The k-order policy search as the learner: its episodes are the ones it re-ran, its
+    cost on the worlds searched is reported, and a bad number of worlds is a usage error."""
+    pytest.importorskip("mujoco", reason="needs the extra crmgrasp[mujoco]")
+    spec = importlib.util.spec_from_file_location("mujoco_three_fingers", BENCH.parent / "mujoco_three_fingers.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    argv = ["mujoco_three_fingers.py", "--task", "cup-family-3f", "--worlds", "2", "--seeds", "1"]
+    monkeypatch.setattr("sys.argv", [*argv, "--learner", "policy-search", "--search-worlds", "6"])
+    mod.main()
+    out = json.loads(capsys.readouterr().out)
+    assert out["learner"] == "policy-search" and out["search_worlds"] == 6
+    (row,) = out["tasks"]["cup-family-3f"]["per_seed"]
+    assert row["kinematic_episodes"] >= 6 and row["cost_on_worlds_searched"] >= 1.0
+    assert "belief_optimum_on_worlds_searched" not in row and 0 <= row["mujoco_successes"] <= 2
+    monkeypatch.setattr("sys.argv", [*argv, "--search-worlds", "0"])
+    with pytest.raises(SystemExit) as exc:
+        mod.main()
+    assert exc.value.code == 2 and "--search-worlds must be at least 1" in capsys.readouterr().err
 
 
 def test_pouct_peer_smoke(capsys, monkeypatch):

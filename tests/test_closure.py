@@ -145,3 +145,26 @@ def test_the_rank_shortcut_decides_as_the_singular_values() -> None:
     coarse[jit.RANK_TOL] = 10 * jit.CERTIFIED_RANK_TOL
     for w in cases[:20]:
         assert jit._full_rank(w, coarse, g) == (np.linalg.matrix_rank(w, tol=coarse[jit.RANK_TOL]) == 6)
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_the_early_decision_equals_the_comparison(seed: int) -> None:
+    """`above` (the bisection stopped once its bracket decides ``least friction > mu_goal``)
+    answers as the comparison of the full least friction does, for goals far from it, at it
+    to the last bit, one unit in the last place either side, and 0; both answers occur."""
+    import crmgrasp.kernels._closure_jit as jit
+    from crmgrasp.kernels.closure import closure_params
+
+    tol = closure_params()
+    answers = set()
+    for grip in _random_grips(10 + seed, 30):
+        p, n = np.array([c.x for c in grip]), np.array([c.n for c in grip])
+        lf = jit.least_friction(p, n, 8, tol)
+        goals = [0.0, 0.05, 0.15, 0.5, 2.0]
+        if math.isfinite(lf):
+            goals += [lf, math.nextafter(lf, 0.0), math.nextafter(lf, math.inf), lf * (1 + 1e-9), lf * (1 - 1e-9)]
+        for goal in goals:
+            want = not (lf <= goal)
+            assert jit.above(p, n, 8, tol, goal) == want, (grip, goal, lf)
+            answers.add(want)
+    assert answers == {True, False}

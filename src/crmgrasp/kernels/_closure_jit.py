@@ -19,6 +19,8 @@ otherwise. Pivots update only the columns the method reads: the artificial colum
 enter the basis and are never read, so they are left stale. Together they took the
 compiled least friction from about 240 to 72 us per configuration on the tripod tasks'
 configurations (24 programs each); ``python benchmarks/bench_tripod.py`` measures the step.
+A start filter needs only whether the least friction exceeds ``mu_goal``: [`above`][] runs
+the same bisection and stops as soon as its bracket decides that.
 
 No constant of the model is written here: the tolerances arrive in ``tol`` (layout below,
 built by [`crmgrasp.kernels.closure.closure_params`][] from the model's modules).
@@ -249,22 +251,65 @@ def _spans(w, tol, g):  # type: ignore[no-untyped-def]
     return _full_rank(w, tol, g)
 
 
+DECIDED_MARGIN = 1e-9
+"""[`above`][] stops once ``tan`` of a bracket end is past ``mu_goal`` by this relative
+margin, far more than the few units in the last place by which ``math.tan`` may miss
+monotonicity."""
+
+
 @njit(cache=True)
-def least_friction(p, nrm, edges, tol):  # type: ignore[no-untyped-def]
-    """[`crmgrasp.model.quality3d.least_friction_3d`][] of the contacts ``p``, ``nrm``
-    (``(n, 3)``, ``n >= 3``)."""
+def _bisect(p, nrm, edges, tol, low, bar):  # type: ignore[no-untyped-def]
+    """The bisection of [`crmgrasp.model.quality3d.least_friction_3d`][] on the contacts ``p``,
+    ``nrm``: its last bracket ``(lo, hi)`` and 0. With ``low >= 0`` it stops early (see
+    [`above`][]): -1 once ``tan(hi) <= low`` (a probe closed), 1 once ``tan(lo) > bar``."""
     arms, tang, rho = _frames(p, nrm, tol[ARM_MIN])
     co, si = _edge_angles(edges)
     w, g = np.empty((6, arms.shape[0] * edges)), np.empty((6, 6))
+    early = low >= 0.0
     lo, hi = 0.0, tol[THETA_MAX]
     while hi - lo > tol[THETA_TOL]:
+        if early:
+            if hi < tol[THETA_MAX] and math.tan(hi) <= low:
+                return lo, hi, -1
+            if lo > 0.0 and math.tan(lo) > bar:
+                return lo, hi, 1
         mid = 0.5 * (lo + hi)
         _wrenches(arms, nrm, tang, rho, math.tan(mid), co, si, w)
         if _spans(w, tol, g):
             hi = mid
         else:
             lo = mid
+    return lo, hi, 0
+
+
+@njit(cache=True)
+def _friction(hi, tol):  # type: ignore[no-untyped-def]
+    """The least friction from the bisection's last upper end: ``inf`` if no probe closed,
+    0 below the antipodal tolerance, ``tan(hi)`` otherwise."""
     if hi == tol[THETA_MAX]:
         return math.inf
     mu = math.tan(hi)
     return 0.0 if mu < tol[ANTIPODAL_TOL] else mu
+
+
+@njit(cache=True)
+def above(p, nrm, edges, tol, mu_goal):  # type: ignore[no-untyped-def]
+    """``not (least_friction(p, nrm, edges, tol) <= mu_goal)`` (``mu_goal >= 0``), the same
+    answer, from the same bisection stopped as soon as its bracket decides it: the upper end
+    only falls and the lower end only rises, so once ``tan(hi)`` (a probe that closed) is below
+    ``mu_goal`` the least friction will be too, and once ``tan(lo)`` is above both ``mu_goal``
+    and the antipodal tolerance it will stay above (``inf`` included). A start filter needs
+    only this comparison; most candidates decide it in a few probes."""
+    bar = max(mu_goal, tol[ANTIPODAL_TOL]) * (1.0 + DECIDED_MARGIN)
+    _, hi, decided = _bisect(p, nrm, edges, tol, mu_goal * (1.0 - DECIDED_MARGIN), bar)
+    if decided != 0:
+        return decided > 0
+    return not (_friction(hi, tol) <= mu_goal)
+
+
+@njit(cache=True)
+def least_friction(p, nrm, edges, tol):  # type: ignore[no-untyped-def]
+    """[`crmgrasp.model.quality3d.least_friction_3d`][] of the contacts ``p``, ``nrm``
+    (``(n, 3)``, ``n >= 3``)."""
+    _, hi, _ = _bisect(p, nrm, edges, tol, -1.0, 0.0)
+    return _friction(hi, tol)

@@ -25,7 +25,7 @@ import math
 import numpy as np
 from numba import njit
 
-from crmgrasp.kernels._closure_jit import least_friction
+from crmgrasp.kernels._closure_jit import above, least_friction
 from crmgrasp.kernels._compile import compiled
 from crmgrasp.kernels._fingers_jit import _index
 from crmgrasp.kernels._spatial_jit import (
@@ -173,12 +173,19 @@ def _observe(c, n, vals):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def _mu(c, n, tol, edges):  # type: ignore[no-untyped-def]
-    """The least friction of the row ``c`` (``least_friction_3d`` with ``edges`` cone edges)."""
+def _split(c, n):  # type: ignore[no-untyped-def]
+    """The row ``c``'s ``(n, 3)`` points and normals."""
     points, normals = np.empty((n, 3)), np.empty((n, 3))
     for i in range(n):
         for k in range(3):
             points[i, k], normals[i, k] = c[6 * i + k], c[6 * i + 3 + k]
+    return points, normals
+
+
+@njit(cache=True)
+def _mu(c, n, tol, edges):  # type: ignore[no-untyped-def]
+    """The least friction of the row ``c`` (``least_friction_3d`` with ``edges`` cone edges)."""
+    points, normals = _split(c, n)
     return least_friction(points, normals, edges, tol)
 
 
@@ -225,7 +232,8 @@ def accept_start(d, n, planes, cyl, p, q, tol, edges, mu_goal, out):  # type: ig
         top = top and _dot(out[k + 3], out[k + 4], out[k + 5], p[HX], p[HY], p[HZ]) <= -up
     if top or _feasible(out, n, planes, cyl, p, q) != 0:
         return False
-    return not (_mu(out, n, tol, edges) <= mu_goal)
+    points, normals = _split(out, n)
+    return above(points, normals, edges, tol, mu_goal)  # not (least friction <= mu_goal)
 
 
 __all__ = ["accept_start", "begin_one", "step_one"]
