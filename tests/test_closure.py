@@ -122,7 +122,7 @@ def test_the_rank_shortcut_decides_as_the_singular_values() -> None:
     on nearly dependent rows just above and below the rank tolerance, and with a rank
     tolerance too large for the certificate (the singular values alone)."""
     import crmgrasp.kernels._closure_jit as jit
-    from crmgrasp.kernels.closure import closure_params
+    from crmgrasp.kernels.closure import CERTIFIED_RANK_TOL, closure_params
 
     tol, g = closure_params(), np.empty((6, 6))
     cases = _wrench_batches(3)
@@ -142,7 +142,7 @@ def test_the_rank_shortcut_decides_as_the_singular_values() -> None:
         kinds.add(want)
     assert kinds == {True, False}
     coarse = tol.copy()
-    coarse[jit.RANK_TOL] = 10 * jit.CERTIFIED_RANK_TOL
+    coarse[jit.RANK_TOL] = 10 * CERTIFIED_RANK_TOL
     for w in cases[:20]:
         assert jit._full_rank(w, coarse, g) == (np.linalg.matrix_rank(w, tol=coarse[jit.RANK_TOL]) == 6)
 

@@ -36,7 +36,8 @@ from numba import njit
 # indices into tol
 THETA_MAX, THETA_TOL, RANK_TOL, LP_TOL, OPT_TOL = range(5)
 PIVOT_TOL, FEASIBILITY_TOL, ANTIPODAL_TOL, ARM_MIN, MAX_PIVOTS = range(5, 10)
-N_TOL = 10
+CERTIFIED_GAP, CERTIFIED_RANK_TOL, DECIDED_MARGIN = range(10, 13)  # the kernel's own margins
+N_TOL = 13
 
 
 @njit(cache=True)
@@ -196,32 +197,20 @@ def max_least_weight(w, tol):  # type: ignore[no-untyped-def]
     return cost[rhs]
 
 
-CERTIFIED_GAP = 1e-8
-"""The rank test's shortcut: a Cholesky factorisation of ``W W^T - CERTIFIED_GAP I`` that
-succeeds proves ``sigma_min(W) >= 1e-4`` up to rounding (``W``'s entries are at most 1 in
-magnitude, so the rounding of ``W W^T`` and of the factorisation is below 1e-12 for any
-cone this module builds); LAPACK's singular values are backward stable, so numpy's rank with
-a tolerance below [`CERTIFIED_RANK_TOL`][] then counts every row. Not a model constant: it
-decides only which of two computations gives the same answer."""
-
-CERTIFIED_RANK_TOL = 1e-6
-"""The shortcut is taken only while the model's rank tolerance is below this."""
-
-
 @njit(cache=True)
 def _full_rank(w, tol, g):  # type: ignore[no-untyped-def]
     """``rank W == rows`` as ``np.linalg.matrix_rank(W, RANK_TOL)`` decides it: certified
     by a Cholesky factorisation of ``W W^T - CERTIFIED_GAP I`` (scratch ``g``, ``k x k``)
-    when it succeeds, the singular values otherwise."""
+    when it succeeds, the singular values otherwise ([`crmgrasp.kernels.closure.CERTIFIED_GAP`][])."""
     k, m = w.shape
-    if tol[RANK_TOL] < CERTIFIED_RANK_TOL:
+    if tol[RANK_TOL] < tol[CERTIFIED_RANK_TOL]:
         for i in range(k):
             for j in range(i + 1):
                 s = 0.0
                 for c in range(m):
                     s += w[i, c] * w[j, c]
                 g[i, j] = s
-            g[i, i] -= CERTIFIED_GAP
+            g[i, i] -= tol[CERTIFIED_GAP]
         certified = True
         for j in range(k):
             d = g[j, j]
@@ -249,12 +238,6 @@ def _spans(w, tol, g):  # type: ignore[no-untyped-def]
     if not max_least_weight(w, tol) > tol[LP_TOL]:
         return False
     return _full_rank(w, tol, g)
-
-
-DECIDED_MARGIN = 1e-9
-"""[`above`][] stops once ``tan`` of a bracket end is past ``mu_goal`` by this relative
-margin, far more than the few units in the last place by which ``math.tan`` may miss
-monotonicity."""
 
 
 @njit(cache=True)
@@ -299,9 +282,10 @@ def above(p, nrm, edges, tol, mu_goal):  # type: ignore[no-untyped-def]
     only falls and the lower end only rises, so once ``tan(hi)`` (a probe that closed) is below
     ``mu_goal`` the least friction will be too, and once ``tan(lo)`` is above both ``mu_goal``
     and the antipodal tolerance it will stay above (``inf`` included). A start filter needs
-    only this comparison; most candidates decide it in a few probes."""
-    bar = max(mu_goal, tol[ANTIPODAL_TOL]) * (1.0 + DECIDED_MARGIN)
-    _, hi, decided = _bisect(p, nrm, edges, tol, mu_goal * (1.0 - DECIDED_MARGIN), bar)
+    only this comparison; most candidates decide it in a few probes. Both ends are compared
+    with a relative margin ([`crmgrasp.kernels.closure.DECIDED_MARGIN`][])."""
+    bar = max(mu_goal, tol[ANTIPODAL_TOL]) * (1.0 + tol[DECIDED_MARGIN])
+    _, hi, decided = _bisect(p, nrm, edges, tol, mu_goal * (1.0 - tol[DECIDED_MARGIN]), bar)
     if decided != 0:
         return decided > 0
     return not (_friction(hi, tol) <= mu_goal)

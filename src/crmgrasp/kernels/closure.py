@@ -23,14 +23,41 @@ from numpy.typing import NDArray
 from crmgrasp.kernels.spatial import SpatialKernel
 from crmgrasp.tasks import Task
 
-__all__ = ["closure_params", "compiled_least_friction", "with_compiled_least_friction", "FingersSpatialKernel"]
+__all__ = [
+    "CERTIFIED_GAP",
+    "CERTIFIED_RANK_TOL",
+    "DECIDED_MARGIN",
+    "closure_params",
+    "compiled_least_friction",
+    "with_compiled_least_friction",
+    "FingersSpatialKernel",
+]
 
 F64 = NDArray[np.float64]
 
 
+CERTIFIED_GAP = 1e-8
+"""The compiled rank test's shortcut: a Cholesky factorisation of ``W W^T - CERTIFIED_GAP I``
+that succeeds proves ``sigma_min(W) >= 1e-4`` up to rounding (``W``'s entries are at most 1 in
+magnitude, so the rounding of ``W W^T`` and of the factorisation is below 1e-12 for any cone
+the spatial model builds); LAPACK's singular values are backward stable, so numpy's rank with
+a tolerance below [`CERTIFIED_RANK_TOL`][] then counts every row. Not a model constant: it
+decides only which of two computations gives the same answer."""
+
+CERTIFIED_RANK_TOL = 1e-6
+"""The shortcut is taken only while the model's rank tolerance is below this."""
+
+DECIDED_MARGIN = 1e-9
+"""The compiled start filter stops its bisection once ``tan`` of a bracket end is past
+``mu_goal`` by this relative margin, far more than the few units in the last place by which
+``math.tan`` may miss monotonicity."""
+
+
 def closure_params() -> F64:
-    """The tolerances of `crmgrasp.kernels._closure_jit`, read from the model's modules now
-    ([`crmgrasp.model.quality3d`][], [`crmgrasp.model.quality`][], [`crmgrasp.model.lp`][])."""
+    """The tolerances of `crmgrasp.kernels._closure_jit`, read now from the model's modules
+    ([`crmgrasp.model.quality3d`][], [`crmgrasp.model.quality`][], [`crmgrasp.model.lp`][]), and
+    this module's margins of the compiled shortcuts ([`CERTIFIED_GAP`][], [`CERTIFIED_RANK_TOL`][],
+    [`DECIDED_MARGIN`][])."""
     import crmgrasp.kernels._closure_jit as jit
     from crmgrasp.model import lp, quality, quality3d
 
@@ -39,6 +66,8 @@ def closure_params() -> F64:
     tol[jit.RANK_TOL], tol[jit.LP_TOL], tol[jit.ANTIPODAL_TOL] = quality.RANK_TOL, quality.LP_TOL, quality.ANTIPODAL_TOL
     tol[jit.OPT_TOL], tol[jit.PIVOT_TOL], tol[jit.FEASIBILITY_TOL] = lp.OPT_TOL, lp.PIVOT_TOL, lp.FEASIBILITY_TOL
     tol[jit.ARM_MIN], tol[jit.MAX_PIVOTS] = quality3d.ARM_MIN, lp.MAX_PIVOTS
+    tol[jit.CERTIFIED_GAP], tol[jit.CERTIFIED_RANK_TOL] = CERTIFIED_GAP, CERTIFIED_RANK_TOL
+    tol[jit.DECIDED_MARGIN] = DECIDED_MARGIN
     return tol
 
 
