@@ -12,7 +12,8 @@ and Wood 1999). So, per size ``n``:
   (``pool`` worlds, seed 10,000, the worlds of ``family_learning.py`` first), its mean per
   world: an estimate of ``E[optimum on n worlds] <= J*``;
 * **upper**: the belief-space policy over the pool's first ``n`` worlds (``BeliefPolicy``,
-  which restarts its belief when a world leaves it) run on ``heldout`` fresh worlds (seed
+  which restarts its belief when a world leaves it, or with ``--fallback nearest`` keeps the
+  worlds that explain all but the fewest observations) run on ``heldout`` fresh worlds (seed
   20,000): the cost of a policy, so an estimate of a value ``>= J*``.
 
 ``J*`` lies between the two. A learner's mean cost ``L`` on fresh worlds against the
@@ -27,7 +28,7 @@ that over the square root of ``blocks``), the standard error of the upper estima
 held-out worlds), and the wall time per size.
 
 Usage: ``python benchmarks/reference_bias.py [--task NAME ...] [--sizes 50,100,200,400]
-[--pool 400] [--heldout 300] [--offset-grid N]`` (every size must divide the pool;
+[--pool 400] [--heldout 300] [--offset-grid N] [--fallback restart|nearest]`` (every size must divide the pool;
 ``--offset-grid N``: each task's CRMs replaced by ``N`` offsets per coordinate and contact
 pair, the continuous-offsets target's reference). Prints one JSON object;
 progress on stderr.
@@ -44,7 +45,13 @@ import time
 import numpy as np
 
 from crmgrasp.experiments._episodes import episode_records
-from crmgrasp.planners.references import BeliefPolicy, clairvoyant_bound, sample_starts, ungraspable_fraction
+from crmgrasp.planners.references import (
+    FALLBACKS,
+    BeliefPolicy,
+    clairvoyant_bound,
+    sample_starts,
+    ungraspable_fraction,
+)
 from crmgrasp.tasks import make_task
 from crmgrasp.tasks.offsets import offset_grid
 
@@ -58,9 +65,12 @@ def _r(x: float) -> float:
     return round(float(x), 4)
 
 
-def task_rows(name: str, sizes: list[int], pool: int, heldout: int, grid: int | None = None) -> dict:
+def task_rows(
+    name: str, sizes: list[int], pool: int, heldout: int, grid: int | None = None, fallback: str = "restart"
+) -> dict:
     """The lower and upper estimates per size for one task (see the module docstring), its
-    CRMs a grid of ``grid`` offsets per coordinate and pair if given."""
+    CRMs a grid of ``grid`` offsets per coordinate and pair if given, the upper estimate's
+    policy with ``fallback``."""
     task = make_task(name) if grid is None else offset_grid(make_task(name), grid)
     worlds = sample_starts(task, pool, 10_000)
     fresh = sample_starts(task, heldout, 20_000)
@@ -79,7 +89,7 @@ def task_rows(name: str, sizes: list[int], pool: int, heldout: int, grid: int | 
         blocks = [worlds[i : i + n] for i in range(0, pool, n)]
         inside = np.concatenate([_costs(task, BeliefPolicy(task, b), b) for b in blocks])
         means = inside.reshape(-1, n).mean(axis=1)
-        upper = _costs(task, BeliefPolicy(task, worlds[:n]), fresh)
+        upper = _costs(task, BeliefPolicy(task, worlds[:n], fallback), fresh)
         out[str(n)] = {
             "blocks": len(means),
             "lower": _r(inside.mean()),
@@ -94,7 +104,9 @@ def task_rows(name: str, sizes: list[int], pool: int, heldout: int, grid: int | 
     return out
 
 
-def main(tasks: list[str], sizes: list[int], pool: int, heldout: int, grid: int | None = None) -> dict:
+def main(
+    tasks: list[str], sizes: list[int], pool: int, heldout: int, grid: int | None = None, fallback: str = "restart"
+) -> dict:
     """Every task; see the module docstring."""
     bad = [n for n in sizes if n <= 0 or pool % n]
     if bad:
@@ -102,7 +114,8 @@ def main(tasks: list[str], sizes: list[int], pool: int, heldout: int, grid: int 
     return {
         "sizes": sizes,
         "offset_grid": grid,
-        **{name: task_rows(name, sizes, pool, heldout, grid) for name in tasks},
+        "fallback": fallback,
+        **{name: task_rows(name, sizes, pool, heldout, grid, fallback) for name in tasks},
     }
 
 
@@ -113,6 +126,7 @@ if __name__ == "__main__":
     ap.add_argument("--pool", type=int, default=400)
     ap.add_argument("--heldout", type=int, default=300)
     ap.add_argument("--offset-grid", type=int, default=None)
+    ap.add_argument("--fallback", choices=FALLBACKS, default="restart")
     a = ap.parse_args()
     res = main(
         a.tasks or ["u-handle", "polygon-family"],
@@ -120,5 +134,6 @@ if __name__ == "__main__":
         a.pool,
         a.heldout,
         a.offset_grid,
+        a.fallback,
     )
     print(json.dumps(res, indent=1))

@@ -277,6 +277,9 @@ def test_family_learning_pool_and_reference_bias_smoke():
     assert gridded["u-handle"]["6"]["lower"] == round(belief_optimum(grid, sample_starts(grid, 6, 10_000)), 4)
     with pytest.raises(CrmgraspError, match="other CRMs than task 'u-handle-grid3'"):
         belief_optimum(grid, worlds[:6])
+    near = bias.main(["u-handle"], [6, 12], 12, 10, fallback="nearest")
+    assert near["fallback"] == "nearest" and near["u-handle"]["12"]["lower"] == res["12"]["lower"]
+    assert res["clairvoyant_heldout"] <= near["u-handle"]["6"]["upper"] <= task.max_steps
 
 
 def test_handover_ends_are_the_two_policies():

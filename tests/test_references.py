@@ -121,3 +121,68 @@ def test_the_optimum_over_more_worlds_is_never_lower():
     means = [np.mean([belief_optimum(family, worlds[i : i + n]) for i in range(0, 24, n)]) for n in (1, 3, 6, 12, 24)]
     assert all(a <= b + 1e-12 for a, b in itertools.pairwise(means))
     assert means[-1] > means[0]  # aliasing costs on this family: the bound is strict here
+
+
+def test_the_nearest_fallback_keeps_the_worlds_that_explain_the_most():
+    """With ``fallback="nearest"`` the policy acts as the default on the worlds it plans over
+    (their own world never leaves the belief). On fresh worlds, after the reset and after
+    every CRM, its belief is exactly the planned worlds that, replayed along the CRMs taken,
+    mismatch the fewest observations, a world whose own episode grasped dropping out (checked
+    against that replay, written out here); beliefs beyond the consistent worlds occur. An
+    unknown fallback is a one-line error."""
+    from crmgrasp.model.sensing import Error
+    from crmgrasp.planners.references import BeliefPolicy
+    from crmgrasp.sim import run_episode
+
+    task = make_task("polygon-family")
+    planned = sample_starts(task, 60, seed=1)
+    default, near = BeliefPolicy(task, planned), BeliefPolicy(task, planned, fallback="nearest")
+    assert [default.run(w) for w in planned] == [near.run(w) for w in planned]
+    model = near._model
+
+    def expected(actions: list[int], seen: list[int]) -> tuple[set, int]:
+        alive = []
+        for w in planned:
+            st = model.state(w)
+            miss = int(task.discretizer.index(model.tasks[st[0]].observe(st[1]), Error.NONE) != seen[0])
+            for a, o in zip(actions, seen[1:]):
+                st, o2, grasped = model.step(st, a)
+                if grasped:
+                    break
+                miss += o2 != o
+            else:
+                alive.append((st, miss))
+        least = min(m for _, m in alive)
+        return {st for st, m in alive if m == least}, least
+
+    class Watched:
+        def __init__(self) -> None:
+            self.beyond = 0
+
+        def begin(self, percept):
+            near.begin(percept)
+            self.actions, self.seen = [], [percept.obs_index]
+            self._check()
+
+        def act(self):
+            self.actions.append(near.act())
+            return self.actions[-1]
+
+        def tell(self, percept):
+            near.tell(percept)
+            if not percept.terminated:
+                self.seen.append(percept.obs_index)
+                self._check()
+
+        def _check(self):
+            want, least = expected(self.actions, self.seen)
+            assert set(near._belief) == want
+            self.beyond += least > 0
+
+    watched = Watched()
+    rng = np.random.default_rng(0)
+    for w in sample_starts(task, 25, seed=2):
+        run_episode(task, watched, rng, start=w)
+    assert watched.beyond > 0
+    with pytest.raises(CrmgraspError, match="unknown fallback 'closest'"):
+        BeliefPolicy(task, planned, fallback="closest")

@@ -45,6 +45,7 @@ __all__ = [
     "graspable_warning",
     "sample_starts",
     "BeliefPolicy",
+    "FALLBACKS",
 ]
 
 Start = Config | Grip | World
@@ -288,27 +289,40 @@ def _lower(model: _Model, belief: tuple[State, ...], h: int) -> float:
     return float(np.mean([model.clairvoyant(c, h) for c in belief]))
 
 
+FALLBACKS = ("restart", "nearest")
+"""What [`BeliefPolicy`][] does when no sample start explains the history (``fallback``)."""
+
+
 class BeliefPolicy:
     """The belief-space optimal policy over a set of sample starts, executable on
     fresh starts in the simulator.
 
     The belief is the tuple of sample starts' configurations consistent with the
     history (noise-free dynamics). Each step takes the minimising action of
-    ``V(B, h)``. When a fresh start produces an observation no sample start in the
-    belief produced (the belief empties), the belief restarts from the sample
-    starts whose first observation equals the current one, with the steps left.
+    ``V(B, h)``. A fresh start may produce an observation no sample start in the belief
+    produced (the belief empties). With ``fallback="restart"`` (the default) the belief then
+    restarts from the sample starts whose first observation equals the current one, with
+    the steps left. With ``fallback="nearest"`` every sample start follows the CRMs taken
+    and counts the observations it would have given otherwise (a start whose own episode
+    grasps where the true one does not drops out), and the belief is always the starts
+    with the fewest such mismatches: the consistent ones while any is left (the same
+    belief as the default), then those that explain all but one observation, and so on
+    (the most likely starts if each observation were misread with a small probability).
     """
 
-    def __init__(self, task: Task, starts: Sequence[Start]) -> None:
+    def __init__(self, task: Task, starts: Sequence[Start], fallback: str = "restart") -> None:
         if not starts:
             raise CrmgraspError("BeliefPolicy needs at least one start")
-        self.task = task
+        if fallback not in FALLBACKS:
+            raise CrmgraspError(f"unknown fallback {fallback!r}: choose one of {', '.join(FALLBACKS)}")
+        self.task, self.fallback = task, fallback
         self._model = _Model(task)
         self._memo: dict = {}
         self._acts: dict = {}
         self._belief: tuple[State, ...] = ()
         self._left, self._a = task.max_steps, 0
         self._groups = _first_groups(self._model, starts)
+        self._track: list[tuple[State, int]] = []  # with "nearest": each start's state now and its mismatches
 
     def optimum(self) -> float:
         """The belief-space optimum over the policy's starts ([`belief_optimum`][]'s
@@ -328,6 +342,9 @@ class BeliefPolicy:
         """Belief: the sample starts whose first observation is this one."""
         self._belief = self._groups.get(first.obs_index, ())
         self._left = self.task.max_steps
+        if self.fallback == "nearest":
+            self._track = [(st, int(o != first.obs_index)) for o, g in self._groups.items() for st in g]
+            self._belief = self._belief or self._nearest()
 
     def act(self) -> int:
         """The optimal action for the belief and the CRMs left (0 on an empty belief)."""
@@ -349,8 +366,26 @@ class BeliefPolicy:
             c2, o2, g2 = self._model.step(c, self._a)
             if not g2 and o2 == percept.obs_index:
                 nxt.append(c2)
-        self._belief = tuple(nxt) or self._groups.get(percept.obs_index, ())
+        if self.fallback == "nearest":
+            track = []
+            for c, miss in self._track:
+                c2, o2, g2 = self._model.step(c, self._a)
+                if not g2:
+                    track.append((c2, miss + (o2 != percept.obs_index)))
+            self._track = track
+        self._belief = tuple(nxt) or self._refill(percept.obs_index)
         self._left -= 1
+
+    def _refill(self, obs_index: int) -> tuple[State, ...]:
+        """The belief once no start in it explains the history (``fallback``)."""
+        return self._nearest() if self.fallback == "nearest" else self._groups.get(obs_index, ())
+
+    def _nearest(self) -> tuple[State, ...]:
+        """The tracked starts' states with the fewest mismatches (none if every start dropped out)."""
+        if not self._track:
+            return ()
+        least = min(miss for _, miss in self._track)
+        return tuple(c for c, miss in self._track if miss == least)
 
     def run(self, config: Start, rng: np.random.Generator | None = None) -> tuple[int, bool]:
         """Execute the policy from ``config`` or a world ([`crmgrasp.sim.run_episode`][]; ``rng``
