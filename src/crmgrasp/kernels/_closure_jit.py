@@ -17,8 +17,9 @@ the conjunction of the two). The rank is certified by a Cholesky factorisation o
 numpy's rank counts, are all far above the tolerance) and comes from the singular values
 otherwise. Pivots update only the columns the method reads: the artificial columns never
 enter the basis and are never read, so they are left stale. Together they took the
-compiled least friction from about 240 to 72 us per configuration on the tripod tasks'
-configurations (24 programs each); ``python benchmarks/bench_tripod.py`` measures the step.
+compiled least friction from 212-286 to 62-77 us per configuration on the configurations
+of random tripod episodes (24 programs each; ``python benchmarks/bench_tripod.py``, which
+times it alone and the step).
 A start filter needs only whether the least friction exceeds ``mu_goal``: [`above`][] runs
 the same bisection and stops as soon as its bracket decides that.
 
@@ -150,7 +151,7 @@ def _simplex(t, cost, basis, columns, tol):  # type: ignore[no-untyped-def]
 @njit(cache=True)
 def max_least_weight(w, tol):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.lp.max_least_weight`][]: ``d*``, ``-inf`` (infeasible) or NaN. The
-    artificial columns are only written where the readable copy reads them (never)."""
+    artificial columns keep their zeros: the method never reads them ([`_pivot`][])."""
     k, m = w.shape
     rows, structural = k + 1, m + 1
     width = structural + rows + 1

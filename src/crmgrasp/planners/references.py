@@ -342,9 +342,9 @@ class BeliefPolicy:
         """Belief: the sample starts whose first observation is this one."""
         self._belief = self._groups.get(first.obs_index, ())
         self._left = self.task.max_steps
-        if self.fallback == "nearest":
+        if self.fallback == "nearest":  # the starts with this first observation, if any
             self._track = [(st, int(o != first.obs_index)) for o, g in self._groups.items() for st in g]
-            self._belief = self._belief or self._nearest()
+            self._belief = self._nearest()
 
     def act(self) -> int:
         """The optimal action for the belief and the CRMs left (0 on an empty belief)."""
@@ -353,7 +353,7 @@ class BeliefPolicy:
 
     def tell(self, percept: Percept, action: int | None = None) -> None:
         """Keep the belief's configurations that the action leads to this observation
-        without a grasp (restart from the sample starts if none is left). ``action`` is
+        without a grasp (if none is left: the ``fallback``, see the class docstring). ``action`` is
         the CRM (its index) that was taken when it was not this policy's choice, as when
         another policy acts for a while (``benchmarks/handover.py``); by default, the
         action this policy chose."""
@@ -361,24 +361,22 @@ class BeliefPolicy:
             self._a = integer(action, "action", 0, len(self.task.actions) - 1)
         if percept.terminated:
             return
-        nxt = []
-        for c in self._belief:
-            c2, o2, g2 = self._model.step(c, self._a)
-            if not g2 and o2 == percept.obs_index:
-                nxt.append(c2)
-        if self.fallback == "nearest":
+        if self.fallback == "nearest":  # the consistent starts while any is left, in the same order
             track = []
             for c, miss in self._track:
                 c2, o2, g2 = self._model.step(c, self._a)
                 if not g2:
                     track.append((c2, miss + (o2 != percept.obs_index)))
             self._track = track
-        self._belief = tuple(nxt) or self._refill(percept.obs_index)
+            self._belief = self._nearest()
+        else:
+            nxt = []
+            for c in self._belief:
+                c2, o2, g2 = self._model.step(c, self._a)
+                if not g2 and o2 == percept.obs_index:
+                    nxt.append(c2)
+            self._belief = tuple(nxt) or self._groups.get(percept.obs_index, ())
         self._left -= 1
-
-    def _refill(self, obs_index: int) -> tuple[State, ...]:
-        """The belief once no start in it explains the history (``fallback``)."""
-        return self._nearest() if self.fallback == "nearest" else self._groups.get(obs_index, ())
 
     def _nearest(self) -> tuple[State, ...]:
         """The tracked starts' states with the fewest mismatches (none if every start dropped out)."""
