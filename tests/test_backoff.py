@@ -170,6 +170,10 @@ def test_bad_settings_are_one_line_errors(box):
         make_agent("backoff-vi", 4, middle=1)
     with pytest.raises(CrmgraspError, match="explore must be >= 0"):
         make_agent("backoff-vi", 4, explore=-0.5)
+    with pytest.raises(CrmgraspError, match="explore_tried must be >= 0"):
+        make_agent("backoff-vi", 4, explore_tried=-1.0)
+    with pytest.raises(CrmgraspError, match="explore_tried"):
+        make_agent("backoff-vi", 4, explore_tried=float("nan"))
     with pytest.raises(CrmgraspError, match="needs its state structure"):
         make_agent("backoff-vi", 4).update(0, 0, -1.0, 1, 0, False, np.random.default_rng(0))
 
@@ -212,3 +216,24 @@ def test_explore_tries_what_the_short_level_rates_an_error():
         (records,) = greedy_records(task, res.agents, test, 4, k=6)
         cost[explore] = np.mean([len(r.actions) + 30.0 * sum(r.errors) for r in records])
     assert cost[0.0] > 2.6 and cost[1.0] <= 2.05
+
+
+def test_explore_tried_retries_a_crm_whose_first_tries_erred():
+    """notch-or-box at error cost 1, seed 27: the grasping CRM's one early try from the start
+    erred, so a draw from the counts never gives it a grasp and the greedy policy senses
+    first (2.0 CRMs, no error); with ``explore_tried`` the draw retries it and the policy
+    takes the risk as the optimum does (1.40, errors counted at 1)."""
+    import dataclasses
+
+    from crmgrasp.experiments._episodes import greedy_records
+    from crmgrasp.planners.references import sample_starts
+
+    task = dataclasses.replace(make_task("notch-or-box"), error_cost=1.0)
+    test = sample_starts(task, 300, 1)
+    cost = {}
+    for tried in (0.0, 2.0):
+        res = train_trials(task, "backoff-vi", trials=1, episodes=3000, seed=27, k=6, eval_episodes=0,
+                           params={"explore": 2.0, "explore_tried": tried})  # fmt: skip
+        (records,) = greedy_records(task, res.agents, test, 27, k=6)
+        cost[tried] = np.mean([len(r.actions) + sum(r.errors) for r in records])
+    assert cost[0.0] >= 1.95 and cost[2.0] <= 1.45

@@ -128,13 +128,13 @@ def test_learner_presets_fill_what_the_user_left_out():
     with pytest.raises(CrmgraspError, match="unknown preset 'slow'"):
         apply_preset("slow", box)
     costly = apply_preset("costly-errors", box)
-    assert costly == LearnerChoice("backoff-vi", 6, True, None, (("explore", 2.0),))
+    assert costly == LearnerChoice("backoff-vi", 6, True, None, (("explore", 2.0), ("explore_tried", 2.0)))
     assert apply_preset("costly-errors", box, agent="pooled-vi").params == ()  # its parameters are its agent's
 
 
 def test_a_preset_sets_its_agent_parameters_where_the_user_gave_none(tmp_path):
-    """``--preset costly-errors`` runs backoff-vi with explore = 2 unless ``--explore`` is given;
-    the run records the parameters it used."""
+    """``--preset costly-errors`` runs backoff-vi with explore = explore_tried = 2 unless
+    ``--explore`` or ``--explore-tried`` is given; the run records the parameters it used."""
     import json
 
     from crmgrasp.cli.main import main
@@ -143,6 +143,10 @@ def test_a_preset_sets_its_agent_parameters_where_the_user_gave_none(tmp_path):
     assert main([*base, "--preset", "costly-errors", "--out", str(tmp_path / "a")]) == 0
     run = json.loads((tmp_path / "a" / "run.json").read_text())
     assert run["config"]["agent"] == "backoff-vi" and run["config"]["k"] == 6
-    assert run["config"]["params"]["explore"] == 2.0
+    assert run["config"]["params"]["explore"] == 2.0 and run["config"]["params"]["explore_tried"] == 2.0
     assert main([*base, "--preset", "costly-errors", "--explore", "1", "--out", str(tmp_path / "b")]) == 0
-    assert json.loads((tmp_path / "b" / "run.json").read_text())["config"]["params"]["explore"] == 1.0
+    params = json.loads((tmp_path / "b" / "run.json").read_text())["config"]["params"]
+    assert params["explore"] == 1.0 and params["explore_tried"] == 2.0
+    assert main([*base, "--preset", "costly-errors", "--explore-tried", "0", "--out", str(tmp_path / "c")]) == 0
+    params = json.loads((tmp_path / "c" / "run.json").read_text())["config"]["params"]
+    assert params["explore"] == 2.0 and params["explore_tried"] == 0.0

@@ -103,6 +103,13 @@ class BackoffVI(TabularAgent):
         long history (0: none). The short level may rate such a CRM a sure error from other
         histories with the same suffix; this keeps a chance that the draw tries it where its
         own history may differ.
+    explore_tried
+        Pseudo-counts of an immediate grasp added to the draw of a CRM a long history has
+        tried (0: none, the default). A draw gives no chance to an outcome the counts never
+        saw, so a CRM whose first tries all erred is never drawn to grasp and is not tried
+        again, however often it grasps elsewhere; these pseudo-counts keep that chance, and
+        their weight falls as the CRM's own tries grow (a Dirichlet prior). Acting only: the
+        greedy policy plans on the counts.
     """
 
     name = "backoff-vi"
@@ -120,11 +127,15 @@ class BackoffVI(TabularAgent):
         sample: bool = True,
         explore: float = 0.0,
         middle: bool = False,
+        explore_tried: float = 0.0,
     ) -> None:
         super().__init__(n_actions, gamma=gamma)
         self.explore = finite(explore, "explore")
         if self.explore < 0.0:
             raise CrmgraspError(f"explore must be >= 0, got {self.explore}")
+        self.explore_tried = finite(explore_tried, "explore_tried")
+        if self.explore_tried < 0.0:
+            raise CrmgraspError(f"explore_tried must be >= 0, got {self.explore_tried}")
         self.beta = finite(beta, "beta")
         if self.beta < 0.0:
             raise CrmgraspError(f"beta must be >= 0, got {self.beta}")
@@ -165,6 +176,7 @@ class BackoffVI(TabularAgent):
             "gamma": self.gamma,
             "sample": self.sample,
             "explore": self.explore,
+            "explore_tried": self.explore_tried,
             "middle": self.middle,
         }
 
@@ -278,9 +290,10 @@ class BackoffVI(TabularAgent):
             for b in range(n):
                 entry = self._long_entry(s, b, known)
                 if entry and rng is not None:
-                    if self.explore and (s, b) not in self.counts:  # untried here: a grasp is possible
+                    bonus = self.explore_tried if (s, b) in self.counts else self.explore
+                    if bonus:  # a grasp stays possible in the draw
                         grasp: Any = (self._bound()[0].task.grasp_reward, ("L", s), True)
-                        entry[grasp] = entry.get(grasp, 0.0) + self.explore
+                        entry[grasp] = entry.get(grasp, 0.0) + bonus
                     entry = {o: float(rng.gamma(c)) + 1e-300 for o, c in entry.items()}
                 if entry:
                     self._add(("L", s), b, entry)

@@ -66,9 +66,9 @@ PRESETS: dict[str, LearnerPreset] = {
         "backoff-vi",
         6,
         symmetric=True,
-        params=(("explore", 2.0),),
-        description="backoff-vi, k = 6, explore = 2: for tasks where an errored CRM costs more (error_cost); "
-        "from scratch",
+        params=(("explore", 2.0), ("explore_tried", 2.0)),
+        description="backoff-vi, k = 6, explore = explore_tried = 2: for tasks where an errored CRM costs more "
+        "(error_cost); from scratch",
     ),
 }
 """The presets of ``crmgrasp learn --preset``."""

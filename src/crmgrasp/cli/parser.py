@@ -428,6 +428,7 @@ _AGENT_FLAGS = (
     ("--alpha0", _number, "Dirichlet pseudo-counts per state-action pair"),
     ("--scale", _number, "exploration bonus factor"),
     ("--explore", _number, "pseudo-counts of a grasp in the posterior draw of a CRM a whole history never tried"),
+    ("--explore-tried", _number, "pseudo-counts of a grasp in the posterior draw of a CRM a whole history has tried"),
     ("--start-level", _int(0, 7), "the offsets open at first, 2**L + 1 per coordinate and pair"),
     ("--refine-after", _int(1, 1_000_000), "tries of a history's best CRM before finer offsets open around it"),
     ("--prior-task", str, "a task with the same CRMs and bins (e.g. box-family) to learn a prior on"),
