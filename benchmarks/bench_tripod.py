@@ -8,7 +8,8 @@ rules), with ``CartPole-v1`` as the peer: random actions through ``gymnasium.mak
 ``steps`` per round, the environments alternating round by round, the least round kept.
 Every round starts with both least-friction caches empty, so a step pays for each new
 configuration's least friction as in a fresh run. Times are per step, counting the resets
-(a new solid and a start, whose acceptance needs the start's least friction).
+(a new solid and a start, whose acceptance needs the start's least friction), and for the
+step alone (``env.step`` calls only, each timed on its own in the same pass; CartPole's too).
 
 The least friction alone, as well: the compiled rule (``least_friction`` of
 ``crmgrasp.kernels._closure_jit``, no cache) and the readable one (``least_friction_3d``)
@@ -36,16 +37,21 @@ from crmgrasp.model.quality3d import EDGES, least_friction_3d
 from crmgrasp.model.spatial_model import _least_friction
 
 
-def _round(env: Any, actions: list[int]) -> float:
-    """Seconds per step (resets included) of one pass over ``actions``, caches emptied first."""
+def _round(env: Any, actions: list[int]) -> tuple[float, float]:
+    """Seconds per step of one pass over ``actions``, caches emptied first: resets included,
+    and ``env.step`` alone (the same pass, each call timed on its own)."""
     _least_friction.cache_clear()
     _cached.cache_clear()
-    t0 = time.perf_counter()
+    clock = time.perf_counter
+    alone = 0.0
+    t0 = clock()
     for a in actions:
+        t1 = clock()
         _, _, term, trunc, _ = env.step(a)
+        alone += clock() - t1
         if term or trunc:
             env.reset()
-    return (time.perf_counter() - t0) / len(actions)
+    return (clock() - t0) / len(actions), alone / len(actions)
 
 
 def _least_friction_alone(env_id: str, steps: int, rounds: int) -> tuple[float, float]:
@@ -85,19 +91,27 @@ def main(steps: int = 1000, rounds: int = 3) -> dict[str, Any]:
         envs[f"{name}_lf_only"] = gym.make(env_id)
         envs[f"{name}_lf_only"].unwrapped.kernel = FamilyKernel(envs[name].unwrapped.task, FingersSpatialKernel)
         envs[f"{name}_reference"] = gym.make(env_id, backend="reference")
-    actions, best = {}, {}
+    actions, best, alone = {}, {}, {}
     for name, env in envs.items():
         env.reset(seed=0)
         actions[name] = np.random.default_rng(0).integers(env.action_space.n, size=steps).tolist()
-        best[name] = float("inf")
+        best[name] = alone[name] = float("inf")
     for _ in range(rounds):
         for name, env in envs.items():
-            best[name] = min(best[name], _round(env, actions[name]))
-    cart = best.pop("cartpole")
-    out: dict[str, Any] = {"steps": steps, "rounds": rounds, "cartpole_us": round(cart * 1e6, 2)}
+            with_resets, step_only = _round(env, actions[name])
+            best[name], alone[name] = min(best[name], with_resets), min(alone[name], step_only)
+    cart, cart_alone = best.pop("cartpole"), alone.pop("cartpole")
+    out: dict[str, Any] = {
+        "steps": steps,
+        "rounds": rounds,
+        "cartpole_us": round(cart * 1e6, 2),
+        "cartpole_step_alone_us": round(cart_alone * 1e6, 2),
+    }
     for name, seconds in best.items():
         out[f"{name}_us"] = round(seconds * 1e6, 1)
         out[f"{name}_over_cartpole"] = round(seconds / cart, 1)
+        out[f"{name}_step_alone_us"] = round(alone[name] * 1e6, 1)
+        out[f"{name}_step_alone_over_cartpole"] = round(alone[name] / cart_alone, 1)
     for name in ("box3d3f", "cup3d3f"):
         out[f"{name}_reference_over_compiled"] = round(best[f"{name}_reference"] / best[name], 1)
         out[f"{name}_lf_only_over_compiled"] = round(best[f"{name}_lf_only"] / best[name], 2)

@@ -21,8 +21,18 @@ more worlds it has (``benchmarks/reference_bias.py``): with a larger pool the ga
 closer to the gap to the family's own optimum, of which it stays an upper bound in
 expectation. A learner may then come out below the optimum on the W worlds.
 
+With ``--planner N`` a realizable reference runs too: the belief-space policy planned over N
+worlds drawn apart from the evaluation worlds (seed 30,000), with ``fallback="nearest"`` (where
+no planned world explains the history, the worlds that explain all but the fewest
+observations), on the same W worlds. It knows the family (it plans on simulated worlds of it)
+but not the worlds it runs on, so its cost is that of a policy, at least the family's optimum
+in expectation, where the optimum above is at most that. Per learner the graspable gap to this
+planner is reported as well (``gap_to_planner_graspable``): below zero, the learner from
+episodes does better on these worlds than a planner given the family.
+
 Usage: ``python benchmarks/family_learning.py [--episodes 3000] [--seeds 10] [--first 0]
-[--worlds 300] [--pool P] [--task NAME ...] [--learner NAME ...] [--param KEY=NUMBER ...] [--k K]`` (``--param``:
+[--worlds 300] [--pool P] [--planner N] [--task NAME ...] [--learner NAME ...] [--param KEY=NUMBER ...]
+[--k K]`` (``--param``:
 a learner parameter, e.g. ``explore=1`` for ``backoff-vi``, given to every learner run; ``--k``: every
 learner's history order instead of [`ORDERS`][]).
 Prints one JSON object; progress on stderr.
@@ -72,6 +82,27 @@ def _steps(records: list) -> np.ndarray:
     return np.array([len(r.actions) for r in records], dtype=float)
 
 
+def planner_row(
+    task: object, n: int, worlds: list, graspable: np.ndarray, optimum: np.ndarray
+) -> tuple[dict, np.ndarray]:
+    """The realizable reference of ``--planner n`` (module docstring): its summary and its
+    CRMs per evaluation world."""
+    t0 = time.perf_counter()
+    planner = BeliefPolicy(task, sample_starts(task, n, 30_000), fallback="nearest")
+    records = episode_records(task, lambda: planner, worlds, 0)
+    steps, won = _steps(records), np.array([r.success for r in records])
+    row = {
+        "planned_worlds": n,
+        "mean": round(float(steps.mean()), 4),
+        "mean_graspable": round(float(steps[graspable].mean()), 4),
+        "over_optimum_graspable": round(float(steps[graspable].mean() / optimum[graspable].mean() - 1.0), 4),
+        "fails_graspable": int((graspable & ~won).sum()),
+        "seconds": round(time.perf_counter() - t0, 1),
+    }
+    print(f"planner over {n} other worlds: graspable {row['mean_graspable']} ({row['seconds']:.0f} s)", file=sys.stderr)
+    return row, steps
+
+
 def task_row(
     name: str,
     learners: tuple[str, ...],
@@ -81,6 +112,7 @@ def task_row(
     extra: dict | None = None,
     pool: int = 0,
     k: int | None = None,
+    n_planner: int = 0,
 ) -> dict:
     """One task: the optimum, then every learner over the seeds (see the module docstring)."""
     task = make_task(name)
@@ -102,10 +134,14 @@ def task_row(
         "optimum": round(float(optimum.mean()), 4),
         "optimum_graspable": round(float(optimum[graspable].mean()), 4),
     }
+    reference = None
+    if n_planner:
+        row["planner"], reference = planner_row(task, n_planner, worlds, graspable, optimum)
     params = {"symmetric": task.symmetry is not None, **(extra or {})}
     for agent in learners:
         order = ORDERS.get(agent, 1) if k is None else k
         gaps, gaps_g, success, fails, from_fails, seconds = [], [], [], [], [], 0.0
+        to_planner: list[float] = []
         for seed in seeds:
             t0 = time.perf_counter()
             res = train_trials(
@@ -121,6 +157,8 @@ def task_row(
             lost = graspable & ~won  # graspable worlds the policy never grasps (it runs to the step limit)
             fails.append(int(lost.sum()))
             from_fails.append(round(float((steps[lost] - optimum[lost]).sum() / optimum[graspable].sum()), 4))
+            if reference is not None:
+                to_planner.append(round(float(steps[graspable].mean() / reference[graspable].mean() - 1.0), 4))
             print(
                 f"{name}: {agent} seed {seed}: graspable gap {gaps_g[-1]:.1%}, {fails[-1]} graspable worlds "
                 f"not grasped ({seconds:.0f} s of training so far)",
@@ -139,6 +177,9 @@ def task_row(
             "gap_from_fails": from_fails,
             "train_seconds": round(seconds, 1),
         }
+        if reference is not None:
+            row[agent]["gap_to_planner_graspable"] = to_planner
+            row[agent]["median_gap_to_planner_graspable"] = statistics.median(to_planner)
         print(f"{name}: {agent}: median gap {row[agent]['median_gap_graspable']:.1%} (graspable)", file=sys.stderr)
     return row
 
@@ -153,6 +194,7 @@ def main(
     extra: dict | None = None,
     pool: int = 0,
     k: int | None = None,
+    n_planner: int = 0,
 ) -> dict:
     """Every task and learner; see the module docstring."""
     out: dict = {"episodes": episodes, "seeds": [first, first + seeds - 1], "worlds": n_worlds, "params": extra or {}}
@@ -160,7 +202,7 @@ def main(
         out["k"] = k
     for name in tasks:
         print(f"{name} ...", file=sys.stderr, flush=True)
-        out[name] = task_row(name, learners, episodes, range(first, first + seeds), n_worlds, extra, pool, k)
+        out[name] = task_row(name, learners, episodes, range(first, first + seeds), n_worlds, extra, pool, k, n_planner)
     return out
 
 
@@ -175,7 +217,10 @@ if __name__ == "__main__":
     ap.add_argument("--learner", action="append", dest="learners")
     ap.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER|true|false", type=setting)
     ap.add_argument("--k", type=int, default=None, help="every learner's history order (default: ORDERS)")
+    ap.add_argument("--planner", type=int, default=0, help="worlds of a realizable planner's reference (0: none)")
     a = ap.parse_args()
+    if a.planner < 0:
+        ap.error(f"--planner must be >= 0, got {a.planner}")
     extra = dict(a.param)
     res = main(
         a.episodes,
@@ -187,5 +232,6 @@ if __name__ == "__main__":
         extra,
         a.pool,
         a.k,
+        a.planner,
     )
     print(json.dumps(res, indent=1))

@@ -4,6 +4,7 @@ import importlib.util
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from crmgrasp._validation import CrmgraspError
@@ -240,6 +241,7 @@ def test_bench_tripod_smoke():
     assert res["box3d3f_lf_only_us"] > 0 and res["cup3d3f_lf_only_over_compiled"] > 0
     assert 0 < res["box3d3f_least_friction_us"] < res["box3d3f_least_friction_readable_us"]
     assert res["cup3d3f_least_friction_us"] > 0
+    assert 0 < res["box3d3f_step_alone_us"] <= res["box3d3f_us"] and res["cartpole_step_alone_us"] > 0
 
 
 def test_family_learning_pool_and_reference_bias_smoke():
@@ -260,6 +262,15 @@ def test_family_learning_pool_and_reference_bias_smoke():
     planner = BeliefPolicy(task, planned)
     costs = [len(r.actions) for r in episode_records(task, lambda: planner, planned[:12], 0)]
     assert pooled["optimum"] == round(sum(costs) / 12, 4)  # the 36-world policy, scored on the first 12
+    judged = mod.task_row("u-handle", ("pooled-vi",), 10, range(1), 12, n_planner=24)
+    other = BeliefPolicy(task, sample_starts(task, 24, 30_000), fallback="nearest")
+    costs = np.array([len(r.actions) for r in episode_records(task, lambda: other, planned[:12], 0)])
+    grasp = np.array([mod.ungraspable_fraction(task, [w]) == 0.0 for w in planned[:12]])
+    assert judged["planner"]["mean"] == round(float(costs.mean()), 4) and judged["planner"]["planned_worlds"] == 24
+    assert judged["planner"]["mean_graspable"] == round(float(costs[grasp].mean()), 4)
+    learner = (1 + judged["pooled-vi"]["gap_graspable"][0]) * judged["optimum_graspable"]  # its graspable mean
+    expected = learner / judged["planner"]["mean_graspable"] - 1  # within the rounding of the printed gap
+    assert abs(judged["pooled-vi"]["gap_to_planner_graspable"][0] - expected) < 1e-3
     spec = importlib.util.spec_from_file_location("reference_bias", BENCH.parent / "reference_bias.py")
     bias = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bias)
