@@ -45,6 +45,7 @@ import json
 import statistics
 import sys
 import time
+from typing import Any
 
 import numpy as np
 
@@ -82,9 +83,7 @@ def _steps(records: list) -> np.ndarray:
     return np.array([len(r.actions) for r in records], dtype=float)
 
 
-def planner_row(
-    task: object, n: int, worlds: list, graspable: np.ndarray, optimum: np.ndarray
-) -> tuple[dict, np.ndarray]:
+def planner_row(task: Any, n: int, worlds: list, graspable: np.ndarray, optimum: np.ndarray) -> tuple[dict, np.ndarray]:
     """The realizable reference of ``--planner n`` (module docstring): its summary and its
     CRMs per evaluation world."""
     t0 = time.perf_counter()
@@ -99,7 +98,10 @@ def planner_row(
         "fails_graspable": int((graspable & ~won).sum()),
         "seconds": round(time.perf_counter() - t0, 1),
     }
-    print(f"planner over {n} other worlds: graspable {row['mean_graspable']} ({row['seconds']:.0f} s)", file=sys.stderr)
+    print(
+        f"{task.name}: planner over {n} other worlds: graspable {row['mean_graspable']} ({row['seconds']:.0f} s)",
+        file=sys.stderr,
+    )
     return row, steps
 
 

@@ -58,7 +58,7 @@ from typing import Any
 
 import numpy as np
 
-from crmgrasp._validation import CrmgraspError, finite, integer
+from crmgrasp._validation import CrmgraspError, integer, non_negative
 from crmgrasp.agents.base import greedy_choice
 from crmgrasp.agents.model_based import ModelVI, Outcome
 from crmgrasp.agents.pooled import HistoryFrame, PooledVI
@@ -130,15 +130,9 @@ class BackoffVI(TabularAgent):
         explore_tried: float = 0.0,
     ) -> None:
         super().__init__(n_actions, gamma=gamma)
-        self.explore = finite(explore, "explore")
-        if self.explore < 0.0:
-            raise CrmgraspError(f"explore must be >= 0, got {self.explore}")
-        self.explore_tried = finite(explore_tried, "explore_tried")
-        if self.explore_tried < 0.0:
-            raise CrmgraspError(f"explore_tried must be >= 0, got {self.explore_tried}")
-        self.beta = finite(beta, "beta")
-        if self.beta < 0.0:
-            raise CrmgraspError(f"beta must be >= 0, got {self.beta}")
+        self.explore = non_negative(explore, "explore")
+        self.explore_tried = non_negative(explore_tried, "explore_tried")
+        self.beta = non_negative(beta, "beta")
         self.plan_every = integer(plan_every, "plan_every", 1, 1_000_000)
         if not isinstance(sample, bool):
             raise CrmgraspError(f"sample must be true or false, got {sample!r}")
