@@ -44,3 +44,24 @@ def hide_module(monkeypatch):
         monkeypatch.setattr(importlib, "import_module", importer)
 
     return hide
+
+
+@pytest.fixture
+def refused_policy(tmp_path):
+    """``refused_policy(doc, edit, match)``: the policy document ``doc`` edited by ``edit`` (its
+    checksum made to match again) is refused on load with a message matching ``match``."""
+    import json
+
+    from crmgrasp._validation import CrmgraspError
+    from crmgrasp.agents.policy import GreedyPolicy, policy_digest
+
+    def refused(doc: dict, edit, match: str) -> None:
+        bad = json.loads(json.dumps(doc))
+        edit(bad)
+        bad["sha256"] = policy_digest(bad)
+        path = tmp_path / "edited-policy.json"
+        path.write_text(json.dumps(bad))
+        with pytest.raises(CrmgraspError, match=match):
+            GreedyPolicy.load(path)
+
+    return refused

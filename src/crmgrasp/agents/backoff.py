@@ -53,13 +53,13 @@ value is the same at a history and at its mirror image, so an outcome may lead t
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from typing import Any
 
 import numpy as np
 
 from crmgrasp._validation import CrmgraspError, integer, non_negative
-from crmgrasp.agents.base import greedy_choice
+from crmgrasp.agents.base import allowed_choice, greedy_choice
 from crmgrasp.agents.model_based import ModelVI, Outcome
 from crmgrasp.agents.pooled import HistoryFrame, PooledVI
 from crmgrasp.agents.symmetric import SymmetricAgent, mirror_observation_map
@@ -110,6 +110,14 @@ class BackoffVI(TabularAgent):
         again, however often it grasps elsewhere; these pseudo-counts keep that chance, and
         their weight falls as the CRM's own tries grow (a Dirichlet prior). Acting only: the
         greedy policy plans on the counts.
+    skip_errored
+        The greedy policy (evaluated, saved, run) never repeats a CRM that erred since the
+        contacts last moved (False by default): such a CRM errs again for certain without
+        sensing noise, as an errored CRM leaves the contacts where they were. The values are
+        learned as before; the rule only chooses, after an error, the best CRM not yet known
+        to err there ([`LearnerPolicy`][crmgrasp.agents.base.LearnerPolicy]). A history the
+        learner's window cannot tell apart otherwise (after two errors, say, with k = 2) then
+        no longer loops on the same failing CRMs.
     """
 
     name = "backoff-vi"
@@ -128,6 +136,7 @@ class BackoffVI(TabularAgent):
         explore: float = 0.0,
         middle: bool = False,
         explore_tried: float = 0.0,
+        skip_errored: bool = False,
     ) -> None:
         super().__init__(n_actions, gamma=gamma)
         self.explore = non_negative(explore, "explore")
@@ -139,6 +148,9 @@ class BackoffVI(TabularAgent):
         if not isinstance(middle, bool):
             raise CrmgraspError(f"middle must be true or false, got {middle!r}")
         self.middle = middle
+        if not isinstance(skip_errored, bool):
+            raise CrmgraspError(f"skip_errored must be true or false, got {skip_errored!r}")
+        self.skip_errored = skip_errored
         self.judge = ModelVI(n_actions, q_act, unknown, sweeps, compiled, gamma=gamma)
         self.short = PooledVI(n_actions, q_act=q_act, unknown=unknown, compiled=compiled, gamma=gamma)
         self.short.plan_acting = False  # only its greedy model is read
@@ -172,6 +184,7 @@ class BackoffVI(TabularAgent):
             "explore": self.explore,
             "explore_tried": self.explore_tried,
             "middle": self.middle,
+            "skip_errored": self.skip_errored,
         }
 
     def bind(self, frame: HistoryFrame) -> None:
@@ -242,13 +255,18 @@ class BackoffVI(TabularAgent):
         a = greedy_choice(self._act[node], rng)
         return self._amap[a] if flip else a
 
-    def greedy(self, state: int, rng: np.random.Generator) -> int:
-        """The best tried action on the model of all data (uniform where none was tried)."""
+    def greedy(self, state: int, rng: np.random.Generator, banned: Collection[int] = ()) -> int:
+        """The best tried action on the model of all data (uniform where none was tried),
+        outside ``banned`` where given ([`allowed_choice`][crmgrasp.agents.base.allowed_choice])."""
         judge = self._planned()
         node, flip = self._node(state, judge.tried)
         if node is None:
+            if banned:
+                return allowed_choice([], [], self.n_actions, banned, rng)
             return int(rng.integers(self.n_actions))
-        a = judge.greedy(node, rng)  # type: ignore[arg-type]
+        if banned and flip:
+            banned = {self._amap[b] for b in banned}
+        a = judge.greedy(node, rng, banned)  # type: ignore[arg-type]
         return self._amap[a] if flip else a
 
     def update(

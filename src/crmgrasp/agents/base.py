@@ -9,6 +9,13 @@ An agent maps integer states (k-order history codes) to action indices:
   the action already chosen in ``s2`` by ``act`` (``None`` when ``terminal``);
 * ``greedy(state, rng) -> action``: the learned policy, for evaluation.
 
+An agent whose ``skip_errored`` is true (``backoff-vi``'s parameter, and a saved policy made
+from one) is also asked ``greedy(state, rng, banned)``: the best action outside ``banned``,
+the CRMs that erred since the contacts last moved. An errored CRM leaves the contacts where
+they were ([docs/model.md section 3][model-3]), so without sensing noise repeating it from
+there errs again for certain: it costs a CRM and tells nothing new. `LearnerPolicy` keeps
+that set (empty after a CRM that moved the contacts and at a reset).
+
 All randomness comes from the ``rng`` passed in. `LearnerPolicy` makes an
 agent a [`Policy`][crmgrasp.sim.Policy] over k-order histories, so that learners act
 through the same episode loop ([`crmgrasp.sim.run_episode`][]) as planners and
@@ -17,14 +24,16 @@ controllers.
 
 from __future__ import annotations
 
+from collections.abc import Collection, Sequence
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from crmgrasp.model.hand import Error
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.sim import Percept
 
-__all__ = ["Agent", "LearnerPolicy", "greedy_choice"]
+__all__ = ["Agent", "LearnerPolicy", "greedy_choice", "allowed_choice"]
 
 
 @runtime_checkable
@@ -54,6 +63,24 @@ def greedy_choice(row: list[float], rng: np.random.Generator) -> int:
     return ties[int(rng.integers(len(ties)))]
 
 
+def allowed_choice(
+    row: Sequence[float], choices: Sequence[int], n_actions: int, banned: Collection[int], rng: np.random.Generator
+) -> int:
+    """The best of ``choices`` (actions, ``row`` their values by action) outside ``banned``,
+    ties broken uniformly; where every choice is banned, uniform over the actions outside
+    ``banned`` (one not yet tried may still move the contacts); where every action is
+    banned, the best of ``choices`` (uniform if there are none)."""
+    left = [a for a in choices if a not in banned]
+    if left:
+        return left[greedy_choice([row[a] for a in left], rng)]
+    rest = [a for a in range(n_actions) if a not in banned]
+    if rest:
+        return rest[int(rng.integers(len(rest)))]
+    if choices:
+        return choices[greedy_choice([row[a] for a in choices], rng)]
+    return int(rng.integers(n_actions))
+
+
 class LearnerPolicy:
     """An [`Agent`][] as a [`Policy`][crmgrasp.sim.Policy]: it keeps the k-order
     history ([docs/model.md section 6][model-6]) of the discretized observations, acts on its code and,
@@ -63,20 +90,29 @@ class LearnerPolicy:
     action at ``begin``; after each non-terminal step the next action is chosen, then
     the update ``(s, a, r, s', a')`` is made; a terminal step updates with
     ``a' = None``. With ``learn=False`` the agent's greedy policy acts and nothing is
-    updated.
+    updated; if the agent's ``skip_errored`` is true, it is then asked for the best action
+    outside the CRMs that erred since the contacts last moved (module docstring).
     """
 
     def __init__(self, agent: Agent, encoder: KOrderEncoder, rng: np.random.Generator, *, learn: bool = True) -> None:
         self.agent, self.encoder, self.rng, self.learn = agent, encoder, rng, learn
         self._pick = agent.act if learn else agent.greedy
+        self._skip = not learn and bool(getattr(agent, "skip_errored", False))
+        self._banned: frozenset[int] = frozenset()
         self._hist: tuple[int, ...] = ()
         self._s = self._a = 0
 
     def begin(self, first: Percept) -> None:
         self._hist = self.encoder.start(first.obs_index)
         self._s = self.encoder.encode(self._hist)
+        self._banned = frozenset()
         self.agent.begin_episode()
-        self._a = self._pick(self._s, self.rng)
+        self._a = self._choose(self._s)
+
+    def _choose(self, s: int) -> int:
+        if self._banned:
+            return self.agent.greedy(s, self.rng, self._banned)  # type: ignore[call-arg]
+        return self._pick(s, self.rng)
 
     def act(self) -> int:
         return self._a
@@ -84,11 +120,13 @@ class LearnerPolicy:
     def tell(self, percept: Percept) -> None:
         self._hist = self.encoder.push(self._hist, self._a, percept.obs_index)
         s2 = self.encoder.encode(self._hist)
+        if self._skip:
+            self._banned = self._banned | {self._a} if percept.error is not Error.NONE else frozenset()
         if percept.terminated:
             if self.learn:
                 self.agent.update(self._s, self._a, percept.reward, s2, None, True, self.rng)
             return
-        a2 = self._pick(s2, self.rng)
+        a2 = self._choose(s2)
         if self.learn:
             self.agent.update(self._s, self._a, percept.reward, s2, a2, False, self.rng)
         self._s, self._a = s2, a2

@@ -30,12 +30,13 @@ with ``prior_task``); the agent's own counts outweigh it after a few visits.
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from typing import Any
 
 import numpy as np
 
 from crmgrasp._validation import CrmgraspError, finite, integer, positive
-from crmgrasp.agents.base import greedy_choice
+from crmgrasp.agents.base import allowed_choice, greedy_choice
 from crmgrasp.agents.tabular import TabularAgent
 
 __all__ = ["ModelVI", "Model"]
@@ -122,9 +123,13 @@ class ModelVI(TabularAgent):
             return int(rng.integers(self.n_actions))
         return greedy_choice(self.q.get(state) or [self.q_act] * self.n_actions, rng)
 
-    def greedy(self, state: int, rng: np.random.Generator) -> int:
-        """The best tried action by the greedy values (any action where none was tried)."""
+    def greedy(self, state: int, rng: np.random.Generator, banned: Collection[int] = ()) -> int:
+        """The best tried action by the greedy values (any action where none was tried),
+        outside ``banned`` where given ([`allowed_choice`][crmgrasp.agents.base.allowed_choice])."""
         tried = self.tried.get(state)
+        if banned:
+            acts = sorted(tried or ())
+            return allowed_choice(self.q_greedy.get(state, []), acts, self.n_actions, banned, rng)
         if not tried:
             return int(rng.integers(self.n_actions)) if self.n_actions > 1 else 0
         acts = sorted(tried)

@@ -18,6 +18,14 @@ A learner that backs off to shorter histories
 ``"backoff": {"k": 1, "greedy": {...}}``: a history the ``"greedy"`` table does not list
 acts from its last ``k`` CRMs' code in that table (``k`` below the file's).
 
+A learner with ``skip_errored`` (a policy that never repeats a CRM that erred since the
+contacts last moved, [`crmgrasp.agents.base`][]) writes version 4: version 3 (or 2) with
+``"skip_errored": true`` and a ``"ranked"`` table beside each ``"greedy"`` one, listing per
+state every action the policy chooses among, best first, in groups of equal value
+(``{"<state code>": [[best actions], [next], ...]}``; the first group is the ``"greedy"``
+entry). After an error the policy takes the first group with an action not known to err
+there.
+
 ``task_spec`` ([`crmgrasp.tasks.task_to_dict`][]) makes the file stand alone: it
 loads without naming a task, also for a task from a TOML file; given a task, the
 file is refused unless the task is the one it was made for (the first differing key is
@@ -39,7 +47,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -47,6 +55,7 @@ import numpy as np
 
 from crmgrasp._io import read_bounded, write_json
 from crmgrasp._validation import CrmgraspError, shown
+from crmgrasp.agents.base import allowed_choice
 from crmgrasp.agents.tabular import TabularAgent
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import MAX_K, KOrderEncoder
@@ -68,8 +77,9 @@ __all__ = [
 
 FORMAT = "crmgrasp-policy"
 VERSION = 2
-VERSIONS = (2, 3)
-"""Versions read: 2, and 3 (2 with a back-off table), written only with one."""
+VERSIONS = (2, 3, 4)
+"""Versions read: 2, 3 (2 with a back-off table, written only with one) and 4 (either with
+``skip_errored`` and ranked tables)."""
 MAX_BYTES = 64 * 2**20
 """Largest policy file read (64 MiB; a paper-box table is a few kB)."""
 
@@ -223,6 +233,7 @@ class GreedyPolicy:
         table: dict[int, tuple[int, ...]],
         agent: str = "unknown",
         backoff: GreedyPolicy | None = None,
+        ranked: dict[int, tuple[tuple[int, ...], ...]] | None = None,
     ) -> None:
         self.task = task
         self.encoder = KOrderEncoder(task.discretizer.size, len(task.actions), k)
@@ -234,6 +245,10 @@ class GreedyPolicy:
             raise CrmgraspError(f"a back-off table needs an order below {k}, got {backoff.k}")
         self.backoff = backoff
         """The table of shorter histories that an unlisted history acts from, or None."""
+        self.ranked = ranked
+        """Per state, the actions chosen among, best first in groups of equal value; given,
+        the policy skips CRMs that erred since the contacts last moved (``skip_errored``)."""
+        self.skip_errored = ranked is not None
 
     @classmethod
     def from_agent(cls, task: Task, k: int, agent: TabularAgent | SymmetricAgent) -> GreedyPolicy:
@@ -241,26 +256,40 @@ class GreedyPolicy:
         each, the best of the actions its greedy policy chooses among (``greedy_tried``: the tried
         ones; all ties kept); with the back-off table of an agent that has one
         (``backoff_tables()``)."""
-        table = _best_actions(agent.greedy_table, agent.greedy_tried)
+        skip = bool(getattr(agent, "skip_errored", False))
+        values, choices = agent.greedy_table, agent.greedy_tried
         tables = getattr(getattr(agent, "inner", agent), "backoff_tables", None)
         backoff = None
         if tables is not None:
             k1, rows, tried = tables()
-            backoff = cls(task, k1, _best_actions(rows, tried), agent.name)
-        return cls(task, k, table, agent.name, backoff)
+            ranked1 = _ranked(rows, tried) if skip else None
+            backoff = cls(task, k1, _best_actions(rows, tried), agent.name, None, ranked1)
+        ranked = _ranked(values, choices) if skip else None
+        return cls(task, k, _best_actions(values, choices), agent.name, backoff, ranked)
 
     def begin_episode(self) -> None:
         """Stateless."""
 
-    def greedy(self, state: int, rng: np.random.Generator) -> int:
+    def greedy(self, state: int, rng: np.random.Generator, banned: Collection[int] = ()) -> int:
         """The listed action (uniform among ties); else the back-off table's for the
-        history's last CRMs; uniform over all actions if neither lists it."""
+        history's last CRMs; uniform over all actions if neither lists it. With ``banned``
+        (a policy with ``skip_errored``), the first ranked group with an action outside it,
+        as [`allowed_choice`][crmgrasp.agents.base.allowed_choice] chooses."""
         acts = self.table.get(state)
         if acts is None:
             if self.backoff is not None:
                 h = self.encoder.decode(state)
-                return self.backoff.greedy(self.backoff.encoder.encode(h[: max(2 * self.backoff.k, 1)]), rng)
+                return self.backoff.greedy(self.backoff.encoder.encode(h[: max(2 * self.backoff.k, 1)]), rng, banned)
+            if banned:
+                return allowed_choice([], [], self.n_actions, banned, rng)
             return int(rng.integers(self.n_actions))
+        if banned and self.ranked is not None:
+            for group in self.ranked[state]:
+                left = [a for a in group if a not in banned]
+                if left:
+                    return left[0] if len(left) == 1 else left[int(rng.integers(len(left)))]
+            if len(banned) < self.n_actions:  # every ranked action erred here: one not ranked may not
+                return allowed_choice([], [], self.n_actions, banned, rng)
         return acts[0] if len(acts) == 1 else acts[int(rng.integers(len(acts)))]
 
     act = greedy
@@ -282,7 +311,13 @@ class GreedyPolicy:
         hist = self.encoder.start(codes[0])
         for a, o in zip(actions, codes[1:]):
             hist = self.encoder.push(hist, int(a), o)
-        return self.greedy(self.encoder.encode(hist), rng if rng is not None else np.random.default_rng(0))
+        banned: set[int] = set()
+        if self.skip_errored:  # the CRMs that erred since the contacts last moved
+            for a, o in zip(reversed(actions), reversed(codes[1:])):
+                if self.task.discretizer.decode(o)[1] == Error.NONE:
+                    break
+                banned.add(int(a))
+        return self.greedy(self.encoder.encode(hist), rng if rng is not None else np.random.default_rng(0), banned)
 
     def update(self, *args: Any) -> None:
         """A saved policy does not learn."""
@@ -303,6 +338,12 @@ class GreedyPolicy:
         if self.backoff is not None:
             doc["version"] = 3
             doc["backoff"] = {"k": self.backoff.k, "greedy": _table_json(self.backoff.table)}
+        if self.ranked is not None:
+            doc["version"] = 4
+            doc["skip_errored"] = True
+            doc["ranked"] = _ranked_json(self.ranked)
+            if self.backoff is not None and self.backoff.ranked is not None:
+                doc["backoff"]["ranked"] = _ranked_json(self.backoff.ranked)
         doc["sha256"] = policy_digest(doc)
         return doc
 
@@ -349,11 +390,15 @@ class GreedyPolicy:
             raise bad(f"policy's CRM set {doc['actions']} differs from the task's {expected}")
         if doc["bins"] != task.discretizer.to_dict():
             raise bad(f"policy's observation bins {doc['bins']} differ from the task's")
-        table = _read_table(doc["greedy"], KOrderEncoder(task.discretizer.size, len(task.actions), k), bad)
+        encoder = KOrderEncoder(task.discretizer.size, len(task.actions), k)
+        table = _read_table(doc["greedy"], encoder, bad)
+        if (doc["version"] == 4) != (doc.get("skip_errored") is True and "ranked" in doc):
+            raise bad('a version 4 policy, and only one, has "skip_errored": true and a "ranked" table')
+        ranked = _read_ranked(doc["ranked"], table, encoder, bad) if doc["version"] == 4 else None
         backoff = None
         if doc["version"] == 3 or "backoff" in doc:
             backoff = _read_backoff(doc, task, k, bad)
-        return cls(task, k, table, str(doc.get("agent", "unknown")), backoff)
+        return cls(task, k, table, str(doc.get("agent", "unknown")), backoff, ranked)
 
 
 def _best_actions(values: dict[int, list[float]], tried: dict[int, set[int]]) -> dict[int, tuple[int, ...]]:
@@ -366,20 +411,65 @@ def _best_actions(values: dict[int, list[float]], tried: dict[int, set[int]]) ->
     return table
 
 
+def _ranked(values: dict[int, list[float]], tried: dict[int, set[int]]) -> dict[int, tuple[tuple[int, ...], ...]]:
+    """Per state, the actions chosen among (all where none is listed), best first, in
+    groups of equal value (increasing within a group; the first group is `_best_actions`')."""
+    out = {}
+    for s, row in values.items():
+        acts = sorted(tried.get(s) or range(len(row)))
+        levels = sorted({row[a] for a in acts}, reverse=True)
+        out[s] = tuple(tuple(a for a in acts if row[a] == v) for v in levels)
+    return out
+
+
 def _table_json(table: dict[int, tuple[int, ...]]) -> dict[str, list[int]]:
     return {str(s): list(a) for s, a in sorted(table.items())}
+
+
+def _ranked_json(ranked: dict[int, tuple[tuple[int, ...], ...]]) -> dict[str, list[list[int]]]:
+    return {str(s): [list(g) for g in groups] for s, groups in sorted(ranked.items())}
+
+
+def _read_ranked(
+    ranked: Any, table: dict[int, tuple[int, ...]], encoder: KOrderEncoder, bad: Any
+) -> dict[int, tuple[tuple[int, ...], ...]]:
+    """A ``"ranked"`` table: exactly the states of its ``"greedy"`` table, each a non-empty
+    list of disjoint action groups whose first is that state's ``"greedy"`` entry."""
+    if not isinstance(ranked, dict):
+        raise bad('"ranked" must be an object mapping state codes to lists of action groups')
+    out: dict[int, tuple[tuple[int, ...], ...]] = {}
+    for key, groups in ranked.items():
+        if not isinstance(groups, list) or not groups:
+            raise bad(f"ranked state {shown(key)}: expected a non-empty list of action groups")
+        rows = [_read_table({key: g}, encoder, bad) for g in groups]
+        s = next(iter(rows[0]))
+        acts = tuple(r[s] for r in rows)
+        flat = [a for g in acts for a in g]
+        if len(set(flat)) != len(flat) or acts[0] != table.get(s):
+            raise bad(f"ranked state {s}: its groups must be disjoint and the first must be its greedy entry")
+        out[s] = acts
+    if set(out) != set(table):
+        raise bad('"ranked" must list exactly the states of "greedy"')
+    return out
 
 
 def _read_backoff(doc: dict[str, Any], task: Task, k: int, bad: Any) -> GreedyPolicy:
     """The back-off table of a version 3 document (its order below ``k``)."""
     part = doc.get("backoff")
-    if doc["version"] != 3 or not isinstance(part, dict) or set(part) != {"k", "greedy"}:
-        raise bad('a version 3 policy has a "backoff" object with "k" and "greedy" (and only version 3 has one)')
+    if doc["version"] == 4:
+        keys, text = {"k", "greedy", "ranked"}, 'a version 4 policy\'s "backoff" object has "k", "greedy" and "ranked"'
+    else:
+        keys = {"k", "greedy"}
+        text = 'a version 3 policy has a "backoff" object with "k" and "greedy" (and only version 3 has one)'
+    if doc["version"] == 2 or not isinstance(part, dict) or set(part) != keys:
+        raise bad(text)
     k1 = part["k"]
     if isinstance(k1, bool) or not isinstance(k1, int) or not 0 <= k1 < k:
         raise bad(f"backoff k must be an integer in [0, {k}), got {shown(k1)}")
-    table = _read_table(part["greedy"], KOrderEncoder(task.discretizer.size, len(task.actions), k1), bad)
-    return GreedyPolicy(task, k1, table, str(doc.get("agent", "unknown")))
+    encoder = KOrderEncoder(task.discretizer.size, len(task.actions), k1)
+    table = _read_table(part["greedy"], encoder, bad)
+    ranked = _read_ranked(part["ranked"], table, encoder, bad) if "ranked" in part else None
+    return GreedyPolicy(task, k1, table, str(doc.get("agent", "unknown")), None, ranked)
 
 
 def _read_table(greedy: Any, encoder: KOrderEncoder, bad: Any) -> dict[int, tuple[int, ...]]:

@@ -37,6 +37,7 @@ The learner needs to know how its states are built: [`HistoryFrame`][], which
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from typing import Any
 
 import numpy as np
@@ -194,11 +195,11 @@ class PooledVI(ModelVI):
         self._solve()
         return self.judge.tried
 
-    def greedy(self, state: int, rng: np.random.Generator) -> int:
+    def greedy(self, state: int, rng: np.random.Generator, banned: Collection[int] = ()) -> int:
         """The best action on the model with the pooled prior (any action where neither
-        level has data)."""
+        level has data), outside ``banned`` where given."""
         self._solve()
-        return self.judge.greedy(state, rng)
+        return self.judge.greedy(state, rng, banned)
 
     def set_prior(self, prior: Model, weight: float = 1.0) -> None:
         """``ModelVI.set_prior`` on the own counts; the greedy model follows."""

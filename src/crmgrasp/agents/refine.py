@@ -26,6 +26,7 @@ tries are the few around the best of each history.
 from __future__ import annotations
 
 import math
+from collections.abc import Collection
 from collections.abc import Set as AbstractSet
 from typing import Any
 
@@ -119,11 +120,12 @@ class RefineVI(ModelVI):
             return self.coarse[int(rng.integers(len(self.coarse)))]
         return greedy_choice(row, rng)
 
-    def greedy(self, state: int, rng: np.random.Generator) -> int:
-        """The best tried CRM by the greedy values (a coarse one where none was tried)."""
-        if not self.tried.get(state):
+    def greedy(self, state: int, rng: np.random.Generator, banned: Collection[int] = ()) -> int:
+        """The best tried CRM by the greedy values (a coarse one where none was tried),
+        outside ``banned`` where given."""
+        if not self.tried.get(state) and not banned:
             return self.coarse[int(rng.integers(len(self.coarse)))]
-        return super().greedy(state, rng)
+        return super().greedy(state, rng, banned)
 
     def update(
         self, s: int, a: int, r: float, s2: int, a2: int | None, terminal: bool, rng: np.random.Generator

@@ -23,6 +23,7 @@ transition from such a history twice, as taken and mirrored.
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from typing import Any
 
 import numpy as np
@@ -87,10 +88,19 @@ class SymmetricAgent:
         a = self.inner.act(c, rng)
         return self._amap[a] if flip else a
 
-    def greedy(self, state: int, rng: np.random.Generator) -> int:
-        """The inner learner's greedy action, in the representative's frame."""
+    @property
+    def skip_errored(self) -> bool:
+        """The inner learner's ``skip_errored`` (false where it has none)."""
+        return bool(getattr(self.inner, "skip_errored", False))
+
+    def greedy(self, state: int, rng: np.random.Generator, banned: Collection[int] = ()) -> int:
+        """The inner learner's greedy action, in the representative's frame (``banned``, the
+        CRMs to leave out, mirrored with it)."""
         c, flip = self._canon(state)
-        a = self.inner.greedy(c, rng)
+        if banned:
+            a = self.inner.greedy(c, rng, {self._amap[b] for b in banned} if flip else banned)  # type: ignore[call-arg]
+        else:
+            a = self.inner.greedy(c, rng)
         return self._amap[a] if flip else a
 
     def update(

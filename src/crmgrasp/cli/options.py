@@ -95,6 +95,14 @@ def _number(text: str) -> float:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+def _boolean(text: str) -> bool:
+    """An argparse type: ``true`` or ``false`` (any case)."""
+    word = text.strip().lower()
+    if word not in ("true", "false"):
+        raise argparse.ArgumentTypeError(f"expected true or false, got {text!r}")
+    return word == "true"
+
+
 def _resolve_crm(task: Task, text: str) -> Any:
     """``C1``..``Cn`` names the task's actions; anything else is parsed as ``c,f,r``."""
     m = re.fullmatch(r"[Cc]([0-9]+)", text.strip())
