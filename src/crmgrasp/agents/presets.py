@@ -45,7 +45,7 @@ class LearnerPreset:
     k: int
     symmetric: bool = False
     description: str = ""
-    params: tuple[tuple[str, float], ...] = ()
+    params: tuple[tuple[str, float | bool], ...] = ()
 
 
 PRESETS: dict[str, LearnerPreset] = {
@@ -60,7 +60,9 @@ PRESETS: dict[str, LearnerPreset] = {
         "backoff-vi",
         2,
         symmetric=True,
-        description="backoff-vi, k = 2: two-CRM histories backed off to k = 1, for object families; from scratch",
+        params=(("skip_errored", True),),
+        description="backoff-vi, k = 2: two-CRM histories backed off to k = 1, for object families, its greedy "
+        "policy never repeating a CRM that erred since the contacts last moved (skip_errored); from scratch",
     ),
     "costly-errors": LearnerPreset(
         "backoff-vi",
@@ -83,7 +85,7 @@ class LearnerChoice(NamedTuple):
     k: int
     symmetric: bool
     prior_task: str | None
-    params: tuple[tuple[str, float], ...] = ()
+    params: tuple[tuple[str, float | bool], ...] = ()
 
 
 def apply_preset(
