@@ -33,7 +33,7 @@ from crmgrasp.model.hand import Error
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.sim import Percept
 
-__all__ = ["Agent", "LearnerPolicy", "greedy_choice", "allowed_choice"]
+__all__ = ["Agent", "LearnerPolicy", "greedy_choice", "allowed_choice", "erred_here"]
 
 
 @runtime_checkable
@@ -81,6 +81,12 @@ def allowed_choice(
     return int(rng.integers(n_actions))
 
 
+def erred_here(banned: frozenset[int], action: int, error: Error) -> frozenset[int]:
+    """The CRMs that erred since the contacts last moved, after ``action`` ended with
+    ``error``: ``banned`` and ``action`` if it erred (the contacts stay), none if it moved them."""
+    return banned | {action} if error is not Error.NONE else frozenset()
+
+
 class LearnerPolicy:
     """An [`Agent`][] as a [`Policy`][crmgrasp.sim.Policy]: it keeps the k-order
     history ([docs/model.md section 6][model-6]) of the discretized observations, acts on its code and,
@@ -121,7 +127,7 @@ class LearnerPolicy:
         self._hist = self.encoder.push(self._hist, self._a, percept.obs_index)
         s2 = self.encoder.encode(self._hist)
         if self._skip:
-            self._banned = self._banned | {self._a} if percept.error is not Error.NONE else frozenset()
+            self._banned = erred_here(self._banned, self._a, percept.error)
         if percept.terminated:
             if self.learn:
                 self.agent.update(self._s, self._a, percept.reward, s2, None, True, self.rng)

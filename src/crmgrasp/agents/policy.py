@@ -55,7 +55,7 @@ import numpy as np
 
 from crmgrasp._io import read_bounded, write_json
 from crmgrasp._validation import CrmgraspError, shown
-from crmgrasp.agents.base import allowed_choice
+from crmgrasp.agents.base import allowed_choice, erred_here
 from crmgrasp.agents.tabular import TabularAgent
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import MAX_K, KOrderEncoder
@@ -283,13 +283,12 @@ class GreedyPolicy:
             if banned:
                 return allowed_choice([], [], self.n_actions, banned, rng)
             return int(rng.integers(self.n_actions))
-        if banned and self.ranked is not None:
-            for group in self.ranked[state]:
-                left = [a for a in group if a not in banned]
-                if left:
-                    return left[0] if len(left) == 1 else left[int(rng.integers(len(left)))]
-            if len(banned) < self.n_actions:  # every ranked action erred here: one not ranked may not
-                return allowed_choice([], [], self.n_actions, banned, rng)
+        if banned and self.ranked is not None:  # the groups' order as values: -1 for the second group, ...
+            row = [0.0] * self.n_actions
+            for i, group in enumerate(self.ranked[state]):
+                for a in group:
+                    row[a] = -float(i)
+            return allowed_choice(row, sorted(a for g in self.ranked[state] for a in g), self.n_actions, banned, rng)
         return acts[0] if len(acts) == 1 else acts[int(rng.integers(len(acts)))]
 
     act = greedy
@@ -311,12 +310,10 @@ class GreedyPolicy:
         hist = self.encoder.start(codes[0])
         for a, o in zip(actions, codes[1:]):
             hist = self.encoder.push(hist, int(a), o)
-        banned: set[int] = set()
-        if self.skip_errored:  # the CRMs that erred since the contacts last moved
-            for a, o in zip(reversed(actions), reversed(codes[1:])):
-                if self.task.discretizer.decode(o)[1] == Error.NONE:
-                    break
-                banned.add(int(a))
+        banned: frozenset[int] = frozenset()
+        if self.skip_errored:
+            for a, o in zip(actions, codes[1:]):
+                banned = erred_here(banned, int(a), Error(self.task.discretizer.decode(o)[1]))
         return self.greedy(self.encoder.encode(hist), rng if rng is not None else np.random.default_rng(0), banned)
 
     def update(self, *args: Any) -> None:
