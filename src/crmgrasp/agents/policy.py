@@ -262,10 +262,10 @@ class GreedyPolicy:
         backoff = None
         if tables is not None:
             k1, rows, tried = tables()
-            ranked1 = _ranked(rows, tried) if skip else None
-            backoff = cls(task, k1, _best_actions(rows, tried), agent.name, None, ranked1)
-        ranked = _ranked(values, choices) if skip else None
-        return cls(task, k, _best_actions(values, choices), agent.name, backoff, ranked)
+            ranked1 = _ranked(rows, tried)
+            backoff = cls(task, k1, _best_actions(ranked1), agent.name, None, ranked1 if skip else None)
+        ranked = _ranked(values, choices)
+        return cls(task, k, _best_actions(ranked), agent.name, backoff, ranked if skip else None)
 
     def begin_episode(self) -> None:
         """Stateless."""
@@ -398,19 +398,14 @@ class GreedyPolicy:
         return cls(task, k, table, str(doc.get("agent", "unknown")), backoff, ranked)
 
 
-def _best_actions(values: dict[int, list[float]], tried: dict[int, set[int]]) -> dict[int, tuple[int, ...]]:
-    """Per state, the best of the actions chosen among (all of them where none is listed), ties kept."""
-    table = {}
-    for s, row in values.items():
-        acts = sorted(tried.get(s) or range(len(row)))
-        best = max(row[a] for a in acts)
-        table[s] = tuple(a for a in acts if row[a] == best)
-    return table
+def _best_actions(ranked: dict[int, tuple[tuple[int, ...], ...]]) -> dict[int, tuple[int, ...]]:
+    """Per state, the best of the actions chosen among, ties kept: the first group of `_ranked`."""
+    return {s: groups[0] for s, groups in ranked.items()}
 
 
 def _ranked(values: dict[int, list[float]], tried: dict[int, set[int]]) -> dict[int, tuple[tuple[int, ...], ...]]:
     """Per state, the actions chosen among (all where none is listed), best first, in
-    groups of equal value (increasing within a group; the first group is `_best_actions`')."""
+    groups of equal value (increasing within a group)."""
     out = {}
     for s, row in values.items():
         acts = sorted(tried.get(s) or range(len(row)))
