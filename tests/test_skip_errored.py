@@ -158,3 +158,47 @@ def test_learn_takes_the_flag_and_evaluate_runs_the_file(tmp_path, capsys):
     assert main(["learn", "--agent", "sarsa", "--skip-errored", "true", "--out", str(tmp_path / "x")]) == 2
     assert "--skip-errored does not apply to --agent sarsa" in capsys.readouterr().err
     assert not (tmp_path / "x").exists()
+
+
+@pytest.mark.parametrize("learner", ["model-vi", "pooled-vi"])
+def test_every_model_based_learner_takes_the_rule(learner, tmp_path):
+    """``model-vi`` and ``pooled-vi`` (k = 1) take ``skip_errored`` too: their greedy policy
+    repeats no CRM that erred where it is (the same learner without it does), and their
+    policy file (version 4, no back-off table) chooses as they do after every error."""
+    task = make_task("u-handle")
+    params = {"symmetric": True, "skip_errored": True}
+    agent = train_trials(task, learner, trials=1, episodes=300, seed=3, k=1, eval_episodes=0, params=params).agents[0]
+    assert agent.skip_errored and agent.inner.params()["skip_errored"] is True
+    enc, worlds = encoder_for(task, 1), sample_starts(task, 60, 10_000)
+
+    def records():
+        return episode_records(
+            task, lambda: LearnerPolicy(agent, enc, np.random.default_rng(0), learn=False), worlds, 0
+        )
+
+    skipping = records()
+    agent.inner.skip_errored = False
+    try:
+        plain = records()
+    finally:
+        agent.inner.skip_errored = True
+    assert sum(_repeats(r) for r in skipping) == 0 < sum(_repeats(r) for r in plain)
+    loaded = GreedyPolicy.load(GreedyPolicy.from_agent(task, 1, agent).save(tmp_path / "p.json"))
+    assert loaded.skip_errored and loaded.backoff is None
+    checked = 0
+    for r in skipping:
+        h, banned = enc.start(r.first_obs), frozenset()
+        for a, o, erred in zip(r.actions, r.observations, r.errors):
+            if banned:
+                s = enc.encode(h)
+                mine = {agent.greedy(s, np.random.default_rng(i), banned) for i in range(30)}
+                assert mine == {loaded.greedy(s, np.random.default_rng(i), banned) for i in range(30)}
+                checked += 1
+            h, banned = enc.push(h, a, o), banned | {a} if erred else frozenset()
+    assert checked > 10
+
+
+@pytest.mark.parametrize("learner", ["model-vi", "pooled-vi", "refine-vi"])
+def test_a_bad_setting_is_a_one_line_error_for_every_learner(learner):
+    with pytest.raises(CrmgraspError, match="skip_errored must be true or false, got 1"):
+        make_agent(learner, 4, skip_errored=1)

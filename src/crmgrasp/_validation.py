@@ -79,6 +79,14 @@ def non_negative(value: object, name: str) -> float:
     return x
 
 
+def boolean(value: object, name: str) -> bool:
+    """Return ``value`` if it is a bool (true or false, not a number or text), or raise
+    `CrmgraspError`."""
+    if not isinstance(value, bool):
+        raise CrmgraspError(f"{name} must be true or false, got {value!r}")
+    return value
+
+
 def as_point(value: object, name: str) -> tuple[float, float]:
     """Return ``value`` as a finite 2-tuple of floats, or raise `CrmgraspError`."""
     if isinstance(value, (str, bytes)):

@@ -58,7 +58,7 @@ from typing import Any
 
 import numpy as np
 
-from crmgrasp._validation import CrmgraspError, integer, non_negative
+from crmgrasp._validation import CrmgraspError, boolean, integer, non_negative
 from crmgrasp.agents.base import allowed_choice, greedy_choice
 from crmgrasp.agents.model_based import ModelVI, Outcome
 from crmgrasp.agents.pooled import HistoryFrame, PooledVI
@@ -143,20 +143,14 @@ class BackoffVI(TabularAgent):
         self.explore_tried = non_negative(explore_tried, "explore_tried")
         self.beta = non_negative(beta, "beta")
         self.plan_every = integer(plan_every, "plan_every", 1, 1_000_000)
-        if not isinstance(sample, bool):
-            raise CrmgraspError(f"sample must be true or false, got {sample!r}")
-        if not isinstance(middle, bool):
-            raise CrmgraspError(f"middle must be true or false, got {middle!r}")
-        self.middle = middle
-        if not isinstance(skip_errored, bool):
-            raise CrmgraspError(f"skip_errored must be true or false, got {skip_errored!r}")
-        self.skip_errored = skip_errored
+        self.middle = boolean(middle, "middle")
+        self.skip_errored = boolean(skip_errored, "skip_errored")
         self.judge = ModelVI(n_actions, q_act, unknown, sweeps, compiled, gamma=gamma)
         self.short = PooledVI(n_actions, q_act=q_act, unknown=unknown, compiled=compiled, gamma=gamma)
         self.short.plan_acting = False  # only its greedy model is read
         self.counts: dict[tuple[int, int], dict[Outcome, float]] = {}
         self.episodes = 0
-        self.sample = sample
+        self.sample = boolean(sample, "sample")
         self._replan = False
         self._act: dict[Any, list[float]] = {}
         self._solved = True

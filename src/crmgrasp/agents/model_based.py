@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from crmgrasp._validation import CrmgraspError, finite, integer, positive
+from crmgrasp._validation import CrmgraspError, boolean, finite, integer, positive
 from crmgrasp.agents.base import allowed_choice, greedy_choice
 from crmgrasp.agents.tabular import TabularAgent
 
@@ -66,6 +66,10 @@ class ModelVI(TabularAgent):
         Most value-iteration sweeps after each step.
     compiled
         Run the compiled sweeps (the readable ones with False; the same values).
+    skip_errored
+        The greedy policy (evaluated, saved, run) never repeats a CRM that erred since the
+        contacts last moved (False by default), as ``backoff-vi``'s
+        ([`BackoffVI`][crmgrasp.agents.backoff.BackoffVI]); learning is unchanged.
     **kwargs
         [`TabularAgent`][crmgrasp.agents.tabular.TabularAgent]'s ``alpha``, ``gamma``
         (the discount, 0.9, the paper's), ``epsilon``, ``q0``.
@@ -80,15 +84,15 @@ class ModelVI(TabularAgent):
         unknown: float = -10.0,
         sweeps: int = 100,
         compiled: bool = True,
+        skip_errored: bool = False,
         **kwargs: float,
     ) -> None:
         super().__init__(n_actions, **kwargs)
         self.q_act = finite(q_act, "q_act")
         self.unknown = finite(unknown, "unknown")
         self.sweeps = integer(sweeps, "sweeps", 1, 10_000)
-        if not isinstance(compiled, bool):
-            raise CrmgraspError(f"compiled must be true or false, got {compiled!r}")
-        self.compiled = compiled
+        self.compiled = boolean(compiled, "compiled")
+        self.skip_errored = boolean(skip_errored, "skip_errored")
         self.model: Model = {}
         self.q_greedy: dict[int, list[float]] = {}
         self.plan_acting = True
@@ -96,7 +100,13 @@ class ModelVI(TabularAgent):
         whoever reads it)."""
 
     def params(self) -> dict[str, Any]:  # type: ignore[override]
-        return {**super().params(), "q_act": self.q_act, "unknown": self.unknown, "sweeps": self.sweeps}
+        return {
+            **super().params(),
+            "q_act": self.q_act,
+            "unknown": self.unknown,
+            "sweeps": self.sweeps,
+            "skip_errored": self.skip_errored,
+        }
 
     @property
     def greedy_table(self) -> dict[int, list[float]]:
