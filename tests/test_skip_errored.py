@@ -28,9 +28,27 @@ def handle():
     return task, agent.agents[0], sample_starts(task, 60, 10_000)
 
 
-def _records(task, agent, worlds, seed=0):
-    enc = encoder_for(task, 2)
+def _records(task, agent, worlds, seed=0, k=2):
+    enc = encoder_for(task, k)
     return episode_records(task, lambda: LearnerPolicy(agent, enc, np.random.default_rng(seed), learn=False), worlds, 0)
+
+
+def _choices_after_errors(task, k, agent, loaded, records) -> int:
+    """Check that ``loaded`` chooses as ``agent`` (the same sets of choices over 30 tie draws,
+    none among the banned CRMs) at every history of ``records`` with a CRM that erred since
+    the contacts last moved; return how many such histories there were."""
+    enc, checked = encoder_for(task, k), 0
+    for r in records:
+        h, banned = enc.start(r.first_obs), frozenset()
+        for a, o, erred in zip(r.actions, r.observations, r.errors):
+            if banned:
+                s = enc.encode(h)
+                mine = {agent.greedy(s, np.random.default_rng(i), banned) for i in range(30)}
+                saved = {loaded.greedy(s, np.random.default_rng(i), banned) for i in range(30)}
+                assert mine == saved and not mine & banned
+                checked += 1
+            h, banned = enc.push(h, a, o), banned | {a} if erred else frozenset()
+    return checked
 
 
 def _repeats(record) -> int:
@@ -85,18 +103,7 @@ def test_the_saved_policy_acts_as_the_learner(handle, tmp_path):
     assert doc["version"] == 4 and doc["skip_errored"] is True and "ranked" in doc["backoff"]
     loaded = GreedyPolicy.load(path)
     assert loaded.skip_errored and loaded.backoff is not None and loaded.backoff.ranked is not None
-    enc, checked = encoder_for(task, 2), 0
-    for r in _records(task, agent, worlds):
-        h, banned = enc.start(r.first_obs), frozenset()
-        for a, o, erred in zip(r.actions, r.observations, r.errors):
-            s = enc.encode(h)
-            if banned:
-                mine = {agent.greedy(s, np.random.default_rng(i), banned) for i in range(30)}
-                saved = {loaded.greedy(s, np.random.default_rng(i), banned) for i in range(30)}
-                assert mine == saved and not mine & banned
-                checked += 1
-            h, banned = enc.push(h, a, o), banned | {a} if erred else frozenset()
-    assert checked > 20
+    assert _choices_after_errors(task, 2, agent, loaded, _records(task, agent, worlds)) > 20
     d = task.discretizer
     o, palm = d.compose((1, 1, 0), Error.NONE), d.compose((1, 1, 0), Error.PALM)
     first = loaded.predict([o], [])
@@ -169,33 +176,17 @@ def test_every_model_based_learner_takes_the_rule(learner, tmp_path):
     params = {"symmetric": True, "skip_errored": True}
     agent = train_trials(task, learner, trials=1, episodes=300, seed=3, k=1, eval_episodes=0, params=params).agents[0]
     assert agent.skip_errored and agent.inner.params()["skip_errored"] is True
-    enc, worlds = encoder_for(task, 1), sample_starts(task, 60, 10_000)
-
-    def records():
-        return episode_records(
-            task, lambda: LearnerPolicy(agent, enc, np.random.default_rng(0), learn=False), worlds, 0
-        )
-
-    skipping = records()
+    worlds = sample_starts(task, 60, 10_000)
+    skipping = _records(task, agent, worlds, k=1)
     agent.inner.skip_errored = False
     try:
-        plain = records()
+        plain = _records(task, agent, worlds, k=1)
     finally:
         agent.inner.skip_errored = True
     assert sum(_repeats(r) for r in skipping) == 0 < sum(_repeats(r) for r in plain)
     loaded = GreedyPolicy.load(GreedyPolicy.from_agent(task, 1, agent).save(tmp_path / "p.json"))
     assert loaded.skip_errored and loaded.backoff is None
-    checked = 0
-    for r in skipping:
-        h, banned = enc.start(r.first_obs), frozenset()
-        for a, o, erred in zip(r.actions, r.observations, r.errors):
-            if banned:
-                s = enc.encode(h)
-                mine = {agent.greedy(s, np.random.default_rng(i), banned) for i in range(30)}
-                assert mine == {loaded.greedy(s, np.random.default_rng(i), banned) for i in range(30)}
-                checked += 1
-            h, banned = enc.push(h, a, o), banned | {a} if erred else frozenset()
-    assert checked > 10
+    assert _choices_after_errors(task, 1, agent, loaded, skipping) > 10
 
 
 @pytest.mark.parametrize("learner", ["model-vi", "pooled-vi", "refine-vi"])

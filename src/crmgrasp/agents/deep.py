@@ -34,7 +34,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from crmgrasp._validation import CrmgraspError, require_extra
+from crmgrasp._validation import CrmgraspError, boolean, require_extra
 from crmgrasp.agents.training import checkpoint_generators, checkpoints_to_within
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import Error
@@ -118,8 +118,7 @@ class RecurrentPPOConfig:
     [`FlatCRMAction`][crmgrasp.envs.continuous.FlatCRMAction]) instead of its CRMs."""
 
     def __post_init__(self) -> None:
-        if not isinstance(self.continuous, bool):
-            raise CrmgraspError(f"RecurrentPPO continuous must be true or false, got {self.continuous!r}")
+        boolean(self.continuous, "RecurrentPPO continuous")
         for f in fields(self):
             if f.name == "continuous":
                 continue

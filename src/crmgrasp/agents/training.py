@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from crmgrasp._progress import Progress
-from crmgrasp._validation import CrmgraspError, integer
+from crmgrasp._validation import CrmgraspError, boolean, integer
 from crmgrasp.agents.backoff import BackoffVI
 from crmgrasp.agents.base import Agent, LearnerPolicy
 from crmgrasp.agents.baselines import FixedSequence, RandomAgent
@@ -143,9 +143,7 @@ def build_agent(task: Task, encoder: KOrderEncoder, name: str, params: dict[str,
     (`set_prior`). The prior is computed once
     per setting and reused by every trial."""
     p = dict(params or {})
-    symmetric = p.pop("symmetric", False)
-    if not isinstance(symmetric, bool):
-        raise CrmgraspError(f"symmetric must be true or false, got {symmetric!r}")
+    symmetric = boolean(p.pop("symmetric", False), "symmetric")
     prior = {key: p.pop(key) for key in PRIOR_KEYS if key in p}
     agent = make_agent(name, len(task.actions), **p)
     if prior and not isinstance(agent, ModelVI):

@@ -24,7 +24,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from crmgrasp._validation import CrmgraspError, finite, non_negative
+from crmgrasp._validation import CrmgraspError, boolean, finite, non_negative
 from crmgrasp.model.contacts import Config, Contact, Grip, check_contacts, make_config
 from crmgrasp.model.hand import Error
 
@@ -232,8 +232,7 @@ class Discretizer:
         for key in thresholds:
             if key not in names:
                 raise CrmgraspError(f"unknown observation {key!r} in the bins; known: {', '.join(names)}")
-        if not isinstance(abs_moments, bool):
-            raise CrmgraspError(f"abs_moments must be true or false, got {abs_moments!r}")
+        boolean(abs_moments, "abs_moments")
         th = tuple(_thresholds(thresholds.get(n, DEFAULT_MOMENT if i else DEFAULT_RHO), n) for i, n in enumerate(names))
         strides = [len(Error)]
         for t in reversed(th[1:]):
