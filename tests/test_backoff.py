@@ -71,6 +71,22 @@ def test_planning_model_blends_own_counts_with_the_short_level(box):
     assert len(judge.tried[("L", h)]) >= 1
 
 
+def test_the_posterior_draw_is_one_gamma_draw_per_pseudo_count_in_order():
+    """The acting model's draw: each entry's pseudo-counts ``c`` become ``Gamma(c, 1) + 1e-300``,
+    entry after entry, outcome after outcome; drawn in one call, the numbers are those of
+    successive scalar draws from the same generator, and the generator ends in the same state."""
+    shapes = np.random.default_rng(5).uniform(0.01, 4.0, 40).tolist()
+    entries = [
+        (("L", i), i % 3, {(-1.0, ("S", j), False): c for j, c in enumerate(shapes[4 * i : 4 * i + 4])})
+        for i in range(10)
+    ]
+    one, scalar = np.random.default_rng(9), np.random.default_rng(9)
+    BackoffVI._draw(entries, one)
+    expected = [float(scalar.gamma(c)) + 1e-300 for c in shapes]
+    assert [v for _, _, e in entries for v in e.values()] == expected
+    assert one.random() == scalar.random()
+
+
 @pytest.mark.parametrize("middle", [False, True])
 def test_the_middle_level_pools_histories_with_the_same_last_two_crms(box, middle):
     """k = 3. History ``h`` never tried CRM 1; ``h2`` (the same last two CRMs and

@@ -158,6 +158,9 @@ class BackoffVI(TabularAgent):
         self._short_sym: SymmetricAgent | None = None
         self._short_frame: HistoryFrame | None = None
         self._suffix: dict[int, int] = {}
+        self._suffix_node: dict[int, tuple[Node, bool]] = {}
+        self._seen: dict[tuple[int, int, int], tuple[int, ...]] = {}
+        self._next: dict[tuple[int, int, int], int] = {}
         self._outcomes: dict[tuple[int, int], list[tuple[float, bool, float, tuple[int, ...]]]] = {}
         self._mid_counts: dict[tuple[int, int], dict[tuple[float, int, bool], float]] = {}
         self._mid: dict[tuple[int, int], dict[tuple[float, int, bool], float]] = {}
@@ -190,6 +193,7 @@ class BackoffVI(TabularAgent):
         task = frame.task
         short_enc = KOrderEncoder(enc.n_obs, enc.n_actions, 1)
         self._frame = frame
+        self._suffix_node, self._next, self._seen = {}, {}, {}
         if frame.symmetric is not None:
             self._short_sym = SymmetricAgent(self.short, task, short_enc)
             self._amap = list(task.symmetry.actions)  # type: ignore[union-attr]
@@ -221,7 +225,7 @@ class BackoffVI(TabularAgent):
         """The node history ``s`` acts from among ``nodes`` (its own, else its suffix's)."""
         if ("L", s) in nodes:
             return ("L", s), False
-        node, flip = self._short_node(self.suffix(s))
+        node, flip = self._suffix_short(s)
         return (node, flip) if node in nodes else (None, False)
 
     # ----------------------------------------------------------------- the loop
@@ -292,6 +296,7 @@ class BackoffVI(TabularAgent):
         for (s1, b), entry in short.model.items():
             self._add(("S", s1), b, {(r, ("S", t2), t): c for (r, t2, t), c in entry.items()})
         known = set(longs)
+        entries: list[tuple[Node, int, dict[Any, float]]] = []
         for s in longs:
             for b in range(n):
                 entry = self._long_entry(s, b, known)
@@ -300,12 +305,27 @@ class BackoffVI(TabularAgent):
                     if bonus:  # a grasp stays possible in the draw
                         grasp: Any = (self._bound()[0].task.grasp_reward, ("L", s), True)
                         entry[grasp] = entry.get(grasp, 0.0) + bonus
-                    entry = {o: float(rng.gamma(c)) + 1e-300 for o, c in entry.items()}
                 if entry:
-                    self._add(("L", s), b, entry)
+                    entries.append((("L", s), b, entry))
+        if rng is not None and entries:
+            self._draw(entries, rng)
+        for node, b, entry in entries:
+            self._add(node, b, entry)
         judge._plan()
         self._solved = True
         return judge
+
+    @staticmethod
+    def _draw(entries: list[tuple[Node, int, dict[Any, float]]], rng: np.random.Generator) -> None:
+        """Replace each entry's pseudo-counts ``c`` by a draw ``Gamma(c, 1)`` (plus 1e-300, so
+        that no outcome is drawn impossible), in place: normalised, the draws of one entry
+        are a ``Dirichlet(c)`` draw. One call to ``rng.gamma`` over all entries, in order,
+        draws the numbers successive scalar calls would."""
+        shapes = [c for _, _, entry in entries for c in entry.values()]
+        draws = iter((rng.gamma(np.array(shapes, dtype=np.float64)) + 1e-300).tolist())
+        for _, _, entry in entries:
+            for o in entry:
+                entry[o] = next(draws)
 
     def _add(self, node: Node, b: int, entry: dict[Any, float]) -> None:
         self.judge.model[(node, b)] = entry  # type: ignore[index]
@@ -313,12 +333,27 @@ class BackoffVI(TabularAgent):
 
     def _route(self, s2: int, known: set[int]) -> Node:
         """The node an outcome history leads to: its own if it has data, else its suffix's."""
-        return ("L", s2) if s2 in known else self._short_node(self.suffix(s2))[0]
+        return ("L", s2) if s2 in known else self._suffix_short(s2)[0]
+
+    def _suffix_short(self, s: int) -> tuple[Node, bool]:
+        """The short node of history ``s``'s suffix and whether it is the suffix's mirror
+        image, remembered (a function of the code alone)."""
+        v = self._suffix_node.get(s)
+        if v is None:
+            v = self._suffix_node[s] = self._short_node(self.suffix(s))
+        return v
+
+    def _next_state(self, s: int, b: int, obs: int) -> int:
+        """``frame.next_state(s, b, obs)``, remembered (a function of the codes alone)."""
+        key = (s, b, obs)
+        t = self._next.get(key)
+        if t is None:
+            t = self._next[key] = self._bound()[0].next_state(s, b, obs)
+        return t
 
     def _long_entry(self, s: int, b: int, known: set[int]) -> dict[Any, float]:
         """``n(h, b, .) + beta p_1(. | h_1, b)`` with outcomes routed to nodes (``p_1``
         alone where ``h`` never tried ``b``; empty where neither level has data)."""
-        frame = self._bound()[0]
         entry: dict[Any, float] = {}
         own = self.counts.get((s, b))
         for (r, s2, t), c in (own or {}).items():
@@ -330,16 +365,16 @@ class BackoffVI(TabularAgent):
         mid = self._middle_outcomes(s, b) if self.middle else None
         if mid:
             for (r, obs, t), p in mid.items():
-                o = (r, self._route(frame.next_state(s, b, obs), known), t)
+                o = (r, self._route(self._next_state(s, b, obs), known), t)
                 entry[o] = entry.get(o, 0.0) + weight * p
             return entry
-        (_, s1), flip = self._short_node(self.suffix(s))
+        (_, s1), flip = self._suffix_short(s)
         outcomes = self._short_outcomes(s1, self._amap[b] if flip else b)
         if not outcomes:
             return entry
         for r, t, p, seen in outcomes:
             for obs in seen:
-                s2 = frame.next_state(s, b, self._omap[obs] if flip else obs)
+                s2 = self._next_state(s, b, self._omap[obs] if flip else obs)
                 o = (r, self._route(s2, known), t)
                 entry[o] = entry.get(o, 0.0) + weight * p / len(seen)
         return entry
@@ -375,7 +410,7 @@ class BackoffVI(TabularAgent):
             return out
         counts = self._mid_counts[key]
         blend = dict(counts)
-        (_, s1), flip = self._short_node(self.suffix(s))
+        (_, s1), flip = self._suffix_short(s)
         for r, t, p, seen in self._short_outcomes(s1, self._amap[b] if flip else b):
             for obs in seen:
                 o = (r, self._omap[obs] if flip else obs, t)
@@ -392,7 +427,13 @@ class BackoffVI(TabularAgent):
             _, short_frame = self._bound()
             pooled = self.short.greedy_model().model.get((s1, b1)) or {}
             total = sum(pooled.values())
-            out = [(r, t, c / total, short_frame.outcome_observations(s1, b1, t2)) for (r, t2, t), c in pooled.items()]
+            seen = self._seen
+            out = []
+            for (r, t2, t), c in pooled.items():
+                obs = seen.get((s1, b1, t2))
+                if obs is None:  # a function of the codes alone: remembered
+                    obs = seen[(s1, b1, t2)] = short_frame.outcome_observations(s1, b1, t2)
+                out.append((r, t, c / total, obs))
             self._outcomes[(s1, b1)] = out
         return out
 

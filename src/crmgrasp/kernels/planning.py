@@ -32,15 +32,16 @@ def value_iteration(agent: Any, tol: float) -> int:
     out_r: list[float] = []
     out_row: list[int] = []
     out_t: list[bool] = []
+    add_p, add_r, add_row, add_t, index = out_p.append, out_r.append, out_row.append, out_t.append, row.get
     for (s, a), cs in agent.model.items():
         total = sum(cs.values())
         pair_row.append(row[s])
         pair_a.append(a)
         for (r, s2, t), c in cs.items():
-            out_p.append(c / total)
-            out_r.append(r)
-            out_row.append(row.get(s2, -1))
-            out_t.append(t)
+            add_p(c / total)
+            add_r(r)
+            add_row(index(s2, -1))
+            add_t(t)
         first.append(len(out_p))
     rows, cols = np.array(pair_row, dtype=np.int64), np.array(pair_a, dtype=np.int64)
     done = _vi_jit.sweeps(
