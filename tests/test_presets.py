@@ -155,3 +155,6 @@ def test_a_preset_sets_its_agent_parameters_where_the_user_gave_none(tmp_path):
     assert json.loads((tmp_path / "d" / "policy.json").read_text())["version"] == 4
     assert main([*base, "--preset", "families", "--skip-errored", "false", "--out", str(tmp_path / "e")]) == 0
     assert json.loads((tmp_path / "e" / "run.json").read_text())["config"]["params"]["skip_errored"] is False
+    assert main([*base, "--preset", "families", "--plan-every", "5", "--out", str(tmp_path / "f")]) == 0
+    params = json.loads((tmp_path / "f" / "run.json").read_text())["config"]["params"]
+    assert params["plan_every"] == 5 and params["skip_errored"] is True  # the user's option and the preset's
