@@ -158,9 +158,10 @@ class BackoffVI(TabularAgent):
         self._short_sym: SymmetricAgent | None = None
         self._short_frame: HistoryFrame | None = None
         self._suffix: dict[int, int] = {}
-        self._suffix_node: dict[int, tuple[Node, bool]] = {}
-        self._seen: dict[tuple[int, int, int], tuple[int, ...]] = {}
+        # functions of the history codes alone, remembered (emptied when the learner is bound)
+        self._short_of: dict[int, tuple[Node, bool]] = {}
         self._next: dict[tuple[int, int, int], int] = {}
+        self._seen: dict[tuple[int, int, int], tuple[int, ...]] = {}
         self._outcomes: dict[tuple[int, int], list[tuple[float, bool, float, tuple[int, ...]]]] = {}
         self._mid_counts: dict[tuple[int, int], dict[tuple[float, int, bool], float]] = {}
         self._mid: dict[tuple[int, int], dict[tuple[float, int, bool], float]] = {}
@@ -193,7 +194,7 @@ class BackoffVI(TabularAgent):
         task = frame.task
         short_enc = KOrderEncoder(enc.n_obs, enc.n_actions, 1)
         self._frame = frame
-        self._suffix_node, self._next, self._seen = {}, {}, {}
+        self._suffix, self._short_of, self._next, self._seen = {}, {}, {}, {}
         if frame.symmetric is not None:
             self._short_sym = SymmetricAgent(self.short, task, short_enc)
             self._amap = list(task.symmetry.actions)  # type: ignore[union-attr]
@@ -338,9 +339,9 @@ class BackoffVI(TabularAgent):
     def _suffix_short(self, s: int) -> tuple[Node, bool]:
         """The short node of history ``s``'s suffix and whether it is the suffix's mirror
         image, remembered (a function of the code alone)."""
-        v = self._suffix_node.get(s)
+        v = self._short_of.get(s)
         if v is None:
-            v = self._suffix_node[s] = self._short_node(self.suffix(s))
+            v = self._short_of[s] = self._short_node(self.suffix(s))
         return v
 
     def _next_state(self, s: int, b: int, obs: int) -> int:
@@ -350,6 +351,15 @@ class BackoffVI(TabularAgent):
         if t is None:
             t = self._next[key] = self._bound()[0].next_state(s, b, obs)
         return t
+
+    def _short_seen(self, s1: int, b1: int, t2: int) -> tuple[int, ...]:
+        """``outcome_observations(s1, b1, t2)``, remembered (a function of the codes
+        alone)."""
+        key = (s1, b1, t2)
+        obs = self._seen.get(key)
+        if obs is None:
+            obs = self._seen[key] = self._bound()[1].outcome_observations(s1, b1, t2)
+        return obs
 
     def _long_entry(self, s: int, b: int, known: set[int]) -> dict[Any, float]:
         """``n(h, b, .) + beta p_1(. | h_1, b)`` with outcomes routed to nodes (``p_1``
@@ -424,16 +434,9 @@ class BackoffVI(TabularAgent):
         and the observations (in ``s1``'s frame) that can have led there (cached per plan)."""
         out = self._outcomes.get((s1, b1))
         if out is None:
-            _, short_frame = self._bound()
             pooled = self.short.greedy_model().model.get((s1, b1)) or {}
             total = sum(pooled.values())
-            seen = self._seen
-            out = []
-            for (r, t2, t), c in pooled.items():
-                obs = seen.get((s1, b1, t2))
-                if obs is None:  # a function of the codes alone: remembered
-                    obs = seen[(s1, b1, t2)] = short_frame.outcome_observations(s1, b1, t2)
-                out.append((r, t, c / total, obs))
+            out = [(r, t, c / total, self._short_seen(s1, b1, t2)) for (r, t2, t), c in pooled.items()]
             self._outcomes[(s1, b1)] = out
         return out
 
