@@ -71,6 +71,28 @@ def test_planning_model_blends_own_counts_with_the_short_level(box):
     assert len(judge.tried[("L", h)]) >= 1
 
 
+@pytest.mark.parametrize("gap", [2, 400])
+def test_decay_weighs_a_count_by_its_age_in_episodes(box, gap):
+    """With ``decay`` = 0.5 a count made ``gap`` episodes before the plan weighs ``0.5**gap``
+    and one made in the plan's episode weighs 1 (``beta`` = 0: the own counts alone). At
+    ``gap`` = 400 the stored counts pass 1e100 and are rescaled on the way; the weights hold."""
+    enc, d, rng = encoder_for(box, 2), box.discretizer, np.random.default_rng(0)
+    o, o2 = d.compose((1, 0, 0), Error.NONE), d.compose((0, 0, 0), Error.NONE)
+    agent = _agent(box, beta=0.0, decay=0.5)
+    h = enc.encode(enc.push(enc.start(o2), 0, o))
+    after = enc.encode(enc.push(enc.decode(h), 1, o2))
+    agent.begin_episode()
+    agent.update(h, 1, -1.0, after, 0, False, rng)  # episode 1: to o2
+    for _ in range(gap):
+        agent.begin_episode()
+    agent.update(h, 1, -1.0, h, None, True, rng)  # episode 1 + gap: grasped
+    entry = agent._planned().model[(("L", h), 1)]
+    grasped = sum(c for (_, _, t), c in entry.items() if t)
+    moved = sum(c for (_, _, t), c in entry.items() if not t)
+    assert grasped == pytest.approx(1.0) and moved == pytest.approx(0.5**gap, rel=1e-12)
+    assert (agent._base > 0) == (gap == 400) and agent.params()["decay"] == 0.5  # rescaled or not
+
+
 def test_the_posterior_draw_is_one_gamma_draw_per_pseudo_count_in_order():
     """The acting model's draw: each entry's pseudo-counts ``c`` become ``Gamma(c, 1) + 1e-300``,
     entry after entry, outcome after outcome; drawn in one call, the numbers are those of
@@ -184,6 +206,11 @@ def test_bad_settings_are_one_line_errors(box):
         make_agent("backoff-vi", 4, explore_tried=-1.0)
     with pytest.raises(CrmgraspError, match="explore_tried"):
         make_agent("backoff-vi", 4, explore_tried=float("nan"))
+    for bad in (0.0, -0.5, float("nan")):
+        with pytest.raises(CrmgraspError, match="decay must be"):
+            make_agent("backoff-vi", 4, decay=bad)
+    with pytest.raises(CrmgraspError, match=r"decay must be in \(0, 1\], got 1.5"):
+        make_agent("backoff-vi", 4, decay=1.5)
     with pytest.raises(CrmgraspError, match="needs its state structure"):
         make_agent("backoff-vi", 4).update(0, 0, -1.0, 1, 0, False, np.random.default_rng(0))
 

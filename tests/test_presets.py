@@ -158,3 +158,5 @@ def test_a_preset_sets_its_agent_parameters_where_the_user_gave_none(tmp_path):
     assert main([*base, "--preset", "families", "--plan-every", "5", "--out", str(tmp_path / "f")]) == 0
     params = json.loads((tmp_path / "f" / "run.json").read_text())["config"]["params"]
     assert params["plan_every"] == 5 and params["skip_errored"] is True  # the user's option and the preset's
+    assert main([*base, "--preset", "families", "--decay", "0.999", "--out", str(tmp_path / "g")]) == 0
+    assert json.loads((tmp_path / "g" / "run.json").read_text())["config"]["params"]["decay"] == 0.999

@@ -58,7 +58,7 @@ from typing import Any
 
 import numpy as np
 
-from crmgrasp._validation import CrmgraspError, boolean, integer, non_negative
+from crmgrasp._validation import CrmgraspError, boolean, integer, non_negative, positive
 from crmgrasp.agents.base import allowed_choice, greedy_choice
 from crmgrasp.agents.model_based import ModelVI, Outcome
 from crmgrasp.agents.pooled import HistoryFrame, PooledVI
@@ -118,6 +118,13 @@ class BackoffVI(TabularAgent):
         to err there ([`LearnerPolicy`][crmgrasp.agents.base.LearnerPolicy]). A history the
         learner's window cannot tell apart otherwise (after two errors, say, with k = 2) then
         no longer loops on the same failing CRMs.
+    decay
+        Forgetting of the long level, in ``(0, 1]`` (1, the default: none). A count made in
+        episode ``e`` weighs ``decay ** (E - e)`` when the model is planned in episode ``E``,
+        so the long model follows the recent acting policies. Which worlds lie behind a
+        history shorter than the episode depends on the policy that led there; old counts
+        describe the policies of early training. With ``decay`` = 0.999 the counts of about
+        the last 1,000 episodes weigh most.
     """
 
     name = "backoff-vi"
@@ -137,8 +144,12 @@ class BackoffVI(TabularAgent):
         middle: bool = False,
         explore_tried: float = 0.0,
         skip_errored: bool = False,
+        decay: float = 1.0,
     ) -> None:
         super().__init__(n_actions, gamma=gamma)
+        self.decay = positive(decay, "decay")
+        if self.decay > 1.0:
+            raise CrmgraspError(f"decay must be in (0, 1], got {self.decay}")
         self.explore = non_negative(explore, "explore")
         self.explore_tried = non_negative(explore_tried, "explore_tried")
         self.beta = non_negative(beta, "beta")
@@ -150,6 +161,8 @@ class BackoffVI(TabularAgent):
         self.short.plan_acting = False  # only its greedy model is read
         self.counts: dict[tuple[int, int], dict[Outcome, float]] = {}
         self.episodes = 0
+        self._base = 0  # the episode whose counts are stored with weight 1 (decay < 1)
+        self._unit = self._scale = 1.0  # weight of a new count; factor that turns stored counts into weights
         self.sample = boolean(sample, "sample")
         self._replan = False
         self._act: dict[Any, list[float]] = {}
@@ -183,6 +196,7 @@ class BackoffVI(TabularAgent):
             "explore_tried": self.explore_tried,
             "middle": self.middle,
             "skip_errored": self.skip_errored,
+            "decay": self.decay,
         }
 
     def bind(self, frame: HistoryFrame) -> None:
@@ -235,6 +249,12 @@ class BackoffVI(TabularAgent):
         self.episodes += 1
         e = self.episodes
         self._replan = e <= self.plan_every or e % self.plan_every == 0
+        if self.decay < 1.0:
+            self._unit = self.decay ** (self._base - e)
+            if self._unit > 1e100:  # store the counts at today's weights, far from overflow
+                self._scale = self.decay ** (e - self._base)
+                self.counts = {key: {o: c * self._scale for o, c in row.items()} for key, row in self.counts.items()}
+                self._base, self._unit = e, 1.0
 
     def act(self, state: int, rng: np.random.Generator) -> int:
         """The best action by the planned acting values (uniform where there is no node); at
@@ -275,7 +295,7 @@ class BackoffVI(TabularAgent):
         self._mark(s, a)
         counts = self.counts.setdefault((s, a), {})
         o = (r, s2, terminal)
-        counts[o] = counts.get(o, 0.0) + 1.0
+        counts[o] = counts.get(o, 0.0) + self._unit
         (self._short_sym or self.short).update(self.suffix(s), a, r, self.suffix(s2), a2, terminal, rng)
         self._solved = False
 
@@ -287,6 +307,7 @@ class BackoffVI(TabularAgent):
         short = self.short.greedy_model()
         judge, n = self.judge, self.n_actions
         judge.model, judge.tried = {}, {}
+        self._scale = self.decay ** (self.episodes - self._base) if self.decay < 1.0 else 1.0
         longs = sorted({s for s, _ in self.counts})
         nodes: list[Node] = [("S", s1) for s1 in short.q] + [("L", s) for s in longs]
         judge.q = {node: [judge.q_act] * n for node in nodes}  # type: ignore[misc]
@@ -368,7 +389,7 @@ class BackoffVI(TabularAgent):
         own = self.counts.get((s, b))
         for (r, s2, t), c in (own or {}).items():
             o = (r, self._route(s2, known), t)
-            entry[o] = entry.get(o, 0.0) + c
+            entry[o] = entry.get(o, 0.0) + c * self._scale
         if own and self.beta == 0.0:
             return entry
         weight = self.beta if own else 1.0
@@ -408,7 +429,7 @@ class BackoffVI(TabularAgent):
                 seen = frame.outcome_observations(s, b, s2)
                 for obs in seen:
                     key = (r, obs, t)
-                    row[key] = row.get(key, 0.0) + c / len(seen)
+                    row[key] = row.get(key, 0.0) + c * self._scale / len(seen)
         self._mid_counts, self._mid = pooled, {}
 
     def _middle_outcomes(self, s: int, b: int) -> dict[tuple[float, int, bool], float] | None:
