@@ -252,8 +252,8 @@ class BackoffVI(TabularAgent):
         if self.decay < 1.0:
             self._unit = self.decay ** (self._base - e)
             if self._unit > 1e100:  # store the counts at today's weights, far from overflow
-                self._scale = self.decay ** (e - self._base)
-                self.counts = {key: {o: c * self._scale for o, c in row.items()} for key, row in self.counts.items()}
+                scale = self.decay ** (e - self._base)
+                self.counts = {key: {o: c * scale for o, c in row.items()} for key, row in self.counts.items()}
                 self._base, self._unit = e, 1.0
 
     def act(self, state: int, rng: np.random.Generator) -> int:
