@@ -93,6 +93,21 @@ def test_decay_weighs_a_count_by_its_age_in_episodes(box, gap):
     assert (agent._base > 0) == (gap == 400) and agent.params()["decay"] == 0.5  # rescaled or not
 
 
+def test_mean_after_stops_the_draws_after_its_episode(box, monkeypatch):
+    """With ``mean_after`` = 3 and ``plan_every`` = 1, the acting plan draws from the posterior
+    in episodes 1-3 and is the mean model from episode 4 on; ``mean_after`` = 0 draws to the end."""
+    for mean_after, draws in ((3, [1, 2, 3]), (0, [1, 2, 3, 4, 5, 6])):
+        agent = _agent(box, plan_every=1, mean_after=mean_after)
+        drawn: list[int] = []
+        monkeypatch.setattr(agent, "_draw", lambda entries, rng, a=agent, d=drawn: d.append(a.episodes))
+        rng = np.random.default_rng(0)
+        agent.update(0, 1, -1.0, 0, None, True, rng)  # one count, so that every plan has an entry to draw
+        for _ in range(6):
+            agent.begin_episode()
+            agent.act(0, rng)
+        assert drawn == draws and agent.params()["mean_after"] == mean_after
+
+
 def test_the_posterior_draw_is_one_gamma_draw_per_pseudo_count_in_order():
     """The acting model's draw: each entry's pseudo-counts ``c`` become ``Gamma(c, 1) + 1e-300``,
     entry after entry, outcome after outcome; drawn in one call, the numbers are those of
@@ -206,6 +221,8 @@ def test_bad_settings_are_one_line_errors(box):
         make_agent("backoff-vi", 4, explore_tried=-1.0)
     with pytest.raises(CrmgraspError, match="explore_tried"):
         make_agent("backoff-vi", 4, explore_tried=float("nan"))
+    with pytest.raises(CrmgraspError, match="mean_after"):
+        make_agent("backoff-vi", 4, mean_after=-1)
     for bad in (0.0, -0.5, float("nan")):
         with pytest.raises(CrmgraspError, match="decay must be"):
             make_agent("backoff-vi", 4, decay=bad)

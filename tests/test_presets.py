@@ -160,3 +160,5 @@ def test_a_preset_sets_its_agent_parameters_where_the_user_gave_none(tmp_path):
     assert params["plan_every"] == 5 and params["skip_errored"] is True  # the user's option and the preset's
     assert main([*base, "--preset", "families", "--decay", "0.999", "--out", str(tmp_path / "g")]) == 0
     assert json.loads((tmp_path / "g" / "run.json").read_text())["config"]["params"]["decay"] == 0.999
+    assert main([*base, "--preset", "families", "--mean-after", "20", "--out", str(tmp_path / "h")]) == 0
+    assert json.loads((tmp_path / "h" / "run.json").read_text())["config"]["params"]["mean_after"] == 20

@@ -93,6 +93,10 @@ class BackoffVI(TabularAgent):
         Act on a posterior draw of the long level (True, the default) rather than on its
         mean: each long pair's outcome probabilities are drawn from the Dirichlet whose
         parameters are the blended counts ``n(h, a, o) + beta p_1(o | h_1, a)``.
+    mean_after
+        With ``sample``, act on the mean from episode ``mean_after + 1`` on (0, the default:
+        draw to the end). The late episodes then follow the policy the greedy one will be,
+        so the counts of a two-CRM history come from the worlds that policy meets there.
     middle
         Back a long history's model off to its k = 2 suffix first (False, the default: to the
         k = 1 level directly): the counts of every long history with the same last two CRMs and
@@ -145,6 +149,7 @@ class BackoffVI(TabularAgent):
         explore_tried: float = 0.0,
         skip_errored: bool = False,
         decay: float = 1.0,
+        mean_after: int = 0,
     ) -> None:
         super().__init__(n_actions, gamma=gamma)
         self.decay = positive(decay, "decay")
@@ -164,6 +169,7 @@ class BackoffVI(TabularAgent):
         self._base = 0  # the episode whose counts are stored with weight 1 (decay < 1)
         self._unit = self._scale = 1.0  # weight of a new count; factor that turns stored counts into weights
         self.sample = boolean(sample, "sample")
+        self.mean_after = integer(mean_after, "mean_after", 0, 1_000_000_000)
         self._replan = False
         self._act: dict[Any, list[float]] = {}
         self._solved = True
@@ -192,6 +198,7 @@ class BackoffVI(TabularAgent):
             "sweeps": j.sweeps,
             "gamma": self.gamma,
             "sample": self.sample,
+            "mean_after": self.mean_after,
             "explore": self.explore,
             "explore_tried": self.explore_tried,
             "middle": self.middle,
@@ -261,7 +268,7 @@ class BackoffVI(TabularAgent):
         a planning episode's first step, plan them first (on a posterior draw with ``sample``)."""
         if self._replan:
             self._replan = False
-            if self.sample:
+            if self.sample and (not self.mean_after or self.episodes <= self.mean_after):
                 self._solved = False
                 judge = self._planned(rng)
                 self._solved = False

@@ -431,6 +431,7 @@ _AGENT_FLAGS = (
     ("--explore", _number, "pseudo-counts of a grasp in the posterior draw of a CRM a whole history never tried"),
     ("--explore-tried", _number, "pseudo-counts of a grasp in the posterior draw of a CRM a whole history has tried"),
     ("--plan-every", _int(1, 1_000_000), "re-plan the acting draw every N episodes (and before each of the first N)"),
+    ("--mean-after", _int(0, 1_000_000_000), "act on the posterior mean after N episodes instead of a draw (0: never)"),
     ("--decay", _number, "weight factor per episode of a whole-history count, in (0, 1] (1: no forgetting)"),
     (
         "--skip-errored",
