@@ -265,7 +265,8 @@ class BackoffVI(TabularAgent):
 
     def act(self, state: int, rng: np.random.Generator) -> int:
         """The best action by the planned acting values (uniform where there is no node); at
-        a planning episode's first step, plan them first (on a posterior draw with ``sample``)."""
+        a planning episode's first step, plan them first (on a posterior draw with ``sample``, up to
+        episode ``mean_after`` where it is set)."""
         if self._replan:
             self._replan = False
             if self.sample and (not self.mean_after or self.episodes <= self.mean_after):
