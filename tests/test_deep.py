@@ -2,6 +2,7 @@
 
 import csv
 import sys
+import tempfile
 
 import numpy as np
 import pytest
@@ -67,9 +68,11 @@ needs_deep = pytest.mark.skipif(not deep_available(), reason="needs the extra: p
 
 
 @needs_deep
-def test_training_is_deterministic_and_evaluates():
+def test_training_is_deterministic_and_evaluates(tmp_path, monkeypatch):
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     task = make_task("paper-box")
     runs = [train_recurrent_ppo(task, 3, TINY) for _ in range(2)]
+    assert not list(tmp_path.glob("SB3-*"))  # no stable-baselines3 log folder left behind
     np.testing.assert_array_equal(runs[0].episode_steps, runs[1].episode_steps)
     np.testing.assert_array_equal(runs[0].checkpoint_steps, runs[1].checkpoint_steps)
     assert runs[0].episode_steps.sum() <= TINY.total_steps and len(runs[0].checkpoints) == 4  # 512 / (2 * 64)

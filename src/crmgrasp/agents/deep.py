@@ -411,18 +411,22 @@ def train_recurrent_ppo(
 
 def make_model(name: str, env: Any, c: RecurrentPPOConfig, seed: int, budget: int = 0) -> Any:
     """The untrained stable-baselines3 model of deep learner ``name`` on ``env`` (``budget``:
-    SAC's replay buffer, in transitions)."""
+    SAC's replay buffer, in transitions). Its logger writes nowhere: stable-baselines3's
+    default makes a folder under the system's temporary directory for every model."""
     algo = DEEP_AGENTS[name]
     cls = getattr(importlib.import_module(ALGORITHM_MODULES[algo.algorithm]), algo.algorithm)
     common = {"learning_rate": c.learning_rate, "gamma": c.gamma, "seed": seed, "device": "cpu", "verbose": 0}
     if algo.algorithm == "SAC":
         arch = _mlp(c)
         replay = {"batch_size": 64, "learning_starts": c.n_steps, "buffer_size": budget}
-        return cls(algo.policy, env, policy_kwargs=arch, **replay, **common)
-    ppo = {"n_steps": c.n_steps, "batch_size": max(1, c.n_steps * c.n_envs // 4), "n_epochs": c.n_epochs}
-    recurrent = algo.algorithm == "RecurrentPPO"
-    net: dict[str, Any] = {"lstm_hidden_size": c.lstm_hidden, "net_arch": [c.hidden]} if recurrent else _mlp(c)
-    return cls(algo.policy, env, ent_coef=c.ent_coef, policy_kwargs=net, **ppo, **common)
+        model = cls(algo.policy, env, policy_kwargs=arch, **replay, **common)
+    else:
+        ppo = {"n_steps": c.n_steps, "batch_size": max(1, c.n_steps * c.n_envs // 4), "n_epochs": c.n_epochs}
+        recurrent = algo.algorithm == "RecurrentPPO"
+        net: dict[str, Any] = {"lstm_hidden_size": c.lstm_hidden, "net_arch": [c.hidden]} if recurrent else _mlp(c)
+        model = cls(algo.policy, env, ent_coef=c.ent_coef, policy_kwargs=net, **ppo, **common)
+    model.set_logger(importlib.import_module("stable_baselines3.common.logger").Logger(None, []))
+    return model
 
 
 def _mlp(c: RecurrentPPOConfig) -> dict[str, Any]:
