@@ -335,7 +335,7 @@ def test_learn_warns_before_training_an_ungraspable_task(tmp_path, capsys):
 
 
 def test_episodes_to_5pct_lead_with_the_greedy_policy_and_flag_a_noise_bound_curve():
-    from crmgrasp.cli.main import _to_5pct_lines
+    from crmgrasp.cli.learning import _to_5pct_lines
 
     s = {
         "reference_mean_steps": 1.66,
