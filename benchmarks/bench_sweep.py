@@ -21,7 +21,8 @@ import time
 from pathlib import Path
 
 from crmgrasp.experiments.runs import RunFolder
-from crmgrasp.experiments.sweep import run_study, study_from_dict
+from crmgrasp.experiments.study import study_from_dict
+from crmgrasp.experiments.sweep import run_study
 
 
 def _run(doc: dict, jobs: int, executor: str = "local") -> tuple[float, bytes]:

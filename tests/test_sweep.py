@@ -14,7 +14,7 @@ from crmgrasp._validation import CrmgraspError
 from crmgrasp.cli import main
 from crmgrasp.experiments import sweep as sweep_mod
 from crmgrasp.experiments.runs import read_status
-from crmgrasp.experiments.sweep import cell_id, load_study, study_from_dict
+from crmgrasp.experiments.study import cell_id, load_study, study_from_dict
 
 from .signals import default_sigint
 
@@ -71,12 +71,38 @@ def test_grid_and_cells_are_expanded(tmp_path):
         ({"cell": [{"agent": "sarsa", "alpha": True}]}, "alpha must be a finite number, got True"),
         ({"cell": [{"agent": "sarsa", "alpha": float("inf")}]}, "alpha must be finite, got inf"),
         ({"cell": [{"agent": "sarsa", "task": 3}]}, "task must be a string, got 3"),
+        ({"cell": [{"agent": "pooled-vi", "mean_after": 10}]}, "agent 'pooled-vi' takes no mean_after"),
+        ({"cell": [{"agent": "backoff-vi", "mean_after": 1.5}]}, "mean_after must be an integer, got 1.5"),
+        ({"cell": [{"agent": "backoff-vi", "skip_errored": 1}]}, "skip_errored must be true or false, got 1"),
+        ({"cell": [{"agent": "fixed", "sequence": 1}]}, "unknown key 'sequence'"),  # not a scalar parameter
     ],
 )
 def test_bad_studies_are_one_line(doc, message):
     with pytest.raises(CrmgraspError, match=message.replace("[", r"\[")) as err:
         study_from_dict(doc)
     assert "\n" not in str(err.value)
+
+
+def test_every_agents_scalar_parameters_are_cell_keys_and_columns(tmp_path, capsys):
+    """A study sets any registered agent's parameters (backoff-vi's ``beta`` and
+    ``mean_after`` here), which reach the agent and become columns after the first
+    learners' ones."""
+    from crmgrasp.agents.training import AGENTS, agent_parameters
+    from crmgrasp.experiments.study import BASE_KEYS, TABLE_PARAMS, agent_params, table_keys
+
+    wanted = {p for a in AGENTS for p in agent_parameters(a)} - {"sequence"}  # fixed's CRM list
+    assert set(agent_params()) == wanted
+    text = 'name = "b"\ntrials = 1\nepisodes = 30\neval_episodes = 5\n[grid]\nagent = ["backoff-vi"]\n'
+    text += "beta = [0.5, 1.0]\nmean_after = [10]\n"
+    study = load_study(_write(tmp_path, text))
+    assert table_keys(study) == [*BASE_KEYS, *TABLE_PARAMS, "beta", "mean_after"]
+    assert main(["sweep", str(tmp_path / "study.toml"), "--quiet", "--out", str(tmp_path / "out")]) == 0
+    with open(tmp_path / "out" / "cells.csv") as fh:
+        cells = list(csv.DictReader(fh))
+    assert [(c["beta"], c["mean_after"], c["status"]) for c in cells] == [("0.5", "10", "ok"), ("1.0", "10", "ok")]
+    units = sorted((tmp_path / "out" / "units").iterdir())
+    params = [json.loads(u.read_text())["summary"]["params"] for u in units]
+    assert sorted((p["beta"], p["mean_after"]) for p in params) == [(0.5, 10), (1.0, 10)]
 
 
 def test_a_cells_relative_task_file_is_read_beside_the_study(tmp_path, monkeypatch):
