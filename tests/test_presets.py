@@ -120,7 +120,8 @@ def test_learner_presets_fill_what_the_user_left_out():
     box, cup = make_task("paper-box"), make_task("cup-3d")
     assert apply_preset("paper", box) == LearnerChoice("sarsa", 2, False, None)
     assert apply_preset("fastest", box) == LearnerChoice("pooled-vi", 1, True, None)  # from scratch
-    assert apply_preset("families", box) == LearnerChoice("backoff-vi", 2, True, None, (("skip_errored", True),))
+    families = LearnerChoice("backoff-vi", 2, True, None, (("skip_errored", True), ("mean_after", 2000)))
+    assert apply_preset("families", box) == families
     assert apply_preset("fastest", cup) == LearnerChoice("pooled-vi", 1, False, None)  # no symmetry declared
     assert apply_preset("fastest", box, agent="dyna-q", k=2) == LearnerChoice("dyna-q", 2, True, None)
     assert apply_preset("fastest", box, prior_task="mixed").prior_task == "mixed"
@@ -151,7 +152,8 @@ def test_a_preset_sets_its_agent_parameters_where_the_user_gave_none(tmp_path):
     params = json.loads((tmp_path / "c" / "run.json").read_text())["config"]["params"]
     assert params["explore"] == 2.0 and params["explore_tried"] == 0.0
     assert main([*base, "--preset", "families", "--out", str(tmp_path / "d")]) == 0
-    assert json.loads((tmp_path / "d" / "run.json").read_text())["config"]["params"]["skip_errored"] is True
+    params = json.loads((tmp_path / "d" / "run.json").read_text())["config"]["params"]
+    assert params["skip_errored"] is True and params["mean_after"] == 2000
     assert json.loads((tmp_path / "d" / "policy.json").read_text())["version"] == 4
     assert main([*base, "--preset", "families", "--skip-errored", "false", "--out", str(tmp_path / "e")]) == 0
     assert json.loads((tmp_path / "e" / "run.json").read_text())["config"]["params"]["skip_errored"] is False

@@ -45,7 +45,7 @@ class LearnerPreset:
     k: int
     symmetric: bool = False
     description: str = ""
-    params: tuple[tuple[str, float | bool], ...] = ()
+    params: tuple[tuple[str, float | int | bool], ...] = ()
 
 
 PRESETS: dict[str, LearnerPreset] = {
@@ -60,9 +60,10 @@ PRESETS: dict[str, LearnerPreset] = {
         "backoff-vi",
         2,
         symmetric=True,
-        params=(("skip_errored", True),),
+        params=(("skip_errored", True), ("mean_after", 2000)),
         description="backoff-vi, k = 2: two-CRM histories backed off to k = 1, for object families, its greedy "
-        "policy never repeating a CRM that erred since the contacts last moved (skip_errored); from scratch",
+        "policy never repeating a CRM that erred since the contacts last moved (skip_errored), acting on the "
+        "model's posterior mean instead of a draw after episode 2,000 (mean_after); from scratch",
     ),
     "costly-errors": LearnerPreset(
         "backoff-vi",
@@ -85,7 +86,7 @@ class LearnerChoice(NamedTuple):
     k: int
     symmetric: bool
     prior_task: str | None
-    params: tuple[tuple[str, float | bool], ...] = ()
+    params: tuple[tuple[str, float | int | bool], ...] = ()
 
 
 def apply_preset(
