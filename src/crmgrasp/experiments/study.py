@@ -26,7 +26,6 @@ one line naming the file, the cell and the key.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import hashlib
 import itertools
 import json
@@ -40,7 +39,17 @@ from crmgrasp._io import read_bounded
 from crmgrasp._validation import SEED_MAX, CrmgraspError, integer, shown
 from crmgrasp.tasks.schema import checked_name, typed
 
-__all__ = ["Study", "load_study", "study_from_dict", "cell_id", "cell_keys", "agent_params", "BASE_KEYS"]
+__all__ = [
+    "Study",
+    "load_study",
+    "study_from_dict",
+    "cell_id",
+    "cell_keys",
+    "table_keys",
+    "agent_params",
+    "BASE_KEYS",
+    "TABLE_PARAMS",
+]
 
 BASE_KEYS = ("task", "start_preset", "grasp_reward", "agent", "k", "symmetric")
 """The cell keys that are not an agent's parameters."""
@@ -52,11 +61,11 @@ learners); a study's other parameters follow them where a cell sets them."""
 _DEFAULT_CELL = {"task": "paper-box", "agent": "sarsa", "k": 2}
 
 
-@functools.cache
 def agent_params() -> tuple[str, ...]:
     """Every registered agent's keyword parameters whose defaults are scalars (booleans,
     integers, floats, strings), in the registry's order: what a cell may set besides
-    [`BASE_KEYS`][]."""
+    [`BASE_KEYS`][]. Read from the registry at each call, so an agent registered later
+    counts."""
     from crmgrasp.agents.training import AGENTS, agent_parameters, parameter_defaults
 
     names = dict.fromkeys(p for agent in AGENTS for p in agent_parameters(agent))
