@@ -11,10 +11,12 @@ configuration's least friction as in a fresh run. Times are per step, counting t
 (a new solid and a start, whose acceptance needs the start's least friction), and for the
 step alone (``env.step`` calls only, each timed on its own in the same pass; CartPole's too).
 
-The least friction alone, as well: the compiled rule (``least_friction`` of
-``crmgrasp.kernels._closure_jit``, no cache) and the readable one (``least_friction_3d``)
-on the configurations of ``steps`` random actions of each task (the least of ``rounds``
-passes; the readable rule on the first 50 configurations, once).
+The least friction alone, as well, on the distinct configurations of ``steps`` random
+actions of each task: the compiled rule (``least_friction`` of
+``crmgrasp.kernels._closure_jit``, no cache; the least of ``rounds`` passes) with the
+search's guesses and, as the peer, without them (the plain bisection, the rule before the
+guesses), the readable rule (``least_friction_3d``, first 50 configurations, once), linear
+programs per configuration both ways, and how far the two answers lie apart.
 
 Prints one JSON object (microseconds and ratios). Usage:
 ``python benchmarks/bench_tripod.py [STEPS] [ROUNDS]`` (defaults 1000 and 3).
@@ -54,12 +56,8 @@ def _round(env: Any, actions: list[int]) -> tuple[float, float]:
     return (clock() - t0) / len(actions), alone / len(actions)
 
 
-def _least_friction_alone(env_id: str, steps: int, rounds: int) -> tuple[float, float]:
-    """Microseconds per configuration of the compiled and the readable least friction, on
-    the configurations a random-action run of ``env_id`` visits."""
-    import crmgrasp.kernels._closure_jit as jit
-    from crmgrasp.kernels.closure import closure_params
-
+def _configurations(env_id: str, steps: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The distinct configurations of ``steps`` random actions of ``env_id`` (seed 0 and 1)."""
     env = gym.make(env_id)
     _, info = env.reset(seed=0)
     configs = [info["config"]]
@@ -68,19 +66,68 @@ def _least_friction_alone(env_id: str, steps: int, rounds: int) -> tuple[float, 
         configs.append(info["config"])
         if term or trunc:
             configs.append(env.reset()[1]["config"])
-    pairs = [(np.array([c.x for c in cfg]), np.array([c.n for c in cfg])) for cfg in configs]
-    tol = closure_params()
-    jit.least_friction(*pairs[0], EDGES, tol)  # compiled before timing
-    compiled = float("inf")
+    return [(np.array([c.x for c in cfg]), np.array([c.n for c in cfg])) for cfg in dict.fromkeys(configs)]
+
+
+def _least_friction_alone(env_id: str, steps: int, rounds: int) -> dict[str, float]:
+    """The least friction on the distinct configurations a random-action run of ``env_id``
+    visits: microseconds per configuration, compiled (the least of ``rounds`` passes) with the
+    search's guesses and without (``GUIDE_MAX`` = 0: the plain bisection, the rule before the
+    guesses, as a peer), and readable (the first 50 configurations, once); linear programs per
+    configuration, counted on the readable rule, both ways; and how far the two answers lie
+    apart (the largest relative gap above friction 1e-6, and how many fall on the other side of
+    the task's ``mu_goal``)."""
+    import crmgrasp.kernels._closure_jit as jit
+    from crmgrasp.kernels.closure import closure_params
+    from crmgrasp.model import quality3d
+
+    pairs = _configurations(env_id, steps)
+    guided, plain = closure_params(), closure_params()
+    plain[jit.GUIDE_MAX] = 0.0
+    jit.least_friction(*pairs[0], EDGES, guided)  # compiled before timing
+    best = {"guided": float("inf"), "plain": float("inf")}
     for _ in range(rounds):
-        t0 = time.perf_counter()
-        for p, n in pairs:
-            jit.least_friction(p, n, EDGES, tol)
-        compiled = min(compiled, (time.perf_counter() - t0) / len(pairs))
+        for name, tol in (("guided", guided), ("plain", plain)):
+            t0 = time.perf_counter()
+            for p, n in pairs:
+                jit.least_friction(p, n, EDGES, tol)
+            best[name] = min(best[name], (time.perf_counter() - t0) / len(pairs))
+    goal = gym.make(env_id).unwrapped.task.mu_goal
+    gap, crossed = 0.0, 0
+    for p, n in pairs:
+        new, old = jit.least_friction(p, n, EDGES, guided), jit.least_friction(p, n, EDGES, plain)
+        crossed += (new <= goal) != (old <= goal)
+        if new != old and min(new, old) > 1e-6:
+            gap = max(gap, abs(new - old) / old)
+    counted = {"guided": 0, "plain": 0}
+    program = quality3d.max_least_weight
     t0 = time.perf_counter()
     for p, n in pairs[:50]:
         least_friction_3d(p, n)
-    return compiled * 1e6, (time.perf_counter() - t0) / len(pairs[:50]) * 1e6
+    readable = (time.perf_counter() - t0) / len(pairs[:50])
+    for name, cap in (("guided", quality3d.GUIDE_MAX), ("plain", 0)):
+
+        def counting(w: np.ndarray, _name: str = name) -> float:
+            counted[_name] += 1
+            return program(w)
+
+        quality3d.max_least_weight, quality3d.GUIDE_MAX = counting, cap
+        try:
+            for p, n in pairs[:50]:
+                least_friction_3d(p, n)
+        finally:
+            quality3d.max_least_weight, quality3d.GUIDE_MAX = program, guided[jit.GUIDE_MAX]
+    return {
+        "configurations": len(pairs),
+        "least_friction_us": round(best["guided"] * 1e6, 1),
+        "least_friction_bisection_us": round(best["plain"] * 1e6, 1),
+        "bisection_over_search": round(best["plain"] / best["guided"], 2),
+        "least_friction_readable_us": round(readable * 1e6, 1),
+        "programs_per_configuration": round(counted["guided"] / len(pairs[:50]), 1),
+        "programs_per_configuration_bisection": round(counted["plain"] / len(pairs[:50]), 1),
+        "largest_relative_gap_above_1e-6": float(f"{gap:.2g}"),
+        "crossing_mu_goal": crossed,
+    }
 
 
 def main(steps: int = 1000, rounds: int = 3) -> dict[str, Any]:
@@ -117,9 +164,8 @@ def main(steps: int = 1000, rounds: int = 3) -> dict[str, Any]:
         out[f"{name}_lf_only_over_compiled"] = round(best[f"{name}_lf_only"] / best[name], 2)
     for env_id in ("crmgrasp/Box3D3F-v0", "crmgrasp/Cup3D3F-v0"):
         name = env_id.split("/")[1].split("-")[0].lower()
-        compiled, readable = _least_friction_alone(env_id, steps, rounds)
-        out[f"{name}_least_friction_us"] = round(compiled, 1)
-        out[f"{name}_least_friction_readable_us"] = round(readable, 1)
+        for key, value in _least_friction_alone(env_id, steps, rounds).items():
+            out[f"{name}_{key}"] = value
     return out
 
 

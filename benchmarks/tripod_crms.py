@@ -9,7 +9,7 @@ per ordered pair) and the two-finger set's pattern grown to three contacts (six 
 oppositions and each contact's four 0.05 m slides, 18 CRMs).
 
 Usage: ``python benchmarks/tripod_crms.py [STARTS] [SEED]`` (defaults 30 and 5; a few
-minutes on one core: every feasible outcome costs a least friction, about 24 linear
+minutes on one core: every feasible outcome costs a least friction, about 12 linear
 programs). Prints one JSON object.
 """
 

@@ -74,6 +74,21 @@ def test_a_changed_tolerance_reaches_the_compiled_rule(monkeypatch) -> None:
     assert math.isinf(compiled_least_friction()(grip))
 
 
+def test_the_search_constants_reach_the_compiled_rule(monkeypatch) -> None:
+    """The guesses' constants are read when the rule is made: with none allowed both rules
+    bisect, and still agree bit for bit; on most grips that moves the answer by a bracket."""
+    from crmgrasp.model import quality3d
+
+    grips = _random_grips(7, 12)
+    guided = [compiled_least_friction()(grip) for grip in grips]
+    monkeypatch.setattr(quality3d, "GUIDE_MAX", 0)
+    plain = [compiled_least_friction()(grip) for grip in grips]
+    for grip, got in zip(grips, plain, strict=True):
+        want = least_friction_3d([c.x for c in grip], [c.n for c in grip])
+        assert got == want or (math.isinf(got) and math.isinf(want))
+    assert sum(g != p for g, p in zip(guided, plain, strict=True) if math.isfinite(g)) >= 3
+
+
 def test_the_references_take_the_compiled_rule(monkeypatch) -> None:
     """`compiled_rules` leaves a planar task as it is and hands a tripod task's model the
     compiled least friction; the references computed with it equal the readable ones."""
@@ -149,7 +164,7 @@ def test_the_rank_shortcut_decides_as_the_singular_values() -> None:
 
 @pytest.mark.parametrize("seed", range(2))
 def test_the_early_decision_equals_the_comparison(seed: int) -> None:
-    """`above` (the bisection stopped once its bracket decides ``least friction > mu_goal``)
+    """`above` (the search stopped once its bracket decides ``least friction > mu_goal``)
     answers as the comparison of the full least friction does, for goals far from it, at it
     to the last bit, one unit in the last place either side, and 0; both answers occur."""
     import crmgrasp.kernels._closure_jit as jit

@@ -15,6 +15,7 @@ from gymnasium.utils.env_checker import check_env
 from crmgrasp import CrmgraspError
 from crmgrasp.kernels import kernel_for
 from crmgrasp.model.hand import Error
+from crmgrasp.model.quality import ANTIPODAL_TOL, positively_spans
 from crmgrasp.model.quality3d import force_closure_3d, least_friction_3d, min_friction_3d
 from crmgrasp.model.sensing import SensorNoise
 from crmgrasp.model.solids import Cylinder, box3d
@@ -91,6 +92,70 @@ def test_least_friction_brackets_the_linear_program() -> None:
         assert force_closure_3d(pts, nrm, mu * 1.001 + 1e-9)
         assert mu < 1e-6 or not force_closure_3d(pts, nrm, mu * 0.999)
     assert finite >= 3
+
+
+def _tilted_grips(count: int) -> list[tuple[list, list]]:
+    """Three contacts on a cylinder at random angles and heights, normals tilted off the axis:
+    least frictions spread over 0.05-5 (and some inf)."""
+    rng = np.random.default_rng(9)
+    out = []
+    for _ in range(count):
+        pts, nrm = _equator(tuple(rng.uniform(0, 2 * math.pi, 3)))
+        pts = [(x, y, float(rng.uniform(-0.03, 0.03))) for x, y, _ in pts]
+        nrm = [tuple(np.array(n) + rng.normal(0.0, 0.3, 3)) for n in nrm]
+        out.append((pts, [tuple(np.array(n) / np.linalg.norm(n)) for n in nrm]))
+    return out
+
+
+def test_the_search_without_guesses_is_the_bisection(monkeypatch) -> None:
+    """With no guesses allowed every probe is the bracket's midpoint: the least friction is
+    the plain bisection's, written out here, bit for bit."""
+    from crmgrasp.model import quality3d
+
+    def bisection(pts: list, nrm: list) -> float:
+        frames = quality3d._cone_frames(pts, nrm)
+        lo, hi = 0.0, quality3d._THETA_MAX_3D
+        while hi - lo > quality3d.THETA_TOL_3D:
+            mid = 0.5 * (lo + hi)
+            closes = positively_spans(quality3d._wrenches(frames, math.tan(mid), 8))
+            lo, hi = (lo, mid) if closes else (mid, hi)
+        if hi == quality3d._THETA_MAX_3D:
+            return math.inf
+        return 0.0 if math.tan(hi) < ANTIPODAL_TOL else math.tan(hi)
+
+    monkeypatch.setattr(quality3d, "GUIDE_MAX", 0)
+    for pts, nrm in _tilted_grips(6):
+        assert least_friction_3d(pts, nrm) == bisection(pts, nrm)
+
+
+def test_the_guesses_halve_the_programs_and_keep_the_bracket(monkeypatch) -> None:
+    """On tilted tripods the search's guesses take at most 16 programs a configuration where
+    the bisection takes 24, and the answer still brackets the closure: closed at it, open
+    1e-3 rad below it, and within 1e-5 relative of the bisection's."""
+    from crmgrasp.model import quality3d
+
+    calls = []
+    program = quality3d.max_least_weight
+    monkeypatch.setattr(quality3d, "max_least_weight", lambda w: calls.append(1) or program(w))
+    finite = 0
+    for pts, nrm in _tilted_grips(10):
+        calls.clear()
+        mu = least_friction_3d(pts, nrm)
+        guided = len(calls)
+        with monkeypatch.context() as m:
+            m.setattr(quality3d, "GUIDE_MAX", 0)
+            calls.clear()
+            plain = least_friction_3d(pts, nrm)
+        if math.isinf(mu) or mu < 1e-6:
+            assert mu == plain or (mu < 1e-6 and plain < 1e-6)
+            continue
+        finite += 1
+        assert guided <= 16 and len(calls) == 24, (guided, len(calls))
+        assert mu == pytest.approx(plain, rel=1e-5)
+        theta = math.atan(mu)
+        assert force_closure_3d(pts, nrm, mu)
+        assert not force_closure_3d(pts, nrm, math.tan(theta - 1e-3))
+    assert finite >= 5
 
 
 # ---------------------------------------------------------------- the hand and the CRM

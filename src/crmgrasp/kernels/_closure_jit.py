@@ -5,10 +5,10 @@ the same order: the contacts' frames and unit edge wrenches of
 [`crmgrasp.model.quality3d`][] (``_cone_frames``, ``_wrenches``, `tangent_basis`; the
 edges' cosines and sines computed once per configuration, the same values), the linear
 program and the rank test of [`crmgrasp.model.quality.positively_spans`][] (the simplex
-method of [`crmgrasp.model.lp`][], pivot by pivot) and the bisection of
-[`crmgrasp.model.quality3d.least_friction_3d`][]. numba compiles without ``fastmath`` and
-``math.cos``, ``math.sin``, ``math.tan`` call the same C library as Python's, so the
-results equal the readable rules bit for bit (the tests check it).
+method of [`crmgrasp.model.lp`][], pivot by pivot) and the bracketing search of
+[`crmgrasp.model.quality3d.least_friction_3d`][] (its midpoints and secant guesses). numba
+compiles without ``fastmath`` and ``math.cos``, ``math.sin``, ``math.tan`` call the same C
+library as Python's, so the results equal the readable rules bit for bit (the tests check it).
 
 Three shortcuts leave every returned value unchanged. The program runs before the rank
 test, and the rank is tested only when the program says the wrenches span (the answer is
@@ -18,10 +18,11 @@ numpy's rank counts, are all far above the tolerance) and comes from the singula
 otherwise. Pivots update only the columns the method reads: the artificial columns never
 enter the basis and are never read, so they are left stale. Together they took the
 compiled least friction from 212-286 to 62-77 us per configuration on the configurations
-of random tripod episodes (24 programs each; ``python benchmarks/bench_tripod.py``, which
-times it alone and the step).
+of random tripod episodes, when the rule was a bisection of 24 programs; the search's
+guesses then halved the programs (``python benchmarks/bench_tripod.py``, which times it
+alone, against the bisection, and the step).
 A start filter needs only whether the least friction exceeds ``mu_goal``: [`above`][] runs
-the same bisection and stops as soon as its bracket decides that.
+the same search and stops as soon as its bracket decides that.
 
 No constant of the model is written here: the tolerances arrive in ``tol`` (layout below,
 built by [`crmgrasp.kernels.closure.closure_params`][] from the model's modules).
@@ -38,7 +39,8 @@ from numba import njit
 THETA_MAX, THETA_TOL, RANK_TOL, LP_TOL, OPT_TOL = range(5)
 PIVOT_TOL, FEASIBILITY_TOL, ANTIPODAL_TOL, ARM_MIN, MAX_PIVOTS = range(5, 10)
 CERTIFIED_GAP, CERTIFIED_RANK_TOL, DECIDED_MARGIN = range(10, 13)  # the kernel's own margins
-N_TOL = 13
+GUIDE_REACH, GUIDE_WIDEN, GUIDE_NEAR, GUIDE_FLOOR, GUIDE_MAX = range(13, 18)  # the search's guesses
+N_TOL = 18
 
 
 @njit(cache=True)
@@ -233,42 +235,54 @@ def _full_rank(w, tol, g):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def _spans(w, tol, g):  # type: ignore[no-untyped-def]
-    """[`crmgrasp.model.quality.positively_spans`][]: ``d* > LP_TOL`` and full rank (the
-    same conjunction; the program first, since a probe it rejects needs no rank)."""
-    if not max_least_weight(w, tol) > tol[LP_TOL]:
-        return False
-    return _full_rank(w, tol, g)
-
-
-@njit(cache=True)
-def _bisect(p, nrm, edges, tol, low, bar):  # type: ignore[no-untyped-def]
-    """The bisection of [`crmgrasp.model.quality3d.least_friction_3d`][] on the contacts ``p``,
-    ``nrm``: its last bracket ``(lo, hi)`` and 0. With ``low >= 0`` it stops early (see
-    [`above`][]): -1 once ``tan(hi) <= low`` (a probe closed), 1 once ``tan(lo) > bar``."""
+def _search(p, nrm, edges, tol, low, bar):  # type: ignore[no-untyped-def]
+    """The search of [`crmgrasp.model.quality3d.least_friction_3d`][] on the contacts ``p``,
+    ``nrm``: its last bracket ``(a, b)`` (the cones open at ``a``, close at ``b``) and 0, probe
+    by probe as ``_search`` ([`_next_probe`][] picks each). With ``low >= 0`` it stops early
+    (see [`above`][]): -1 once ``tan(b) <= low`` (a probe closed), 1 once ``tan(a) > bar``."""
     arms, tang, rho = _frames(p, nrm, tol[ARM_MIN])
     co, si = _edge_angles(edges)
     w, g = np.empty((6, arms.shape[0] * edges)), np.empty((6, 6))
     early = low >= 0.0
-    lo, hi = 0.0, tol[THETA_MAX]
-    while hi - lo > tol[THETA_TOL]:
+    a, b, d1, b2, d2 = 0.0, tol[THETA_MAX], math.nan, math.nan, math.nan
+    reach, guesses = tol[GUIDE_REACH], 0
+    while b - a > tol[THETA_TOL]:
         if early:
-            if hi < tol[THETA_MAX] and math.tan(hi) <= low:
-                return lo, hi, -1
-            if lo > 0.0 and math.tan(lo) > bar:
-                return lo, hi, 1
-        mid = 0.5 * (lo + hi)
-        _wrenches(arms, nrm, tang, rho, math.tan(mid), co, si, w)
-        if _spans(w, tol, g):
-            hi = mid
+            if b < tol[THETA_MAX] and math.tan(b) <= low:
+                return a, b, -1
+            if a > 0.0 and math.tan(a) > bar:
+                return a, b, 1
+        x, guess = _next_probe(a, b, d1, b2, d2, reach, guesses, tol)
+        guesses += guess
+        _wrenches(arms, nrm, tang, rho, math.tan(x), co, si, w)
+        d = max_least_weight(w, tol)
+        if d > tol[LP_TOL] and _full_rank(w, tol, g):
+            a, b, d1, b2, d2, reach = a, x, d, b, d1, tol[GUIDE_REACH]
         else:
-            lo = mid
-    return lo, hi, 0
+            a = x
+            if guess:
+                reach = tol[GUIDE_WIDEN] * reach
+    return a, b, 0
+
+
+@njit(cache=True)
+def _next_probe(a, b, d1, b2, d2, reach, guesses, tol):  # type: ignore[no-untyped-def]
+    """``quality3d._next_probe``: the next half-angle, and 1 when it is a guess (0 for the
+    midpoint)."""
+    target = tol[LP_TOL]
+    if guesses < tol[GUIDE_MAX] and d1 > target and d2 > d1 and b2 > tol[GUIDE_FLOOR]:
+        root = b - (d1 - target) * (b2 - b) / (d2 - d1)
+        err = reach * (b - root) * (b2 - root)
+        near = tol[GUIDE_NEAR] * tol[THETA_TOL]
+        x = root + err if b - root > near else root - (b - root) - max(err, near)
+        if a < x < b:
+            return x, 1
+    return 0.5 * (a + b), 0
 
 
 @njit(cache=True)
 def _friction(hi, tol):  # type: ignore[no-untyped-def]
-    """The least friction from the bisection's last upper end: ``inf`` if no probe closed,
+    """The least friction from the search's last upper end: ``inf`` if no probe closed,
     0 below the antipodal tolerance, ``tan(hi)`` otherwise."""
     if hi == tol[THETA_MAX]:
         return math.inf
@@ -279,14 +293,14 @@ def _friction(hi, tol):  # type: ignore[no-untyped-def]
 @njit(cache=True)
 def above(p, nrm, edges, tol, mu_goal):  # type: ignore[no-untyped-def]
     """``not (least_friction(p, nrm, edges, tol) <= mu_goal)`` (``mu_goal >= 0``), the same
-    answer, from the same bisection stopped as soon as its bracket decides it: the upper end
+    answer, from the same search stopped as soon as its bracket decides it: the upper end
     only falls and the lower end only rises, so once ``tan(hi)`` (a probe that closed) is below
     ``mu_goal`` the least friction will be too, and once ``tan(lo)`` is above both ``mu_goal``
     and the antipodal tolerance it will stay above (``inf`` included). A start filter needs
     only this comparison; most candidates decide it in a few probes. Both ends are compared
     with a relative margin ([`crmgrasp.kernels.closure.DECIDED_MARGIN`][])."""
     bar = max(mu_goal, tol[ANTIPODAL_TOL]) * (1.0 + tol[DECIDED_MARGIN])
-    _, hi, decided = _bisect(p, nrm, edges, tol, mu_goal * (1.0 - tol[DECIDED_MARGIN]), bar)
+    _, hi, decided = _search(p, nrm, edges, tol, mu_goal * (1.0 - tol[DECIDED_MARGIN]), bar)
     if decided != 0:
         return decided > 0
     return not (_friction(hi, tol) <= mu_goal)
@@ -296,5 +310,5 @@ def above(p, nrm, edges, tol, mu_goal):  # type: ignore[no-untyped-def]
 def least_friction(p, nrm, edges, tol):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.quality3d.least_friction_3d`][] of the contacts ``p``, ``nrm``
     (``(n, 3)``, ``n >= 3``)."""
-    _, hi, _ = _bisect(p, nrm, edges, tol, -1.0, 0.0)
+    _, hi, _ = _search(p, nrm, edges, tol, -1.0, 0.0)
     return _friction(hi, tol)

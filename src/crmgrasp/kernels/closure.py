@@ -1,11 +1,11 @@
 """The compiled least friction of three or more spatial contacts, and the kernel that uses it.
 
 A spatial hand of three or more contacts (a tripod) spends nearly all of a step on the least
-friction of the new configuration: a bisection over the friction cone's half-angle, one linear
+friction of the new configuration: a search over the friction cone's half-angle, one linear
 program per probe ([`crmgrasp.model.quality3d.least_friction_3d`][]).
 [`FingersSpatialKernel`][] steps such a task by its readable rules, but with the least
 friction computed in compiled code (`crmgrasp.kernels._closure_jit`: the same frames,
-wrenches, rank test, simplex pivots and bisection, bit for bit). It hands the compiled rule
+wrenches, rank test, simplex pivots and search, bit for bit). It hands the compiled rule
 to the task's [`SpatialModel`][crmgrasp.model.spatial_model.SpatialModel] (its
 ``least_friction``), so every path that asks for a configuration's quality (steps, starts,
 success) takes it.
@@ -48,7 +48,7 @@ CERTIFIED_RANK_TOL = 1e-6
 """The shortcut is taken only while the model's rank tolerance is below this."""
 
 DECIDED_MARGIN = 1e-9
-"""The compiled start filter stops its bisection once ``tan`` of a bracket end is past
+"""The compiled start filter stops its search once ``tan`` of a bracket end is past
 ``mu_goal`` by this relative margin, far more than the few units in the last place by which
 ``math.tan`` may miss monotonicity."""
 
@@ -68,6 +68,9 @@ def closure_params() -> F64:
     tol[jit.ARM_MIN], tol[jit.MAX_PIVOTS] = quality3d.ARM_MIN, lp.MAX_PIVOTS
     tol[jit.CERTIFIED_GAP], tol[jit.CERTIFIED_RANK_TOL] = CERTIFIED_GAP, CERTIFIED_RANK_TOL
     tol[jit.DECIDED_MARGIN] = DECIDED_MARGIN
+    tol[jit.GUIDE_REACH], tol[jit.GUIDE_WIDEN] = quality3d.GUIDE_REACH, quality3d.GUIDE_WIDEN
+    tol[jit.GUIDE_NEAR], tol[jit.GUIDE_FLOOR] = quality3d.GUIDE_NEAR, quality3d.GUIDE_FLOOR
+    tol[jit.GUIDE_MAX] = quality3d.GUIDE_MAX
     return tol
 
 

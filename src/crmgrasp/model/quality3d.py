@@ -13,10 +13,11 @@ Conventions: points in metres, shape ``(n, 3)``; inward unit normals, shape ``(n
   mu_goal``, as in the plane.
 * [`least_friction_3d`][], three or more contacts (docs/model-3d.md section 9): the least
   ``mu`` at which [`force_closure_3d`][] holds, ``tan`` of the least cone half-angle,
-  bracketed by bisection to [`THETA_TOL_3D`][] (the upper end); ``inf`` if no probe below
-  ``mu = 1e6`` closes. Closure only grows with ``mu`` (each polyhedral cone contains the
-  one of a smaller ``mu``, up to the scaling of its edges, which leaves positive spanning
-  unchanged), so the bisection is exact up to its tolerance. Two contacts never close: their
+  bracketed to [`THETA_TOL_3D`][] (the upper end) by midpoints and secant guesses
+  (``_search``); ``inf`` if no probe below ``mu = 1e6`` closes. Closure only grows with
+  ``mu`` (each polyhedral cone contains the one of a smaller ``mu``, up to the scaling of its
+  edges, which leaves positive spanning unchanged), so the bracket is exact up to its
+  tolerance, whichever probes narrow it. Two contacts never close: their
   rule stays the squeeze of [`min_friction_3d`][].
 * [`primitive_wrenches`][]: each contact's friction cone ``{f : |f_t| <= mu f_n}``
   is replaced by the inscribed polyhedral cone of ``edges`` edges
@@ -42,6 +43,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from crmgrasp._validation import CrmgraspError, non_negative
+from crmgrasp.model import quality
+from crmgrasp.model.lp import max_least_weight
 from crmgrasp.model.quality import ANTIPODAL_TOL, positively_spans
 from crmgrasp.model.solids import cross, dot, norm
 
@@ -118,10 +121,32 @@ def min_friction_3d(points: ArrayLike, normals: ArrayLike) -> float:
 
 
 THETA_TOL_3D = 1e-7
-"""The bisection's resolution of the least friction cone half-angle, radians
-([`least_friction_3d`][]): about 24 linear programs per configuration."""
+"""The search's resolution of the least friction cone half-angle, radians
+([`least_friction_3d`][]): about 12 linear programs per configuration on the tripod tasks
+(24 for a plain bisection; `benchmarks/bench_tripod.py` counts them)."""
 
 _THETA_MAX_3D = math.atan(1e6)  # no closure below this half-angle counts as none: inf
+
+GUIDE_REACH = 3.0
+"""How far above the secant root a guess goes, in units of ``(b - x_s)(b2 - x_s)`` (per
+radian: about the curvature of the program's optimum ``d*`` near the threshold on the tripod
+tasks' grips), so that it closes just above the threshold ([`least_friction_3d`][]). Like the
+four constants below it decides only which half-angles are probed, never the bracket's rule."""
+
+GUIDE_WIDEN = 8.0
+"""The reach's factor after a guess that opened."""
+
+GUIDE_NEAR = 0.25
+"""Once the secant root is within this fraction of [`THETA_TOL_3D`][] below the lowest closed
+probe, the next guess goes as far below the root, to open there and end the search."""
+
+GUIDE_FLOOR = 1e-3
+"""No guess from closed probes below this half-angle (radians): near a frictionless equilibrium
+the program's answers are not monotone in the half-angle (NaN among closed probes), so
+midpoints decide there."""
+
+GUIDE_MAX = 16
+"""At most this many guesses per configuration; midpoints after that (so the search ends)."""
 
 
 EDGES = 8
@@ -144,15 +169,54 @@ def least_friction_3d(points: ArrayLike, normals: ArrayLike, edges: int = EDGES)
     frames = _cone_frames(points, normals)
     if len(frames.arms) < 3:
         return math.inf
-    closes = lambda theta: positively_spans(_wrenches(frames, math.tan(theta), edges))  # noqa: E731
-    lo, hi = 0.0, _THETA_MAX_3D
-    while hi - lo > THETA_TOL_3D:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (lo, mid) if closes(mid) else (mid, hi)
-    if hi == _THETA_MAX_3D:  # no probe closed
+    b = _search(frames, edges)
+    if b == _THETA_MAX_3D:  # no probe closed
         return math.inf
-    mu = math.tan(hi)
+    mu = math.tan(b)
     return 0.0 if mu < ANTIPODAL_TOL else mu
+
+
+def _search(frames: _Frames, edges: int) -> float:
+    """The least closing half-angle's bracket ``(a, b)`` narrowed to [`THETA_TOL_3D`][]: the
+    cones open at ``a`` (0 at first) and close at ``b`` (``_THETA_MAX_3D`` at first); each
+    probe at ``x`` in between (from [`_next_probe`][]) replaces ``b`` if the cones close there,
+    ``a`` if not. Returns ``b``."""
+    a, b = 0.0, _THETA_MAX_3D
+    d1 = b2 = d2 = math.nan  # d* at b, and the closed probe b2 > b before it with its d*
+    reach, guesses = GUIDE_REACH, 0
+    while b - a > THETA_TOL_3D:
+        x, guess = _next_probe(a, b, d1, b2, d2, reach, guesses)
+        guesses += guess
+        w = _wrenches(frames, math.tan(x), edges)
+        d = max_least_weight(w)  # positively_spans' program and rank test, the program first
+        if d > quality.LP_TOL and np.linalg.matrix_rank(w, tol=quality.RANK_TOL) == len(w):
+            b, d1, b2, d2, reach = x, d, b, d1, GUIDE_REACH
+        else:
+            a = x
+            reach = GUIDE_WIDEN * reach if guess else reach
+    return b
+
+
+def _next_probe(a: float, b: float, d1: float, b2: float, d2: float, reach: float, guesses: int) -> tuple[float, int]:
+    """The next half-angle to probe in ``(a, b)``, and 1 if it is a guess (0 for the midpoint).
+
+    Near the threshold the program's optimum ``d*`` grows close to linearly with the
+    half-angle, and concavely, so the secant through the two lowest closed probes, ``(b2,
+    d2)`` and ``(b, d1)``, meets ``d* = LP_TOL`` at ``x_s`` at or just below the threshold,
+    within about ``(b - x_s)(b2 - x_s)`` times the curvature. The guess is ``x_s`` plus
+    ``reach`` times that (to close just above the threshold), or, once ``b`` is within
+    [`GUIDE_NEAR`][] of the tolerance above ``x_s``, as far below ``x_s`` (to open just below
+    it). The midpoint otherwise: before two closed probes, below [`GUIDE_FLOOR`][], after
+    [`GUIDE_MAX`][] guesses or for a guess outside the bracket."""
+    target = quality.LP_TOL
+    if guesses < GUIDE_MAX and d1 > target and d2 > d1 and b2 > GUIDE_FLOOR:
+        root = b - (d1 - target) * (b2 - b) / (d2 - d1)
+        err = reach * (b - root) * (b2 - root)
+        near = GUIDE_NEAR * THETA_TOL_3D
+        x = root + err if b - root > near else root - (b - root) - max(err, near)
+        if a < x < b:
+            return x, 1
+    return 0.5 * (a + b), 0
 
 
 def primitive_wrenches(points: ArrayLike, normals: ArrayLike, mu: float, edges: int = 8) -> F64:

@@ -54,7 +54,7 @@ def contact3d(point: ArrayLike, normal: ArrayLike) -> Contact3D:
 def _least_friction(config: Grip3D) -> float:
     """[`least_friction_3d`][crmgrasp.model.quality3d.least_friction_3d] of a configuration,
     cached (a configuration is a hashable tuple; the least recently used of ``2**14`` go
-    first): about 24 linear programs each."""
+    first): about 12 linear programs each."""
     return least_friction_3d([c.x for c in config], [c.n for c in config])
 
 
