@@ -95,6 +95,9 @@ def test_each_builtin_task_takes_a_stated_path():
 _COMPILE = "crmgrasp.kernels._compile"
 
 
+_JIT_MODULES = ("_polygon_jit", "_spatial_jit", "_vi_jit", "_fingers_jit", "_closure_jit", "_fingers3d_jit")
+
+
 @pytest.mark.parametrize(
     ("module", "allowed"),
     [
@@ -123,6 +126,38 @@ def test_compiled_code_holds_no_constant_of_the_model(module, allowed):
     assert imports == allowed
     floats = [n.value for n in ast.walk(tree) if isinstance(n, ast.Constant) and isinstance(n.value, float)]
     assert set(floats) <= {0.0, 0.5, 1.0, 2.0, 4.0, -1.0}, floats  # arithmetic of the rules, no tolerance
+
+
+def test_every_compiled_module_carries_the_current_stamp():
+    """numba's disk cache of a caller does not follow an edit to a callee in another file; the
+    stamp line of every compiled module does, so a stale stamp is an error here."""
+    from crmgrasp.kernels import _stamp
+
+    assert {p.name for p in _stamp.compiled_modules()} == {f"{m}.py" for m in _JIT_MODULES}
+    assert _stamp.stale() == [], "a compiled source changed: run `python -m crmgrasp.kernels._stamp`"
+
+
+def test_an_edit_to_one_compiled_module_restamps_all_of_them(tmp_path):
+    """In a copy of the compiled sources: an edit to one module (or to how they are compiled)
+    makes every stamp stale; rewriting changes only the stamp lines and leaves none stale."""
+    import shutil
+
+    from crmgrasp.kernels import _stamp
+
+    for path in [*_stamp.compiled_modules(), _stamp.HERE / "_compile.py"]:
+        shutil.copy(path, tmp_path / path.name)
+    assert _stamp.stale(tmp_path) == []
+    for edited in ("_closure_jit.py", "_compile.py"):
+        target = tmp_path / edited
+        target.write_text(target.read_text().replace("from __future__", "# edited\nfrom __future__", 1))
+        before = {p.name: p.read_text() for p in _stamp.compiled_modules(tmp_path)}
+        assert _stamp.stale(tmp_path) == sorted(before)
+        assert _stamp.write(tmp_path) == sorted(before)
+        assert _stamp.stale(tmp_path) == []
+        for p in _stamp.compiled_modules(tmp_path):
+            old, new = before[p.name].splitlines(), p.read_text().splitlines()
+            assert [line for line in old[:-1] if line] == [line for line in new[:-1] if line]
+            assert old[-1] != new[-1] and new[-1] == _stamp.PREFIX + _stamp.digest(tmp_path)
 
 
 def test_a_changed_tolerance_reaches_the_compiled_kernel(monkeypatch):

@@ -312,3 +312,6 @@ def least_friction(p, nrm, edges, tol):  # type: ignore[no-untyped-def]
     (``(n, 3)``, ``n >= 3``)."""
     _, hi, _ = _search(p, nrm, edges, tol, -1.0, 0.0)
     return _friction(hi, tol)
+
+
+# compiled sources: c0eec46571534eaa3fb926c479df7cb92d5576a0245039130c2e94cc5849b4c2

@@ -243,3 +243,6 @@ def begin_one(v, n, th, strides, abs_m, p, fp, vals):  # type: ignore[no-untyped
     index, least friction)``, as [`crmgrasp.sim.begin`][]."""
     _observe(v, 0, n, vals, 0)
     return _index(vals, 0, 0, th, strides, abs_m), _mu(v, 0, n, fp, p[ANTIPODAL_TOL])
+
+
+# compiled sources: c0eec46571534eaa3fb926c479df7cb92d5576a0245039130c2e94cc5849b4c2

@@ -402,3 +402,6 @@ def edge_rows(v, e):  # type: ignore[no-untyped-def]
         if e[i, 2] * e[k, 3] - e[i, 3] * e[k, 2] < 0.0:
             return False
     return True
+
+
+# compiled sources: c0eec46571534eaa3fb926c479df7cb92d5576a0245039130c2e94cc5849b4c2

@@ -349,3 +349,6 @@ def accept_start(d, planes, cyl, p, q, out):  # type: ignore[no-untyped-def]
     if _feasible(out, planes, cyl, p, q) != 0:
         return False
     return not (_mu(out, p[ANTIPODAL_TOL]) <= p[MU_GOAL])
+
+
+# compiled sources: c0eec46571534eaa3fb926c479df7cb92d5576a0245039130c2e94cc5849b4c2
