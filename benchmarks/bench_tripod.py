@@ -79,7 +79,7 @@ def _least_friction_alone(env_id: str, steps: int, rounds: int) -> dict[str, flo
     the task's ``mu_goal``)."""
     import crmgrasp.kernels._closure_jit as jit
     from crmgrasp.kernels.closure import closure_params
-    from crmgrasp.model import quality3d
+    from crmgrasp.model import quality, quality3d
 
     pairs = _configurations(env_id, steps)
     guided, plain = closure_params(), closure_params()
@@ -100,7 +100,7 @@ def _least_friction_alone(env_id: str, steps: int, rounds: int) -> dict[str, flo
         if new != old and min(new, old) > 1e-6:
             gap = max(gap, abs(new - old) / old)
     counted = {"guided": 0, "plain": 0}
-    program = quality3d.max_least_weight
+    program = quality.max_least_weight
     t0 = time.perf_counter()
     for p, n in pairs[:50]:
         least_friction_3d(p, n)
@@ -111,12 +111,12 @@ def _least_friction_alone(env_id: str, steps: int, rounds: int) -> dict[str, flo
             counted[_name] += 1
             return program(w)
 
-        quality3d.max_least_weight, quality3d.GUIDE_MAX = counting, cap
+        quality.max_least_weight, quality3d.GUIDE_MAX = counting, cap
         try:
             for p, n in pairs[:50]:
                 least_friction_3d(p, n)
         finally:
-            quality3d.max_least_weight, quality3d.GUIDE_MAX = program, guided[jit.GUIDE_MAX]
+            quality.max_least_weight, quality3d.GUIDE_MAX = program, guided[jit.GUIDE_MAX]
     return {
         "configurations": len(pairs),
         "least_friction_us": round(best["guided"] * 1e6, 1),

@@ -132,11 +132,11 @@ def test_the_guesses_halve_the_programs_and_keep_the_bracket(monkeypatch) -> Non
     """On tilted tripods the search's guesses take at most 16 programs a configuration where
     the bisection takes 24, and the answer still brackets the closure: closed at it, open
     1e-3 rad below it, and within 1e-5 relative of the bisection's."""
-    from crmgrasp.model import quality3d
+    from crmgrasp.model import quality, quality3d
 
     calls = []
-    program = quality3d.max_least_weight
-    monkeypatch.setattr(quality3d, "max_least_weight", lambda w: calls.append(1) or program(w))
+    program = quality.max_least_weight
+    monkeypatch.setattr(quality, "max_least_weight", lambda w: calls.append(1) or program(w))
     finite = 0
     for pts, nrm in _tilted_grips(10):
         calls.clear()

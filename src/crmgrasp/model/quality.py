@@ -58,6 +58,7 @@ __all__ = [
     "is_force_closure",
     "force_closure",
     "positively_spans",
+    "span_margin",
     "LP_TOL",
     "RANK_TOL",
     "ANTIPODAL_TOL",
@@ -270,9 +271,17 @@ def positively_spans(wrenches: np.ndarray) -> bool:
     strictly inside their convex hull. Linear program
     ``max d  s.t.  W lambda = 0, sum lambda = 1, lambda_j >= d``
     ([`crmgrasp.model.lp.max_least_weight`][], solved by the simplex method as written); true
-    iff ``rank W = k`` and ``d* > LP_TOL``. The one force-closure test of the planar
-    ([`force_closure`][]) and the spatial ([`crmgrasp.model.quality3d`][]) models."""
+    iff ``rank W = k`` and ``d* > LP_TOL`` ([`span_margin`][]). The one force-closure test of
+    the planar ([`force_closure`][]) and the spatial ([`crmgrasp.model.quality3d`][]) models."""
+    return span_margin(wrenches) > LP_TOL
+
+
+def span_margin(wrenches: np.ndarray) -> float:
+    """The optimum ``d*`` of [`positively_spans`][]' program when ``rank W = k``, ``-inf`` when
+    the rank falls short (the program is then not solved): the columns positively span R^k iff
+    this exceeds ``LP_TOL``. The spatial least friction's search reads ``d*`` of the probes
+    that close ([`crmgrasp.model.quality3d.least_friction_3d`][])."""
     k, _ = wrenches.shape
     if np.linalg.matrix_rank(wrenches, tol=RANK_TOL) < k:
-        return False
-    return max_least_weight(wrenches) > LP_TOL
+        return -math.inf
+    return max_least_weight(wrenches)

@@ -44,8 +44,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from crmgrasp._validation import CrmgraspError, non_negative
 from crmgrasp.model import quality
-from crmgrasp.model.lp import max_least_weight
-from crmgrasp.model.quality import ANTIPODAL_TOL, positively_spans
+from crmgrasp.model.quality import ANTIPODAL_TOL, positively_spans, span_margin
 from crmgrasp.model.solids import cross, dot, norm
 
 __all__ = [
@@ -187,9 +186,8 @@ def _search(frames: _Frames, edges: int) -> float:
     while b - a > THETA_TOL_3D:
         x, guess = _next_probe(a, b, d1, b2, d2, reach, guesses)
         guesses += guess
-        w = _wrenches(frames, math.tan(x), edges)
-        d = max_least_weight(w)  # positively_spans' program and rank test, the program first
-        if d > quality.LP_TOL and np.linalg.matrix_rank(w, tol=quality.RANK_TOL) == len(w):
+        d = span_margin(_wrenches(frames, math.tan(x), edges))
+        if d > quality.LP_TOL:  # positively_spans
             b, d1, b2, d2, reach = x, d, b, d1, GUIDE_REACH
         else:
             a = x
