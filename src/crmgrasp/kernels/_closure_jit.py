@@ -238,8 +238,11 @@ def _full_rank(w, tol, g):  # type: ignore[no-untyped-def]
 def _search(p, nrm, edges, tol, low, bar):  # type: ignore[no-untyped-def]
     """The search of [`crmgrasp.model.quality3d.least_friction_3d`][] on the contacts ``p``,
     ``nrm``: its last bracket ``(a, b)`` (the cones open at ``a``, close at ``b``) and 0, probe
-    by probe as ``_search`` ([`_next_probe`][] picks each). With ``low >= 0`` it stops early
-    (see [`above`][]): -1 once ``tan(b) <= low`` (a probe closed), 1 once ``tan(a) > bar``."""
+    by probe as ``quality3d._search`` ([`_next_probe`][] picks each). A probe closes when
+    ``quality.span_margin`` exceeds ``LP_TOL``: the same conjunction of program and rank, the
+    program first here (a probe it rejects needs no rank), so ``d`` of a closing probe is the
+    same value. With ``low >= 0`` it stops early (see [`above`][]): -1 once ``tan(b) <= low``
+    (a probe closed), 1 once ``tan(a) > bar``."""
     arms, tang, rho = _frames(p, nrm, tol[ARM_MIN])
     co, si = _edge_angles(edges)
     w, g = np.empty((6, arms.shape[0] * edges)), np.empty((6, 6))
@@ -314,4 +317,4 @@ def least_friction(p, nrm, edges, tol):  # type: ignore[no-untyped-def]
     return _friction(hi, tol)
 
 
-# compiled sources: c0eec46571534eaa3fb926c479df7cb92d5576a0245039130c2e94cc5849b4c2
+# compiled sources: 3a2ae1d2c9ebbd78b50b9fb32d9c41f3843a0c49f9686e276534652bc094d1c1

@@ -245,4 +245,4 @@ def begin_one(v, n, th, strides, abs_m, p, fp, vals):  # type: ignore[no-untyped
     return _index(vals, 0, 0, th, strides, abs_m), _mu(v, 0, n, fp, p[ANTIPODAL_TOL])
 
 
-# compiled sources: c0eec46571534eaa3fb926c479df7cb92d5576a0245039130c2e94cc5849b4c2
+# compiled sources: 3a2ae1d2c9ebbd78b50b9fb32d9c41f3843a0c49f9686e276534652bc094d1c1

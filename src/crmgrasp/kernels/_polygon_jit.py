@@ -404,4 +404,4 @@ def edge_rows(v, e):  # type: ignore[no-untyped-def]
     return True
 
 
-# compiled sources: c0eec46571534eaa3fb926c479df7cb92d5576a0245039130c2e94cc5849b4c2
+# compiled sources: 3a2ae1d2c9ebbd78b50b9fb32d9c41f3843a0c49f9686e276534652bc094d1c1
