@@ -57,7 +57,8 @@ def _round(env: Any, actions: list[int]) -> tuple[float, float]:
 
 
 def _configurations(env_id: str, steps: int) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The distinct configurations of ``steps`` random actions of ``env_id`` (seed 0 and 1)."""
+    """The distinct configurations of ``steps`` random actions of ``env_id`` (reset seed 0,
+    actions drawn with seed 1), in the order first visited."""
     env = gym.make(env_id)
     _, info = env.reset(seed=0)
     configs = [info["config"]]
@@ -100,12 +101,12 @@ def _least_friction_alone(env_id: str, steps: int, rounds: int) -> dict[str, flo
         if new != old and min(new, old) > 1e-6:
             gap = max(gap, abs(new - old) / old)
     counted = {"guided": 0, "plain": 0}
-    program = quality.max_least_weight
+    program, cap_before = quality.max_least_weight, quality3d.GUIDE_MAX
     t0 = time.perf_counter()
     for p, n in pairs[:50]:
         least_friction_3d(p, n)
     readable = (time.perf_counter() - t0) / len(pairs[:50])
-    for name, cap in (("guided", quality3d.GUIDE_MAX), ("plain", 0)):
+    for name, cap in (("guided", cap_before), ("plain", 0)):
 
         def counting(w: np.ndarray, _name: str = name) -> float:
             counted[_name] += 1
@@ -116,7 +117,7 @@ def _least_friction_alone(env_id: str, steps: int, rounds: int) -> dict[str, flo
             for p, n in pairs[:50]:
                 least_friction_3d(p, n)
         finally:
-            quality.max_least_weight, quality3d.GUIDE_MAX = program, guided[jit.GUIDE_MAX]
+            quality.max_least_weight, quality3d.GUIDE_MAX = program, cap_before
     return {
         "configurations": len(pairs),
         "least_friction_us": round(best["guided"] * 1e6, 1),
