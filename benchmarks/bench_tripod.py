@@ -13,10 +13,11 @@ step alone (``env.step`` calls only, each timed on its own in the same pass; Car
 
 The least friction alone, as well, on the distinct configurations of ``steps`` random
 actions of each task: the compiled rule (``least_friction`` of
-``crmgrasp.kernels._closure_jit``, no cache; the least of ``rounds`` passes) with the
-search's guesses and, as the peer, without them (the plain bisection, the rule before the
-guesses), the readable rule (``least_friction_3d``, first 50 configurations, once), linear
-programs per configuration both ways, and how far the two answers lie apart.
+``crmgrasp.kernels._closure_jit``, no cache; the least of ``rounds`` passes) and, as peers, the
+rule before each of its last two changes: without the search's guesses (the plain bisection)
+and with Bland's pivot rule throughout instead of Dantzig's; the readable rule
+(``least_friction_3d``, first 50 configurations, once), linear programs per configuration and
+pivots per program each way, and how far each peer's answers lie from the rule's.
 
 Prints one JSON object (microseconds and ratios). Usage:
 ``python benchmarks/bench_tripod.py [STEPS] [ROUNDS]`` (defaults 1000 and 3).
@@ -70,65 +71,96 @@ def _configurations(env_id: str, steps: int) -> list[tuple[np.ndarray, np.ndarra
     return [(np.array([c.x for c in cfg]), np.array([c.n for c in cfg])) for cfg in dict.fromkeys(configs)]
 
 
+def _apart(pairs: list, new: np.ndarray, old: np.ndarray, goal: float) -> tuple[float, int]:
+    """The largest relative gap between two rules' answers above friction 1e-6, and how many
+    fall on the other side of ``goal``."""
+    gap, crossed = 0.0, 0
+    for a, b in zip(new.tolist(), old.tolist(), strict=True):
+        crossed += (a <= goal) != (b <= goal)
+        if a != b and min(a, b) > 1e-6:
+            gap = max(gap, abs(a - b) / b)
+    return gap, crossed
+
+
+def _counted(pairs: list, cap: int, streak: int) -> tuple[float, float]:
+    """Linear programs and simplex pivots per configuration of the readable rule on ``pairs``,
+    with ``GUIDE_MAX`` = ``cap`` and ``DEGENERATE_STREAK`` = ``streak``."""
+    from crmgrasp.model import lp, quality, quality3d
+
+    counts = [0, 0]
+    program, pivot = quality.max_least_weight, lp._pivot
+    before = quality3d.GUIDE_MAX, lp.DEGENERATE_STREAK
+
+    def counting(w: np.ndarray) -> float:
+        counts[0] += 1
+        return program(w)
+
+    def pivoting(*args: Any) -> None:
+        counts[1] += 1
+        pivot(*args)
+
+    quality.max_least_weight, lp._pivot = counting, pivoting
+    quality3d.GUIDE_MAX, lp.DEGENERATE_STREAK = cap, streak
+    try:
+        for p, n in pairs:
+            least_friction_3d(p, n)
+    finally:
+        quality.max_least_weight, lp._pivot = program, pivot
+        quality3d.GUIDE_MAX, lp.DEGENERATE_STREAK = before
+    return counts[0] / len(pairs), counts[1] / len(pairs)
+
+
 def _least_friction_alone(env_id: str, steps: int, rounds: int) -> dict[str, float]:
     """The least friction on the distinct configurations a random-action run of ``env_id``
-    visits: microseconds per configuration, compiled (the least of ``rounds`` passes) with the
-    search's guesses and without (``GUIDE_MAX`` = 0: the plain bisection, the rule before the
-    guesses, as a peer), and readable (the first 50 configurations, once); linear programs per
-    configuration, counted on the readable rule, both ways; and how far the two answers lie
-    apart (the largest relative gap above friction 1e-6, and how many fall on the other side of
-    the task's ``mu_goal``)."""
+    visits: microseconds per configuration, compiled (the least of ``rounds`` passes) by the
+    rule (the search's guesses, Dantzig's pivots) and by two peers, each the rule before one
+    change: without the guesses (``GUIDE_MAX`` = 0: the plain bisection) and with Bland's pivots
+    throughout (``DEGENERATE_STREAK`` = 0); readable (the first 50 configurations, once); linear
+    programs and pivots per configuration, counted on the readable rule; and how far each
+    peer's answers lie from the rule's (the largest relative gap above friction 1e-6, and how
+    many fall on the other side of the task's ``mu_goal``)."""
     import crmgrasp.kernels._closure_jit as jit
     from crmgrasp.kernels.closure import closure_params
-    from crmgrasp.model import quality, quality3d
+    from crmgrasp.model import lp, quality3d
 
     pairs = _configurations(env_id, steps)
-    guided, plain = closure_params(), closure_params()
-    plain[jit.GUIDE_MAX] = 0.0
-    jit.least_friction(*pairs[0], EDGES, guided)  # compiled before timing
-    best = {"guided": float("inf"), "plain": float("inf")}
+    tols = {"rule": closure_params(), "bisection": closure_params(), "bland": closure_params()}
+    tols["bisection"][jit.GUIDE_MAX] = 0.0
+    tols["bland"][jit.DEGENERATE_STREAK] = 0.0
+    jit.least_friction(*pairs[0], EDGES, tols["rule"])  # compiled before timing
+    best = dict.fromkeys(tols, float("inf"))
     for _ in range(rounds):
-        for name, tol in (("guided", guided), ("plain", plain)):
+        for name, tol in tols.items():
             t0 = time.perf_counter()
             for p, n in pairs:
                 jit.least_friction(p, n, EDGES, tol)
             best[name] = min(best[name], (time.perf_counter() - t0) / len(pairs))
     goal = gym.make(env_id).unwrapped.task.mu_goal
-    gap, crossed = 0.0, 0
-    for p, n in pairs:
-        new, old = jit.least_friction(p, n, EDGES, guided), jit.least_friction(p, n, EDGES, plain)
-        crossed += (new <= goal) != (old <= goal)
-        if new != old and min(new, old) > 1e-6:
-            gap = max(gap, abs(new - old) / old)
-    counted = {"guided": 0, "plain": 0}
-    program, cap_before = quality.max_least_weight, quality3d.GUIDE_MAX
+    answers = {name: np.array([jit.least_friction(p, n, EDGES, tol) for p, n in pairs]) for name, tol in tols.items()}
     t0 = time.perf_counter()
     for p, n in pairs[:50]:
         least_friction_3d(p, n)
     readable = (time.perf_counter() - t0) / len(pairs[:50])
-    for name, cap in (("guided", cap_before), ("plain", 0)):
-
-        def counting(w: np.ndarray, _name: str = name) -> float:
-            counted[_name] += 1
-            return program(w)
-
-        quality.max_least_weight, quality3d.GUIDE_MAX = counting, cap
-        try:
-            for p, n in pairs[:50]:
-                least_friction_3d(p, n)
-        finally:
-            quality.max_least_weight, quality3d.GUIDE_MAX = program, cap_before
-    return {
+    cap, streak = quality3d.GUIDE_MAX, lp.DEGENERATE_STREAK
+    programs, pivots = _counted(pairs[:50], cap, streak)
+    out = {
         "configurations": len(pairs),
-        "least_friction_us": round(best["guided"] * 1e6, 1),
-        "least_friction_bisection_us": round(best["plain"] * 1e6, 1),
-        "bisection_over_search": round(best["plain"] / best["guided"], 2),
+        "least_friction_us": round(best["rule"] * 1e6, 1),
         "least_friction_readable_us": round(readable * 1e6, 1),
-        "programs_per_configuration": round(counted["guided"] / len(pairs[:50]), 1),
-        "programs_per_configuration_bisection": round(counted["plain"] / len(pairs[:50]), 1),
-        "largest_relative_gap_above_1e-6": float(f"{gap:.2g}"),
-        "crossing_mu_goal": crossed,
+        "programs_per_configuration": round(programs, 1),
+        "pivots_per_program": round(pivots / programs, 1),
     }
+    for name, counted in (("bisection", _counted(pairs[:50], 0, streak)), ("bland", _counted(pairs[:50], cap, 0))):
+        gap, crossed = _apart(pairs, answers["rule"], answers[name], goal)
+        out |= {
+            f"least_friction_{name}_us": round(best[name] * 1e6, 1),
+            f"{name}_over_rule": round(best[name] / best["rule"], 2),
+            f"programs_per_configuration_{name}": round(counted[0], 1),
+            f"pivots_per_program_{name}": round(counted[1] / counted[0], 1),
+            f"largest_relative_gap_to_{name}_above_1e-6": float(f"{gap:.2g}"),
+            f"crossing_mu_goal_against_{name}": crossed,
+        }
+    return out
 
 
 def main(steps: int = 1000, rounds: int = 3) -> dict[str, Any]:

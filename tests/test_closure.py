@@ -131,6 +131,27 @@ def test_the_compiled_program_equals_the_readable_one(seed: int) -> None:
         assert got == want or (math.isnan(got) and math.isnan(want)), (got, want)
 
 
+@pytest.mark.parametrize("streak", [0, 1])
+def test_the_pivot_rule_reaches_the_compiled_program(monkeypatch, streak: int) -> None:
+    """With Bland's rule throughout (``DEGENERATE_STREAK`` 0, the rule before Dantzig's) and
+    with Bland's after every degenerate pivot (1), the compiled program still equals the
+    readable one bit for bit; Bland's rule throughout changes some optima in the last bits."""
+    import crmgrasp.kernels._closure_jit as jit
+    from crmgrasp.kernels.closure import closure_params
+
+    batches = _wrench_batches(5)
+    dantzig = [jit.max_least_weight(w, closure_params()) for w in batches]
+    monkeypatch.setattr(lp, "DEGENERATE_STREAK", streak)
+    tol = closure_params()
+    assert tol[jit.DEGENERATE_STREAK] == streak
+    got = [jit.max_least_weight(w, tol) for w in batches]
+    for w, value in zip(batches, got, strict=True):
+        want = lp.max_least_weight(w)
+        assert value == want or (math.isnan(value) and math.isnan(want)), (value, want)
+    if streak == 0:
+        assert sum(a != b for a, b in zip(dantzig, got, strict=True) if math.isfinite(a)) >= 3
+
+
 def test_the_rank_shortcut_decides_as_the_singular_values() -> None:
     """The Cholesky certificate and numpy's rank agree on full-rank wrenches, on wrenches of
     rank 5 (one row a copy of another: the certificate fails, the singular values decide),

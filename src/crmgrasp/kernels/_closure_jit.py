@@ -40,7 +40,8 @@ THETA_MAX, THETA_TOL, RANK_TOL, LP_TOL, OPT_TOL = range(5)
 PIVOT_TOL, FEASIBILITY_TOL, ANTIPODAL_TOL, ARM_MIN, MAX_PIVOTS = range(5, 10)
 CERTIFIED_GAP, CERTIFIED_RANK_TOL, DECIDED_MARGIN = range(10, 13)  # the kernel's own margins
 GUIDE_REACH, GUIDE_WIDEN, GUIDE_NEAR, GUIDE_FLOOR, GUIDE_MAX = range(13, 18)  # the search's guesses
-N_TOL = 18
+DEGENERATE_STREAK = 18
+N_TOL = 19
 
 
 @njit(cache=True)
@@ -128,14 +129,23 @@ def _pivot(t, cost, basis, r, j, live):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
+def _entering(cost, columns, bland, tol):  # type: ignore[no-untyped-def]
+    """``crmgrasp.model.lp._entering``: Bland's or Dantzig's entering column, -1 if none."""
+    j, least = -1, -tol[OPT_TOL]
+    for c in range(columns):
+        if cost[c] < least:
+            if bland:
+                return c
+            j, least = c, cost[c]
+    return j
+
+
+@njit(cache=True)
 def _simplex(t, cost, basis, columns, tol):  # type: ignore[no-untyped-def]
     """``crmgrasp.model.lp._simplex``: true when it ends, false when rounding stops it."""
+    streak = 0
     for _ in range(int(tol[MAX_PIVOTS])):
-        j = -1
-        for c in range(columns):
-            if cost[c] < -tol[OPT_TOL]:
-                j = c
-                break
+        j = _entering(cost, columns, streak >= tol[DEGENERATE_STREAK], tol)
         if j < 0:
             return True
         r, best = -1, math.inf
@@ -146,6 +156,7 @@ def _simplex(t, cost, basis, columns, tol):  # type: ignore[no-untyped-def]
                     r, best = i, ratio
         if r < 0:
             return False
+        streak = streak + 1 if best <= 0.0 else 0
         _pivot(t, cost, basis, r, j, columns)
     return False
 
@@ -317,4 +328,4 @@ def least_friction(p, nrm, edges, tol):  # type: ignore[no-untyped-def]
     return _friction(hi, tol)
 
 
-# compiled sources: 3a2ae1d2c9ebbd78b50b9fb32d9c41f3843a0c49f9686e276534652bc094d1c1
+# compiled sources: 28aa73519111c44362210be31cec5dd26d41c7596255ac6c96713f92f899ef1e

@@ -245,4 +245,4 @@ def begin_one(v, n, th, strides, abs_m, p, fp, vals):  # type: ignore[no-untyped
     return _index(vals, 0, 0, th, strides, abs_m), _mu(v, 0, n, fp, p[ANTIPODAL_TOL])
 
 
-# compiled sources: 3a2ae1d2c9ebbd78b50b9fb32d9c41f3843a0c49f9686e276534652bc094d1c1
+# compiled sources: 28aa73519111c44362210be31cec5dd26d41c7596255ac6c96713f92f899ef1e

@@ -351,4 +351,4 @@ def accept_start(d, planes, cyl, p, q, out):  # type: ignore[no-untyped-def]
     return not (_mu(out, p[ANTIPODAL_TOL]) <= p[MU_GOAL])
 
 
-# compiled sources: 3a2ae1d2c9ebbd78b50b9fb32d9c41f3843a0c49f9686e276534652bc094d1c1
+# compiled sources: 28aa73519111c44362210be31cec5dd26d41c7596255ac6c96713f92f899ef1e

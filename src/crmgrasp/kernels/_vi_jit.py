@@ -70,4 +70,4 @@ def sweeps(qa, qg, tried, pair_row, pair_a, first, out_p, out_r, out_row, out_t,
     return limit
 
 
-# compiled sources: 3a2ae1d2c9ebbd78b50b9fb32d9c41f3843a0c49f9686e276534652bc094d1c1
+# compiled sources: 28aa73519111c44362210be31cec5dd26d41c7596255ac6c96713f92f899ef1e
