@@ -1,7 +1,9 @@
-"""The tripod environments' step time: compiled, least friction compiled only, readable.
+"""The tripod environments' step time: compiled, compiled deciding the grasp only, least
+friction compiled only, readable.
 
 For ``crmgrasp/Box3D3F-v0`` and ``crmgrasp/Cup3D3F-v0`` on the default backend (every rule
-compiled: ``FusedFingersSpatialKernel``), with only the least friction compiled (the
+compiled: ``FusedFingersSpatialKernel``), the same with ``exact_friction=False`` (``_decided``:
+the step decides the grasp and reports no least friction), with only the least friction compiled (the
 readable CRMs, starts and observations: ``FingersSpatialKernel``, the path before the fused
 kernel and still the one for sensing noise), and on ``backend="reference"`` (the readable
 rules), with ``CartPole-v1`` as the peer: random actions through ``gymnasium.make``,
@@ -168,6 +170,7 @@ def main(steps: int = 1000, rounds: int = 3) -> dict[str, Any]:
     for env_id in ("crmgrasp/Box3D3F-v0", "crmgrasp/Cup3D3F-v0"):
         name = env_id.split("/")[1].split("-")[0].lower()
         envs[name] = gym.make(env_id)
+        envs[f"{name}_decided"] = gym.make(env_id, exact_friction=False)
         envs[f"{name}_lf_only"] = gym.make(env_id)
         envs[f"{name}_lf_only"].unwrapped.kernel = FamilyKernel(envs[name].unwrapped.task, FingersSpatialKernel)
         envs[f"{name}_reference"] = gym.make(env_id, backend="reference")

@@ -239,6 +239,7 @@ def test_bench_tripod_smoke():
     res = mod.main(steps=5, rounds=1)
     assert res["box3d3f_us"] > 0 and res["cup3d3f_reference_us"] > 0 and res["cartpole_us"] > 0
     assert res["box3d3f_lf_only_us"] > 0 and res["cup3d3f_lf_only_over_compiled"] > 0
+    assert res["box3d3f_decided_step_alone_us"] > 0 and res["cup3d3f_decided_over_cartpole"] > 0
     assert 0 < res["box3d3f_least_friction_us"] < res["box3d3f_least_friction_readable_us"]
     assert res["cup3d3f_least_friction_us"] > 0 and res["cup3d3f_least_friction_bland_us"] > 0
     assert res["box3d3f_programs_per_configuration"] < res["box3d3f_programs_per_configuration_bisection"]

@@ -203,4 +203,6 @@ def test_the_early_decision_equals_the_comparison(seed: int) -> None:
             want = not (lf <= goal)
             assert jit.above(p, n, 8, tol, goal) == want, (grip, goal, lf)
             answers.add(want)
+            decided = jit.decided_friction(p, n, 8, tol, goal)  # a bound on the side of the goal lf is on
+            assert (decided <= goal) == (lf <= goal) and (decided >= lf if lf <= goal else decided <= lf)
     assert answers == {True, False}

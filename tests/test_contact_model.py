@@ -75,7 +75,7 @@ def test_a_new_model_kind_is_one_row_of_the_seam(monkeypatch):
     object.__setattr__(task, "model", Toy(task.hand))
     with pytest.raises(CrmgraspError, match="no kernel for the contact model 'toy'"):
         kernel_for(task)
-    monkeypatch.setitem(kernels.PATHS, "toy", lambda t, backend: ReferenceKernel(t))
+    monkeypatch.setitem(kernels.PATHS, "toy", lambda t, backend, friction: ReferenceKernel(t))
     assert type(kernel_for(task)) is ReferenceKernel
 
 

@@ -48,6 +48,52 @@ def test_fused_tripod_steps_equal_the_readable_rules(name: str) -> None:
 
 
 @pytest.mark.parametrize("name", TRIPODS)
+def test_a_decided_friction_changes_nothing_else(name: str) -> None:
+    """``kernel_for(task, friction="decided")``: over random CRMs and many episodes the same
+    states, observations, bins, errors, rewards and ends as the exact kernel, from the same
+    draws; each least friction replaced by a bound on the same side of ``mu_goal``; and the
+    environment with ``exact_friction=False`` steps the same, without ``min_friction``."""
+    import gymnasium as gym
+
+    task = make_task(name)
+    exact, decided = kernel_for(task), kernel_for(task, friction="decided")
+    rng_e, rng_d = np.random.default_rng(5), np.random.default_rng(5)
+    a, b = exact.begin(exact.sample_start(rng_e), rng_e), decided.begin(decided.sample_start(rng_d), rng_d)
+    moved = 0
+    for action in np.random.default_rng(6).integers(len(task.actions), size=300).tolist():
+        assert a._replace(min_friction=0.0) == b._replace(min_friction=0.0)
+        assert task.grasped(a.min_friction) == task.grasped(b.min_friction)
+        assert b.min_friction >= a.min_friction if task.grasped(a.min_friction) else b.min_friction <= a.min_friction
+        moved += a.min_friction != b.min_friction
+        if a.terminated or a.truncated:
+            a, b = exact.begin(exact.sample_start(rng_e), rng_e), decided.begin(decided.sample_start(rng_d), rng_d)
+        else:
+            a, b = exact.step_one(a.state, action, rng_e), decided.step_one(b.state, action, rng_d)
+    assert moved > 20 and rng_e.random() == rng_d.random()
+    env_id = {"cup-3d-3f": "crmgrasp/Cup3D3F-v0", "box-3d-3f": "crmgrasp/Box3D3F-v0"}[name]
+    full, lean = gym.make(env_id), gym.make(env_id, exact_friction=False)
+    (o1, i1), (o2, i2) = full.reset(seed=1), lean.reset(seed=1)
+    for action in np.random.default_rng(8).integers(len(task.actions), size=60).tolist():
+        assert {**o1, "error": 0}.keys() == o2.keys() and all(np.array_equal(o1[k], o2[k]) for k in o1)
+        assert "min_friction" not in i2 and i2 == {k: v for k, v in i1.items() if k != "min_friction"}
+        o1, r1, t1, u1, i1 = full.step(action)
+        o2, r2, t2, u2, i2 = lean.step(action)
+        assert (r1, t1, u1) == (r2, t2, u2)
+        if t1 or u1:
+            (o1, i1), (o2, i2) = full.reset(), lean.reset()
+
+
+def test_the_friction_argument_is_checked() -> None:
+    """An unknown ``friction`` or a non-boolean ``exact_friction``: a one-line error."""
+    import gymnasium as gym
+
+    with pytest.raises(CrmgraspError, match="unknown friction 'rough'"):
+        kernel_for(make_task("box-3d-3f"), friction="rough")
+    with pytest.raises(CrmgraspError, match="exact_friction must be true or false"):
+        gym.make("crmgrasp/Box3D3F-v0", exact_friction=1)
+
+
+@pytest.mark.parametrize("name", TRIPODS)
 def test_fused_tripod_continuous_crms_and_no_table(name: str) -> None:
     """CRMs with random real offsets (any pair, a contact onto itself included), and the
     same task without a table: still bit for bit."""

@@ -82,7 +82,9 @@ class OneStep(NamedTuple):
     [`Percept`][] is what a policy may see of it, and a kernel's
     [`BatchStep`][crmgrasp.kernels.base.BatchStep] its batched form). ``observation`` is the
     contact model's observation of the reading (its ``observation_names``, in order);
-    ``error`` is [`Error`][crmgrasp.model.hand.Error] (an ``int``)."""
+    ``error`` is [`Error`][crmgrasp.model.hand.Error] (an ``int``); ``min_friction`` is the
+    configuration's least friction (from a kernel made with ``friction="decided"``, a friction
+    that decides the grasp as it does: [`crmgrasp.kernels.kernel_for`][])."""
 
     state: SimState
     observation: tuple[float, ...]

@@ -12,7 +12,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, boolean
 from crmgrasp.kernels import Kernel, kernel_for
 from crmgrasp.model.contact_model import ContactModel
 from crmgrasp.model.contacts import Config
@@ -88,7 +88,8 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
 
     (A is the hand aperture; sensed values are clipped into the box.) ``info``
     carries ``obs_index`` (the task's discretized observation, 24 values for
-    paper-box), ``config`` (the true configuration), ``min_friction`` and ``steps``.
+    paper-box), ``config`` (the true configuration), ``min_friction`` (its least
+    friction; not with ``exact_friction=False``) and ``steps``.
 
     ## Rewards
     -1 per CRM.
@@ -106,7 +107,11 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
     ``task``: a [`Task`][crmgrasp.tasks.Task] or a registered task name;
     ``render_mode``: ``None`` or ``"rgb_array"``; ``backend``: ``"auto"``,
     ``"numba"`` or ``"reference"`` ([`crmgrasp.kernels.kernel_for`][]; every
-    backend gives the same episodes).
+    backend gives the same episodes); ``exact_friction``: true (the default) to report each
+    configuration's least friction in ``info``; false to have the step only decide whether
+    the configuration is a grasp (the same observations, rewards and episode ends), which
+    on a tripod stops the least friction's search as soon as that is decided
+    (``kernel_for(..., friction="decided")``), and ``info`` then has no ``min_friction``.
 
     ## Version History
     * v0: initial version (docs/model.md).
@@ -114,14 +119,21 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 2}  # noqa: RUF012 - Gymnasium's convention
 
-    def __init__(self, task: Task | str = "paper-box", render_mode: str | None = None, backend: str = "auto") -> None:
+    def __init__(
+        self,
+        task: Task | str = "paper-box",
+        render_mode: str | None = None,
+        backend: str = "auto",
+        exact_friction: bool = True,
+    ) -> None:
         self.task = make_task(task) if isinstance(task, str) else task
         if not isinstance(self.task, Task):
             raise CrmgraspError(f"task must be a Task or a registered name, got {task!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise CrmgraspError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         self.render_mode = render_mode
-        self.kernel: Kernel = kernel_for(self.task, backend)
+        self.exact_friction = boolean(exact_friction, "exact_friction")
+        self.kernel: Kernel = kernel_for(self.task, backend, "exact" if exact_friction else "decided")
         self.action_space = spaces.Discrete(len(self.task.actions))
         self._n_actions = len(self.task.actions)
         self.observation_space = observation_space(self.task.model)
@@ -135,12 +147,15 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         """The observation (clipped into the space) and ``info`` of a kernel's result."""
         self._state = res.state
         obs = space_observation(self._clip, res)
-        info = {
-            "obs_index": res.obs_index,
-            "config": res.state.config,
-            "min_friction": res.min_friction,
-            "steps": res.state.steps,
-        }
+        if self.exact_friction:
+            info = {
+                "obs_index": res.obs_index,
+                "config": res.state.config,
+                "min_friction": res.min_friction,
+                "steps": res.state.steps,
+            }
+        else:
+            info = {"obs_index": res.obs_index, "config": res.state.config, "steps": res.state.steps}
         return obs, info
 
     def reset(

@@ -54,6 +54,7 @@ from crmgrasp.tasks import Task
 __all__ = [
     "BACKENDS",
     "Backend",
+    "FRICTIONS",
     "PATHS",
     "kernel_for",
     "compiled_rules",
@@ -70,27 +71,41 @@ BACKENDS: tuple[str, ...] = ("auto", "numba", "reference")
 ``"numba"``: the compiled kernel (an error where none exists);
 ``"reference"``: the readable rules, row by row."""
 
+FRICTIONS: tuple[str, ...] = ("exact", "decided")
+"""What a kernel's ``min_friction`` is: the least friction, or one that decides the grasp
+([`kernel_for`][])."""
 
-def kernel_for(task: Task, backend: str = "auto") -> Kernel:
+
+def kernel_for(task: Task, backend: str = "auto", friction: str = "exact") -> Kernel:
     """The kernel that steps ``task`` on ``backend`` (see the module docstring): a family's
     kernel over per-object kernels, else the path [`PATHS`][] lists for the task's
-    contact model (``task.model.kind``)."""
+    contact model (``task.model.kind``).
+
+    ``friction`` (one of [`FRICTIONS`][]) says what each result's ``min_friction`` must be:
+    ``"exact"``, the configuration's least friction; ``"decided"``, any friction that decides
+    the grasp as the least friction does (at most ``mu_goal`` exactly when it is). Every
+    observation, error, reward and episode end is the same either way; a kernel whose least
+    friction is cheap returns the exact one in both. A tripod's compiled step then stops its
+    search once the grasp is decided (`crmgrasp.kernels._closure_jit.decided_friction`)."""
     if backend not in BACKENDS:
         raise CrmgraspError(f"unknown backend {backend!r}; choose one of {', '.join(BACKENDS)}")
+    if friction not in FRICTIONS:
+        raise CrmgraspError(f"unknown friction {friction!r}; choose one of {', '.join(FRICTIONS)}")
     if task.family is not None:
         from crmgrasp.kernels.family import FamilyKernel
 
-        return FamilyKernel(task, lambda instance: kernel_for(instance, backend))
+        return FamilyKernel(task, lambda instance: kernel_for(instance, backend, friction))
     try:
         choose = PATHS[task.model.kind]
     except KeyError:
         raise CrmgraspError(f"no kernel for the contact model {task.model.kind!r}") from None
-    return choose(task, backend)
+    return choose(task, backend, friction)
 
 
-def _planar(task: Task, backend: str) -> Kernel:
+def _planar(task: Task, backend: str, friction: str) -> Kernel:
     """Planar model on a polygon compiled (fused when noise-free; three or more contacts on
-    the fingers kernels), else the reference rules."""
+    the fingers kernels), else the reference rules; the least friction is exact on every
+    path (a few microseconds)."""
     compiled = isinstance(task.obj, Polygon)
     if backend == "reference" or (backend == "auto" and not compiled):
         return ReferenceKernel(task)
@@ -105,10 +120,11 @@ def _planar(task: Task, backend: str) -> Kernel:
     return PolygonKernel(task) if task.noise.active else FusedPolygonKernel(task)
 
 
-def _spatial(task: Task, backend: str) -> Kernel:
+def _spatial(task: Task, backend: str, friction: str) -> Kernel:
     """Spatial model on a polyhedron or a cylinder without noise: compiled and fused (two
-    contacts, or three and more); with noise or on a mesh the reference rules, for three
-    and more contacts with their least friction compiled."""
+    contacts, or three and more, which alone take ``friction`` = ``"decided"``: the least
+    friction is exact elsewhere); with noise or on a mesh the reference rules, for three and
+    more contacts with their least friction compiled."""
     from crmgrasp.kernels.spatial import FusedSpatialKernel, SpatialKernel
 
     if backend == "numba" and task.noise.active:
@@ -123,7 +139,7 @@ def _spatial(task: Task, backend: str) -> Kernel:
         from crmgrasp.kernels.closure import FingersSpatialKernel
         from crmgrasp.kernels.fingers3d import FusedFingersSpatialKernel
 
-        return FingersSpatialKernel(task) if slow else FusedFingersSpatialKernel(task)
+        return FingersSpatialKernel(task) if slow else FusedFingersSpatialKernel(task, decided=friction == "decided")
     return SpatialKernel(task) if slow else FusedSpatialKernel(task)
 
 
@@ -140,9 +156,9 @@ def compiled_rules(task: Task) -> Task:
     return task
 
 
-PATHS: dict[str, Callable[[Task, str], Kernel]] = {"planar": _planar, "spatial": _spatial}
-"""Contact model kind -> the function that picks its kernel from the backend, the object
-and the noise. A new contact model adds one row."""
+PATHS: dict[str, Callable[[Task, str, str], Kernel]] = {"planar": _planar, "spatial": _spatial}
+"""Contact model kind -> the function that picks its kernel from the backend, the friction
+asked for ([`kernel_for`][]), the object and the noise. A new contact model adds one row."""
 
 
 def _rows(configs: ArrayLike, name: str, model: ContactModel) -> NDArray[np.float64]:

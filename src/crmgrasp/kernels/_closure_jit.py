@@ -21,8 +21,9 @@ compiled least friction from 212-286 to 62-77 us per configuration on the config
 of random tripod episodes, when the rule was a bisection of 24 programs; the search's
 guesses then halved the programs (``python benchmarks/bench_tripod.py``, which times it
 alone, against the bisection, and the step).
-A start filter needs only whether the least friction exceeds ``mu_goal``: [`above`][] runs
-the same search and stops as soon as its bracket decides that.
+A start filter needs only whether the least friction exceeds ``mu_goal``, and a step made to
+decide the grasp only whether it is at most ``mu_goal``: [`decided_friction`][] runs the same
+search and stops as soon as its bracket decides that ([`above`][] is its comparison).
 
 No constant of the model is written here: the tolerances arrive in ``tol`` (layout below,
 built by [`crmgrasp.kernels.closure.closure_params`][] from the model's modules).
@@ -305,19 +306,29 @@ def _friction(hi, tol):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
+def decided_friction(p, nrm, edges, tol, mu_goal):  # type: ignore[no-untyped-def]
+    """A friction that decides the grasp as [`least_friction`][] does (``mu_goal >= 0``): at
+    most ``mu_goal`` exactly when the least friction is. The same search, stopped as soon as
+    its bracket decides that comparison: the upper end only falls and the lower end only
+    rises, so once ``tan(hi)`` (a probe that closed) is below ``mu_goal`` the least friction
+    will be too, and once ``tan(lo)`` is above both ``mu_goal`` and the antipodal tolerance it
+    will stay above (``inf`` included). It returns that end's friction (the cones close at
+    ``tan(hi)``: an upper bound of the least friction; they are open at ``tan(lo)``: a lower
+    bound), or the least friction itself where the search ends undecided. Both ends are
+    compared with a relative margin ([`crmgrasp.kernels.closure.DECIDED_MARGIN`][])."""
+    bar = max(mu_goal, tol[ANTIPODAL_TOL]) * (1.0 + tol[DECIDED_MARGIN])
+    lo, hi, decided = _search(p, nrm, edges, tol, mu_goal * (1.0 - tol[DECIDED_MARGIN]), bar)
+    if decided > 0:
+        return math.tan(lo)
+    return _friction(hi, tol)
+
+
+@njit(cache=True)
 def above(p, nrm, edges, tol, mu_goal):  # type: ignore[no-untyped-def]
     """``not (least_friction(p, nrm, edges, tol) <= mu_goal)`` (``mu_goal >= 0``), the same
-    answer, from the same search stopped as soon as its bracket decides it: the upper end
-    only falls and the lower end only rises, so once ``tan(hi)`` (a probe that closed) is below
-    ``mu_goal`` the least friction will be too, and once ``tan(lo)`` is above both ``mu_goal``
-    and the antipodal tolerance it will stay above (``inf`` included). A start filter needs
-    only this comparison; most candidates decide it in a few probes. Both ends are compared
-    with a relative margin ([`crmgrasp.kernels.closure.DECIDED_MARGIN`][])."""
-    bar = max(mu_goal, tol[ANTIPODAL_TOL]) * (1.0 + tol[DECIDED_MARGIN])
-    _, hi, decided = _search(p, nrm, edges, tol, mu_goal * (1.0 - tol[DECIDED_MARGIN]), bar)
-    if decided != 0:
-        return decided > 0
-    return not (_friction(hi, tol) <= mu_goal)
+    answer, from [`decided_friction`][]: a start filter needs only this comparison, and most
+    candidates decide it in a few probes."""
+    return not (decided_friction(p, nrm, edges, tol, mu_goal) <= mu_goal)
 
 
 @njit(cache=True)
@@ -328,4 +339,4 @@ def least_friction(p, nrm, edges, tol):  # type: ignore[no-untyped-def]
     return _friction(hi, tol)
 
 
-# compiled sources: 28aa73519111c44362210be31cec5dd26d41c7596255ac6c96713f92f899ef1e
+# compiled sources: e268304e0a6c8c2e85b19cb707f79eea2a484cd2ea9e13a236340520520946dd

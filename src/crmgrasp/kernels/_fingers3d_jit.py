@@ -25,7 +25,7 @@ import math
 import numpy as np
 from numba import njit
 
-from crmgrasp.kernels._closure_jit import above, least_friction
+from crmgrasp.kernels._closure_jit import above, decided_friction, least_friction
 from crmgrasp.kernels._compile import compiled
 from crmgrasp.kernels._fingers_jit import _index
 from crmgrasp.kernels._spatial_jit import (
@@ -183,17 +183,21 @@ def _split(c, n):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def _mu(c, n, tol, edges):  # type: ignore[no-untyped-def]
-    """The least friction of the row ``c`` (``least_friction_3d`` with ``edges`` cone edges)."""
+def _mu(c, n, tol, edges, goal):  # type: ignore[no-untyped-def]
+    """The least friction of the row ``c`` (``least_friction_3d`` with ``edges`` cone edges);
+    with ``goal >= 0``, a friction that decides it against ``goal`` (``decided_friction``)."""
     points, normals = _split(c, n)
+    if goal >= 0.0:
+        return decided_friction(points, normals, edges, tol, goal)
     return least_friction(points, normals, edges, tol)
 
 
 @njit(cache=True)
-def step_one(v, action, acts, n, planes, cyl, th, strides, abs_m, p, q, tol, edges, out, vals, known, mu_v):  # type: ignore[no-untyped-def]
+def step_one(v, action, acts, n, planes, cyl, th, strides, abs_m, p, q, tol, edges, out, vals, known, mu_v, goal):  # type: ignore[no-untyped-def]
     """One noise-free CRM ``acts[action]`` from the row ``v``: the new configuration into
     ``out``, its observation into ``vals[:, 0]``; returns ``(error code, bin index, least
-    friction)``, as [`crmgrasp.sim.step`][]. With ``known``, ``vals`` and ``mu_v`` already
+    friction)``, as [`crmgrasp.sim.step`][] (with ``goal >= 0`` a friction that decides the
+    least friction against ``goal``: [`_mu`][]). With ``known``, ``vals`` and ``mu_v`` already
     hold the observation and least friction of ``v``: after an error (the row unchanged)
     they are the step's own, not computed again."""
     code = _crm(
@@ -202,15 +206,15 @@ def step_one(v, action, acts, n, planes, cyl, th, strides, abs_m, p, q, tol, edg
     if code != 0 and known:
         return code, _index(vals, 0, code, th, strides, abs_m), mu_v
     _observe(out, n, vals)
-    return code, _index(vals, 0, code, th, strides, abs_m), _mu(out, n, tol, edges)
+    return code, _index(vals, 0, code, th, strides, abs_m), _mu(out, n, tol, edges, goal)
 
 
 @njit(cache=True)
-def begin_one(v, n, th, strides, abs_m, tol, edges, vals):  # type: ignore[no-untyped-def]
+def begin_one(v, n, th, strides, abs_m, tol, edges, vals, goal):  # type: ignore[no-untyped-def]
     """The observation of the row ``v`` into ``vals[:, 0]``; returns ``(bin index, least
-    friction)``, as [`crmgrasp.sim.begin`][]."""
+    friction)``, as [`crmgrasp.sim.begin`][] (``goal`` as in [`step_one`][])."""
     _observe(v, n, vals)
-    return _index(vals, 0, 0, th, strides, abs_m), _mu(v, n, tol, edges)
+    return _index(vals, 0, 0, th, strides, abs_m), _mu(v, n, tol, edges, goal)
 
 
 @njit(cache=True)
@@ -239,4 +243,4 @@ def accept_start(d, n, planes, cyl, p, q, tol, edges, mu_goal, out):  # type: ig
 __all__ = ["accept_start", "begin_one", "step_one"]
 
 
-# compiled sources: 28aa73519111c44362210be31cec5dd26d41c7596255ac6c96713f92f899ef1e
+# compiled sources: e268304e0a6c8c2e85b19cb707f79eea2a484cd2ea9e13a236340520520946dd

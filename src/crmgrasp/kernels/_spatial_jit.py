@@ -351,4 +351,4 @@ def accept_start(d, planes, cyl, p, q, out):  # type: ignore[no-untyped-def]
     return not (_mu(out, p[ANTIPODAL_TOL]) <= p[MU_GOAL])
 
 
-# compiled sources: 28aa73519111c44362210be31cec5dd26d41c7596255ac6c96713f92f899ef1e
+# compiled sources: e268304e0a6c8c2e85b19cb707f79eea2a484cd2ea9e13a236340520520946dd

@@ -70,4 +70,4 @@ def sweeps(qa, qg, tried, pair_row, pair_a, first, out_p, out_r, out_row, out_t,
     return limit
 
 
-# compiled sources: 28aa73519111c44362210be31cec5dd26d41c7596255ac6c96713f92f899ef1e
+# compiled sources: e268304e0a6c8c2e85b19cb707f79eea2a484cd2ea9e13a236340520520946dd

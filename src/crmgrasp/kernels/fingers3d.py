@@ -3,7 +3,10 @@
 [`FusedFingersSpatialKernel`][] steps a noise-free tripod task on a polyhedron or a
 cylinder: a CRM, its observation, bin and least friction are one compiled call
 (`crmgrasp.kernels._fingers3d_jit`), and so is the decision on each start try. The results
-equal the readable rules bit for bit (the tests check it). Batched rows, sensing noise and
+equal the readable rules bit for bit (the tests check it). Made with ``decided=True``
+([`crmgrasp.kernels.kernel_for`][]'s ``friction="decided"``), a step's least friction is one
+that decides the grasp, from the search stopped once it is decided; everything else is the
+same. Batched rows, sensing noise and
 meshes go through [`FingersSpatialKernel`][crmgrasp.kernels.closure.FingersSpatialKernel]
 (the readable rules with the least friction compiled).
 """
@@ -31,8 +34,9 @@ class FusedFingersSpatialKernel(FusedSingleStep, FingersSpatialKernel):
 
     name = "numba-spatial-fingers-fused"
 
-    def __init__(self, task: Task) -> None:
+    def __init__(self, task: Task, decided: bool = False) -> None:
         super().__init__(task)
+        self.decided = decided  # min_friction only decides the grasp (kernel_for's friction)
         self.n = n = self.model.n_contacts
         self.p, self.q, self.th, self.planes, self.cyl = spatial_params(task)
         self.strides = np.array(task.discretizer._strides, dtype=np.int64)
@@ -54,13 +58,19 @@ class FusedFingersSpatialKernel(FusedSingleStep, FingersSpatialKernel):
         self._fresh()
         return self
 
+    def _goal(self) -> float:
+        """``mu_goal`` where the step only decides the grasp, else -1 (the exact least friction)."""
+        return self.task.mu_goal if self.decided else -1.0
+
     def _begin_call(self) -> tuple[int, float]:
-        return jit.begin_one(self._v, self.n, self.th, self.strides, self.abs_m, self.tol, self.edges, self._vals)  # type: ignore[no-any-return]
+        return jit.begin_one(  # type: ignore[no-any-return]
+            self._v, self.n, self.th, self.strides, self.abs_m, self.tol, self.edges, self._vals, self._goal()
+        )
 
     def _step_call(self, action: int, table: F64) -> tuple[int, int, float]:
         return jit.step_one(  # type: ignore[no-any-return]
             self._v, action, table, self.n, self.planes, self.cyl, self.th, self.strides, self.abs_m,
-            self.p, self.q, self.tol, self.edges, self._out, self._vals, self._known, self._mu,
+            self.p, self.q, self.tol, self.edges, self._out, self._vals, self._known, self._mu, self._goal(),
         )  # fmt: skip
 
     def _accept(self, d: F64) -> Any:
