@@ -16,8 +16,9 @@ step alone (``env.step`` calls only, each timed on its own in the same pass; Car
 The least friction alone, as well, on the distinct configurations of ``steps`` random
 actions of each task: the compiled rule (``least_friction`` of
 ``crmgrasp.kernels._closure_jit``, no cache; the least of ``rounds`` passes) and, as peers, the
-rule before each of its last two changes: without the search's guesses (the plain bisection)
-and with Bland's pivot rule throughout instead of Dantzig's; the readable rule
+rule before each of its changes ([`PEERS`][]): the plain bisection, Bland's pivot rule
+throughout instead of Dantzig's, the midpoint as the first probe; the search stopped once it
+decides the grasp (``decided_friction``), with and without the first probe; the readable rule
 (``least_friction_3d``, first 50 configurations, once), linear programs per configuration and
 pivots per program each way, and how far each peer's answers lie from the rule's.
 
@@ -84,14 +85,31 @@ def _apart(pairs: list, new: np.ndarray, old: np.ndarray, goal: float) -> tuple[
     return gap, crossed
 
 
-def _counted(pairs: list, cap: int, streak: int) -> tuple[float, float]:
+PEERS = {
+    "bisection": {"GUIDE_MAX": 0, "FIRST_PROBE": 0.0},
+    "bland": {"DEGENERATE_STREAK": 0},
+    "midpoint_first": {"FIRST_PROBE": 0.0},
+}
+"""Each peer: the rule with constants of ``quality3d`` and ``lp`` set otherwise (the rule
+before one of its changes): no guesses and no first probe (the plain bisection), Bland's pivot
+rule throughout, the midpoint as the first probe."""
+
+
+def _modules() -> dict[str, Any]:
+    from crmgrasp.model import lp, quality3d
+
+    return {"GUIDE_MAX": quality3d, "FIRST_PROBE": quality3d, "DEGENERATE_STREAK": lp}
+
+
+def _counted(pairs: list, changes: dict[str, float]) -> tuple[float, float]:
     """Linear programs and simplex pivots per configuration of the readable rule on ``pairs``,
-    with ``GUIDE_MAX`` = ``cap`` and ``DEGENERATE_STREAK`` = ``streak``."""
-    from crmgrasp.model import lp, quality, quality3d
+    with the constants in ``changes`` set to their values."""
+    from crmgrasp.model import lp, quality
 
     counts = [0, 0]
     program, pivot = quality.max_least_weight, lp._pivot
-    before = quality3d.GUIDE_MAX, lp.DEGENERATE_STREAK
+    modules = _modules()
+    before = {name: getattr(modules[name], name) for name in changes}
 
     def counting(w: np.ndarray) -> float:
         counts[0] += 1
@@ -102,61 +120,71 @@ def _counted(pairs: list, cap: int, streak: int) -> tuple[float, float]:
         pivot(*args)
 
     quality.max_least_weight, lp._pivot = counting, pivoting
-    quality3d.GUIDE_MAX, lp.DEGENERATE_STREAK = cap, streak
+    for name, value in changes.items():
+        setattr(modules[name], name, value)
     try:
         for p, n in pairs:
             least_friction_3d(p, n)
     finally:
         quality.max_least_weight, lp._pivot = program, pivot
-        quality3d.GUIDE_MAX, lp.DEGENERATE_STREAK = before
+        for name, value in before.items():
+            setattr(modules[name], name, value)
     return counts[0] / len(pairs), counts[1] / len(pairs)
 
 
 def _least_friction_alone(env_id: str, steps: int, rounds: int) -> dict[str, float]:
     """The least friction on the distinct configurations a random-action run of ``env_id``
     visits: microseconds per configuration, compiled (the least of ``rounds`` passes) by the
-    rule (the search's guesses, Dantzig's pivots) and by two peers, each the rule before one
-    change: without the guesses (``GUIDE_MAX`` = 0: the plain bisection) and with Bland's pivots
-    throughout (``DEGENERATE_STREAK`` = 0); readable (the first 50 configurations, once); linear
-    programs and pivots per configuration, counted on the readable rule; and how far each
-    peer's answers lie from the rule's (the largest relative gap above friction 1e-6, and how
-    many fall on the other side of the task's ``mu_goal``)."""
+    rule and by each of [`PEERS`][] and, to decide the grasp only, by the rule and the
+    midpoint-first peer (``decided_friction`` at the task's ``mu_goal``); readable (the first 50
+    configurations, once); linear programs and pivots per configuration, counted on the
+    readable rule; and how far each peer's answers lie from the rule's (the largest relative gap
+    above friction 1e-6, and how many fall on the other side of the task's ``mu_goal``)."""
     import crmgrasp.kernels._closure_jit as jit
     from crmgrasp.kernels.closure import closure_params
-    from crmgrasp.model import lp, quality3d
 
     pairs = _configurations(env_id, steps)
-    tols = {"rule": closure_params(), "bisection": closure_params(), "bland": closure_params()}
-    tols["bisection"][jit.GUIDE_MAX] = 0.0
-    tols["bland"][jit.DEGENERATE_STREAK] = 0.0
+    goal = gym.make(env_id).unwrapped.task.mu_goal
+    tols = {"rule": closure_params()}
+    for name, changes in PEERS.items():
+        tols[name] = closure_params()
+        for key, value in changes.items():
+            tols[name][getattr(jit, key)] = value
     jit.least_friction(*pairs[0], EDGES, tols["rule"])  # compiled before timing
-    best = dict.fromkeys(tols, float("inf"))
+    jit.decided_friction(*pairs[0], EDGES, tols["rule"], goal)
+    timed = {**{(n, "exact"): t for n, t in tols.items()}, ("rule", "decided"): tols["rule"]}
+    timed[("midpoint_first", "decided")] = tols["midpoint_first"]
+    best = dict.fromkeys(timed, float("inf"))
     for _ in range(rounds):
-        for name, tol in tols.items():
+        for (name, how), tol in timed.items():
             t0 = time.perf_counter()
             for p, n in pairs:
-                jit.least_friction(p, n, EDGES, tol)
-            best[name] = min(best[name], (time.perf_counter() - t0) / len(pairs))
-    goal = gym.make(env_id).unwrapped.task.mu_goal
+                if how == "exact":
+                    jit.least_friction(p, n, EDGES, tol)
+                else:
+                    jit.decided_friction(p, n, EDGES, tol, goal)
+            best[(name, how)] = min(best[(name, how)], (time.perf_counter() - t0) / len(pairs))
     answers = {name: np.array([jit.least_friction(p, n, EDGES, tol) for p, n in pairs]) for name, tol in tols.items()}
     t0 = time.perf_counter()
     for p, n in pairs[:50]:
         least_friction_3d(p, n)
     readable = (time.perf_counter() - t0) / len(pairs[:50])
-    cap, streak = quality3d.GUIDE_MAX, lp.DEGENERATE_STREAK
-    programs, pivots = _counted(pairs[:50], cap, streak)
+    programs, pivots = _counted(pairs[:50], {})
     out = {
         "configurations": len(pairs),
-        "least_friction_us": round(best["rule"] * 1e6, 1),
+        "least_friction_us": round(best[("rule", "exact")] * 1e6, 1),
         "least_friction_readable_us": round(readable * 1e6, 1),
         "programs_per_configuration": round(programs, 1),
         "pivots_per_program": round(pivots / programs, 1),
+        "least_friction_decided_us": round(best[("rule", "decided")] * 1e6, 1),
+        "least_friction_decided_midpoint_first_us": round(best[("midpoint_first", "decided")] * 1e6, 1),
     }
-    for name, counted in (("bisection", _counted(pairs[:50], 0, streak)), ("bland", _counted(pairs[:50], cap, 0))):
+    for name, changes in PEERS.items():
+        counted = _counted(pairs[:50], changes)
         gap, crossed = _apart(pairs, answers["rule"], answers[name], goal)
         out |= {
-            f"least_friction_{name}_us": round(best[name] * 1e6, 1),
-            f"{name}_over_rule": round(best[name] / best["rule"], 2),
+            f"least_friction_{name}_us": round(best[(name, "exact")] * 1e6, 1),
+            f"{name}_over_rule": round(best[(name, "exact")] / best[("rule", "exact")], 2),
             f"programs_per_configuration_{name}": round(counted[0], 1),
             f"pivots_per_program_{name}": round(counted[1] / counted[0], 1),
             f"largest_relative_gap_to_{name}_above_1e-6": float(f"{gap:.2g}"),

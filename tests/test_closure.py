@@ -74,14 +74,16 @@ def test_a_changed_tolerance_reaches_the_compiled_rule(monkeypatch) -> None:
     assert math.isinf(compiled_least_friction()(grip))
 
 
-def test_the_search_constants_reach_the_compiled_rule(monkeypatch) -> None:
-    """The guesses' constants are read when the rule is made: with none allowed both rules
-    bisect, and still agree bit for bit; on most grips that moves the answer by a bracket."""
+@pytest.mark.parametrize(("name", "value"), [("GUIDE_MAX", 0), ("FIRST_PROBE", 0.0), ("FIRST_PROBE", 0.3)])
+def test_the_search_constants_reach_the_compiled_rule(monkeypatch, name: str, value: float) -> None:
+    """The search's constants are read when the rule is made: with no guesses allowed, or the
+    first probe elsewhere (the midpoint, friction 0.3), both rules still agree bit for bit; on
+    several grips that moves the answer within its bracket."""
     from crmgrasp.model import quality3d
 
     grips = _random_grips(7, 12)
     guided = [compiled_least_friction()(grip) for grip in grips]
-    monkeypatch.setattr(quality3d, "GUIDE_MAX", 0)
+    monkeypatch.setattr(quality3d, name, value)
     plain = [compiled_least_friction()(grip) for grip in grips]
     for grip, got in zip(grips, plain, strict=True):
         want = least_friction_3d([c.x for c in grip], [c.n for c in grip])

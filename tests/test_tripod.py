@@ -108,8 +108,8 @@ def _tilted_grips(count: int) -> list[tuple[list, list]]:
 
 
 def test_the_search_without_guesses_is_the_bisection(monkeypatch) -> None:
-    """With no guesses allowed every probe is the bracket's midpoint: the least friction is
-    the plain bisection's, written out here, bit for bit."""
+    """With no guesses allowed and no first probe every probe is the bracket's midpoint: the
+    least friction is the plain bisection's, written out here, bit for bit."""
     from crmgrasp.model import quality3d
 
     def bisection(pts: list, nrm: list) -> float:
@@ -124,8 +124,31 @@ def test_the_search_without_guesses_is_the_bisection(monkeypatch) -> None:
         return 0.0 if math.tan(hi) < ANTIPODAL_TOL else math.tan(hi)
 
     monkeypatch.setattr(quality3d, "GUIDE_MAX", 0)
+    monkeypatch.setattr(quality3d, "FIRST_PROBE", 0.0)
     for pts, nrm in _tilted_grips(6):
         assert least_friction_3d(pts, nrm) == bisection(pts, nrm)
+
+
+def test_the_first_probe_is_at_its_friction(monkeypatch) -> None:
+    """The search probes friction ``FIRST_PROBE`` first (the midpoint of the whole range with
+    it at 0), then the midpoint of what is left: above it when it opened, below when it
+    closed."""
+    from crmgrasp.model import quality3d
+
+    probes: list[float] = []
+    wrenches = quality3d._wrenches
+    monkeypatch.setattr(quality3d, "_wrenches", lambda f, mu, e: probes.append(mu) or wrenches(f, mu, e))
+    for pts, nrm in _tilted_grips(4):
+        probes.clear()
+        mu = least_friction_3d(pts, nrm)
+        first, second = (math.atan(p) for p in probes[:2])
+        assert probes[0] == pytest.approx(quality3d.FIRST_PROBE, rel=1e-12)
+        end = quality3d._THETA_MAX_3D if mu > quality3d.FIRST_PROBE else 0.0
+        assert second == pytest.approx(0.5 * (first + end), rel=1e-12)
+    monkeypatch.setattr(quality3d, "FIRST_PROBE", 0.0)
+    probes.clear()
+    least_friction_3d(*_tilted_grips(1)[0])
+    assert math.atan(probes[0]) == pytest.approx(0.5 * quality3d._THETA_MAX_3D, rel=1e-12)
 
 
 def test_the_guesses_halve_the_programs_and_keep_the_bracket(monkeypatch) -> None:
@@ -144,6 +167,7 @@ def test_the_guesses_halve_the_programs_and_keep_the_bracket(monkeypatch) -> Non
         guided = len(calls)
         with monkeypatch.context() as m:
             m.setattr(quality3d, "GUIDE_MAX", 0)
+            m.setattr(quality3d, "FIRST_PROBE", 0.0)
             calls.clear()
             plain = least_friction_3d(pts, nrm)
         if math.isinf(mu) or mu < 1e-6:

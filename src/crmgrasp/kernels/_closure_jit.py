@@ -41,8 +41,8 @@ THETA_MAX, THETA_TOL, RANK_TOL, LP_TOL, OPT_TOL = range(5)
 PIVOT_TOL, FEASIBILITY_TOL, ANTIPODAL_TOL, ARM_MIN, MAX_PIVOTS = range(5, 10)
 CERTIFIED_GAP, CERTIFIED_RANK_TOL, DECIDED_MARGIN = range(10, 13)  # the kernel's own margins
 GUIDE_REACH, GUIDE_WIDEN, GUIDE_NEAR, GUIDE_FLOOR, GUIDE_MAX = range(13, 18)  # the search's guesses
-DEGENERATE_STREAK = 18
-N_TOL = 19
+DEGENERATE_STREAK, FIRST_PROBE = 18, 19
+N_TOL = 20
 
 
 @njit(cache=True)
@@ -285,6 +285,8 @@ def _next_probe(a, b, d1, b2, d2, reach, guesses, tol):  # type: ignore[no-untyp
     """``quality3d._next_probe``: the next half-angle, and 1 when it is a guess (0 for the
     midpoint)."""
     target = tol[LP_TOL]
+    if a == 0.0 and b == tol[THETA_MAX] and tol[FIRST_PROBE] > 0.0:  # nothing probed yet
+        return math.atan(tol[FIRST_PROBE]), 0
     if guesses < tol[GUIDE_MAX] and d1 > target and d2 > d1 and b2 > tol[GUIDE_FLOOR]:
         root = b - (d1 - target) * (b2 - b) / (d2 - d1)
         err = reach * (b - root) * (b2 - root)
@@ -339,4 +341,4 @@ def least_friction(p, nrm, edges, tol):  # type: ignore[no-untyped-def]
     return _friction(hi, tol)
 
 
-# compiled sources: e268304e0a6c8c2e85b19cb707f79eea2a484cd2ea9e13a236340520520946dd
+# compiled sources: 4a6879171a7e45986de6dfd4cec96c70a74731ac572120dca69b75704fdf87e8

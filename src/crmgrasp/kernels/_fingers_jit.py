@@ -245,4 +245,4 @@ def begin_one(v, n, th, strides, abs_m, p, fp, vals):  # type: ignore[no-untyped
     return _index(vals, 0, 0, th, strides, abs_m), _mu(v, 0, n, fp, p[ANTIPODAL_TOL])
 
 
-# compiled sources: e268304e0a6c8c2e85b19cb707f79eea2a484cd2ea9e13a236340520520946dd
+# compiled sources: 4a6879171a7e45986de6dfd4cec96c70a74731ac572120dca69b75704fdf87e8

@@ -351,4 +351,4 @@ def accept_start(d, planes, cyl, p, q, out):  # type: ignore[no-untyped-def]
     return not (_mu(out, p[ANTIPODAL_TOL]) <= p[MU_GOAL])
 
 
-# compiled sources: e268304e0a6c8c2e85b19cb707f79eea2a484cd2ea9e13a236340520520946dd
+# compiled sources: 4a6879171a7e45986de6dfd4cec96c70a74731ac572120dca69b75704fdf87e8

@@ -70,4 +70,4 @@ def sweeps(qa, qg, tried, pair_row, pair_a, first, out_p, out_r, out_row, out_t,
     return limit
 
 
-# compiled sources: e268304e0a6c8c2e85b19cb707f79eea2a484cd2ea9e13a236340520520946dd
+# compiled sources: 4a6879171a7e45986de6dfd4cec96c70a74731ac572120dca69b75704fdf87e8

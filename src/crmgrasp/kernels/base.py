@@ -29,6 +29,7 @@ from crmgrasp.tasks import StartFilter, Task
 __all__ = ["Kernel", "FusedSingleStep", "OneStep", "BatchStep", "bin_thresholds"]
 
 _ERRORS = tuple(Error)
+_new = tuple.__new__  # builds the step's NamedTuples without their Python-level __new__ (the hot path)
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -276,4 +277,7 @@ class FusedSingleStep(Kernel):
         terminated, truncated = episode_end(self.task, mu, steps)
         reward = step_reward(self.task, terminated, code)
         obs = tuple(self._vals[:, 0].tolist())
-        return OneStep(SimState(config, config, steps), obs, _ERRORS[code], index, mu, reward, terminated, truncated)
+        return _new(
+            OneStep,
+            (_new(SimState, (config, config, steps)), obs, _ERRORS[code], index, mu, reward, terminated, truncated),
+        )

@@ -71,6 +71,7 @@ def closure_params() -> F64:
     tol[jit.GUIDE_REACH], tol[jit.GUIDE_WIDEN] = quality3d.GUIDE_REACH, quality3d.GUIDE_WIDEN
     tol[jit.GUIDE_NEAR], tol[jit.GUIDE_FLOOR] = quality3d.GUIDE_NEAR, quality3d.GUIDE_FLOOR
     tol[jit.GUIDE_MAX], tol[jit.DEGENERATE_STREAK] = quality3d.GUIDE_MAX, lp.DEGENERATE_STREAK
+    tol[jit.FIRST_PROBE] = quality3d.FIRST_PROBE
     return tol
 
 

@@ -35,8 +35,8 @@ class FusedFingersSpatialKernel(FusedSingleStep, FingersSpatialKernel):
     name = "numba-spatial-fingers-fused"
 
     def __init__(self, task: Task, decided: bool = False) -> None:
-        super().__init__(task)
         self.decided = decided  # min_friction only decides the grasp (kernel_for's friction)
+        super().__init__(task)
         self.n = n = self.model.n_contacts
         self.p, self.q, self.th, self.planes, self.cyl = spatial_params(task)
         self.strides = np.array(task.discretizer._strides, dtype=np.int64)
@@ -47,7 +47,10 @@ class FusedFingersSpatialKernel(FusedSingleStep, FingersSpatialKernel):
         self._fresh()
 
     def _fresh(self) -> None:
+        """No configuration held; the goal its least friction decides against (``mu_goal``
+        where the step only decides the grasp, else -1: the exact least friction)."""
         self._forget()
+        self._goal = self.task.mu_goal if self.decided else -1.0
         self.start_filter = self._accept  # type: ignore[assignment]
 
     def rebind(self, instance: Task) -> FusedFingersSpatialKernel:
@@ -58,19 +61,15 @@ class FusedFingersSpatialKernel(FusedSingleStep, FingersSpatialKernel):
         self._fresh()
         return self
 
-    def _goal(self) -> float:
-        """``mu_goal`` where the step only decides the grasp, else -1 (the exact least friction)."""
-        return self.task.mu_goal if self.decided else -1.0
-
     def _begin_call(self) -> tuple[int, float]:
         return jit.begin_one(  # type: ignore[no-any-return]
-            self._v, self.n, self.th, self.strides, self.abs_m, self.tol, self.edges, self._vals, self._goal()
+            self._v, self.n, self.th, self.strides, self.abs_m, self.tol, self.edges, self._vals, self._goal
         )
 
     def _step_call(self, action: int, table: F64) -> tuple[int, int, float]:
         return jit.step_one(  # type: ignore[no-any-return]
             self._v, action, table, self.n, self.planes, self.cyl, self.th, self.strides, self.abs_m,
-            self.p, self.q, self.tol, self.edges, self._out, self._vals, self._known, self._mu, self._goal(),
+            self.p, self.q, self.tol, self.edges, self._out, self._vals, self._known, self._mu, self._goal,
         )  # fmt: skip
 
     def _accept(self, d: F64) -> Any:

@@ -121,7 +121,7 @@ def min_friction_3d(points: ArrayLike, normals: ArrayLike) -> float:
 
 THETA_TOL_3D = 1e-7
 """The search's resolution of the least friction cone half-angle, radians
-([`least_friction_3d`][]): about 12 linear programs per configuration on the tripod tasks
+([`least_friction_3d`][]): about 12-13 linear programs per configuration on the tripod tasks
 (24 for a plain bisection; `benchmarks/bench_tripod.py` counts them)."""
 
 _THETA_MAX_3D = math.atan(1e6)  # no closure below this half-angle counts as none: inf
@@ -146,6 +146,13 @@ midpoints decide there."""
 
 GUIDE_MAX = 16
 """At most this many guesses per configuration; midpoints after that (so the search ends)."""
+
+FIRST_PROBE = 0.0505
+"""The friction of the search's first probe, 1% above the spatial tasks' default goal (0.05):
+a search stopped as soon as it decides a grasp at that goal (the start filter, a step asked
+only to decide the grasp) then ends after one program for every configuration whose least
+friction lies above it. The midpoint of the remaining bracket follows. Like the guesses'
+constants it decides only which half-angles are probed (0: the midpoint first)."""
 
 
 EDGES = 8
@@ -205,8 +212,11 @@ def _next_probe(a: float, b: float, d1: float, b2: float, d2: float, reach: floa
     ``reach`` times that (to close just above the threshold), or, once ``b`` is within
     [`GUIDE_NEAR`][] of the tolerance above ``x_s``, as far below ``x_s`` (to open just below
     it). The midpoint otherwise: before two closed probes, below [`GUIDE_FLOOR`][], after
-    [`GUIDE_MAX`][] guesses or for a guess outside the bracket."""
+    [`GUIDE_MAX`][] guesses or for a guess outside the bracket; the first probe of all at
+    friction [`FIRST_PROBE`][]."""
     target = quality.LP_TOL
+    if a == 0.0 and b == _THETA_MAX_3D and FIRST_PROBE > 0.0:  # nothing probed yet
+        return math.atan(FIRST_PROBE), 0
     if guesses < GUIDE_MAX and d1 > target and d2 > d1 and b2 > GUIDE_FLOOR:
         root = b - (d1 - target) * (b2 - b) / (d2 - d1)
         err = reach * (b - root) * (b2 - root)

@@ -96,16 +96,12 @@ class SpatialModel(LabelledContacts):
     def config_of(self, row: Sequence[float]) -> Contacts3D:
         """The configuration of the first six floats per contact of ``row`` (a kernel's row
         may carry more after them)."""
-        if self.n_contacts == 2:
-            return Config3D(
-                Contact3D((row[0], row[1], row[2]), (row[3], row[4], row[5])),
-                Contact3D((row[6], row[7], row[8]), (row[9], row[10], row[11])),
-            )
-        parts = (
-            Contact3D((row[i], row[i + 1], row[i + 2]), (row[i + 3], row[i + 4], row[i + 5]))
+        new = tuple.__new__  # the NamedTuples' own construction, without their Python-level __new__ (a hot path)
+        parts = [
+            new(Contact3D, ((row[i], row[i + 1], row[i + 2]), (row[i + 3], row[i + 4], row[i + 5])))
             for i in range(0, 6 * self.n_contacts, 6)
-        )
-        return Grip3D(*parts)
+        ]
+        return new(Config3D if self.n_contacts == 2 else Grip3D, parts)  # type: ignore[return-value]
 
     def row_of(self, config: Contacts3D) -> list[float]:
         return [v for c in config for part in c for v in part]
