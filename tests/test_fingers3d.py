@@ -83,6 +83,25 @@ def test_a_decided_friction_changes_nothing_else(name: str) -> None:
             (o1, i1), (o2, i2) = full.reset(), lean.reset()
 
 
+def test_the_vector_environment_takes_exact_friction() -> None:
+    """``make_vec`` with ``exact_friction=False``: the same batched observations, rewards and
+    ends as the default, and no ``min_friction`` in ``info``."""
+    import gymnasium as gym
+
+    envs = [
+        gym.make_vec("crmgrasp/Cup3D3F-v0", num_envs=3, vectorization_mode="vector_entry_point", **kw)
+        for kw in ({}, {"exact_friction": False})
+    ]
+    (o1, i1), (o2, i2) = (env.reset(seed=4) for env in envs)
+    rng = np.random.default_rng(2)
+    for _ in range(40):
+        assert all(np.array_equal(o1[k], o2[k]) for k in o1) and "min_friction" not in i2
+        assert np.array_equal(i1["obs_index"], i2["obs_index"]) and "min_friction" in i1
+        actions = rng.integers(envs[0].single_action_space.n, size=3)
+        (o1, r1, t1, u1, i1), (o2, r2, t2, u2, i2) = (env.step(actions) for env in envs)
+        assert np.array_equal(r1, r2) and np.array_equal(t1, t2) and np.array_equal(u1, u2)
+
+
 def test_the_friction_argument_is_checked() -> None:
     """An unknown ``friction`` or a non-boolean ``exact_friction``: a one-line error."""
     import gymnasium as gym

@@ -132,8 +132,14 @@ class ContinuousCRMEnv(CRMGraspEnv):
     * v0: initial version.
     """
 
-    def __init__(self, task: Task | str = "paper-box", render_mode: str | None = None, backend: str = "auto") -> None:
-        super().__init__(task, render_mode, backend)
+    def __init__(
+        self,
+        task: Task | str = "paper-box",
+        render_mode: str | None = None,
+        backend: str = "auto",
+        exact_friction: bool = True,
+    ) -> None:
+        super().__init__(task, render_mode, backend, exact_friction)
         self.actions = PairOffsetActions(self.task)
         self.ranges = self.actions.ranges
         self.action_space = self.actions.space  # type: ignore[assignment]

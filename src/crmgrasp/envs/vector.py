@@ -28,7 +28,7 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, boolean
 from crmgrasp.envs.single import observation_space
 from crmgrasp.kernels import Kernel, kernel_for
 from crmgrasp.sim import episode_end, step_reward
@@ -55,9 +55,12 @@ class CRMGraspVectorEnv(VectorEnv):
         render_mode: str | None = None,
         backend: str = "auto",
         max_episode_steps: int | None = None,
+        exact_friction: bool = True,
     ) -> None:
         """``max_episode_steps`` (given by ``gymnasium.make_vec`` from the registration)
-        replaces the task's ``max_steps``: episodes are cut off inside the batch."""
+        replaces the task's ``max_steps``: episodes are cut off inside the batch.
+        ``exact_friction`` as in [`CRMGraspEnv`][crmgrasp.envs.single.CRMGraspEnv]: false, and
+        the steps only decide the grasp (``info`` without ``min_friction``)."""
         if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
             raise CrmgraspError(f"num_envs must be an integer >= 1, got {num_envs!r}")
         if render_mode is not None:
@@ -66,7 +69,9 @@ class CRMGraspVectorEnv(VectorEnv):
         if max_episode_steps is not None and max_episode_steps != self.task.max_steps:
             self.task = dataclasses.replace(self.task, max_steps=max_episode_steps)
         self._backend = backend
-        self.kernel: Kernel = kernel_for(self.task, backend)
+        self.exact_friction = boolean(exact_friction, "exact_friction")
+        self._friction = "exact" if exact_friction else "decided"
+        self.kernel: Kernel = kernel_for(self.task, backend, self._friction)
         self.num_envs = num_envs
         self.render_mode = None
         self.single_action_space = spaces.Discrete(len(self.task.actions))
@@ -112,6 +117,8 @@ class CRMGraspVectorEnv(VectorEnv):
     def _info(self, index: np.ndarray, mu: np.ndarray) -> dict[str, Any]:
         config = self._cfg.view()  # a read-only view: each step builds new rows
         config.flags.writeable = False
+        if not self.exact_friction:
+            return {"obs_index": index, "steps": self._steps.copy(), "config": config}
         return {"obs_index": index, "min_friction": mu, "steps": self._steps.copy(), "config": config}
 
     def reset(
@@ -160,7 +167,7 @@ class FamilyVectorEnv(CRMGraspVectorEnv):
         super().__init__(num_envs, task, **kwargs)
         if self.task.family is None:
             raise CrmgraspError(f"task {self.task.name!r} has no object family; use CRMGraspVectorEnv")
-        self._rows: list[Any] = [kernel_for(self.task, self._backend) for _ in range(num_envs)]
+        self._rows: list[Any] = [kernel_for(self.task, self._backend, self._friction) for _ in range(num_envs)]
         self._states: list[Any] = [None] * num_envs
 
     def _collect(self, results: list[Any]) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
