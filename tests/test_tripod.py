@@ -151,6 +151,23 @@ def test_the_first_probe_is_at_its_friction(monkeypatch) -> None:
     assert math.atan(probes[0]) == pytest.approx(0.5 * quality3d._THETA_MAX_3D, rel=1e-12)
 
 
+def test_the_first_probe_sits_just_above_the_tripods_goal() -> None:
+    """``FIRST_PROBE`` is 1% above the default goal of a task, which the tripod tasks keep:
+    a first probe that opens there decides their grasp (above the goal by more than the
+    decision's margin), one that closes leaves it to the probes below."""
+    import dataclasses
+
+    from crmgrasp.kernels.closure import DECIDED_MARGIN
+    from crmgrasp.model import quality3d
+    from crmgrasp.tasks import Task
+
+    default = next(f.default for f in dataclasses.fields(Task) if f.name == "mu_goal")
+    assert quality3d.FIRST_PROBE == pytest.approx(1.01 * default, rel=1e-12)
+    for name in ("cup-3d-3f", "box-3d-3f"):
+        goal = make_task(name).mu_goal
+        assert goal == default and math.tan(math.atan(quality3d.FIRST_PROBE)) > goal * (1 + DECIDED_MARGIN)
+
+
 def test_the_guesses_halve_the_programs_and_keep_the_bracket(monkeypatch) -> None:
     """On tilted tripods the search's guesses take at most 16 programs a configuration where
     the bisection takes 24, and the answer still brackets the closure: closed at it, open
