@@ -132,14 +132,8 @@ class ContinuousCRMEnv(CRMGraspEnv):
     * v0: initial version.
     """
 
-    def __init__(
-        self,
-        task: Task | str = "paper-box",
-        render_mode: str | None = None,
-        backend: str = "auto",
-        exact_friction: bool = True,
-    ) -> None:
-        super().__init__(task, render_mode, backend, exact_friction)
+    def __init__(self, task: Task | str = "paper-box", **kwargs: Any) -> None:
+        super().__init__(task, **kwargs)  # render_mode, backend, exact_friction: as CRMGraspEnv's
         self.actions = PairOffsetActions(self.task)
         self.ranges = self.actions.ranges
         self.action_space = self.actions.space  # type: ignore[assignment]

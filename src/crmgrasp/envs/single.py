@@ -147,15 +147,14 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         """The observation (clipped into the space) and ``info`` of a kernel's result."""
         self._state = res.state
         obs = space_observation(self._clip, res)
-        if self.exact_friction:
-            info = {
-                "obs_index": res.obs_index,
-                "config": res.state.config,
-                "min_friction": res.min_friction,
-                "steps": res.state.steps,
-            }
-        else:
-            info = {"obs_index": res.obs_index, "config": res.state.config, "steps": res.state.steps}
+        info = {
+            "obs_index": res.obs_index,
+            "config": res.state.config,
+            "min_friction": res.min_friction,
+            "steps": res.state.steps,
+        }
+        if not self.exact_friction:  # then only a friction that decides the grasp
+            del info["min_friction"]
         return obs, info
 
     def reset(

@@ -117,9 +117,10 @@ class CRMGraspVectorEnv(VectorEnv):
     def _info(self, index: np.ndarray, mu: np.ndarray) -> dict[str, Any]:
         config = self._cfg.view()  # a read-only view: each step builds new rows
         config.flags.writeable = False
-        if not self.exact_friction:
-            return {"obs_index": index, "steps": self._steps.copy(), "config": config}
-        return {"obs_index": index, "min_friction": mu, "steps": self._steps.copy(), "config": config}
+        info = {"obs_index": index, "min_friction": mu, "steps": self._steps.copy(), "config": config}
+        if not self.exact_friction:  # then only frictions that decide the grasps
+            del info["min_friction"]
+        return info
 
     def reset(
         self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
