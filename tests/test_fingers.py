@@ -258,6 +258,33 @@ def test_the_compiled_uniform_start_rule_draws_the_readable_starts(name):
 
 
 # ---------------------------------------------------------------- tasks
+def test_the_references_take_the_compiled_planar_least_friction(monkeypatch):
+    """`compiled_rules` hands a three-finger planar task's model the fingers kernel's
+    compiled least friction: equal to the readable rule bit for bit on the configurations
+    random CRMs visit, and the references computed with it equal the readable ones."""
+    from crmgrasp.kernels import compiled_rules
+    from crmgrasp.kernels.fingers import compiled_least_friction
+    from crmgrasp.planners import references
+
+    task = make_task("triangles-3f")
+    fast = compiled_rules(task)
+    assert fast.model.least_friction is not None and task.model.least_friction is None
+    assert compiled_rules(make_task("paper-box")).model.least_friction is None
+    rule, rng = compiled_least_friction(), np.random.default_rng(3)
+    inst = task.instance(rng)
+    config, seen = inst.sample_start(rng), 0
+    for a in rng.integers(len(task.actions), size=200).tolist():
+        config = inst.execute(config, task.actions[a], config).config
+        assert rule(config) == least_friction(config)
+        assert fast.model.quality(config) == inst.model.quality(config)
+        seen += 0.0 < least_friction(config) < math.inf
+    assert seen > 10
+    starts = references.sample_starts(task, 6, 3)
+    values = (references.belief_optimum(task, starts), references.clairvoyant_bound(task, starts))
+    monkeypatch.setattr(references, "compiled_rules", lambda t: t)
+    assert (references.belief_optimum(task, starts), references.clairvoyant_bound(task, starts)) == values
+
+
 def test_three_finger_tasks_are_registered_and_sample_feasible_starts():
     task = make_task("triangles-3f")
     assert task.model.n_contacts == 3 and "three fingers" in task.headline()

@@ -86,7 +86,7 @@ class ThirdContactConfig:
 def _row(name: str, mu: float, cfg: ThirdContactConfig) -> dict[str, Any]:
     """The references of task ``name`` at goal ``mu`` on ``cfg.starts`` sampled starts, and
     where some start can be grasped, the learner's greedy policies on those starts."""
-    task = compiled_rules(dataclasses.replace(make_task(name), mu_goal=mu))  # a tripod's least friction compiled
+    task = compiled_rules(dataclasses.replace(make_task(name), mu_goal=mu))  # three contacts: least friction compiled
     starts = sample_starts(task, cfg.starts, cfg.seed)
     share = 1.0 - ungraspable_fraction(task, starts)
     found = share > 0.0

@@ -145,14 +145,21 @@ def _spatial(task: Task, backend: str, friction: str) -> Kernel:
 
 def compiled_rules(task: Task) -> Task:
     """``task`` with each rule that the kernels compile for its model handed to that model:
-    today the least friction of three or more spatial contacts
-    ([`crmgrasp.kernels.closure.with_compiled_least_friction`][]); ``task`` itself otherwise.
+    today the least friction of three or more contacts, spatial
+    ([`crmgrasp.kernels.closure.with_compiled_least_friction`][]) and planar
+    ([`crmgrasp.kernels.fingers.compiled_least_friction`][]); ``task`` itself otherwise.
     For code that applies the task's rules directly rather than through a kernel (the
     reference values and the k-order search); the results are the same bit for bit."""
-    if task.model.kind == "spatial" and task.model.n_contacts > 2:
+    if task.model.n_contacts > 2 and task.model.kind == "spatial":
         from crmgrasp.kernels.closure import with_compiled_least_friction
 
         return with_compiled_least_friction(task)
+    if task.model.n_contacts > 2 and task.model.kind == "planar":
+        import dataclasses
+
+        from crmgrasp.kernels.fingers import compiled_least_friction
+
+        return task.with_model(dataclasses.replace(task.model, least_friction=compiled_least_friction()))  # type: ignore[type-var]
     return task
 
 

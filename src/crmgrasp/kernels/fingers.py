@@ -8,6 +8,7 @@ results equal the readable rules bit for bit (the tests check it).
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
@@ -22,7 +23,7 @@ from crmgrasp.model.hand import CRM, Error
 from crmgrasp.sim import OneStep, SimState, episode_end, step_reward
 from crmgrasp.tasks import Task
 
-__all__ = ["FingersKernel"]
+__all__ = ["FingersKernel", "compiled_least_friction"]
 
 _ERRORS = tuple(Error)
 
@@ -34,6 +35,20 @@ def _quality_params() -> F64:
     fp[jit.THETA_MAX], fp[jit.ANGLE_TOL] = quality._THETA_MAX, quality.ANGLE_TOL
     fp[jit.ARM_MIN] = quality._ARM_MIN
     return fp
+
+
+@functools.lru_cache(maxsize=1 << 14)
+def _cached(config: Any, fp: tuple[float, ...], antipodal_tol: float) -> float:
+    row = np.array([[v for c in config for v in c]], dtype=np.float64)
+    return float(jit._mu(row, 0, len(config), np.array(fp), antipodal_tol))
+
+
+def compiled_least_friction() -> Any:
+    """The least friction of a planar configuration of three or more contacts, compiled:
+    ``config -> float``, equal bit for bit to
+    [`least_friction`][crmgrasp.model.quality.least_friction] (the fingers kernel's own),
+    cached per configuration and constants as the readable rule is."""
+    return functools.partial(_cached, fp=tuple(_quality_params().tolist()), antipodal_tol=quality.ANTIPODAL_TOL)
 
 
 class _UniformFilter:

@@ -9,7 +9,7 @@ readings and observations ([`crmgrasp.model.sensing`][]), min friction
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -54,10 +54,16 @@ class PlanarModel(LabelledContacts):
         The planar hand (contacts, aperture, palm, reach).
     noise
         Sensing noise of every reading (off by default).
+    least_friction
+        The least friction of three or more contacts, if not the readable
+        [`least_friction`][crmgrasp.model.quality.least_friction]: a kernel hands in its
+        compiled copy (`crmgrasp.kernels.compiled_rules`), equal to it bit for bit; the
+        configurations are then taken as the rules made them (no checks).
     """
 
     hand: Hand
     noise: SensorNoise = field(default_factory=SensorNoise)
+    least_friction: Callable[[Grip], float] | None = field(default=None, compare=False, repr=False)
 
     kind: ClassVar[str] = "planar"
     axes: ClassVar[str] = "xy"
@@ -114,7 +120,10 @@ class PlanarModel(LabelledContacts):
         return observe(sensed)
 
     def quality(self, config: Config | Grip) -> float:
-        """[`min_friction`][crmgrasp.model.quality.min_friction]."""
+        """[`min_friction`][crmgrasp.model.quality.min_friction] (``least_friction`` where
+        given, for three or more contacts)."""
+        if self.least_friction is not None and len(config) > 2:
+            return self.least_friction(config)  # type: ignore[arg-type]
         return min_friction(config)
 
     def feasible(self, obj: Any, config: Config | Grip) -> Error:
