@@ -34,6 +34,7 @@ when first chosen, not when `crmgrasp` is imported.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from typing import Literal
 
@@ -150,13 +151,13 @@ def compiled_rules(task: Task) -> Task:
     ([`crmgrasp.kernels.fingers.compiled_least_friction`][]); ``task`` itself otherwise.
     For code that applies the task's rules directly rather than through a kernel (the
     reference values and the k-order search); the results are the same bit for bit."""
-    if task.model.n_contacts > 2 and task.model.kind == "spatial":
+    if task.model.n_contacts <= 2:
+        return task
+    if task.model.kind == "spatial":
         from crmgrasp.kernels.closure import with_compiled_least_friction
 
         return with_compiled_least_friction(task)
-    if task.model.n_contacts > 2 and task.model.kind == "planar":
-        import dataclasses
-
+    if task.model.kind == "planar":
         from crmgrasp.kernels.fingers import compiled_least_friction
 
         return task.with_model(dataclasses.replace(task.model, least_friction=compiled_least_friction()))  # type: ignore[type-var]
