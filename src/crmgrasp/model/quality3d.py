@@ -13,8 +13,8 @@ Conventions: points in metres, shape ``(n, 3)``; inward unit normals, shape ``(n
   mu_goal``, as in the plane.
 * [`least_friction_3d`][], three or more contacts (docs/model-3d.md section 9): the least
   ``mu`` at which [`force_closure_3d`][] holds, ``tan`` of the least cone half-angle,
-  bracketed to [`THETA_TOL_3D`][] (the upper end) by midpoints and secant guesses
-  (``_search``); ``inf`` if no probe below ``mu = 1e6`` closes. Closure only grows with
+  bracketed to [`THETA_TOL_3D`][] (the upper end) by a first probe at [`FIRST_PROBE`][],
+  midpoints and secant guesses (``_search``); ``inf`` if no probe below ``mu = 1e6`` closes. Closure only grows with
   ``mu`` (each polyhedral cone contains the one of a smaller ``mu``, up to the scaling of its
   edges, which leaves positive spanning unchanged), so the bracket is exact up to its
   tolerance, whichever probes narrow it. Two contacts never close: their
