@@ -248,6 +248,22 @@ def test_bench_tripod_smoke():
     assert 0 < res["box3d3f_step_alone_us"] <= res["box3d3f_us"] and res["cartpole_step_alone_us"] > 0
 
 
+def test_bench_references_smoke(monkeypatch, capsys):
+    spec = importlib.util.spec_from_file_location("bench_references", BENCH.parent / "bench_references.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    monkeypatch.setattr(mod, "CASES", (("paper-box", None, 60), ("u-handle", 5, 40)))
+    res = mod.main(quick=True, run=mod.one)  # in this process (the script runs each in a fresh one)
+    calls = []
+    again = mod.main(quick=True, run=lambda *a: calls.append(a[4:]) or mod.one(*a[:4]), before="/elsewhere")
+    assert calls.count(("/elsewhere",)) == 2 and again["paper-box"]["before_over_auto"] > 0
+    assert set(res) == {"paper-box", "u-handle-grid5"}
+    for row in res.values():
+        assert row["starts"] == 6 if row is res["paper-box"] else row["starts"] == 4
+        assert row["belief_optimum"] >= row["clairvoyant_bound"] > 0 and row["seconds_reference"] > 0
+        assert row["reference_over_auto"] > 0
+
+
 def test_family_learning_pool_and_reference_bias_smoke():
     spec = importlib.util.spec_from_file_location("family_learning", BENCH.parent / "family_learning.py")
     mod = importlib.util.module_from_spec(spec)

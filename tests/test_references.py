@@ -186,3 +186,75 @@ def test_the_nearest_fallback_keeps_the_worlds_that_explain_the_most():
     assert watched.beyond > 0
     with pytest.raises(CrmgraspError, match="unknown fallback 'closest'"):
         BeliefPolicy(task, planned, fallback="closest")
+
+
+def _noisy(name):
+    from dataclasses import replace
+
+    from crmgrasp.model.sensing import SensorNoise
+
+    return replace(make_task(name), noise=SensorNoise(0.05, 0.002))
+
+
+@pytest.mark.parametrize(
+    ("make", "n"),
+    [
+        (lambda: make_task("paper-box"), 100),
+        (lambda: _noisy("paper-box"), 60),  # the references ignore the noise on every path
+        (lambda: __import__("crmgrasp.tasks.offsets", fromlist=["x"]).offset_grid(make_task("u-handle"), 5), 25),
+        (lambda: make_task("triangles-3f"), 10),
+        (lambda: make_task("cup-3d"), 24),
+        (lambda: make_task("box-3d-3f"), 8),
+        (lambda: make_task("mixed"), 30),  # discs have no compiled kernel: the readable rules on both
+    ],
+    ids=["paper-box", "noisy", "u-handle-grid5", "triangles-3f", "cup-3d", "box-3d-3f", "mixed"],
+)
+def test_the_references_are_the_same_on_every_backend(make, n):
+    """The search expands states through the kernels (compiled on "auto") and gives the readable
+    rules' values exactly: the optimum, the bound, the ungraspable share and a policy's episodes."""
+    from crmgrasp.planners.references import BeliefPolicy, ungraspable_fraction
+
+    task = make()
+    starts = sample_starts(task, n, 3)
+    values = {
+        b: (
+            belief_optimum(task, starts, backend=b),
+            clairvoyant_bound(task, starts, backend=b),
+            ungraspable_fraction(task, starts, backend=b),
+            [BeliefPolicy(task, starts[: n // 2], "nearest", backend=b).run(s) for s in starts[n // 2 :]],
+        )
+        for b in ("auto", "reference")
+    }
+    assert values["auto"] == values["reference"]
+    assert values["auto"][0] >= values["auto"][1] > 0.0
+
+
+@pytest.mark.parametrize("name", ["paper-box", "triangles-3f", "cup-3d", "box-3d-3f", "u-handle"])
+def test_a_kernels_successors_are_the_readable_steps(name):
+    """``Kernel.successors``: every CRM from a configuration, as the readable step takes it
+    (next configuration, bin index, error, grasp; the least friction itself where the kernel
+    reports it exactly)."""
+    from crmgrasp.kernels import kernel_for
+    from crmgrasp.sim import SimState, step
+
+    task = make_task(name)
+    rng = np.random.default_rng(5)
+    for _ in range(6):
+        inst = task.instance(rng) if task.family is not None else task
+        config = inst.sample_start(rng)
+        for _ in range(2):  # a start, then where a CRM took it
+            for friction in ("exact", "decided"):
+                got = kernel_for(inst, "auto", friction).successors(config)
+                assert len(got) == len(task.actions)
+                for a, s in enumerate(got):
+                    want = step(inst, SimState(config, config, 0), a, rng)
+                    assert (s.config, s.obs_index, s.error) == (want.state.config, want.obs_index, want.error)
+                    assert inst.grasped(s.min_friction) == want.terminated
+                    if friction == "exact":
+                        assert s.min_friction == want.min_friction
+            config = got[int(rng.integers(len(got)))].config
+
+
+def test_an_unknown_reference_backend_is_one_line(task):
+    with pytest.raises(CrmgraspError, match="unknown backend 'gpu'"):
+        belief_optimum(task, sample_starts(task, 5, 0), backend="gpu")

@@ -64,9 +64,13 @@ def _cmd_references(args: argparse.Namespace) -> int:
     task = _task(args)
     with _progress(args).stage(f"references of {task.name}", 0):
         starts = refs.sample_starts(task, args.starts, args.seed)
-        clair, belief = refs.clairvoyant_bound(task, starts), refs.belief_optimum(task, starts)
-        never = refs.ungraspable_fraction(task, starts)
-        blocks = refs.block_optima(task, starts, args.blocks) if args.blocks > 1 else None
+        backend = args.backend
+        clair, belief = (
+            refs.clairvoyant_bound(task, starts, backend=backend),
+            refs.belief_optimum(task, starts, backend=backend),
+        )
+        never = refs.ungraspable_fraction(task, starts, backend=backend)
+        blocks = refs.block_optima(task, starts, args.blocks, backend=backend) if args.blocks > 1 else None
     res = {
         "task": task.name,
         "starts": args.starts,

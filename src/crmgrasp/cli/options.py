@@ -233,7 +233,7 @@ def _add_kernel_backend(p: argparse.ArgumentParser) -> None:
         "--backend",
         choices=("auto", "numba", "reference"),
         default="auto",
-        help="kernel that episodes step through: compiled where one exists (auto, default), compiled "
+        help="kernel the rules run on: compiled where one exists (auto, default), compiled "
         "(numba), or the readable rules (reference); all give the same results",
     )
 

@@ -215,6 +215,7 @@ def _parser_references(sub: Any) -> None:
         "family is optimistic and rises with more starts (default 1: none; must divide --starts)",
     )
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
+    _add_kernel_backend(p)
     _add_quiet(p)
 
 

@@ -26,7 +26,7 @@ from crmgrasp.model.sensing import Discretizer
 from crmgrasp.sim import OneStep, SimState, begin, episode_end, step, step_reward
 from crmgrasp.tasks import StartFilter, Task
 
-__all__ = ["Kernel", "FusedSingleStep", "OneStep", "BatchStep", "bin_thresholds"]
+__all__ = ["Kernel", "FusedSingleStep", "OneStep", "BatchStep", "Successor", "bin_thresholds", "stepwise_successors"]
 
 _ERRORS = tuple(Error)
 _new = tuple.__new__  # builds the step's NamedTuples without their Python-level __new__ (the hot path)
@@ -45,6 +45,29 @@ class BatchStep(NamedTuple):
     obs: dict[str, np.ndarray]
     obs_index: I64
     min_friction: F64
+
+
+class Successor(NamedTuple):
+    """Where one CRM leads from a configuration, noise-free ([`Kernel.successors`][]): the
+    next configuration (the same one after an error), the bin index of its observation
+    with the error, the error, and its least friction."""
+
+    config: Any
+    obs_index: int
+    error: Error
+    min_friction: float
+
+
+def stepwise_successors(step: Any, config: Any, table: F64) -> list[Successor]:
+    """[`Kernel.successors`][] from a kernel's fused single step ``step(state, action,
+    table)`` (a `FusedSingleStep`'s ``_step``), one call per row of ``table``: for kernels
+    whose batched rows run the readable rules."""
+    state = _new(SimState, (config, config, 0))
+    out = []
+    for a in range(len(table)):
+        s = step(state, a, table)
+        out.append(_new(Successor, (s.state.config, s.obs_index, s.error, s.min_friction)))
+    return out
 
 
 def bin_thresholds(d: Discretizer) -> F64:
@@ -152,6 +175,20 @@ class Kernel(ABC):
         crm = self.task.crm(crm)
         index = self.model.labels.index
         return np.array([[index(crm.c), index(crm.f), *np.atleast_1d(crm.r)]], dtype=np.float64)
+
+    def successors(self, config: Any) -> list[Successor]:
+        """Every action of the task from ``config``, in order, noise-free (the reading is the
+        configuration): one [`Successor`][] each, from one batched call of the rules
+        ([`execute`][], [`observe`][]); the reference values' search step."""
+        n = len(self.acts)
+        rows = np.array([self.model.row_of(config)] * n, dtype=np.float64)
+        new, err = self.execute(rows, rows, np.arange(n))
+        *_, index, mu = self.observe(new, new, err)
+        of = self.config_of
+        return [
+            _new(Successor, (of(row) if not code else config, i, _ERRORS[code], m))
+            for row, i, code, m in zip(new.tolist(), index.tolist(), err.tolist(), mu.tolist(), strict=True)
+        ]
 
     def sample_start(self, rng: np.random.Generator) -> Any:
         """One start (`crmgrasp.tasks.Task.sample_start`, with `start_filter`):

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 import crmgrasp.kernels._fingers3d_jit as jit
-from crmgrasp.kernels.base import F64, FusedSingleStep
+from crmgrasp.kernels.base import F64, FusedSingleStep, Successor, stepwise_successors
 from crmgrasp.kernels.closure import FingersSpatialKernel, closure_params, with_compiled_least_friction
 from crmgrasp.kernels.spatial import solid_params, spatial_params
 from crmgrasp.model.quality3d import EDGES
@@ -71,6 +71,11 @@ class FusedFingersSpatialKernel(FusedSingleStep, FingersSpatialKernel):
             self._v, action, table, self.n, self.planes, self.cyl, self.th, self.strides, self.abs_m,
             self.p, self.q, self.tol, self.edges, self._out, self._vals, self._known, self._mu, self._goal,
         )  # fmt: skip
+
+    def successors(self, config: Any) -> list[Successor]:
+        """[`Kernel.successors`][crmgrasp.kernels.base.Kernel.successors] by the fused single
+        step (the batched rows here run the readable rules but for the least friction)."""
+        return stepwise_successors(self._step, config, self.acts)
 
     def _accept(self, d: F64) -> Any:
         """[`SurfaceStarts`][crmgrasp.tasks.spatial.SurfaceStarts]' decision on one try, compiled."""

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.kernels.base import F64, bin_thresholds
+from crmgrasp.kernels.base import F64, Successor, bin_thresholds, stepwise_successors
 from crmgrasp.kernels.reference import ReferenceKernel
 from crmgrasp.model.hand import Error
 from crmgrasp.model.sensing import Observation
@@ -152,6 +152,11 @@ class FusedSpatialKernel(SpatialKernel):
             terminated,
             truncated,
         )
+
+    def successors(self, config: Any) -> list[Successor]:
+        """[`Kernel.successors`][crmgrasp.kernels.base.Kernel.successors] by the fused single
+        step (the batched rows here run the readable rules)."""
+        return stepwise_successors(self._step, config, self.acts4)
 
     def _accept(self, d: F64) -> Config3D | None:
         """[`SurfaceStarts`][crmgrasp.tasks.spatial.SurfaceStarts]' decision on one try, compiled."""

@@ -185,7 +185,7 @@ class _MemoSteps:
 
     def step_one(self, state: SimState, action: Any, rng: np.random.Generator) -> OneStep:
         nxt, obs, grasped = self.model.step(state.config, action)  # type: ignore[arg-type]
-        error = self.model.errors[(state.config, action)]  # type: ignore[index]
+        error = self.model.error(state.config, action)  # type: ignore[arg-type]
         steps = state.steps + 1
         done = SimState(nxt, nxt, steps)  # type: ignore[arg-type]
         truncated = steps >= self.horizon and not grasped

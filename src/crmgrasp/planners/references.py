@@ -19,20 +19,27 @@ the learners do (success ends an episode; ``task.max_steps`` truncates it).
   observe ``o``. Solved exactly by depth-first search with memoisation and a
   branch-and-bound cut (every start still in play costs at least its clairvoyant
   number of CRMs). The gap between the two is the price of perceptual aliasing.
+
+Both searches expand a state by every CRM at once, through the kernel of its object
+([`crmgrasp.kernels.base.Kernel.successors`][]: compiled where a kernel exists on the
+default ``backend="auto"``, the readable rules with ``backend="reference"``). Every kernel
+gives the readable rules' results bit for bit, so every value here is the same on either
+backend (the tests compare them); only the time differs (`benchmarks/bench_references.py`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections import deque
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 
 from crmgrasp._validation import CrmgraspError, integer
-from crmgrasp.kernels import compiled_rules
+from crmgrasp.kernels import BACKENDS, Kernel, compiled_rules, kernel_for
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import Error
+from crmgrasp.model.sensing import SensorNoise
 from crmgrasp.sim import Percept, run_episode
 from crmgrasp.tasks import Task, World
 
@@ -56,15 +63,25 @@ Step = tuple[State, int, bool]  # next state, observation index, grasped
 class _Model:
     """Cached deterministic transitions of a task (noise ignored) over hidden states
     ``(object, configuration)``: object 0 is the task's own; each
-    [`World`][crmgrasp.tasks.World] adds its object."""
+    [`World`][crmgrasp.tasks.World] adds its object.
 
-    def __init__(self, task: Task) -> None:
+    A state's successors under every CRM come from one call of its object's kernel
+    ([`crmgrasp.kernels.kernel_for`][] on ``backend``: compiled where a kernel exists, the
+    readable rules on ``"reference"``; the same values bit for bit, as the tests hold every
+    kernel to the readable rules); a single step not yet expanded applies the task's rules."""
+
+    def __init__(self, task: Task, backend: str = "auto") -> None:
+        if backend not in BACKENDS:
+            raise CrmgraspError(f"unknown backend {backend!r}; choose one of {', '.join(BACKENDS)}")
         self.task = task = compiled_rules(task)
+        self.backend = backend
         self.tasks: list[Task] = [task]
+        self._kernels: list[Kernel | None] = [None if task.family is not None else _kernel(task, backend)]
         self._ids: dict[int, int] = {}
+        self._succ: dict[State, tuple[Step, ...]] = {}
+        self._succ_err: dict[State, tuple[Error, ...]] = {}
         self._step: dict[tuple[State, int], Step] = {}
-        self.errors: dict[tuple[State, int], Error] = {}
-        """Each cached step's error flag."""
+        self._err: dict[tuple[State, int], Error] = {}
         self._clair: dict[State, tuple[int | None, int]] = {}  # state -> (depth found, horizon searched)
 
     def state(self, start: Start) -> State:
@@ -79,12 +96,28 @@ class _Model:
                     )
                 i = self._ids[id(start.task)] = len(self.tasks)
                 self.tasks.append(compiled_rules(start.task))
+                self._kernels.append(_kernel(start.task, self.backend))
             return (i, start.config)
         if self.task.family is not None:
             raise CrmgraspError(f"task {self.task.name!r} draws an object per episode: give worlds, not configurations")
         return (0, start)
 
+    def successors(self, state: State) -> tuple[Step, ...]:
+        """``step(state, a)`` for every CRM ``a``, in order, from one call of the object's
+        kernel ([`crmgrasp.kernels.base.Kernel.successors`][]), cached."""
+        hit = self._succ.get(state)
+        if hit is None:
+            i, config = state
+            grasped = self.tasks[i].grasped
+            nexts = self._kernels[i].successors(config)  # type: ignore[union-attr]
+            hit = self._succ[state] = tuple(((i, c), index, grasped(mu)) for c, index, _, mu in nexts)
+            self._succ_err[state] = tuple(s.error for s in nexts)
+        return hit
+
     def step(self, state: State, action: int) -> Step:
+        succ = self._succ.get(state)
+        if succ is not None:
+            return succ[action]
         key = (state, action)
         hit = self._step.get(key)
         if hit is None:
@@ -93,8 +126,17 @@ class _Model:
             out = t.execute(config, t.actions[action], config)
             index = t.discretizer.index(t.observe(out.config), out.error)
             hit = self._step[key] = ((i, out.config), index, t.is_success(out.config))
-            self.errors[key] = out.error
+            self._err[key] = out.error
         return hit
+
+    def error(self, state: State, action: int) -> Error:
+        """The error flag of ``step(state, action)`` (after that step)."""
+        errs = self._succ_err.get(state)
+        return errs[action] if errs is not None else self._err[(state, action)]
+
+    def errors(self, state: State) -> tuple[Error, ...]:
+        """The error flags of every CRM from ``state`` (after [`successors`][])."""
+        return self._succ_err[state]
 
     def clairvoyant(self, state: State, horizon: int) -> int:
         """Fewest CRMs to a grasp within ``horizon`` (``horizon`` if none is found)."""
@@ -121,36 +163,39 @@ class _Model:
         """Breadth-first search over CRM sequences. Configurations are visited once up
         to [`SAME`][]: one reached again within rounding (a slide and its reverse)
         is the same place, and searching it again cannot find a shorter sequence."""
-        seen = {_key(start)}
+        seen = {self.key(start)}
         frontier = deque([(start, 0)])
         while frontier:
             cfg, depth = frontier.popleft()
             if depth == horizon:
                 continue
-            for a in range(len(self.tasks[cfg[0]].actions)):
-                nxt, _, grasped = self.step(cfg, a)
+            for nxt, _, grasped in self.successors(cfg):
                 if grasped:
                     return depth + 1
-                k = _key(nxt)
+                k = self.key(nxt)
                 if k not in seen:
                     seen.add(k)
                     frontier.append((nxt, depth + 1))
         return None
 
+    def key(self, state: State) -> tuple[int, tuple[int, ...]]:
+        """The state's place: its object and its numbers rounded to [`SAME`][]."""
+        i, c = state
+        return i, tuple([round(v / SAME) for v in self.tasks[i].model.numbers(c)])
+
+
+def _kernel(task: Task, backend: str) -> Kernel:
+    """The kernel that expands ``task``'s states: its path on ``backend`` without sensing
+    noise (the references' dynamics are noise-free; a reading equal to the configuration is
+    the same on every path), deciding grasps only (``friction="decided"``)."""
+    if task.noise.active:
+        task = dataclasses.replace(task, noise=SensorNoise())
+    return kernel_for(task, backend, "decided")
+
 
 SAME = 1e-9
 """Metres (and unit-normal components) within which two configurations count as one
 place in the clairvoyant search."""
-
-
-def _key(state: State) -> tuple[int, tuple[int, ...]]:
-    i, c = state
-    return i, tuple(round(v / SAME) for v in _flat(c))
-
-
-def _flat(value: tuple[Any, ...]) -> tuple[float, ...]:
-    """The numbers of a configuration, contacts (and a spatial contact's vectors) flattened."""
-    return tuple(x for part in value for x in (_flat(part) if isinstance(part, tuple) else (part,)))
 
 
 def sample_starts(task: Task, n: int, seed: int) -> list[Config | Grip] | list[World]:
@@ -163,26 +208,28 @@ def sample_starts(task: Task, n: int, seed: int) -> list[Config | Grip] | list[W
     return [task.sample_start(rng) for _ in range(n)]
 
 
-def clairvoyant_steps(task: Task, config: Start, horizon: int | None = None) -> int:
+def clairvoyant_steps(task: Task, config: Start, horizon: int | None = None, backend: str = "auto") -> int:
     """Fewest CRMs from ``config`` (or a world) to a grasp (``horizon``, default
     ``task.max_steps``, if none is reachable within it)."""
-    model = _Model(task)
+    model = _Model(task, backend)
     return model.clairvoyant(model.state(config), horizon or task.max_steps)
 
 
-def clairvoyant_bound(task: Task, starts: Sequence[Start], horizon: int | None = None) -> float:
+def clairvoyant_bound(task: Task, starts: Sequence[Start], horizon: int | None = None, backend: str = "auto") -> float:
     """Mean of [`clairvoyant_steps`][] over ``starts``."""
-    model = _Model(task)
+    model = _Model(task, backend)
     h = horizon or task.max_steps
     return float(np.mean([model.clairvoyant(model.state(c), h) for c in starts]))
 
 
-def ungraspable_fraction(task: Task, starts: Sequence[Start], horizon: int | None = None) -> float:
+def ungraspable_fraction(
+    task: Task, starts: Sequence[Start], horizon: int | None = None, backend: str = "auto"
+) -> float:
     """Share of ``starts`` from which no sequence of at most ``horizon`` (default
     ``task.max_steps``) CRMs reaches a grasp, even knowing the true configuration."""
     if not starts:
         raise CrmgraspError("ungraspable_fraction needs at least one start")
-    model = _Model(task)
+    model = _Model(task, backend)
     h = horizon or task.max_steps
     return sum(model.depth(model.state(c), h) is None for c in starts) / len(starts)
 
@@ -210,19 +257,21 @@ def _first_groups(model: _Model, starts: Sequence[Start]) -> dict[int, tuple[Sta
     return groups
 
 
-def belief_optimum(task: Task, starts: Sequence[Start], horizon: int | None = None) -> float:
+def belief_optimum(task: Task, starts: Sequence[Start], horizon: int | None = None, backend: str = "auto") -> float:
     """Exact optimal expected CRMs per episode over ``starts`` from observations only
     (with ``task.error_cost`` c > 0: the expected cost, CRMs plus c per errored CRM)."""
     if not starts:
         raise CrmgraspError("belief_optimum needs at least one start")
-    model = _Model(task)
+    model = _Model(task, backend)
     h = horizon or task.max_steps
     memo: dict[tuple[tuple[State, ...], int], float] = {}
     total = sum(len(g) * _value(model, g, h, memo) for g in _first_groups(model, starts).values())
     return total / len(starts)
 
 
-def block_optima(task: Task, starts: Sequence[Start], blocks: int, horizon: int | None = None) -> list[float]:
+def block_optima(
+    task: Task, starts: Sequence[Start], blocks: int, horizon: int | None = None, backend: str = "auto"
+) -> list[float]:
     """[`belief_optimum`][] over each of ``blocks`` disjoint runs of ``starts`` (in order,
     equally long: ``blocks`` must divide their number).
 
@@ -236,7 +285,7 @@ def block_optima(task: Task, starts: Sequence[Start], blocks: int, horizon: int 
     if isinstance(blocks, bool) or not isinstance(blocks, int) or blocks < 1 or n % blocks:
         raise CrmgraspError(f"blocks must be a whole number that divides the {n} starts, got {blocks!r}")
     size = n // blocks
-    return [belief_optimum(task, starts[i : i + size], horizon) for i in range(0, n, size)]
+    return [belief_optimum(task, starts[i : i + size], horizon, backend) for i in range(0, n, size)]
 
 
 def _value(model: _Model, belief: tuple[State, ...], h: int, memo: dict, acts: dict | None = None) -> float:
@@ -253,14 +302,15 @@ def _value(model: _Model, belief: tuple[State, ...], h: int, memo: dict, acts: d
     best = float(h) * (1.0 + c_err)  # doing anything for h steps costs at most this
     best_action = 0
     options = []
+    succs = [model.successors(c) for c in belief]
+    errs = [model.errors(c) for c in belief] if c_err else []  # without an error cost they cost nothing
     for a in range(len(model.task.actions)):
         children: dict[int, list[State]] = {}
-        errors = 0
-        for c in belief:
-            nxt, index, grasped = model.step(c, a)
-            errors += model.errors[(c, a)] is not Error.NONE
+        for succ in succs:
+            nxt, index, grasped = succ[a]
             if not grasped:
                 children.setdefault(index, []).append(nxt)
+        errors = sum(e[a] is not Error.NONE for e in errs)
         kids = [tuple(v) for v in children.values()]
         now = 1.0 + c_err * errors / n
         bound = now + sum(len(k) * _lower(model, k, h - 1) for k in kids) / n
@@ -286,7 +336,16 @@ def _lower(model: _Model, belief: tuple[State, ...], h: int) -> float:
     information cannot do worse), capped by the horizon."""
     if h == 0:
         return 0.0
-    return float(np.mean([model.clairvoyant(c, h) for c in belief]))
+    known, total = model._clair, 0
+    for c in belief:  # model.clairvoyant(c, h), read from its memo where it answers h
+        found, searched = known.get(c, (None, 0))
+        if found is not None and found <= h:
+            total += found
+        elif found is None and h <= searched:
+            total += h
+        else:
+            total += model.clairvoyant(c, h)
+    return total / len(belief)
 
 
 FALLBACKS = ("restart", "nearest")
@@ -310,13 +369,13 @@ class BeliefPolicy:
     (the most likely starts if each observation were misread with a small probability).
     """
 
-    def __init__(self, task: Task, starts: Sequence[Start], fallback: str = "restart") -> None:
+    def __init__(self, task: Task, starts: Sequence[Start], fallback: str = "restart", backend: str = "auto") -> None:
         if not starts:
             raise CrmgraspError("BeliefPolicy needs at least one start")
         if fallback not in FALLBACKS:
             raise CrmgraspError(f"unknown fallback {fallback!r}: choose one of {', '.join(FALLBACKS)}")
         self.task, self.fallback = task, fallback
-        self._model = _Model(task)
+        self._model = _Model(task, backend)
         self._memo: dict = {}
         self._acts: dict = {}
         self._belief: tuple[State, ...] = ()
