@@ -144,7 +144,8 @@ def test_the_nearest_fallback_keeps_the_worlds_that_explain_the_most():
         alive = []
         for w in planned:
             st = model.state(w)
-            miss = int(task.discretizer.index(model.tasks[st[0]].observe(st[1]), Error.NONE) != seen[0])
+            i, config = model.places[st]
+            miss = int(task.discretizer.index(model.tasks[i].observe(config), Error.NONE) != seen[0])
             for a, o in zip(actions, seen[1:]):
                 st, o2, grasped = model.step(st, a)
                 if grasped:

@@ -82,7 +82,7 @@ class _Episodes:
         self.enc = KOrderEncoder(task.discretizer.size, len(task.actions), k)
         self.horizon = horizon
         self.states: list[State] = [self.model.state(c) for c in starts]
-        self.first = [task.discretizer.index(self.model.tasks[i].observe(cfg), Error.NONE) for i, cfg in self.states]
+        self.first = [self.model.observation(s) for s in self.states]
         self.count = 0
         self.policy = _TablePolicy(self.enc, task.error_cost)
         self.steps = _MemoSteps(self)

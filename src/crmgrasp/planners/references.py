@@ -56,14 +56,16 @@ __all__ = [
 ]
 
 Start = Config | Grip | World
-State = tuple[int, Config | Grip]  # the world's object (an index into _Model.tasks) and the configuration
+Place = tuple[int, Config | Grip]  # the world's object (an index into _Model.tasks) and the configuration
+State = int  # a hidden state: its index in _Model.places (each place gets one, once)
 Step = tuple[State, int, bool]  # next state, observation index, grasped
 
 
 class _Model:
-    """Cached deterministic transitions of a task (noise ignored) over hidden states
-    ``(object, configuration)``: object 0 is the task's own; each
-    [`World`][crmgrasp.tasks.World] adds its object.
+    """Cached deterministic transitions of a task (noise ignored) over hidden states, each
+    a place ``(object, configuration)`` numbered once (``places[state]``): object 0 is the
+    task's own; each [`World`][crmgrasp.tasks.World] adds its object. A belief is then a
+    tuple of numbers, cheap to compare and to look up.
 
     A state's successors under every CRM come from one call of its object's kernel
     ([`crmgrasp.kernels.kernel_for`][] on ``backend``: compiled where a kernel exists, the
@@ -78,11 +80,25 @@ class _Model:
         self.tasks: list[Task] = [task]
         self._kernels: list[Kernel | None] = [None if task.family is not None else _kernel(task, backend)]
         self._ids: dict[int, int] = {}
-        self._succ: dict[State, tuple[Step, ...]] = {}
-        self._succ_err: dict[State, tuple[Error, ...]] = {}
+        self.places: list[Place] = []
+        self._number: dict[Place, State] = {}
+        self._succ: list[tuple[Step, ...] | None] = []
+        self._succ_err: list[tuple[Error, ...] | None] = []
+        self._keys: list[tuple[int, tuple[int, ...]] | None] = []
         self._step: dict[tuple[State, int], Step] = {}
         self._err: dict[tuple[State, int], Error] = {}
         self._clair: dict[State, tuple[int | None, int]] = {}  # state -> (depth found, horizon searched)
+
+    def _state(self, place: Place) -> State:
+        """The number of ``place`` (a new one the first time)."""
+        s = self._number.get(place)
+        if s is None:
+            s = self._number[place] = len(self.places)
+            self.places.append(place)
+            self._succ.append(None)
+            self._succ_err.append(None)
+            self._keys.append(None)
+        return s
 
     def state(self, start: Start) -> State:
         """The hidden state of a start (a configuration of the task, or a world)."""
@@ -97,46 +113,52 @@ class _Model:
                 i = self._ids[id(start.task)] = len(self.tasks)
                 self.tasks.append(compiled_rules(start.task))
                 self._kernels.append(_kernel(start.task, self.backend))
-            return (i, start.config)
+            return self._state((i, start.config))
         if self.task.family is not None:
             raise CrmgraspError(f"task {self.task.name!r} draws an object per episode: give worlds, not configurations")
-        return (0, start)
+        return self._state((0, start))
+
+    def observation(self, state: State) -> int:
+        """The bin index of the state's own observation (no error): what an episode
+        starting there senses first."""
+        i, config = self.places[state]
+        return self.task.discretizer.index(self.tasks[i].observe(config), Error.NONE)
 
     def successors(self, state: State) -> tuple[Step, ...]:
         """``step(state, a)`` for every CRM ``a``, in order, from one call of the object's
         kernel ([`crmgrasp.kernels.base.Kernel.successors`][]), cached."""
-        hit = self._succ.get(state)
+        hit = self._succ[state]
         if hit is None:
-            i, config = state
-            grasped = self.tasks[i].grasped
+            i, config = self.places[state]
+            grasped, number = self.tasks[i].grasped, self._state
             nexts = self._kernels[i].successors(config)  # type: ignore[union-attr]
-            hit = self._succ[state] = tuple(((i, c), index, grasped(mu)) for c, index, _, mu in nexts)
+            hit = self._succ[state] = tuple((number((i, c)), index, grasped(mu)) for c, index, _, mu in nexts)
             self._succ_err[state] = tuple(s.error for s in nexts)
         return hit
 
     def step(self, state: State, action: int) -> Step:
-        succ = self._succ.get(state)
+        succ = self._succ[state]
         if succ is not None:
             return succ[action]
         key = (state, action)
         hit = self._step.get(key)
         if hit is None:
-            i, config = state
+            i, config = self.places[state]
             t = self.tasks[i]
             out = t.execute(config, t.actions[action], config)
             index = t.discretizer.index(t.observe(out.config), out.error)
-            hit = self._step[key] = ((i, out.config), index, t.is_success(out.config))
+            hit = self._step[key] = (self._state((i, out.config)), index, t.is_success(out.config))
             self._err[key] = out.error
         return hit
 
     def error(self, state: State, action: int) -> Error:
         """The error flag of ``step(state, action)`` (after that step)."""
-        errs = self._succ_err.get(state)
+        errs = self._succ_err[state]
         return errs[action] if errs is not None else self._err[(state, action)]
 
     def errors(self, state: State) -> tuple[Error, ...]:
         """The error flags of every CRM from ``state`` (after [`successors`][])."""
-        return self._succ_err[state]
+        return self._succ_err[state]  # type: ignore[return-value]
 
     def clairvoyant(self, state: State, horizon: int) -> int:
         """Fewest CRMs to a grasp within ``horizon`` (``horizon`` if none is found)."""
@@ -179,9 +201,13 @@ class _Model:
         return None
 
     def key(self, state: State) -> tuple[int, tuple[int, ...]]:
-        """The state's place: its object and its numbers rounded to [`SAME`][]."""
-        i, c = state
-        return i, tuple([round(v / SAME) for v in self.tasks[i].model.numbers(c)])
+        """Where the state is, for the clairvoyant search: its object and its numbers rounded
+        to [`SAME`][] (remembered)."""
+        k = self._keys[state]
+        if k is None:
+            i, c = self.places[state]
+            k = self._keys[state] = (i, tuple([round(v / SAME) for v in self.tasks[i].model.numbers(c)]))
+        return k
 
 
 def _kernel(task: Task, backend: str) -> Kernel:
@@ -252,7 +278,7 @@ def _first_groups(model: _Model, starts: Sequence[Start]) -> dict[int, tuple[Sta
     groups: dict[int, tuple[State, ...]] = {}
     for c in starts:
         st = model.state(c)
-        k = model.task.discretizer.index(model.tasks[st[0]].observe(st[1]), Error.NONE)
+        k = model.observation(st)
         groups[k] = (*groups.get(k, ()), st)
     return groups
 
