@@ -50,7 +50,8 @@ class BatchStep(NamedTuple):
 class Successor(NamedTuple):
     """Where one CRM leads from a configuration, noise-free ([`Kernel.successors`][]): the
     next configuration (the same one after an error), the bin index of its observation
-    with the error, the error, and its least friction."""
+    with the error, the error, and its least friction (from a kernel made with
+    ``friction="decided"``, a friction that decides the grasp as it does)."""
 
     config: Any
     obs_index: int
