@@ -1,6 +1,7 @@
 import csv
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -134,6 +135,27 @@ def test_reproduce_index_and_cli(tmp_path, capsys):
     assert (tmp_path / "b" / "README.md").read_bytes() == before
     assert main(["reproduce", "figure4", "--quick", "--resume", "--out", str(tmp_path / "b")]) == 2
     assert "experiments" in capsys.readouterr().err
+    _same_in_worker_processes(tmp_path / "b", tmp_path / "two")
+
+
+def _same_in_worker_processes(one: Path, out: Path) -> None:
+    """Figures 4, 7, 8 and 9 run in two worker processes give the summaries and files of the
+    one-process run in ``one`` (the whole quick run above)."""
+    names = ["figure4", "figure7", "figure8", "figure9"]
+    two = reproduce(out, names, quick=True, jobs=2)
+    done = json.loads((one / "run.json").read_text())["completed"]
+    strip = lambda s: {k: v for k, v in s.items() if k != "seconds"}  # noqa: E731
+    mine = json.loads(json.dumps({k: strip(v) for k, v in two.items()}))  # as run.json holds them
+    assert {k: strip(done[k]["summary"]) for k in names} == mine
+    files = sorted(f for name in names for f in (one / name).rglob("*.csv"))
+    assert len(files) >= 4
+    for f in files:
+        other = out / f.relative_to(one)
+        if f.name == "learners.csv":  # its last column is wall time
+            cut = [[line.rsplit(",", 1)[0] for line in p.read_text().splitlines()] for p in (f, other)]
+            assert cut[0] == cut[1]
+        else:
+            assert f.read_bytes() == other.read_bytes(), f
 
 
 def test_reproduce_writes_the_same_files_on_every_kernel_backend(tmp_path):
@@ -147,18 +169,3 @@ def test_reproduce_writes_the_same_files_on_every_kernel_backend(tmp_path):
             if p.suffix in (".csv", ".json")
         }
     assert outs["numba"] == outs["reference"] and len(outs["numba"]) >= 4
-
-
-def test_reproduce_groups_in_worker_processes_give_the_same_files(tmp_path):
-    names = ["figure4", "figure7", "figure8", "figure9"]
-    one = reproduce(tmp_path / "one", names, quick=True)
-    two = reproduce(tmp_path / "two", names, quick=True, jobs=2)
-    strip = lambda s: {k: v for k, v in s.items() if k != "seconds"}  # noqa: E731
-    assert {k: strip(v) for k, v in one.items()} == {k: strip(v) for k, v in two.items()}
-    for f in sorted((tmp_path / "one").rglob("*.csv")):
-        other = tmp_path / "two" / f.relative_to(tmp_path / "one")
-        if f.name == "learners.csv":  # its last column is wall time
-            cut = [[line.rsplit(",", 1)[0] for line in p.read_text().splitlines()] for p in (f, other)]
-            assert cut[0] == cut[1]
-        else:
-            assert f.read_bytes() == other.read_bytes(), f
