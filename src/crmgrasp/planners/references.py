@@ -165,6 +165,21 @@ class _Model:
         depth = self.depth(state, horizon)
         return horizon if depth is None else depth
 
+    def clairvoyant_total(self, states: Sequence[State], horizon: int) -> int:
+        """The sum of [`clairvoyant`][] over ``states``: each read straight from the memo
+        where a search already answers ``horizon`` (as [`depth`][] reads it), the search
+        otherwise (the branch-and-bound's bound, asked for every belief it meets)."""
+        known, total = self._clair, 0
+        for c in states:
+            found, searched = known.get(c, (None, 0))
+            if found is not None and found <= horizon:
+                total += found
+            elif found is None and horizon <= searched:
+                total += horizon
+            else:
+                total += self.clairvoyant(c, horizon)
+        return total
+
     def depth(self, state: State, horizon: int) -> int | None:
         """Fewest CRMs to a grasp within ``horizon``; ``None`` if no sequence grasps.
         One search answers every horizon up to its own: a depth ``d`` found holds for
@@ -362,16 +377,7 @@ def _lower(model: _Model, belief: tuple[State, ...], h: int) -> float:
     information cannot do worse), capped by the horizon."""
     if h == 0:
         return 0.0
-    known, total = model._clair, 0
-    for c in belief:  # model.clairvoyant(c, h), read from its memo where it answers h
-        found, searched = known.get(c, (None, 0))
-        if found is not None and found <= h:
-            total += found
-        elif found is None and h <= searched:
-            total += h
-        else:
-            total += model.clairvoyant(c, h)
-    return total / len(belief)
+    return model.clairvoyant_total(belief, h) / len(belief)
 
 
 FALLBACKS = ("restart", "nearest")
