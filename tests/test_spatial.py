@@ -207,16 +207,22 @@ def test_sensing_noise_in_3d() -> None:
         sense3d(START, 1.0, 0.0, rng, HAND)
 
 
+def _dot3(n, t) -> float:
+    """``n . t`` of two 3-vectors summed from 0.0 in order, the sum `_rigid` states (numpy's
+    ``np.dot`` goes to the BLAS, whose last bit depends on the kernel the machine picks)."""
+    return float(((0.0 + n[0] * t[0]) + n[1] * t[1]) + n[2] * t[2])
+
+
 def test_rigid_motions_compute_what_numpy_computes_bit_for_bit():
     """`moved` and `yawed` write the faces' arithmetic out in Python floats: the bytes (the sign
-    of a zero included) equal numpy's ``R a``, ``b + np.dot(R a, t)`` and row scaling, on
-    boxes with zero coordinates and on general polyhedra."""
+    of a zero included) equal numpy's ``R a``, ``b + (R a) . t`` (summed in order) and row
+    scaling, on boxes with zero coordinates and on general polyhedra."""
     from crmgrasp.model.solids import ConvexPolyhedron, box3d, rotation_z
 
     def numpy_moved(planes, r, t):
         rows = np.array(planes)
         normals = rows[:, :3] @ r.T
-        raw = np.array([(*n, b + float(np.dot(n, t))) for n, b in zip(normals, rows[:, 3])])
+        raw = np.array([(*n, b + _dot3(n, t)) for n, b in zip(normals, rows[:, 3])])
         return (raw / np.sqrt((raw[:, :3] * raw[:, :3]).sum(axis=1))[:, None]).tobytes()
 
     rng = np.random.default_rng(8)
@@ -250,7 +256,7 @@ def test_the_quick_rigid_motions_equal_the_checked_constructions():
         r, t = rotation_z(angle), np.array([dx, dy, 0.0])
         rows = np.array(box.planes)
         normals = rows[:, :3] @ r.T
-        checked = ConvexPolyhedron(tuple((*n, b + float(n @ t)) for n, b in zip(normals.tolist(), rows[:, 3].tolist())))
+        checked = ConvexPolyhedron(tuple((*n, b + _dot3(n, t)) for n, b in zip(normals.tolist(), rows[:, 3].tolist())))
         moved = box.yawed(angle, dx, dy)
         assert moved.planes == checked.planes == box.moved(r, t).planes
         assert moved.centre.tolist() == moved.vertices.mean(axis=0).tolist()

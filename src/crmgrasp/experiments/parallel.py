@@ -87,7 +87,10 @@ def run_parallel(
         for proc in list(procs.values()) if isinstance(procs, dict) else []:
             if hasattr(proc, "terminate"):
                 proc.terminate()
-        pool.shutdown(wait=False, cancel_futures=True)
+        # wait for the executor's manager thread (quick: the workers are stopped), so that no
+        # wake-up of it is left for interpreter exit, where Python 3.11 may write it to a pipe
+        # the thread already closed and print a traceback after the one-line message
+        pool.shutdown(wait=True, cancel_futures=True)
         raise
     pool.shutdown()
 

@@ -198,8 +198,9 @@ class ConvexPolyhedron:
 
     def _rigid(self, r: F64, t: F64) -> ConvexPolyhedron:
         """Faces ``(R a, b + (R a) . t)``, scaled to unit normals; the dot product of three
-        written out as ``np.dot`` of two 3-vectors sums it, from ``0.0`` and in order (bit for
-        bit, the sign of a zero included; tested)."""
+        written out, summed from ``0.0`` and in order (the sign of a zero included; tested).
+        ``R a`` is numpy's product, whose last bit may depend on the BLAS kernel the machine
+        picks (docs/development.md)."""
         normals = (np.array(self.planes)[:, :3] @ r.T).tolist()
         t0, t1, t2 = t.tolist()
         offsets = [f[3] for f in self.planes]
