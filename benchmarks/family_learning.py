@@ -24,15 +24,17 @@ expectation. A learner may then come out below the optimum on the W worlds.
 With ``--planner N`` a realizable reference runs too: the belief-space policy planned over N
 worlds drawn apart from the evaluation worlds (seed 30,000), with ``fallback="nearest"`` (where
 no planned world explains the history, the worlds that explain all but the fewest
-observations), on the same W worlds. It knows the family (it plans on simulated worlds of it)
-but not the worlds it runs on, so its cost is that of a policy, at least the family's optimum
-in expectation, where the optimum above is at most that. Per learner the graspable gap to this
-planner is reported as well (``gap_to_planner_graspable``): below zero, the learner from
-episodes does better on these worlds than a planner given the family.
+observations; ``--fallback restart``: the planned worlds with the current observation, which
+is much quicker over tens of thousands of worlds), on the same W worlds. It knows the family
+(it plans on simulated worlds of it) but not the worlds it runs on, so its cost is that of a
+policy, at least the family's optimum in expectation, where the optimum above is at most that.
+Per learner the graspable gap to this planner is reported as well
+(``gap_to_planner_graspable``): below zero, the learner from episodes does better on these
+worlds than a planner given the family.
 
 Usage: ``python benchmarks/family_learning.py [--episodes 3000] [--seeds 10] [--first 0]
 [--worlds 300] [--pool P] [--planner N] [--task NAME ...] [--learner NAME ...] [--param KEY=NUMBER ...]
-[--k K]`` (``--param``:
+[--k K] [--fallback nearest|restart]`` (``--param``:
 a learner parameter, e.g. ``explore=1`` for ``backoff-vi``, given to every learner run; ``--k``: every
 learner's history order instead of [`ORDERS`][]).
 Prints one JSON object; progress on stderr.
@@ -52,7 +54,7 @@ import numpy as np
 from crmgrasp._validation import setting
 from crmgrasp.agents.training import train_trials
 from crmgrasp.experiments._episodes import episode_records, greedy_records
-from crmgrasp.planners.references import BeliefPolicy, sample_starts, ungraspable_fraction
+from crmgrasp.planners.references import FALLBACKS, BeliefPolicy, sample_starts, ungraspable_fraction
 from crmgrasp.tasks import make_task
 
 TASKS = (
@@ -83,15 +85,18 @@ def _steps(records: list) -> np.ndarray:
     return np.array([len(r.actions) for r in records], dtype=float)
 
 
-def planner_row(task: Any, n: int, worlds: list, graspable: np.ndarray, optimum: np.ndarray) -> tuple[dict, np.ndarray]:
+def planner_row(
+    task: Any, n: int, worlds: list, graspable: np.ndarray, optimum: np.ndarray, fallback: str = "nearest"
+) -> tuple[dict, np.ndarray]:
     """The realizable reference of ``--planner n`` (module docstring): its summary and its
     CRMs per evaluation world."""
     t0 = time.perf_counter()
-    planner = BeliefPolicy(task, sample_starts(task, n, 30_000), fallback="nearest")
+    planner = BeliefPolicy(task, sample_starts(task, n, 30_000), fallback=fallback)
     records = episode_records(task, lambda: planner, worlds, 0)
     steps, won = _steps(records), np.array([r.success for r in records])
     row = {
         "planned_worlds": n,
+        "fallback": fallback,
         "mean": round(float(steps.mean()), 4),
         "mean_graspable": round(float(steps[graspable].mean()), 4),
         "over_optimum_graspable": round(float(steps[graspable].mean() / optimum[graspable].mean() - 1.0), 4),
@@ -115,6 +120,7 @@ def task_row(
     pool: int = 0,
     k: int | None = None,
     n_planner: int = 0,
+    fallback: str = "nearest",
 ) -> dict:
     """One task: the optimum, then every learner over the seeds (see the module docstring)."""
     task = make_task(name)
@@ -138,7 +144,7 @@ def task_row(
     }
     reference = None
     if n_planner:
-        row["planner"], reference = planner_row(task, n_planner, worlds, graspable, optimum)
+        row["planner"], reference = planner_row(task, n_planner, worlds, graspable, optimum, fallback)
     params = {"symmetric": task.symmetry is not None, **(extra or {})}
     for agent in learners:
         order = ORDERS.get(agent, 1) if k is None else k
@@ -197,6 +203,7 @@ def main(
     pool: int = 0,
     k: int | None = None,
     n_planner: int = 0,
+    fallback: str = "nearest",
 ) -> dict:
     """Every task and learner; see the module docstring."""
     out: dict = {"episodes": episodes, "seeds": [first, first + seeds - 1], "worlds": n_worlds, "params": extra or {}}
@@ -204,7 +211,8 @@ def main(
         out["k"] = k
     for name in tasks:
         print(f"{name} ...", file=sys.stderr, flush=True)
-        out[name] = task_row(name, learners, episodes, range(first, first + seeds), n_worlds, extra, pool, k, n_planner)
+        seeds_run = range(first, first + seeds)
+        out[name] = task_row(name, learners, episodes, seeds_run, n_worlds, extra, pool, k, n_planner, fallback)
     return out
 
 
@@ -220,6 +228,7 @@ if __name__ == "__main__":
     ap.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER|true|false", type=setting)
     ap.add_argument("--k", type=int, default=None, help="every learner's history order (default: ORDERS)")
     ap.add_argument("--planner", type=int, default=0, help="worlds of a realizable planner's reference (0: none)")
+    ap.add_argument("--fallback", choices=FALLBACKS, default="nearest", help="the planner's belief when it empties")
     a = ap.parse_args()
     if a.planner < 0:
         ap.error(f"--planner must be >= 0, got {a.planner}")
@@ -235,5 +244,6 @@ if __name__ == "__main__":
         a.pool,
         a.k,
         a.planner,
+        a.fallback,
     )
     print(json.dumps(res, indent=1))

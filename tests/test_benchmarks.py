@@ -291,6 +291,11 @@ def test_family_learning_pool_and_reference_bias_smoke():
     learner = (1 + judged["pooled-vi"]["gap_graspable"][0]) * judged["optimum_graspable"]  # its graspable mean
     expected = learner / judged["planner"]["mean_graspable"] - 1  # within the rounding of the printed gap
     assert abs(judged["pooled-vi"]["gap_to_planner_graspable"][0] - expected) < 1e-3
+    restarted = mod.task_row("u-handle", ("pooled-vi",), 10, range(1), 12, n_planner=24, fallback="restart")
+    other = BeliefPolicy(task, sample_starts(task, 24, 30_000))  # the default fallback: restart
+    costs = np.array([len(r.actions) for r in episode_records(task, lambda: other, planned[:12], 0)])
+    assert restarted["planner"]["mean"] == round(float(costs.mean()), 4)
+    assert restarted["planner"]["fallback"] == "restart" and judged["planner"]["fallback"] == "nearest"
     spec = importlib.util.spec_from_file_location("reference_bias", BENCH.parent / "reference_bias.py")
     bias = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bias)
