@@ -23,7 +23,7 @@ from crmgrasp.cli.common import _print_result, _progress, _run_folder, _task
 from crmgrasp.cli.learning import _cmd_evaluate, _cmd_learn
 from crmgrasp.cli.parser import build_parser
 from crmgrasp.cli.scene import _cmd_crm, _cmd_run, _cmd_show
-from crmgrasp.tasks import TEMPLATE, make_task, task_names, task_to_dict
+from crmgrasp.tasks import TEMPLATE, Task, make_task, task_names, task_to_dict
 
 __all__ = ["main", "build_parser"]
 
@@ -61,6 +61,9 @@ def _cmd_references(args: argparse.Namespace) -> int:
 
     if args.starts % args.blocks:
         raise CrmgraspError(f"--blocks {args.blocks} must divide --starts {args.starts}")
+    for flag, given in (("--planner-seed", args.planner_seed), ("--fallback", args.fallback)):
+        if given is not None and args.planner is None:
+            raise CrmgraspError(f"{flag} needs --planner")
     task = _task(args)
     with _progress(args).stage(f"references of {task.name}", 0):
         starts = refs.sample_starts(task, args.starts, args.seed)
@@ -97,7 +100,33 @@ def _cmd_references(args: argparse.Namespace) -> int:
             f"\n  over {args.blocks} blocks of {args.starts // args.blocks} starts: belief-space optimum {mean:.4f} "
             f"({ci_text(lo, hi, 'blocks')}) against {belief:.4f} over all {args.starts}"
         )
+    if args.planner is not None:
+        planner, line = _realizable(args, task, starts)
+        res["planner"] = planner
+        text += line
     return _print_result(args, res, text)
+
+
+def _realizable(args: argparse.Namespace, task: Task, starts: list) -> tuple[dict[str, Any], str]:
+    """``references --planner``: the realizable reference and the text lines that say it."""
+    from crmgrasp.planners.realizable import realizable_reference
+
+    seed = args.seed + 1 if args.planner_seed is None else args.planner_seed
+    fallback = args.fallback or "restart"
+    with _progress(args).stage(f"a belief-space policy over {args.planner} other starts of {task.name}", 0):
+        res = realizable_reference(task, starts, args.planner, seed, fallback, args.backend)
+    line = (
+        f"\n  a belief-space policy planned over {args.planner} other starts (seed {seed}, fallback {fallback}): "
+        f"{res['mean']:.4f} CRMs on these starts (standard error {res['standard_error']:.4f}), "
+        f"{res['over_optimum']:+.1%} over the optimum; the task's own optimum lies between the two in expectation"
+    )
+    if res["graspable_starts"]:
+        line += (
+            f"\n  on the {res['graspable_starts']} graspable starts: belief-space optimum "
+            f"{res['optimum_graspable']:.4f}, the policy {res['mean_graspable']:.4f} "
+            f"({res['over_optimum_graspable']:+.1%})"
+        )
+    return res, line
 
 
 def _cmd_plan(args: argparse.Namespace) -> int:

@@ -35,6 +35,7 @@ from crmgrasp.cli.options import (
 )
 from crmgrasp.experiments.registry import EXPERIMENTS
 from crmgrasp.model.history import MAX_K
+from crmgrasp.planners.references import FALLBACKS
 
 __all__ = ["build_parser"]
 
@@ -213,6 +214,30 @@ def _parser_references(sub: Any) -> None:
         help="also the belief-space optimum over each of this many disjoint blocks of the starts, their mean "
         "and a 95%% interval over the blocks: how far the sample size still moves the optimum, which on a "
         "family is optimistic and rises with more starts (default 1: none; must divide --starts)",
+    )
+    p.add_argument(
+        "--planner",
+        type=_STARTS,
+        default=None,
+        metavar="N",
+        help="also run, from each start, the belief-space policy planned over N other sampled starts (worlds on "
+        "a family): a policy that knows the task's distribution but not the starts, so its mean cost is at least "
+        "the task's own optimum in expectation, as the optimum over the starts is at most that; both also on "
+        "the graspable starts only (default: none; 1 to 1,000,000)",
+    )
+    p.add_argument(
+        "--planner-seed",
+        type=_SEED,
+        default=None,
+        help="seed of the planner's starts (default: --seed + 1; with --planner only)",
+    )
+    p.add_argument(
+        "--fallback",
+        choices=FALLBACKS,
+        default=None,
+        help="the planner's belief when no planned start explains the history: restart from those with the "
+        "current observation, or the nearest, those that explain all but the fewest observations (slower over "
+        "many starts) (default: restart; with --planner only)",
     )
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
     _add_kernel_backend(p)

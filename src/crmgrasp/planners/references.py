@@ -49,6 +49,7 @@ __all__ = [
     "belief_optimum",
     "block_optima",
     "ungraspable_fraction",
+    "graspable_starts",
     "graspable_warning",
     "sample_starts",
     "BeliefPolicy",
@@ -263,16 +264,27 @@ def clairvoyant_bound(task: Task, starts: Sequence[Start], horizon: int | None =
     return float(np.mean([model.clairvoyant(model.state(c), h) for c in starts]))
 
 
+def graspable_starts(
+    task: Task, starts: Sequence[Start], horizon: int | None = None, backend: str = "auto"
+) -> np.ndarray:
+    """Per start, whether some sequence of at most ``horizon`` (default ``task.max_steps``)
+    CRMs reaches a grasp from it knowing the true configuration (a boolean array)."""
+    if not starts:
+        raise CrmgraspError("graspable_starts needs at least one start")
+    model = _Model(task, backend)
+    h = horizon or task.max_steps
+    return np.array([model.depth(model.state(c), h) is not None for c in starts], dtype=bool)
+
+
 def ungraspable_fraction(
     task: Task, starts: Sequence[Start], horizon: int | None = None, backend: str = "auto"
 ) -> float:
     """Share of ``starts`` from which no sequence of at most ``horizon`` (default
-    ``task.max_steps``) CRMs reaches a grasp, even knowing the true configuration."""
+    ``task.max_steps``) CRMs reaches a grasp, even knowing the true configuration
+    (the share of [`graspable_starts`][] that are not)."""
     if not starts:
         raise CrmgraspError("ungraspable_fraction needs at least one start")
-    model = _Model(task, backend)
-    h = horizon or task.max_steps
-    return sum(model.depth(model.state(c), h) is None for c in starts) / len(starts)
+    return int((~graspable_starts(task, starts, horizon, backend)).sum()) / len(starts)
 
 
 def graspable_warning(task: Task, n: int = 50, seed: int = 0) -> str | None:

@@ -1,0 +1,87 @@
+"""A realizable reference: the belief-space policy planned over starts drawn apart from
+the ones it is scored on.
+
+The belief-space optimum over sampled starts ([`crmgrasp.planners.references.belief_optimum`][])
+is the best policy for those very starts, so on a family of objects it is optimistic: in
+expectation at most the family's own optimum ``J*``, and the more so the fewer starts.
+The same planner over ``n`` *other* starts ([`BeliefPolicy`][crmgrasp.planners.references.BeliefPolicy]),
+run from the starts, knows the task's distribution (it plans on draws from it) but not the
+starts: its mean cost is a policy's, at least ``J*`` in expectation. Together they bracket
+``J*``; how far apart they are says how far the sample size still moves the optimum.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+
+import numpy as np
+
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.model.hand import Error
+from crmgrasp.model.sensing import SensorNoise
+from crmgrasp.planners.references import BeliefPolicy, Start, _kernel, graspable_starts, sample_starts
+from crmgrasp.sim import run_episode
+from crmgrasp.tasks import Task
+
+__all__ = ["policy_costs", "realizable_reference"]
+
+
+def policy_costs(
+    task: Task, planned: Sequence[Start], starts: Sequence[Start], fallback: str = "restart", backend: str = "auto"
+) -> np.ndarray:
+    """The cost per start of the belief-space policy planned over ``planned``
+    ([`BeliefPolicy`][]) run from each of ``starts``: its CRMs, plus ``task.error_cost`` per
+    errored CRM (the cost [`belief_optimum`][crmgrasp.planners.references.belief_optimum]
+    counts), to the step limit where it does not grasp.
+
+    With ``planned`` the starts themselves, the mean is that optimum over them. With
+    worlds sampled apart from the starts, the policy knows the task's distribution (it plans
+    on draws from it) but not the starts it runs on: its mean cost estimates a realizable
+    policy's, at least the task's own optimum in expectation, where the optimum over the
+    starts is at most that in expectation (it is the best policy for those very starts)."""
+    if not starts:
+        raise CrmgraspError("policy_costs needs at least one start")
+    policy = BeliefPolicy(task, planned, fallback=fallback, backend=backend)
+    if task.noise.active:  # noise-free dynamics, as the references' own
+        task = dataclasses.replace(task, noise=SensorNoise())
+    kernel, counted = _kernel(task, backend), task.error_cost > 0.0
+    rng = np.random.default_rng(0)  # never drawn from: no sensing noise, and every start given
+    costs = np.empty(len(starts))
+    for i, start in enumerate(starts):
+        ep = run_episode(task, policy, rng, start=start, trace=counted, kernel=kernel)
+        errors = sum(t.after.error != Error.NONE for t in ep.trace)
+        costs[i] = ep.steps + task.error_cost * errors
+    return costs
+
+
+def realizable_reference(
+    task: Task, starts: Sequence[Start], n: int, seed: int, fallback: str = "restart", backend: str = "auto"
+) -> dict[str, float | int | str | None]:
+    """The belief-space policy planned over ``n`` starts drawn with ``seed`` (apart from
+    ``starts``), run from each of ``starts``, beside the optimum over ``starts``
+    ([`policy_costs`][] of both): ``mean`` and its ``standard_error`` over the starts,
+    ``over_optimum`` (``mean / optimum - 1``), and the same on the graspable starts only
+    ([`graspable_starts`][]; ``None`` where there are none), where an ungraspable start
+    costs both the step limit. In expectation the task's own optimum lies between the
+    optimum over ``starts`` (at most it) and ``mean`` (at least it)."""
+    optimum = policy_costs(task, starts, starts, backend=backend)
+    cost = policy_costs(task, sample_starts(task, n, seed), starts, fallback, backend)
+    graspable = graspable_starts(task, starts, backend=backend)
+    k = int(graspable.sum())
+    out: dict[str, float | int | str | None] = {
+        "planned_starts": n,
+        "seed": seed,
+        "fallback": fallback,
+        "mean": float(cost.mean()),
+        "standard_error": float(cost.std(ddof=1) / np.sqrt(len(cost))) if len(cost) > 1 else None,
+        "over_optimum": float(cost.mean() / optimum.mean() - 1.0),
+        "graspable_starts": k,
+        "optimum_graspable": None,
+        "mean_graspable": None,
+        "over_optimum_graspable": None,
+    }
+    if k:
+        opt, mean = float(optimum[graspable].mean()), float(cost[graspable].mean())
+        out |= {"optimum_graspable": opt, "mean_graspable": mean, "over_optimum_graspable": mean / opt - 1.0}
+    return out
