@@ -81,3 +81,18 @@ def test_references_planner_command(capsys) -> None:
         main(["references", "--starts", "20", "--planner", "0", "--quiet"])
     assert stop.value.code == 2
     assert "argument --planner: value must be an integer in [1, 1000000], got 0" in capsys.readouterr().err
+
+
+def test_realizable_reference_shows_each_run_over_the_starts() -> None:
+    import io
+
+    from crmgrasp._progress import Progress
+
+    task = make_task("u-handle")
+    starts = sample_starts(task, 20, 0)
+    shown = io.StringIO()
+    res = realizable_reference(task, starts, 50, 1, progress=Progress(shown, live=False))
+    out = shown.getvalue()
+    assert "the optimum over the starts: done 20/20 starts" in out
+    assert "a policy over 50 other starts: done 20/20 starts" in out
+    assert res == realizable_reference(task, starts, 50, 1)  # the display changes nothing

@@ -113,8 +113,7 @@ def _realizable(args: argparse.Namespace, task: Task, starts: list) -> tuple[dic
 
     seed = args.seed + 1 if args.planner_seed is None else args.planner_seed
     fallback = args.fallback or "restart"
-    with _progress(args).stage(f"a belief-space policy over {args.planner} other starts of {task.name}", 0):
-        res = realizable_reference(task, starts, args.planner, seed, fallback, args.backend)
+    res = realizable_reference(task, starts, args.planner, seed, fallback, args.backend, _progress(args))
     line = (
         f"\n  a belief-space policy planned over {args.planner} other starts (seed {seed}, fallback {fallback}): "
         f"{res['mean']:.4f} CRMs on these starts (standard error {res['standard_error']:.4f}), "

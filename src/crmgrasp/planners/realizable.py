@@ -13,10 +13,11 @@ starts: its mean cost is a policy's, at least ``J*`` in expectation. Together th
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from crmgrasp._progress import Progress
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.hand import Error
 from crmgrasp.model.sensing import SensorNoise
@@ -28,7 +29,12 @@ __all__ = ["policy_costs", "realizable_reference"]
 
 
 def policy_costs(
-    task: Task, planned: Sequence[Start], starts: Sequence[Start], fallback: str = "restart", backend: str = "auto"
+    task: Task,
+    planned: Sequence[Start],
+    starts: Sequence[Start],
+    fallback: str = "restart",
+    backend: str = "auto",
+    advance: Callable[[], None] | None = None,
 ) -> np.ndarray:
     """The cost per start of the belief-space policy planned over ``planned``
     ([`BeliefPolicy`][]) run from each of ``starts``: its CRMs, plus ``task.error_cost`` per
@@ -39,7 +45,8 @@ def policy_costs(
     worlds sampled apart from the starts, the policy knows the task's distribution (it plans
     on draws from it) but not the starts it runs on: its mean cost estimates a realizable
     policy's, at least the task's own optimum in expectation, where the optimum over the
-    starts is at most that in expectation (it is the best policy for those very starts)."""
+    starts is at most that in expectation (it is the best policy for those very starts).
+    ``advance``, if given, is called after each start (a progress display's)."""
     if not starts:
         raise CrmgraspError("policy_costs needs at least one start")
     policy = BeliefPolicy(task, planned, fallback=fallback, backend=backend)
@@ -52,11 +59,19 @@ def policy_costs(
         ep = run_episode(task, policy, rng, start=start, trace=counted, kernel=kernel)
         errors = sum(t.after.error != Error.NONE for t in ep.trace)
         costs[i] = ep.steps + task.error_cost * errors
+        if advance is not None:
+            advance()
     return costs
 
 
 def realizable_reference(
-    task: Task, starts: Sequence[Start], n: int, seed: int, fallback: str = "restart", backend: str = "auto"
+    task: Task,
+    starts: Sequence[Start],
+    n: int,
+    seed: int,
+    fallback: str = "restart",
+    backend: str = "auto",
+    progress: Progress | None = None,
 ) -> dict[str, float | int | str | None]:
     """The belief-space policy planned over ``n`` starts drawn with ``seed`` (apart from
     ``starts``), run from each of ``starts``, beside the optimum over ``starts``
@@ -64,9 +79,18 @@ def realizable_reference(
     ``over_optimum`` (``mean / optimum - 1``), and the same on the graspable starts only
     ([`graspable_starts`][]; ``None`` where there are none), where an ungraspable start
     costs both the step limit. In expectation the task's own optimum lies between the
-    optimum over ``starts`` (at most it) and ``mean`` (at least it)."""
-    optimum = policy_costs(task, starts, starts, backend=backend)
-    cost = policy_costs(task, sample_starts(task, n, seed), starts, fallback, backend)
+    optimum over ``starts`` (at most it) and ``mean`` (at least it). ``progress`` shows each
+    policy's run over the starts (it plans as they run)."""
+    runs = (("the optimum over the starts", None, "restart"), (f"a policy over {n} other starts", n, fallback))
+    costs = []
+    for label, other, rule in runs:
+        planned = starts if other is None else sample_starts(task, other, seed)
+        if progress is None:
+            costs.append(policy_costs(task, planned, starts, rule, backend))
+            continue
+        with progress.stage(label, len(starts), "starts"):
+            costs.append(policy_costs(task, planned, starts, rule, backend, progress.advance))
+    optimum, cost = costs
     graspable = graspable_starts(task, starts, backend=backend)
     k = int(graspable.sum())
     out: dict[str, float | int | str | None] = {
