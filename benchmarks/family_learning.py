@@ -85,6 +85,14 @@ def _steps(records: list) -> np.ndarray:
     return np.array([len(r.actions) for r in records], dtype=float)
 
 
+def _optimum(task: Any, planned: list, worlds: list) -> np.ndarray:
+    """CRMs per world of the belief-space optimal policy over ``planned``: one planner for
+    every world (its memo is shared), freed on return, before ``--planner`` builds its own
+    (the memo is a run's largest object)."""
+    planner = BeliefPolicy(task, planned)
+    return _steps(episode_records(task, lambda: planner, worlds, 0))
+
+
 def planner_row(
     task: Any, n: int, worlds: list, graspable: np.ndarray, optimum: np.ndarray, fallback: str = "nearest"
 ) -> tuple[dict, np.ndarray]:
@@ -128,8 +136,7 @@ def task_row(
     planned = sample_starts(task, max(pool, n_worlds), 10_000)  # the evaluation worlds first
     worlds = planned[:n_worlds]
     graspable = np.array([ungraspable_fraction(task, [w]) == 0.0 for w in worlds])
-    planner = BeliefPolicy(task, planned)  # one planner for every world: its memo is shared
-    optimum = _steps(episode_records(task, lambda: planner, worlds, 0))
+    optimum = _optimum(task, planned, worlds)
     print(
         f"{name}: optimum over {len(planned)} worlds planned and run in {time.perf_counter() - t_task:.0f} s",
         file=sys.stderr,
