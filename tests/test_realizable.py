@@ -11,7 +11,13 @@ from crmgrasp import CrmgraspError, make_task
 from crmgrasp.cli import main
 from crmgrasp.model.sensing import SensorNoise
 from crmgrasp.planners.realizable import policy_costs, realizable_reference
-from crmgrasp.planners.references import belief_optimum, graspable_starts, sample_starts, ungraspable_fraction
+from crmgrasp.planners.references import (
+    BeliefPolicy,
+    belief_optimum,
+    graspable_starts,
+    sample_starts,
+    ungraspable_fraction,
+)
 
 
 @pytest.mark.parametrize(
@@ -29,7 +35,9 @@ from crmgrasp.planners.references import belief_optimum, graspable_starts, sampl
 def test_the_policy_over_the_starts_themselves_costs_the_optimum(make, n) -> None:
     task = make()
     starts = sample_starts(task, n, 3)
-    costs = policy_costs(task, starts, starts)
+    policy = BeliefPolicy(task, starts)
+    assert policy.optimum() == belief_optimum(task, starts)  # the same search, bit for bit
+    costs = policy_costs(policy, starts)
     assert costs.shape == (n,)
     assert costs.mean() == pytest.approx(belief_optimum(task, starts), abs=1e-12)
 
@@ -40,7 +48,7 @@ def test_graspable_starts_cost_the_step_limit_where_not() -> None:
     graspable = graspable_starts(task, starts)
     assert graspable.dtype == bool and 0 < graspable.sum() < len(starts)  # seed 0 holds both kinds
     assert ungraspable_fraction(task, starts) == (~graspable).mean()
-    costs = policy_costs(task, sample_starts(task, 200, 1), starts)
+    costs = policy_costs(BeliefPolicy(task, sample_starts(task, 200, 1)), starts)
     assert np.all(costs[~graspable] == task.max_steps)
 
 
@@ -48,9 +56,10 @@ def test_realizable_reference_reports_both_and_their_graspable_means() -> None:
     task = make_task("u-handle")
     starts = sample_starts(task, 60, 0)
     same = realizable_reference(task, starts, 60, 0)  # the same draws: the policy is the optimum's
-    assert same["over_optimum"] == 0.0 and same["mean"] == pytest.approx(belief_optimum(task, starts))
+    assert same["optimum"] == belief_optimum(task, starts)
+    assert same["over_optimum"] == 0.0 and same["mean"] == pytest.approx(same["optimum"])
     res = realizable_reference(task, starts, 300, 7, "nearest")
-    costs = policy_costs(task, sample_starts(task, 300, 7), starts, "nearest")
+    costs = policy_costs(BeliefPolicy(task, sample_starts(task, 300, 7), "nearest"), starts)
     graspable = graspable_starts(task, starts)
     assert res["mean"] == costs.mean() and res["graspable_starts"] == graspable.sum()
     assert res["standard_error"] == pytest.approx(costs.std(ddof=1) / np.sqrt(60))
@@ -60,7 +69,7 @@ def test_realizable_reference_reports_both_and_their_graspable_means() -> None:
     with pytest.raises(CrmgraspError, match="unknown fallback 'near'"):
         realizable_reference(task, starts, 10, 1, "near")
     with pytest.raises(CrmgraspError, match="policy_costs needs at least one start"):
-        policy_costs(task, starts, [])
+        policy_costs(BeliefPolicy(task, starts), [])
 
 
 def test_references_planner_command(capsys) -> None:
@@ -68,8 +77,12 @@ def test_references_planner_command(capsys) -> None:
     assert main([*args, "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     task = make_task("u-handle")
-    expected = realizable_reference(task, sample_starts(task, 50, 0), 200, 1)  # --seed + 1 by default
+    starts = sample_starts(task, 50, 0)
+    expected = realizable_reference(task, starts, 200, 1)  # --seed + 1 by default
     assert res["planner"] == pytest.approx(expected)
+    assert res["belief_optimum"] == belief_optimum(task, starts)  # taken from the planner's run, the same
+    assert main([*args[:5], "--json", "--quiet"]) == 0  # without --planner, from belief_optimum itself
+    assert json.loads(capsys.readouterr().out)["belief_optimum"] == res["belief_optimum"]
     assert main([*args, "--planner-seed", "5", "--fallback", "nearest"]) == 0
     out = capsys.readouterr().out
     assert "planned over 200 other starts (seed 5, fallback nearest)" in out and "graspable starts" in out

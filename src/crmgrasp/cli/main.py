@@ -65,13 +65,15 @@ def _cmd_references(args: argparse.Namespace) -> int:
         if given is not None and args.planner is None:
             raise CrmgraspError(f"{flag} needs --planner")
     task = _task(args)
+    starts = refs.sample_starts(task, args.starts, args.seed)
+    planner: dict[str, Any] | None = None
+    line = ""
+    if args.planner is not None:  # it finds the optimum over the starts on its way
+        planner, line = _realizable(args, task, starts)
     with _progress(args).stage(f"references of {task.name}", 0):
-        starts = refs.sample_starts(task, args.starts, args.seed)
         backend = args.backend
-        clair, belief = (
-            refs.clairvoyant_bound(task, starts, backend=backend),
-            refs.belief_optimum(task, starts, backend=backend),
-        )
+        clair = refs.clairvoyant_bound(task, starts, backend=backend)
+        belief = refs.belief_optimum(task, starts, backend=backend) if planner is None else planner["optimum"]
         never = refs.ungraspable_fraction(task, starts, backend=backend)
         blocks = refs.block_optima(task, starts, args.blocks, backend=backend) if args.blocks > 1 else None
     res = {
@@ -100,8 +102,7 @@ def _cmd_references(args: argparse.Namespace) -> int:
             f"\n  over {args.blocks} blocks of {args.starts // args.blocks} starts: belief-space optimum {mean:.4f} "
             f"({ci_text(lo, hi, 'blocks')}) against {belief:.4f} over all {args.starts}"
         )
-    if args.planner is not None:
-        planner, line = _realizable(args, task, starts)
+    if planner is not None:
         res["planner"] = planner
         text += line
     return _print_result(args, res, text)

@@ -29,19 +29,14 @@ __all__ = ["policy_costs", "realizable_reference"]
 
 
 def policy_costs(
-    task: Task,
-    planned: Sequence[Start],
-    starts: Sequence[Start],
-    fallback: str = "restart",
-    backend: str = "auto",
-    advance: Callable[[], None] | None = None,
+    policy: BeliefPolicy, starts: Sequence[Start], advance: Callable[[], None] | None = None
 ) -> np.ndarray:
-    """The cost per start of the belief-space policy planned over ``planned``
-    ([`BeliefPolicy`][]) run from each of ``starts``: its CRMs, plus ``task.error_cost`` per
-    errored CRM (the cost [`belief_optimum`][crmgrasp.planners.references.belief_optimum]
-    counts), to the step limit where it does not grasp.
+    """The cost per start of a belief-space policy ([`BeliefPolicy`][], planned over its
+    own starts) run from each of ``starts``: its CRMs, plus ``task.error_cost`` per errored
+    CRM (the cost [`belief_optimum`][crmgrasp.planners.references.belief_optimum] counts), to
+    the step limit where it does not grasp; noise-free, as the policy plans.
 
-    With ``planned`` the starts themselves, the mean is that optimum over them. With
+    Planned over the starts themselves, the mean is that optimum over them. Planned over
     worlds sampled apart from the starts, the policy knows the task's distribution (it plans
     on draws from it) but not the starts it runs on: its mean cost estimates a realizable
     policy's, at least the task's own optimum in expectation, where the optimum over the
@@ -49,7 +44,7 @@ def policy_costs(
     ``advance``, if given, is called after each start (a progress display's)."""
     if not starts:
         raise CrmgraspError("policy_costs needs at least one start")
-    policy = BeliefPolicy(task, planned, fallback=fallback, backend=backend)
+    task, backend = policy.task, policy.backend
     if task.noise.active:  # noise-free dynamics, as the references' own
         task = dataclasses.replace(task, noise=SensorNoise())
     kernel, counted = _kernel(task, backend), task.error_cost > 0.0
@@ -75,28 +70,27 @@ def realizable_reference(
 ) -> dict[str, float | int | str | None]:
     """The belief-space policy planned over ``n`` starts drawn with ``seed`` (apart from
     ``starts``), run from each of ``starts``, beside the optimum over ``starts``
-    ([`policy_costs`][] of both): ``mean`` and its ``standard_error`` over the starts,
+    ([`policy_costs`][] of both): ``optimum`` (the value of
+    [`belief_optimum`][crmgrasp.planners.references.belief_optimum], bit for bit, from the
+    optimal policy's own search), ``mean`` and its ``standard_error`` over the starts,
     ``over_optimum`` (``mean / optimum - 1``), and the same on the graspable starts only
     ([`graspable_starts`][]; ``None`` where there are none), where an ungraspable start
     costs both the step limit. In expectation the task's own optimum lies between the
     optimum over ``starts`` (at most it) and ``mean`` (at least it). ``progress`` shows each
     policy's run over the starts (it plans as they run)."""
-    runs = (("the optimum over the starts", None, "restart"), (f"a policy over {n} other starts", n, fallback))
-    costs = []
-    for label, other, rule in runs:
-        planned = starts if other is None else sample_starts(task, other, seed)
-        if progress is None:
-            costs.append(policy_costs(task, planned, starts, rule, backend))
-            continue
-        with progress.stage(label, len(starts), "starts"):
-            costs.append(policy_costs(task, planned, starts, rule, backend, progress.advance))
-    optimum, cost = costs
+    other = BeliefPolicy(task, sample_starts(task, n, seed), fallback, backend)  # it plans as it runs
+    best = BeliefPolicy(task, starts, backend=backend)
+    value = best.optimum()
+    optimum = _run(best, starts, progress, "the optimum over the starts")
+    del best  # its memo, the largest object, goes before the other policy plans
+    cost = _run(other, starts, progress, f"a policy over {n} other starts")
     graspable = graspable_starts(task, starts, backend=backend)
     k = int(graspable.sum())
     out: dict[str, float | int | str | None] = {
         "planned_starts": n,
         "seed": seed,
         "fallback": fallback,
+        "optimum": value,
         "mean": float(cost.mean()),
         "standard_error": float(cost.std(ddof=1) / np.sqrt(len(cost))) if len(cost) > 1 else None,
         "over_optimum": float(cost.mean() / optimum.mean() - 1.0),
@@ -109,3 +103,11 @@ def realizable_reference(
         opt, mean = float(optimum[graspable].mean()), float(cost[graspable].mean())
         out |= {"optimum_graspable": opt, "mean_graspable": mean, "over_optimum_graspable": mean / opt - 1.0}
     return out
+
+
+def _run(policy: BeliefPolicy, starts: Sequence[Start], progress: Progress | None, label: str) -> np.ndarray:
+    """[`policy_costs`][], shown as a stage of ``progress`` where there is one."""
+    if progress is None:
+        return policy_costs(policy, starts)
+    with progress.stage(label, len(starts), "starts"):
+        return policy_costs(policy, starts, progress.advance)

@@ -418,7 +418,7 @@ class BeliefPolicy:
             raise CrmgraspError("BeliefPolicy needs at least one start")
         if fallback not in FALLBACKS:
             raise CrmgraspError(f"unknown fallback {fallback!r}: choose one of {', '.join(FALLBACKS)}")
-        self.task, self.fallback = task, fallback
+        self.task, self.fallback, self.backend = task, fallback, backend
         self._model = _Model(task, backend)
         self._memo: dict = {}
         self._acts: dict = {}
