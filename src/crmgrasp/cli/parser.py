@@ -229,7 +229,8 @@ def _parser_references(sub: Any) -> None:
         "--planner-seed",
         type=_SEED,
         default=None,
-        help="seed of the planner's starts (default: --seed + 1; with --planner only)",
+        metavar="SEED",
+        help="seed of the planner's starts (default: --seed + 1; 0 to 2**63-1; with --planner only)",
     )
     p.add_argument(
         "--fallback",
