@@ -73,8 +73,11 @@ def _cmd_references(args: argparse.Namespace) -> int:
     with _progress(args).stage(f"references of {task.name}", 0):
         backend = args.backend
         clair = refs.clairvoyant_bound(task, starts, backend=backend)
-        belief = refs.belief_optimum(task, starts, backend=backend) if planner is None else planner["optimum"]
-        never = refs.ungraspable_fraction(task, starts, backend=backend)
+        if planner is None:
+            belief = refs.belief_optimum(task, starts, backend=backend)
+            never = refs.ungraspable_fraction(task, starts, backend=backend)
+        else:  # the same values, which the planner's run has found on its way
+            belief, never = planner["optimum"], (len(starts) - planner["graspable_starts"]) / len(starts)
         blocks = refs.block_optima(task, starts, args.blocks, backend=backend) if args.blocks > 1 else None
     res = {
         "task": task.name,
