@@ -3,7 +3,7 @@ optimum on all worlds and on the graspable worlds only.
 
 For each task: W evaluation worlds are sampled once (``sample_starts(task, W, 10_000)``);
 a world is graspable when some sequence of at most ``max_steps`` CRMs grasps it knowing
-the true configuration (``ungraspable_fraction``). The belief-space optimal policy over
+the true configuration (``graspable_starts``). The belief-space optimal policy over
 those worlds (``BeliefPolicy``) runs on each: its mean is the optimum. For each seed, one
 agent per learner trains for EPISODES episodes of the task itself (k from [`ORDERS`][], on the mirror
 quotient where the task declares one, no prior), then its greedy policy runs on the same
@@ -54,7 +54,7 @@ import numpy as np
 from crmgrasp._validation import setting
 from crmgrasp.agents.training import train_trials
 from crmgrasp.experiments._episodes import episode_records, greedy_records
-from crmgrasp.planners.references import FALLBACKS, BeliefPolicy, sample_starts, ungraspable_fraction
+from crmgrasp.planners.references import FALLBACKS, BeliefPolicy, graspable_starts, sample_starts
 from crmgrasp.tasks import make_task
 
 TASKS = (
@@ -135,7 +135,7 @@ def task_row(
     t_task = time.perf_counter()
     planned = sample_starts(task, max(pool, n_worlds), 10_000)  # the evaluation worlds first
     worlds = planned[:n_worlds]
-    graspable = np.array([ungraspable_fraction(task, [w]) == 0.0 for w in worlds])
+    graspable = graspable_starts(task, worlds)
     optimum = _optimum(task, planned, worlds)
     print(
         f"{name}: optimum over {len(planned)} worlds planned and run in {time.perf_counter() - t_task:.0f} s",

@@ -269,7 +269,7 @@ def test_family_learning_pool_and_reference_bias_smoke():
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     from crmgrasp.experiments._episodes import episode_records
-    from crmgrasp.planners.references import BeliefPolicy, belief_optimum, sample_starts
+    from crmgrasp.planners.references import BeliefPolicy, belief_optimum, sample_starts, ungraspable_fraction
     from crmgrasp.tasks import make_task
 
     task = make_task("u-handle")
@@ -285,7 +285,7 @@ def test_family_learning_pool_and_reference_bias_smoke():
     judged = mod.task_row("u-handle", ("pooled-vi",), 10, range(1), 12, n_planner=24)
     other = BeliefPolicy(task, sample_starts(task, 24, 30_000), fallback="nearest")
     costs = np.array([len(r.actions) for r in episode_records(task, lambda: other, planned[:12], 0)])
-    grasp = np.array([mod.ungraspable_fraction(task, [w]) == 0.0 for w in planned[:12]])
+    grasp = np.array([ungraspable_fraction(task, [w]) == 0.0 for w in planned[:12]])
     assert judged["planner"]["mean"] == round(float(costs.mean()), 4) and judged["planner"]["planned_worlds"] == 24
     assert judged["planner"]["mean_graspable"] == round(float(costs[grasp].mean()), 4)
     learner = (1 + judged["pooled-vi"]["gap_graspable"][0]) * judged["optimum_graspable"]  # its graspable mean

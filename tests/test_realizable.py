@@ -111,3 +111,12 @@ def test_realizable_reference_shows_each_run_over_the_starts() -> None:
     assert "the optimum over the starts: done 20/20 starts" in out
     assert "a policy over 50 other starts: done 20/20 starts" in out
     assert res == realizable_reference(task, starts, 50, 1)  # the display changes nothing
+
+
+def test_references_planner_from_a_single_start(capsys) -> None:
+    """One start has no standard error: the text leaves it out, the JSON says null."""
+    assert main(["references", "--starts", "1", "--planner", "5", "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "planned over 5 other starts (seed 1, fallback restart):" in out and "standard error" not in out
+    assert main(["references", "--starts", "1", "--planner", "5", "--quiet", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["planner"]["standard_error"] is None

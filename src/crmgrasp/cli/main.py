@@ -118,9 +118,11 @@ def _realizable(args: argparse.Namespace, task: Task, starts: list) -> tuple[dic
     seed = args.seed + 1 if args.planner_seed is None else args.planner_seed
     fallback = args.fallback or "restart"
     res = realizable_reference(task, starts, args.planner, seed, fallback, args.backend, _progress(args))
+    sem = res["standard_error"]
+    spread = "" if sem is None else f" (standard error {sem:.4f})"  # none from a single start
     line = (
         f"\n  a belief-space policy planned over {args.planner} other starts (seed {seed}, fallback {fallback}): "
-        f"{res['mean']:.4f} CRMs on these starts (standard error {res['standard_error']:.4f}), "
+        f"{res['mean']:.4f} CRMs on these starts{spread}, "
         f"{res['over_optimum']:+.1%} over the optimum; the task's own optimum lies between the two in expectation"
     )
     if res["graspable_starts"]:
