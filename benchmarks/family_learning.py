@@ -75,6 +75,8 @@ every learner and the optimum spend the step limit) nor, by default, the three-f
 (``crmgrasp reproduce third-contact``)."""
 THREE_FINGERS = ("triangles-3f", "odd-polygons-3f")
 """Three-finger twins a run may name with ``--task`` (not run by default)."""
+MESHES = ("open-cup-3d",)
+"""Tasks on meshes (readable rules only, slower) a run may name with ``--task`` (not run by default)."""
 LEARNERS = ("backoff-vi", "pooled-vi", "model-vi")
 ORDERS = {"backoff-vi": 2}
 """History order per learner (1 where not listed): ``backoff-vi`` runs with k = 2, as ``--preset
@@ -230,7 +232,7 @@ if __name__ == "__main__":
     ap.add_argument("--first", type=int, default=0)
     ap.add_argument("--worlds", type=int, default=300)
     ap.add_argument("--pool", type=int, default=0, help="worlds the optimum plans over (default: --worlds)")
-    ap.add_argument("--task", action="append", dest="tasks", choices=TASKS + THREE_FINGERS)
+    ap.add_argument("--task", action="append", dest="tasks", choices=TASKS + THREE_FINGERS + MESHES)
     ap.add_argument("--learner", action="append", dest="learners")
     ap.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER|true|false", type=setting)
     ap.add_argument("--k", type=int, default=None, help="every learner's history order (default: ORDERS)")

@@ -277,6 +277,7 @@ class KOrderHistory(gym.Wrapper[int, np.int64, dict[str, Any], np.int64], gym.ut
 SPATIAL_ENVS = {
     "crmgrasp/Box3D-v0": "box-3d",
     "crmgrasp/Cup3D-v0": "cup-3d",
+    "crmgrasp/OpenCup3D-v0": "open-cup-3d",
     "crmgrasp/Box3D3F-v0": "box-3d-3f",
     "crmgrasp/Cup3D3F-v0": "cup-3d-3f",
 }

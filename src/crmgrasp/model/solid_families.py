@@ -10,6 +10,10 @@ parameter).
   a random yaw (drawing all three dimensions covers which face is down): ``Box3D``.
 * [`CylinderOnTable`][]: a closed cylinder of random radius and height, upright
   (axis vertical) with probability ``upright``, else lying on its side: ``Cup3D``.
+* [`OpenCupOnTable`][]: an open cup ([`open_cup`][crmgrasp.model.mesh.open_cup], a
+  triangle mesh: not convex) of random radius and height, upright with probability
+  ``upright`` (the opening up), else lying on its side (the opening to the side):
+  ``OpenCup3D``.
 
 Each has ``sample(rng)``, ``nominal()`` (the middle of every range, unposed),
 ``min_width()`` (the smallest distance across any object it draws: the narrowest span
@@ -26,18 +30,19 @@ import numpy as np
 
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.family_base import Pose, Range, _at, _mid, _range, _uniform, family_dict
-from crmgrasp.model.solids import Cylinder, Solid, box3d
+from crmgrasp.model.mesh import TriangleMesh, open_cup
+from crmgrasp.model.solids import Cylinder, Solid, box3d, rotation_z
 
-__all__ = ["SolidFamily", "BoxOnTable", "CylinderOnTable"]
+__all__ = ["SolidFamily", "BoxOnTable", "CylinderOnTable", "OpenCupOnTable"]
 
 
 @runtime_checkable
 class SolidFamily(Protocol):
     """A distribution over spatial objects on the table."""
 
-    def sample(self, rng: np.random.Generator) -> Solid: ...
+    def sample(self, rng: np.random.Generator) -> Solid | TriangleMesh: ...
 
-    def nominal(self) -> Solid: ...
+    def nominal(self) -> Solid | TriangleMesh: ...
 
     def min_width(self) -> float: ...
 
@@ -46,6 +51,13 @@ class SolidFamily(Protocol):
 
 def _placed(solid: Solid, rng: np.random.Generator, pose: Pose) -> Solid:
     return solid.yawed(*pose.draw(rng))
+
+
+def _upright(value: Any) -> float:
+    """A checked probability of drawing an object upright."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= value <= 1.0:
+        raise CrmgraspError(f"upright must be a probability in [0, 1], got {value!r}")
+    return float(value)
 
 
 def _table_pose() -> Pose:
@@ -99,9 +111,7 @@ class CylinderOnTable:
     def __post_init__(self) -> None:
         object.__setattr__(self, "radius", _range(self.radius, "cylinder radius"))
         object.__setattr__(self, "height", _range(self.height, "cylinder height"))
-        u = self.upright
-        if isinstance(u, bool) or not isinstance(u, (int, float)) or not 0.0 <= u <= 1.0:
-            raise CrmgraspError(f"upright must be a probability in [0, 1], got {u!r}")
+        object.__setattr__(self, "upright", _upright(self.upright))
 
     @staticmethod
     def _cylinder(radius: float, height: float, upright: bool) -> Solid:
@@ -122,3 +132,67 @@ class CylinderOnTable:
 
     def describe(self) -> dict[str, Any]:
         return family_dict("cylinder", self)
+
+
+_LYING = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
+"""The rotation about ``y`` that turns a cup's axis ``+z`` to ``+x`` (its opening to the side)."""
+
+
+@dataclass(frozen=True)
+class OpenCupOnTable:
+    """Open cups ([`open_cup`][crmgrasp.model.mesh.open_cup]) of outer radius ``radius`` and
+    height ``height`` (metres), walls and bottom ``wall`` thick, their circles ``segments``-gons:
+    upright with probability ``upright`` (the opening up), else lying on the table with the
+    opening along the pose's yaw. Draws: radius, height, the upright coin, then the pose (3),
+    as [`CylinderOnTable`][].
+
+    A lying cup is the upright one turned by a quarter turn about ``y`` (its axis from ``+z``
+    to ``+x``), moved so that its axis lies at height ``radius`` from ``x = -height / 2`` to
+    ``height / 2``, then turned by the yaw and moved by the offset.
+
+    >>> cup = OpenCupOnTable(upright=0.0).sample(np.random.default_rng(0))
+    >>> round(cup.support((0.0, 0.0, 1.0)), 12)  # its lowest point is on the table
+    0.0
+    >>> bool(cup.contains(cup.centre))  # the centre of volume lies in the cavity, not in the material
+    False
+    """
+
+    radius: Range = (0.03, 0.07)
+    height: Range = (0.06, 0.20)
+    wall: float = 0.005
+    upright: float = 0.5
+    segments: int = 24
+    pose: Pose = field(default_factory=_table_pose)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "radius", _range(self.radius, "open cup radius"))
+        object.__setattr__(self, "height", _range(self.height, "open cup height"))
+        object.__setattr__(self, "upright", _upright(self.upright))
+        thinnest = min(self.radius[0], self.height[0])
+        w = self.wall
+        if isinstance(w, bool) or not isinstance(w, (int, float)) or not 0.0 < w < thinnest:
+            raise CrmgraspError(
+                f"open cup wall must be a number in (0, {thinnest:g}) m (below the least radius and height), got {w!r}"
+            )
+        open_cup(self.radius[0], self.height[0], float(w), self.segments)  # the segments' one-line error, early
+
+    def _cup(self, radius: float, height: float, upright: bool, angle: float, dx: float, dy: float) -> TriangleMesh:
+        cup, yaw = open_cup(radius, height, self.wall, self.segments), rotation_z(angle)
+        if upright:
+            return cup.moved(yaw, (dx, dy, 0.0))
+        lift = yaw @ np.array([-height / 2, 0.0, radius]) + np.array([dx, dy, 0.0])
+        return cup.moved(yaw @ _LYING, lift)
+
+    def sample(self, rng: np.random.Generator) -> TriangleMesh:
+        radius, height = _uniform(rng, self.radius), _uniform(rng, self.height)
+        upright = float(rng.random()) < self.upright
+        return self._cup(radius, height, upright, *self.pose.draw(rng))
+
+    def nominal(self) -> TriangleMesh:
+        return self._cup(_mid(self.radius), _mid(self.height), self.upright >= 0.5, 0.0, 0.0, 0.0)
+
+    def min_width(self) -> float:
+        return min(2.0 * self.radius[0], self.height[0])
+
+    def describe(self) -> dict[str, Any]:
+        return family_dict("open_cup", self)

@@ -11,8 +11,9 @@ the one episode loop ([`crmgrasp.sim`][]), the learners, the references and the 
 step it unchanged. What the agent sees is the planar model's: ``rho``, ``|m_a|``,
 ``|m_b|`` in the same bins (24 discretized observations) and the error flag.
 
-Registered tasks: ``box-3d`` (``crmgrasp/Box3D-v0``) and ``cup-3d`` (``crmgrasp/Cup3D-v0``),
-and their tripods ``box-3d-3f`` and ``cup-3d-3f`` (``crmgrasp/Box3D3F-v0``,
+Registered tasks: ``box-3d`` (``crmgrasp/Box3D-v0``), ``cup-3d`` (``crmgrasp/Cup3D-v0``), the
+open cups of ``open-cup-3d`` (``crmgrasp/OpenCup3D-v0``: a triangle mesh, not convex, on the
+readable rules), and the tripods ``box-3d-3f`` and ``cup-3d-3f`` (``crmgrasp/Box3D3F-v0``,
 ``crmgrasp/Cup3D3F-v0``: a third finger, [`tripod_crms`][], [`TRIPOD_BINS`][]; the same
 families and goal; docs/model-3d.md section 9).
 """
@@ -30,7 +31,7 @@ from crmgrasp.model.contact_model import observation_names
 from crmgrasp.model.hand import Error
 from crmgrasp.model.mesh import TriangleMesh
 from crmgrasp.model.sensing import Discretizer
-from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable, SolidFamily
+from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable, OpenCupOnTable, SolidFamily
 from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, Solid, dot, surface_point
 from crmgrasp.model.spatial import CRM3D, Contacts3D, Hand3D, config3d
 from crmgrasp.model.spatial_model import SpatialModel, contact3d
@@ -47,6 +48,7 @@ __all__ = [
     "tripod_crms",
     "box_3d",
     "cup_3d",
+    "open_cup_3d",
     "box_3d_3f",
     "cup_3d_3f",
     "SPATIAL_TASKS",
@@ -250,6 +252,16 @@ def cup_3d() -> SpatialTask:
     )
 
 
+def open_cup_3d() -> SpatialTask:
+    """``open-cup-3d``: open cups ([`OpenCupOnTable`][crmgrasp.model.solid_families.OpenCupOnTable])
+    of radius 0.03-0.07 m and height 0.06-0.20 m, walls 5 mm thick, upright or lying (even
+    odds), any yaw: ``cup-3d`` with the top open, so that a goal line through the opening
+    reaches the inner wall and two contacts may pinch the wall. A mesh: the readable rules
+    step it (no compiled kernel)."""
+    text = "open cups r 0.03-0.07 m, h 0.06-0.20 m, wall 5 mm, upright or lying, any yaw (a mesh)"
+    return _spatial_task("open-cup-3d", OpenCupOnTable(), text, None)
+
+
 def box_3d_3f() -> SpatialTask:
     """``box-3d-3f``: ``box-3d``'s boxes held by three fingers."""
     text = "boxes 0.15-0.30 x 0.06-0.12 x 0.06-0.20 m on a table, any yaw; success at friction 0.05"
@@ -262,7 +274,13 @@ def cup_3d_3f() -> SpatialTask:
     return _spatial_task("cup-3d-3f", CylinderOnTable(), text, None, fingers=3)
 
 
-SPATIAL_TASKS = {"box-3d": box_3d, "cup-3d": cup_3d, "box-3d-3f": box_3d_3f, "cup-3d-3f": cup_3d_3f}
+SPATIAL_TASKS = {
+    "box-3d": box_3d,
+    "cup-3d": cup_3d,
+    "open-cup-3d": open_cup_3d,
+    "box-3d-3f": box_3d_3f,
+    "cup-3d-3f": cup_3d_3f,
+}
 """The registered spatial tasks."""
 
 for _name, _factory in SPATIAL_TASKS.items():

@@ -18,8 +18,9 @@ The schema follows the planar one ([`crmgrasp.tasks.files`][]) with spatial part
     # box = { lo = [..], hi = [..] }, polyhedron = { planes = [[ax, ay, az, b], ..] },
     # mesh = { vertices = [[x, y, z], ..], faces = [[i, j, k], ..] },
     # open_cup = { radius = .., height = .., wall = .., segments = .. }
-    # [family]  kind = "box3d" (length, width, height) or "cylinder" (radius, height,
-    #           upright), ranges [low, high], pose = { angle = [..], offset = [..] }
+    # [family]  kind = "box3d" (length, width, height), "cylinder" (radius, height,
+    #           upright) or "open_cup" (radius, height, wall, upright, segments),
+    #           ranges [low, high], pose = { angle = [..], offset = [..] }
     [starts]
     kind = "surface"                 # up = 0.5, max_tries = 10000
 
@@ -35,7 +36,7 @@ from typing import Any
 from crmgrasp._validation import CrmgraspError, shown
 from crmgrasp.model.families import Pose
 from crmgrasp.model.mesh import TriangleMesh, open_cup
-from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable
+from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable, OpenCupOnTable
 from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, box3d
 from crmgrasp.model.spatial import CRM3D, Hand3D
 from crmgrasp.tasks.schema import (
@@ -59,7 +60,7 @@ __all__ = ["spatial_from_dict", "spatial_to_dict", "SPATIAL_KEYS"]
 
 SPATIAL_KEYS = {*COMMON_SECTIONS, "model", "solid", "table"}
 """The keys of a spatial task file."""
-_FAMILIES3D: dict[str, type] = {"box3d": BoxOnTable, "cylinder": CylinderOnTable}
+_FAMILIES3D: dict[str, type] = {"box3d": BoxOnTable, "cylinder": CylinderOnTable, "open_cup": OpenCupOnTable}
 
 
 def _vector(value: Any, key: str, n: int) -> tuple[float, ...]:
