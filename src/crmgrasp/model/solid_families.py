@@ -174,7 +174,8 @@ class OpenCupOnTable:
             raise CrmgraspError(
                 f"open cup wall must be a number in (0, {thinnest:g}) m (below the least radius and height), got {w!r}"
             )
-        open_cup(self.radius[0], self.height[0], float(w), self.segments)  # the segments' one-line error, early
+        object.__setattr__(self, "wall", float(w))
+        open_cup(self.radius[0], self.height[0], self.wall, self.segments)  # the segments' one-line error, early
 
     def _cup(self, radius: float, height: float, upright: bool, angle: float, dx: float, dy: float) -> TriangleMesh:
         cup, yaw = open_cup(radius, height, self.wall, self.segments), rotation_z(angle)
