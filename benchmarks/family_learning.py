@@ -73,7 +73,7 @@ TASKS = (
 ``triangles`` and ``odd-polygons`` (no two-finger grasp at friction 0.15 on any world:
 every learner and the optimum spend the step limit) nor, by default, the three-finger twins
 (``crmgrasp reproduce third-contact``)."""
-THREE_FINGERS = ("triangles-3f", "odd-polygons-3f")
+THREE_FINGERS = ("triangles-3f", "odd-polygons-3f", "box-family-3f", "cup-family-3f", "box-3d-3f", "cup-3d-3f")
 """Three-finger twins a run may name with ``--task`` (not run by default)."""
 MESHES = ("open-cup-3d",)
 """Tasks on meshes (readable rules only, slower) a run may name with ``--task`` (not run by default)."""
