@@ -5,9 +5,9 @@ coin, the pose, from the same ranges and in the same order; the streams part onc
 take different tries), so they differ in the opening alone. On WORLDS worlds of each
 (``sample_starts(task, WORLDS, SEED)``) this prints the clairvoyant bound, the belief-space
 optimum (CRMs per episode) and the share of worlds no sequence of at most ``max_steps`` CRMs
-grasps; and, for the optimal policy's episodes on the open cups, how
-many of its grasps hold a contact on an inner surface (strictly inside the cup's convex hull by
-more than 1e-6 m: the inner wall or the inner bottom, reached through the opening).
+grasps; and, for the optimal policy's episodes on the open cups, how many of its grasps hold a
+contact on an inner surface (strictly inside the cup's convex hull by more than 1e-6 m: the inner
+wall or the inner bottom, reached through the opening).
 
 Usage: ``python benchmarks/open_cups.py [--worlds 300] [--seed 0]``. Prints one JSON object;
 about 1 minute on 2 cores at the defaults.
