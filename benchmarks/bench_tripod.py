@@ -15,10 +15,10 @@ step alone (``env.step`` calls only, each timed on its own in the same pass; Car
 
 The least friction alone, as well, on the distinct configurations of ``steps`` random
 actions of each task: the compiled rule (``least_friction`` of
-``crmgrasp.kernels._closure_jit``, no cache; the least of ``rounds`` passes) and, as peers, the
-rule before each of its changes ([`PEERS`][]): the plain bisection, Bland's pivot rule
-throughout instead of Dantzig's, the midpoint as the first probe; the search stopped once it
-decides the grasp (``decided_friction``), with and without the first probe; the readable rule
+``crmgrasp.kernels._closure_jit``, no cache; the least of ``rounds`` passes; three contacts take
+the exact rule of ``crmgrasp.model.tripod``) and, as peers, the rules before it ([`PEERS`][]):
+the search over the cone's half-angle (the rule of four contacts) and its plain bisection; the
+rule and the search stopped once they decide the grasp (``decided_friction``); the readable rule
 (``least_friction_3d``, first 50 configurations, once), linear programs per configuration and
 pivots per program each way, and how far each peer's answers lie from the rule's.
 
@@ -86,47 +86,46 @@ def _apart(pairs: list, new: np.ndarray, old: np.ndarray, goal: float) -> tuple[
 
 
 PEERS = {
-    "bisection": {"GUIDE_MAX": 0, "FIRST_PROBE": 0.0},
-    "bland": {"DEGENERATE_STREAK": 0},
-    "midpoint_first": {"FIRST_PROBE": 0.0},
+    "search": {"TRIPOD_EXACT": 0},
+    "bisection": {"TRIPOD_EXACT": 0, "GUIDE_MAX": 0, "FIRST_PROBE": 0.0},
 }
-"""Each peer: the rule with constants of ``quality3d`` and ``lp`` set otherwise (the rule
-before one of its changes): no guesses and no first probe (the plain bisection), Bland's pivot
-rule throughout, the midpoint as the first probe."""
+"""Each peer: the rule with constants of ``quality3d`` set otherwise (a rule before): the search
+over the friction cone's half-angle with its first probe and secant guesses, and without them
+(the plain bisection)."""
 
 
 def _modules() -> dict[str, Any]:
-    from crmgrasp.model import lp, quality3d
+    from crmgrasp.model import quality3d
 
-    return {"GUIDE_MAX": quality3d, "FIRST_PROBE": quality3d, "DEGENERATE_STREAK": lp}
+    return {"GUIDE_MAX": quality3d, "FIRST_PROBE": quality3d, "TRIPOD_EXACT": quality3d}
 
 
 def _counted(pairs: list, changes: dict[str, float]) -> tuple[float, float]:
     """Linear programs and simplex pivots per configuration of the readable rule on ``pairs``,
     with the constants in ``changes`` set to their values."""
-    from crmgrasp.model import lp, quality
+    from crmgrasp.model import lp
 
     counts = [0, 0]
-    program, pivot = quality.max_least_weight, lp._pivot
+    program, pivot = lp.solve, lp._pivot
     modules = _modules()
     before = {name: getattr(modules[name], name) for name in changes}
 
-    def counting(w: np.ndarray) -> float:
+    def counting(*args: Any) -> Any:
         counts[0] += 1
-        return program(w)
+        return program(*args)
 
     def pivoting(*args: Any) -> None:
         counts[1] += 1
         pivot(*args)
 
-    quality.max_least_weight, lp._pivot = counting, pivoting
+    lp.solve, lp._pivot = counting, pivoting
     for name, value in changes.items():
-        setattr(modules[name], name, value)
+        setattr(modules[name], name, type(before[name])(value))
     try:
         for p, n in pairs:
             least_friction_3d(p, n)
     finally:
-        quality.max_least_weight, lp._pivot = program, pivot
+        lp.solve, lp._pivot = program, pivot
         for name, value in before.items():
             setattr(modules[name], name, value)
     return counts[0] / len(pairs), counts[1] / len(pairs)
@@ -136,11 +135,12 @@ def _least_friction_alone(env_id: str, steps: int, rounds: int) -> dict[str, flo
     """The least friction on the distinct configurations a random-action run of ``env_id``
     visits: microseconds per configuration, compiled (the least of ``rounds`` passes) by the
     rule and by each of [`PEERS`][] and, to decide the grasp only, by the rule and the
-    midpoint-first peer (``decided_friction`` at the task's ``mu_goal``); readable (the first 50
+    search (``decided_friction`` at the task's ``mu_goal``); readable (the first 50
     configurations, once); linear programs and pivots per configuration, counted on the
     readable rule; and how far each peer's answers lie from the rule's (the largest relative gap
     above friction 1e-6, and how many fall on the other side of the task's ``mu_goal``)."""
     import crmgrasp.kernels._closure_jit as jit
+    import crmgrasp.kernels._lp_jit as layout
     from crmgrasp.kernels.closure import closure_params
 
     pairs = _configurations(env_id, steps)
@@ -149,11 +149,11 @@ def _least_friction_alone(env_id: str, steps: int, rounds: int) -> dict[str, flo
     for name, changes in PEERS.items():
         tols[name] = closure_params()
         for key, value in changes.items():
-            tols[name][getattr(jit, key)] = value
+            tols[name][getattr(layout, key)] = value
     jit.least_friction(*pairs[0], EDGES, tols["rule"])  # compiled before timing
     jit.decided_friction(*pairs[0], EDGES, tols["rule"], goal)
     timed = {**{(n, "exact"): t for n, t in tols.items()}, ("rule", "decided"): tols["rule"]}
-    timed[("midpoint_first", "decided")] = tols["midpoint_first"]
+    timed[("search", "decided")] = tols["search"]
     best = dict.fromkeys(timed, float("inf"))
     for _ in range(rounds):
         for (name, how), tol in timed.items():
@@ -175,9 +175,9 @@ def _least_friction_alone(env_id: str, steps: int, rounds: int) -> dict[str, flo
         "least_friction_us": round(best[("rule", "exact")] * 1e6, 1),
         "least_friction_readable_us": round(readable * 1e6, 1),
         "programs_per_configuration": round(programs, 1),
-        "pivots_per_program": round(pivots / programs, 1),
+        "pivots_per_program": round(pivots / max(programs, 1e-9), 1),
         "least_friction_decided_us": round(best[("rule", "decided")] * 1e6, 1),
-        "least_friction_decided_midpoint_first_us": round(best[("midpoint_first", "decided")] * 1e6, 1),
+        "least_friction_decided_search_us": round(best[("search", "decided")] * 1e6, 1),
     }
     for name, changes in PEERS.items():
         counted = _counted(pairs[:50], changes)

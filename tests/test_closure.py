@@ -81,6 +81,7 @@ def test_the_search_constants_reach_the_compiled_rule(monkeypatch, name: str, va
     several grips that moves the answer within its bracket."""
     from crmgrasp.model import quality3d
 
+    monkeypatch.setattr(quality3d, "TRIPOD_EXACT", False)  # three contacts search too, as four do
     grips = _random_grips(7, 12)
     guided = [compiled_least_friction()(grip) for grip in grips]
     monkeypatch.setattr(quality3d, name, value)
@@ -138,7 +139,7 @@ def test_the_pivot_rule_reaches_the_compiled_program(monkeypatch, streak: int) -
     """With Bland's rule throughout (``DEGENERATE_STREAK`` 0, the rule before Dantzig's) and
     with Bland's after every degenerate pivot (1), the compiled program still equals the
     readable one bit for bit; Bland's rule throughout changes some optima in the last bits."""
-    import crmgrasp.kernels._closure_jit as jit
+    import crmgrasp.kernels._lp_jit as jit
     from crmgrasp.kernels.closure import closure_params
 
     batches = _wrench_batches(5)

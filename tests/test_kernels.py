@@ -95,7 +95,16 @@ def test_each_builtin_task_takes_a_stated_path():
 _COMPILE = "crmgrasp.kernels._compile"
 
 
-_JIT_MODULES = ("_polygon_jit", "_spatial_jit", "_vi_jit", "_fingers_jit", "_closure_jit", "_fingers3d_jit")
+_JIT_MODULES = (
+    "_polygon_jit",
+    "_spatial_jit",
+    "_vi_jit",
+    "_fingers_jit",
+    "_lp_jit",
+    "_tripod_jit",
+    "_closure_jit",
+    "_fingers3d_jit",
+)
 
 
 @pytest.mark.parametrize(
@@ -105,7 +114,12 @@ _JIT_MODULES = ("_polygon_jit", "_spatial_jit", "_vi_jit", "_fingers_jit", "_clo
         ("_spatial_jit", {"__future__", "math", _COMPILE, "crmgrasp.kernels._polygon_jit"}),
         ("_vi_jit", {"__future__", _COMPILE}),
         ("_fingers_jit", {"__future__", "numpy", "numba", _COMPILE, "crmgrasp.kernels._polygon_jit"}),
-        ("_closure_jit", {"__future__", "math", "numpy", "numba"}),
+        ("_lp_jit", {"__future__", "math", "numpy", "numba"}),
+        ("_tripod_jit", {"__future__", "math", "numpy", "numba", "crmgrasp.kernels._lp_jit"}),
+        (
+            "_closure_jit",
+            {"__future__", "math", "numpy", "numba", "crmgrasp.kernels._lp_jit", "crmgrasp.kernels._tripod_jit"},
+        ),
         (
             "_fingers3d_jit",
             {"__future__", "math", "numpy", "numba", _COMPILE}

@@ -134,6 +134,8 @@ def test_the_search_without_guesses_is_the_bisection(monkeypatch) -> None:
     least friction is the plain bisection's, written out here, bit for bit."""
     from crmgrasp.model import quality3d
 
+    monkeypatch.setattr(quality3d, "TRIPOD_EXACT", False)  # the search, which four contacts take
+
     def bisection(pts: list, nrm: list) -> float:
         frames = quality3d._cone_frames(pts, nrm)
         lo, hi = 0.0, quality3d._THETA_MAX_3D
@@ -156,6 +158,8 @@ def test_the_first_probe_is_at_its_friction(monkeypatch) -> None:
     it at 0), then the midpoint of what is left: above it when it opened, below when it
     closed."""
     from crmgrasp.model import quality3d
+
+    monkeypatch.setattr(quality3d, "TRIPOD_EXACT", False)  # the search, which four contacts take
 
     probes: list[float] = []
     wrenches = quality3d._wrenches
@@ -195,6 +199,8 @@ def test_the_guesses_halve_the_programs_and_keep_the_bracket(monkeypatch) -> Non
     the bisection takes 24, and the answer still brackets the closure: closed at it, open
     1e-3 rad below it, and within 1e-5 relative of the bisection's."""
     from crmgrasp.model import quality, quality3d
+
+    monkeypatch.setattr(quality3d, "TRIPOD_EXACT", False)  # the search, which four contacts take
 
     calls = []
     program = quality.max_least_weight

@@ -87,7 +87,7 @@ def kernel_for(task: Task, backend: str = "auto", friction: str = "exact") -> Ke
     the grasp as the least friction does (at most ``mu_goal`` exactly when it is). Every
     observation, error, reward and episode end is the same either way; a kernel whose least
     friction is cheap returns the exact one in both. A tripod's compiled step then stops its
-    search once the grasp is decided (`crmgrasp.kernels._closure_jit.decided_friction`)."""
+    least friction once the grasp is decided (`crmgrasp.kernels._closure_jit.decided_friction`)."""
     if backend not in BACKENDS:
         raise CrmgraspError(f"unknown backend {backend!r}; choose one of {', '.join(BACKENDS)}")
     if friction not in FRICTIONS:

@@ -1,4 +1,4 @@
-"""Compiled (numba) least friction of three or more spatial contacts.
+"""Compiled (numba) least friction of three or more spatial contacts: the search, and the dispatch.
 
 Each function evaluates exactly the floating-point expressions of the readable rules in
 the same order: the contacts' frames and unit edge wrenches of
@@ -25,8 +25,14 @@ A start filter needs only whether the least friction exceeds ``mu_goal``, and a 
 decide the grasp only whether it is at most ``mu_goal``: [`decided_friction`][] runs the same
 search and stops as soon as its bracket decides that ([`above`][] is its comparison).
 
-No constant of the model is written here: the tolerances arrive in ``tol`` (layout below,
-built by [`crmgrasp.kernels.closure.closure_params`][] from the model's modules).
+Three contacts take the exact rule of [`crmgrasp.model.tripod`][] instead
+(`crmgrasp.kernels._tripod_jit`, unless the tolerances' ``TRIPOD_EXACT`` is 0), the search
+being the rule of four; deciding only, it stops once its lower bound is above ``mu_goal`` (by
+the margin) or its upper bound at most ``mu_goal``.
+
+No constant of the model is written here: the tolerances arrive in ``tol`` (the layout of
+`crmgrasp.kernels._lp_jit`, built by [`crmgrasp.kernels.closure.closure_params`][] from the
+model's modules).
 """
 
 from __future__ import annotations
@@ -36,13 +42,26 @@ import math
 import numpy as np
 from numba import njit
 
-# indices into tol
-THETA_MAX, THETA_TOL, RANK_TOL, LP_TOL, OPT_TOL = range(5)
-PIVOT_TOL, FEASIBILITY_TOL, ANTIPODAL_TOL, ARM_MIN, MAX_PIVOTS = range(5, 10)
-CERTIFIED_GAP, CERTIFIED_RANK_TOL, DECIDED_MARGIN = range(10, 13)  # the kernel's own margins
-GUIDE_REACH, GUIDE_WIDEN, GUIDE_NEAR, GUIDE_FLOOR, GUIDE_MAX = range(13, 18)  # the search's guesses
-DEGENERATE_STREAK, FIRST_PROBE = 18, 19
-N_TOL = 20
+from crmgrasp.kernels._lp_jit import (
+    ANTIPODAL_TOL,
+    ARM_MIN,
+    CERTIFIED_GAP,
+    CERTIFIED_RANK_TOL,
+    DECIDED_MARGIN,
+    FIRST_PROBE,
+    GUIDE_FLOOR,
+    GUIDE_MAX,
+    GUIDE_NEAR,
+    GUIDE_REACH,
+    GUIDE_WIDEN,
+    LP_TOL,
+    RANK_TOL,
+    THETA_MAX,
+    THETA_TOL,
+    TRIPOD_EXACT,
+    max_least_weight,
+)
+from crmgrasp.kernels._tripod_jit import tripod_friction
 
 
 @njit(cache=True)
@@ -102,114 +121,6 @@ def _wrenches(arms, nrm, tang, rho, mu, co, si, w):  # type: ignore[no-untyped-d
             w[3, col] = (x1 * f2 - x2 * f1) / rho
             w[4, col] = (x2 * f0 - x0 * f2) / rho
             w[5, col] = (x0 * f1 - x1 * f0) / rho
-
-
-@njit(cache=True)
-def _pivot(t, cost, basis, r, j, live):  # type: ignore[no-untyped-def]
-    """``crmgrasp.model.lp._pivot`` on the columns the method reads: the first ``live`` and the
-    right-hand side. The artificial columns between them never enter and are never read (the
-    ratio test reads the entering column and the right-hand side; the basis records indices,
-    not columns), so leaving them stale changes no value the method returns."""
-    width = t.shape[1]
-    rhs = width - 1
-    p = t[r, j]
-    for c in range(live):
-        t[r, c] = t[r, c] / p
-    t[r, rhs] = t[r, rhs] / p
-    for i in range(t.shape[0]):
-        if i != r:
-            f = t[i, j]
-            for c in range(live):
-                t[i, c] = t[i, c] - f * t[r, c]
-            t[i, rhs] = t[i, rhs] - f * t[r, rhs]
-    f = cost[j]
-    for c in range(live):
-        cost[c] = cost[c] - f * t[r, c]
-    cost[rhs] = cost[rhs] - f * t[r, rhs]
-    basis[r] = j
-
-
-@njit(cache=True)
-def _entering(cost, columns, bland, tol):  # type: ignore[no-untyped-def]
-    """``crmgrasp.model.lp._entering``: Bland's or Dantzig's entering column, -1 if none."""
-    j, least = -1, -tol[OPT_TOL]
-    for c in range(columns):
-        if cost[c] < least:
-            if bland:
-                return c
-            j, least = c, cost[c]
-    return j
-
-
-@njit(cache=True)
-def _simplex(t, cost, basis, columns, tol):  # type: ignore[no-untyped-def]
-    """``crmgrasp.model.lp._simplex``: true when it ends, false when rounding stops it."""
-    streak = 0
-    for _ in range(int(tol[MAX_PIVOTS])):
-        j = _entering(cost, columns, streak >= tol[DEGENERATE_STREAK], tol)
-        if j < 0:
-            return True
-        r, best = -1, math.inf
-        for i in range(t.shape[0]):
-            if t[i, j] > tol[PIVOT_TOL]:
-                ratio = t[i, -1] / t[i, j]
-                if ratio < best or (ratio == best and basis[i] < basis[r]):
-                    r, best = i, ratio
-        if r < 0:
-            return False
-        streak = streak + 1 if best <= 0.0 else 0
-        _pivot(t, cost, basis, r, j, columns)
-    return False
-
-
-@njit(cache=True)
-def max_least_weight(w, tol):  # type: ignore[no-untyped-def]
-    """[`crmgrasp.model.lp.max_least_weight`][]: ``d*``, ``-inf`` (infeasible) or NaN. The
-    artificial columns keep their zeros: the method never reads them ([`_pivot`][])."""
-    k, m = w.shape
-    rows, structural = k + 1, m + 1
-    width = structural + rows + 1
-    rhs = width - 1
-    t = np.zeros((rows, width))
-    for i in range(k):
-        for j in range(m):
-            t[i, j] = w[i, j]
-    for j in range(m):
-        for i in range(k):
-            t[i, m] = t[i, m] + w[i, j]
-    for j in range(m):
-        t[k, j] = 1.0
-    t[k, m] = float(m)
-    t[k, rhs] = 1.0
-    basis = np.empty(rows, dtype=np.int64)
-    for i in range(rows):
-        basis[i] = structural + i
-    cost = np.zeros(width)
-    for i in range(rows):
-        for c in range(structural):
-            cost[c] = cost[c] - t[i, c]
-        cost[rhs] = cost[rhs] - t[i, rhs]
-    if not _simplex(t, cost, basis, structural, tol):
-        return math.nan
-    if -cost[rhs] > tol[FEASIBILITY_TOL]:
-        return -math.inf
-    for r in range(rows):
-        if basis[r] >= structural:
-            for c in range(structural):
-                if abs(t[r, c]) > tol[PIVOT_TOL]:
-                    _pivot(t, cost, basis, r, c, structural)
-                    break
-    for c in range(width):
-        cost[c] = 0.0
-    cost[m] = -1.0
-    for r in range(rows):
-        if basis[r] == m:
-            for c in range(structural):
-                cost[c] = cost[c] + t[r, c]
-            cost[rhs] = cost[rhs] + t[r, rhs]
-    if not _simplex(t, cost, basis, structural, tol):
-        return math.nan
-    return cost[rhs]
 
 
 @njit(cache=True)
@@ -319,6 +230,8 @@ def decided_friction(p, nrm, edges, tol, mu_goal):  # type: ignore[no-untyped-de
     bound), or the least friction itself where the search ends undecided. Both ends are
     compared with a relative margin ([`crmgrasp.kernels.closure.DECIDED_MARGIN`][])."""
     bar = max(mu_goal, tol[ANTIPODAL_TOL]) * (1.0 + tol[DECIDED_MARGIN])
+    if p.shape[0] == 3 and tol[TRIPOD_EXACT] > 0.0:
+        return _tripod(p, nrm, edges, tol, mu_goal, bar)
     lo, hi, decided = _search(p, nrm, edges, tol, mu_goal * (1.0 - tol[DECIDED_MARGIN]), bar)
     if decided > 0:
         return math.tan(lo)
@@ -337,8 +250,18 @@ def above(p, nrm, edges, tol, mu_goal):  # type: ignore[no-untyped-def]
 def least_friction(p, nrm, edges, tol):  # type: ignore[no-untyped-def]
     """[`crmgrasp.model.quality3d.least_friction_3d`][] of the contacts ``p``, ``nrm``
     (``(n, 3)``, ``n >= 3``)."""
+    if p.shape[0] == 3 and tol[TRIPOD_EXACT] > 0.0:
+        return _tripod(p, nrm, edges, tol, -1.0, 0.0)
     _, hi, _ = _search(p, nrm, edges, tol, -1.0, 0.0)
     return _friction(hi, tol)
 
 
-# compiled sources: 4a6879171a7e45986de6dfd4cec96c70a74731ac572120dca69b75704fdf87e8
+@njit(cache=True)
+def _tripod(p, nrm, edges, tol, low, bar):  # type: ignore[no-untyped-def]
+    """Three contacts' least friction by the exact rule (`crmgrasp.kernels._tripod_jit`) on
+    their frames; with ``low >= 0`` stopped once the grasp at ``low`` is decided."""
+    arms, tang, rho = _frames(p, nrm, tol[ARM_MIN])
+    return tripod_friction(arms, nrm, tang, rho, edges, tol, low, bar)
+
+
+# compiled sources: d0e749b53ffceb155bd196e4abe083ff549703676fdc17f8e0f64922d9a53a11

@@ -245,4 +245,4 @@ def begin_one(v, n, th, strides, abs_m, p, fp, vals):  # type: ignore[no-untyped
     return _index(vals, 0, 0, th, strides, abs_m), _mu(v, 0, n, fp, p[ANTIPODAL_TOL])
 
 
-# compiled sources: 4a6879171a7e45986de6dfd4cec96c70a74731ac572120dca69b75704fdf87e8
+# compiled sources: d0e749b53ffceb155bd196e4abe083ff549703676fdc17f8e0f64922d9a53a11

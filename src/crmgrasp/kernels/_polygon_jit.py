@@ -404,4 +404,4 @@ def edge_rows(v, e):  # type: ignore[no-untyped-def]
     return True
 
 
-# compiled sources: 4a6879171a7e45986de6dfd4cec96c70a74731ac572120dca69b75704fdf87e8
+# compiled sources: d0e749b53ffceb155bd196e4abe083ff549703676fdc17f8e0f64922d9a53a11

@@ -1,11 +1,12 @@
 """The compiled least friction of three or more spatial contacts, and the kernel that uses it.
 
-A spatial hand of three or more contacts (a tripod) spends nearly all of a step on the least
-friction of the new configuration: a search over the friction cone's half-angle, one linear
-program per probe ([`crmgrasp.model.quality3d.least_friction_3d`][]).
-[`FingersSpatialKernel`][] steps such a task by its readable rules, but with the least
-friction computed in compiled code (`crmgrasp.kernels._closure_jit`: the same frames,
-wrenches, rank test, simplex pivots and search, bit for bit). It hands the compiled rule
+A spatial hand of three or more contacts (a tripod) spends much of a step on the least friction
+of the new configuration: a few linear programs for three contacts
+([`crmgrasp.model.tripod`][]), a search over the friction cone's half-angle with one per probe
+for four ([`crmgrasp.model.quality3d.least_friction_3d`][]). [`FingersSpatialKernel`][] steps
+such a task by its readable rules, but with the least friction computed in compiled code
+(`crmgrasp.kernels._closure_jit` and `crmgrasp.kernels._tripod_jit`: the same frames,
+programs, pivots and steps, bit for bit). It hands the compiled rule
 to the task's [`SpatialModel`][crmgrasp.model.spatial_model.SpatialModel] (its
 ``least_friction``), so every path that asks for a configuration's quality (steps, starts,
 success) takes it.
@@ -54,12 +55,13 @@ DECIDED_MARGIN = 1e-9
 
 
 def closure_params() -> F64:
-    """The tolerances of `crmgrasp.kernels._closure_jit`, read now from the model's modules
-    ([`crmgrasp.model.quality3d`][], [`crmgrasp.model.quality`][], [`crmgrasp.model.lp`][]), and
+    """The tolerances of the compiled least friction (the layout of `crmgrasp.kernels._lp_jit`),
+    read now from the model's modules ([`crmgrasp.model.quality3d`][], [`crmgrasp.model.tripod`][],
+    [`crmgrasp.model.quality`][], [`crmgrasp.model.lp`][]), and
     this module's margins of the compiled shortcuts ([`CERTIFIED_GAP`][], [`CERTIFIED_RANK_TOL`][],
     [`DECIDED_MARGIN`][])."""
-    import crmgrasp.kernels._closure_jit as jit
-    from crmgrasp.model import lp, quality, quality3d
+    import crmgrasp.kernels._lp_jit as jit
+    from crmgrasp.model import lp, quality, quality3d, tripod
 
     tol = np.empty(jit.N_TOL)
     tol[jit.THETA_MAX], tol[jit.THETA_TOL] = quality3d._THETA_MAX_3D, quality3d.THETA_TOL_3D
@@ -72,6 +74,8 @@ def closure_params() -> F64:
     tol[jit.GUIDE_NEAR], tol[jit.GUIDE_FLOOR] = quality3d.GUIDE_NEAR, quality3d.GUIDE_FLOOR
     tol[jit.GUIDE_MAX], tol[jit.DEGENERATE_STREAK] = quality3d.GUIDE_MAX, lp.DEGENERATE_STREAK
     tol[jit.FIRST_PROBE] = quality3d.FIRST_PROBE
+    tol[jit.COLLINEAR_TOL], tol[jit.MU_MAX], tol[jit.REL_TOL] = tripod.COLLINEAR_TOL, tripod.MU_MAX, tripod.REL_TOL
+    tol[jit.MAX_PROGRAMS], tol[jit.TRIPOD_EXACT] = tripod.MAX_PROGRAMS, float(quality3d.TRIPOD_EXACT)
     return tol
 
 

@@ -9,7 +9,8 @@ positive is the origin. The largest least weight of such a combination is the op
 (weights ``lambda_j = mu_j + d``, so ``d`` is their least); [`max_least_weight`][] returns it
 (``-inf`` when no convex combination is the origin at all).
 
-It is solved by the two-phase simplex method on a dense tableau: phase 1 starts from one
+It is solved by the two-phase simplex method on a dense tableau ([`solve`][], which also
+solves the three-contact least friction's programs of [`crmgrasp.model.tripod`][]): phase 1 starts from one
 artificial variable per row and minimises their sum (a positive minimum: infeasible);
 phase 2 maximises ``d`` from the basis phase 1 found. Each pivot enters the column of most
 negative reduced cost (below ``-OPT_TOL``; the first such column on ties: Dantzig's rule) and
@@ -32,7 +33,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["max_least_weight", "OPT_TOL", "PIVOT_TOL", "FEASIBILITY_TOL", "MAX_PIVOTS", "DEGENERATE_STREAK"]
+__all__ = ["max_least_weight", "solve", "OPT_TOL", "PIVOT_TOL", "FEASIBILITY_TOL", "MAX_PIVOTS", "DEGENERATE_STREAK"]
 
 F64 = NDArray[np.float64]
 
@@ -118,12 +119,51 @@ def _simplex(t: F64, cost: F64, basis: list[int], columns: int) -> bool:
     return False
 
 
+def solve(t: F64, c: F64) -> tuple[int, F64]:
+    """The two-phase simplex method on the tableau ``t = [A, I, b]`` (``rows`` rows, ``b >= 0``,
+    the identity columns artificial), in place: ``min c . x`` s.t. ``A x = b``, ``x >= 0``, ``c``
+    the costs of ``A``'s columns (the module docstring's pivots).
+
+    Returns ``(status, cost)``: status 0 at an optimum, 1 when no ``x`` is feasible (phase 1
+    ends above ``FEASIBILITY_TOL``), 2 when rounding stops the method; ``cost`` the last
+    reduced-cost row ``c - A^T y`` over every column (the artificial columns cost 0 in phase 2,
+    so their entries are ``-y``, minus the rows' multipliers ``y``), its last entry minus the
+    optimum ``c . x``.
+    """
+    rows = len(t)
+    structural = len(c)
+    basis = [structural + i for i in range(rows)]
+    cost = np.zeros(t.shape[1])  # phase 1: the artificials' sum, priced out of their rows
+    for i in range(rows):
+        cost[:structural] = cost[:structural] - t[i, :structural]
+        cost[-1] = cost[-1] - t[i, -1]
+    if not _simplex(t, cost, basis, structural):
+        return 2, cost
+    if -cost[-1] > FEASIBILITY_TOL:
+        return 1, cost
+    for r in range(rows):  # an artificial still basic (at 0) leaves for any structural column
+        if basis[r] >= structural:
+            j = next((c for c in range(structural) if abs(t[r, c]) > PIVOT_TOL), -1)
+            if j >= 0:
+                _pivot(t, cost, basis, r, j)
+    cost = np.zeros(t.shape[1])  # phase 2: c, priced out of the basic rows
+    cost[:structural] = c
+    for r in range(rows):
+        cb = c[basis[r]] if basis[r] < structural else 0.0
+        if cb != 0.0:
+            cost[:] = cost - cb * t[r]
+    if not _simplex(t, cost, basis, structural):
+        return 2, cost
+    return 0, cost
+
+
 def max_least_weight(w: F64) -> float:
     """The program's optimum ``d*`` for the columns of ``w`` (``(k, m)``, finite), ``-inf``
     when no convex combination of them is the origin (see the module docstring), or NaN
     when rounding stops the method (near-degenerate columns: on the spatial model's
     wrenches this was met only at frictions below 1e-6, near a frictionless equilibrium;
-    [`crmgrasp.model.quality.positively_spans`][] counts it as not spanning).
+    [`crmgrasp.model.quality.positively_spans`][] counts it as not spanning). [`solve`][]
+    minimises ``-d``.
 
     Examples
     --------
@@ -134,28 +174,8 @@ def max_least_weight(w: F64) -> float:
     >>> max_least_weight(np.array([[1.0, 0.0], [0.0, 1.0]]))
     -inf
     """
-    k, m = w.shape
-    t = _tableau(w)
-    rows, structural = k + 1, m + 1
-    basis = [structural + i for i in range(rows)]
-    cost = np.zeros(t.shape[1])  # phase 1: the artificials' sum, priced out of their rows
-    for i in range(rows):
-        cost[:structural] = cost[:structural] - t[i, :structural]
-        cost[-1] = cost[-1] - t[i, -1]
-    if not _simplex(t, cost, basis, structural):
-        return math.nan
-    if -cost[-1] > FEASIBILITY_TOL:
-        return -math.inf
-    for r in range(rows):  # an artificial still basic (at 0) leaves for any structural column
-        if basis[r] >= structural:
-            j = next((c for c in range(structural) if abs(t[r, c]) > PIVOT_TOL), -1)
-            if j >= 0:
-                _pivot(t, cost, basis, r, j)
-    cost = np.zeros(t.shape[1])  # phase 2: minimise -d, priced out of the basic rows
-    cost[m] = -1.0
-    for r in range(rows):
-        if basis[r] == m:
-            cost[:] = cost + t[r]
-    if not _simplex(t, cost, basis, structural):
-        return math.nan
-    return float(cost[-1])
+    m = w.shape[1]
+    c = np.zeros(m + 1)
+    c[m] = -1.0
+    status, cost = solve(_tableau(w), c)
+    return (float(cost[-1]), -math.inf, math.nan)[status]

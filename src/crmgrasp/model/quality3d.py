@@ -46,6 +46,7 @@ from crmgrasp._validation import CrmgraspError, non_negative
 from crmgrasp.model import quality
 from crmgrasp.model.quality import ANTIPODAL_TOL, positively_spans, span_margin
 from crmgrasp.model.solids import cross, dot, norm
+from crmgrasp.model.tripod import least_friction_tripod
 
 __all__ = [
     "min_friction_3d",
@@ -155,6 +156,10 @@ friction lies above it. The midpoint of the remaining bracket follows. Like the 
 constants it decides only which half-angles are probed (0: the midpoint first)."""
 
 
+TRIPOD_EXACT = True
+"""Three contacts take the exact rule of [`crmgrasp.model.tripod`][] (False: the search, as four
+contacts do; the rule before, kept as the benchmark's peer)."""
+
 EDGES = 8
 """Edges of each contact's polyhedral friction cone in [`least_friction_3d`][] (its default)."""
 
@@ -175,6 +180,10 @@ def least_friction_3d(points: ArrayLike, normals: ArrayLike, edges: int = EDGES)
     frames = _cone_frames(points, normals)
     if len(frames.arms) < 3:
         return math.inf
+    if len(frames.arms) == 3 and TRIPOD_EXACT:
+        _check_edges(edges)
+        tangents = np.array([np.concatenate(t) for t in frames.tangents])
+        return least_friction_tripod(np.array(frames.arms), np.array(frames.normals), tangents, frames.rho, edges)
     b = _search(frames, edges)
     if b == _THETA_MAX_3D:  # no probe closed
         return math.inf
@@ -260,12 +269,17 @@ def _cone_frames(points: ArrayLike, normals: ArrayLike) -> _Frames:
     return _Frames(arms, list(n), [tangent_basis(normal) for normal in n], rho)
 
 
+def _check_edges(edges: object) -> None:
+    """A one-line error unless ``edges`` is an integer in [3, 64]."""
+    if isinstance(edges, bool) or not isinstance(edges, int) or not 3 <= edges <= 64:
+        raise CrmgraspError(f"edges must be an integer in [3, 64], got {edges!r}")
+
+
 def _wrenches(frames: _Frames, mu: float, edges: int) -> F64:
     """The ``(6, n edges)`` unit edge wrenches, contact by contact, edge by edge (the angle
     ``phi_j = 2 pi j / edges``), each written out so that the compiled copy repeats it."""
     mu = non_negative(mu, "friction coefficient mu")
-    if isinstance(edges, bool) or not isinstance(edges, int) or not 3 <= edges <= 64:
-        raise CrmgraspError(f"edges must be an integer in [3, 64], got {edges!r}")
+    _check_edges(edges)
     scale = math.sqrt(1.0 + mu * mu)
     cols = []
     for x, normal, (t1, t2) in zip(frames.arms, frames.normals, frames.tangents, strict=True):
