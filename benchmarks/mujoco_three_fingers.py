@@ -13,14 +13,17 @@ the episodes it re-runs) and ``--learner korder-search`` (the same search from t
 belief-optimal policy projected onto k-order histories: a planner, it uses the hidden
 states) search on ``--search-worlds`` kinematic worlds (seed 10,000 + seed) instead of
 learning from EPISODES episodes; their row adds the policy's mean cost on the worlds searched
-(and the belief optimum there, for ``korder-search``). Success on MuJoCo: the true least
+(and the belief optimum there, for ``korder-search``). With ``--mujoco-episodes N`` a learner
+then goes on learning for N episodes on the MuJoCo stand-in itself (the fine-tuning of
+``crmgrasp reproduce physics-learning``: the same agent, its counts from both; episodes end on
+the *sensed* grasp; worlds from their own generator, not the scoring one). Success on MuJoCo: the true least
 friction from MuJoCo's contacts at or below ``mu_goal``. Printed per task: MuJoCo successes
 out of WORLDS and CRMs per seed, the kinematic greedy success and CRMs, and the episodes
 MuJoCo ended early.
 
 Usage: ``python benchmarks/mujoco_three_fingers.py [--task triangles-3f ...] [--episodes 3000]
 [--worlds 20] [--seeds 3] [--learner pooled-vi] [--k 1] [--param KEY=VALUE ...]
-[--search-worlds 1000]`` (``--param``: a
+[--search-worlds 1000] [--mujoco-episodes 0]`` (``--param``: a
 learner parameter, e.g. ``explore=1``). Prints one JSON object; progress on
 stderr. About 4 min at the defaults on 2 cores.
 """
@@ -36,7 +39,8 @@ import numpy as np
 
 from crmgrasp._validation import setting
 from crmgrasp.agents.training import AGENTS, encoder_for, evaluate, train_trials
-from crmgrasp.experiments.physics_learning import score_on_mujoco
+from crmgrasp.experiments.physics_learning import score_on_mujoco, train_episodes
+from crmgrasp.hardware.mujoco.steps import MujocoSteps
 from crmgrasp.planners.korder import korder_search
 from crmgrasp.planners.references import sample_starts
 from crmgrasp.tasks import make_task
@@ -54,6 +58,7 @@ def one(
     k: int = 1,
     extra: dict | None = None,
     search_worlds: int = 1000,
+    mujoco_episodes: int = 0,
 ) -> dict:
     task = make_task(name)
     t0 = time.perf_counter()
@@ -71,6 +76,12 @@ def one(
         res = train_trials(task, learner, trials=1, episodes=episodes, seed=seed, k=k, eval_episodes=0, params=params)
         agent = res.agents[0]
         row["kinematic_episodes"] = episodes
+        if mujoco_episodes:
+            rngs = [np.random.default_rng(s) for s in np.random.SeedSequence(seed, spawn_key=(1,)).spawn(2)]
+            steps = MujocoSteps(task)
+            _, sensed, _ = train_episodes(task, agent, encoder, mujoco_episodes, steps, rngs)
+            row |= {"mujoco_episodes": mujoco_episodes, "mujoco_training_sensed_grasps": int(sum(sensed))}
+            row["mujoco_training_faults"] = dict(steps.faults)
     steps, success = evaluate(task, agent, encoder, 1000, np.random.default_rng(seed + 1))
     got = score_on_mujoco(task, agent, encoder, worlds, seed)
     row |= {
@@ -100,6 +111,9 @@ def main() -> None:
     p.add_argument("--search-worlds", type=int, default=1000, help="kinematic worlds of the policy search")
     p.add_argument("--k", type=int, default=1, help="its history order")
     p.add_argument(
+        "--mujoco-episodes", type=int, default=0, help="episodes the learner then learns on the MuJoCo stand-in"
+    )
+    p.add_argument(
         "--param",
         action="append",
         default=[],
@@ -110,14 +124,18 @@ def main() -> None:
     a = p.parse_args()
     if a.search_worlds < 1:
         p.error(f"--search-worlds must be at least 1, got {a.search_worlds}")
+    if a.mujoco_episodes < 0 or (a.mujoco_episodes and a.learner in SEARCHES):
+        p.error(f"--mujoco-episodes must be at least 0, and 0 for a search, got {a.mujoco_episodes}")
     extra = dict(a.param)
     tasks = a.task or ["triangles-3f", "box-family-3f", "cup-family-3f"]
     out = {"episodes": a.episodes, "worlds": a.worlds, "learner": a.learner, "k": a.k, "params": extra, "tasks": {}}
+    out["mujoco_episodes"] = a.mujoco_episodes
     if a.learner in SEARCHES:
         out["search_worlds"] = a.search_worlds
     for name in tasks:
         rows = [
-            one(name, a.episodes, a.worlds, seed, a.learner, a.k, extra, a.search_worlds) for seed in range(a.seeds)
+            one(name, a.episodes, a.worlds, seed, a.learner, a.k, extra, a.search_worlds, a.mujoco_episodes)
+            for seed in range(a.seeds)
         ]
         out["tasks"][name] = {
             "per_seed": rows,

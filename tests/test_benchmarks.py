@@ -170,7 +170,30 @@ def test_mujoco_three_fingers_smoke(capsys, monkeypatch):
     assert out["learner"] == "backoff-vi" and out["k"] == 2 and out["params"] == {"explore": 1}
     (row,) = out["tasks"]["cup-family-3f"]["per_seed"]
     assert 0 <= row["mujoco_successes"] <= 2 and 0.0 <= row["kinematic_success"] <= 1.0
-    assert row["kinematic_episodes"] == 5
+    assert row["kinematic_episodes"] == 5 and "mujoco_episodes" not in row
+
+
+def test_mujoco_three_fingers_goes_on_learning_on_mujoco(capsys, monkeypatch):
+    """``--mujoco-episodes``: the learner then learns on the stand-in (its row counts the
+    episodes and the sensed grasps among them, and the scoring worlds stay the same: a second
+    run with none scores another policy on them); a negative count, or one for a search, is a
+    usage error."""
+    pytest.importorskip("mujoco", reason="needs the extra crmgrasp[mujoco]")
+    spec = importlib.util.spec_from_file_location("mujoco_three_fingers", BENCH.parent / "mujoco_three_fingers.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    argv = ["mujoco_three_fingers.py", "--task", "cup-family-3f", "--episodes", "5", "--worlds", "2", "--seeds", "1"]
+    monkeypatch.setattr("sys.argv", [*argv, "--mujoco-episodes", "3"])
+    mod.main()
+    out = json.loads(capsys.readouterr().out)
+    (row,) = out["tasks"]["cup-family-3f"]["per_seed"]
+    assert out["mujoco_episodes"] == 3 and row["mujoco_episodes"] == 3
+    assert 0 <= row["mujoco_training_sensed_grasps"] <= 3 and isinstance(row["mujoco_training_faults"], dict)
+    for bad in (["--mujoco-episodes", "-1"], ["--mujoco-episodes", "2", "--learner", "policy-search"]):
+        monkeypatch.setattr("sys.argv", [*argv, *bad])
+        with pytest.raises(SystemExit) as exc:
+            mod.main()
+        assert exc.value.code == 2 and "--mujoco-episodes must be at least 0" in capsys.readouterr().err
 
 
 def test_mujoco_three_fingers_policy_search(capsys, monkeypatch):

@@ -99,10 +99,10 @@ def compiled_least_friction(tol: F64 | None = None) -> Any:
     return functools.partial(_cached, tol=key, edges=EDGES)
 
 
-def with_compiled_least_friction(task: Task) -> Task:
-    """``task`` whose model's least friction is [`compiled_least_friction`][] (a spatial task of
-    three or more contacts; the same values, bit for bit)."""
-    model = dataclasses.replace(task.model, least_friction=compiled_least_friction())  # type: ignore[type-var]
+def with_compiled_least_friction(task: Task, tol: F64 | None = None) -> Task:
+    """``task`` whose model's least friction is [`compiled_least_friction`][] with ``tol`` (a
+    spatial task of three or more contacts; the same values, bit for bit)."""
+    model = dataclasses.replace(task.model, least_friction=compiled_least_friction(tol))  # type: ignore[type-var]
     return task.with_model(model)
 
 

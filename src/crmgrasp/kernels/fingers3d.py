@@ -55,8 +55,9 @@ class FusedFingersSpatialKernel(FusedSingleStep, FingersSpatialKernel):
 
     def rebind(self, instance: Task) -> FusedFingersSpatialKernel:
         """This kernel moved onto ``instance`` (the same hand, CRMs, bins and table on another
-        solid of the same kind), in place: the parameters kept, the solid's entries its own."""
-        self.task = with_compiled_least_friction(instance)
+        solid of the same kind), in place: the parameters kept (the tolerances read when the
+        kernel was made), the solid's entries its own."""
+        self.task = with_compiled_least_friction(instance, self.tol)
         self.planes, self.cyl = solid_params(instance.solid, self.p, self.q)  # type: ignore[attr-defined]
         self._fresh()
         return self

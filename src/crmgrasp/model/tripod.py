@@ -68,7 +68,7 @@ close: no contact force has a moment about their line. A friction of [`MU_MAX`][
 counts as none (``inf``).
 
 Every sum is written out in a fixed order so that the compiled copy
-(`crmgrasp.kernels._closure_jit`) repeats it bit for bit.
+(`crmgrasp.kernels._tripod_jit`) repeats it bit for bit.
 """
 
 from __future__ import annotations
