@@ -249,3 +249,17 @@ def test_evaluate_a_saved_policy_on_the_mujoco_hand(tmp_path, capsys):
     result = json.loads(capsys.readouterr().out)
     assert result["hand"] == "mujoco" and result["episodes"] == 4 and isinstance(result["faults"], dict)
     assert 0.0 <= result["success_rate"] <= 1.0
+
+
+def test_a_longer_scoring_run_begins_with_the_shorter_ones_worlds():
+    """`score_on_mujoco` draws its worlds from one generator per seed: the outcomes of 3 worlds
+    are the first 3 of 5, and the success rate is their mean."""
+    from crmgrasp.agents.training import build_agent, encoder_for
+    from crmgrasp.experiments.physics_learning import score_on_mujoco
+
+    task = make_task("paper-box")
+    encoder = encoder_for(task, 1)
+    agent = build_agent(task, encoder, "random")
+    short, long = (score_on_mujoco(task, agent, encoder, n, 4) for n in (3, 5))
+    assert long["outcomes"][:3] == short["outcomes"] and len(long["outcomes"]) == 5
+    assert long["success"] == np.mean(long["outcomes"])

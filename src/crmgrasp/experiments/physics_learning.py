@@ -104,8 +104,9 @@ def train_episodes(
 
 def score_on_mujoco(task: Task, agent: Any, encoder: Any, episodes: int, seed: int) -> dict[str, Any]:
     """The greedy policy of ``agent`` on ``episodes`` MuJoCo worlds drawn from one
-    generator of ``seed`` (the same worlds for every policy scored with this seed): mean
-    CRMs, true success rate and the episodes MuJoCo ended early, by kind."""
+    generator of ``seed`` (the same worlds for every policy scored with this seed, so the first
+    of a longer run are a shorter run's): mean CRMs, true success rate, each episode's true
+    success in order (``outcomes``) and the episodes MuJoCo ended early, by kind."""
     steps = MujocoSteps(task)
     env, ties = (np.random.default_rng(s) for s in np.random.SeedSequence(seed, spawn_key=(2**31,)).spawn(2))
     crms, success = [], []
@@ -113,7 +114,8 @@ def score_on_mujoco(task: Task, agent: Any, encoder: Any, episodes: int, seed: i
         n, ok = run_episode(task, agent, encoder, env, ties, learn=False, kernel=steps)
         crms.append(n)
         success.append(ok)
-    return {"crms": float(np.mean(crms)), "success": float(np.mean(success)), "faults": dict(steps.faults)}
+    out = {"crms": float(np.mean(crms)), "success": float(np.mean(success)), "faults": dict(steps.faults)}
+    return out | {"outcomes": [bool(ok) for ok in success]}
 
 
 def record_mujoco_episode(policy: GreedyPolicy, seed: int, path: Path) -> Path | None:
