@@ -264,4 +264,4 @@ def _tripod(p, nrm, edges, tol, low, bar):  # type: ignore[no-untyped-def]
     return tripod_friction(arms, nrm, tang, rho, edges, tol, low, bar)
 
 
-# compiled sources: d0e749b53ffceb155bd196e4abe083ff549703676fdc17f8e0f64922d9a53a11
+# compiled sources: a78b1798ed42b00d3c3012670c6ebfb1e10d5b1c1f6c8507d77f9621c39c6947

@@ -243,4 +243,4 @@ def accept_start(d, n, planes, cyl, p, q, tol, edges, mu_goal, out):  # type: ig
 __all__ = ["accept_start", "begin_one", "step_one"]
 
 
-# compiled sources: d0e749b53ffceb155bd196e4abe083ff549703676fdc17f8e0f64922d9a53a11
+# compiled sources: a78b1798ed42b00d3c3012670c6ebfb1e10d5b1c1f6c8507d77f9621c39c6947

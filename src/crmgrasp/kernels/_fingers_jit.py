@@ -245,4 +245,4 @@ def begin_one(v, n, th, strides, abs_m, p, fp, vals):  # type: ignore[no-untyped
     return _index(vals, 0, 0, th, strides, abs_m), _mu(v, 0, n, fp, p[ANTIPODAL_TOL])
 
 
-# compiled sources: d0e749b53ffceb155bd196e4abe083ff549703676fdc17f8e0f64922d9a53a11
+# compiled sources: a78b1798ed42b00d3c3012670c6ebfb1e10d5b1c1f6c8507d77f9621c39c6947

@@ -404,4 +404,4 @@ def edge_rows(v, e):  # type: ignore[no-untyped-def]
     return True
 
 
-# compiled sources: d0e749b53ffceb155bd196e4abe083ff549703676fdc17f8e0f64922d9a53a11
+# compiled sources: a78b1798ed42b00d3c3012670c6ebfb1e10d5b1c1f6c8507d77f9621c39c6947

@@ -18,6 +18,12 @@ from crmgrasp.kernels._lp_jit import ANTIPODAL_TOL, COLLINEAR_TOL, MAX_PROGRAMS,
 
 
 @njit(cache=True)
+def _pair(q):  # type: ignore[no-untyped-def]
+    """``tripod.PAIRS[q]``: the contacts squeeze ``q`` joins."""
+    return (0, 1) if q == 0 else ((0, 2) if q == 1 else (1, 2))
+
+
+@njit(cache=True)
 def _rows(arms, nrm, tang, rho, edges, tol):  # type: ignore[no-untyped-def]
     """``tripod._rows``: ``(rows, True)``, or ``(zeros, False)`` for collinear contacts."""
     d = np.empty((3, 3, 3))
@@ -33,7 +39,7 @@ def _rows(arms, nrm, tang, rho, edges, tol):  # type: ignore[no-untyped-def]
     half = math.pi / edges
     inscribed = math.cos(half)
     for q in range(3):
-        i, j = (0, 1) if q == 0 else ((0, 2) if q == 1 else (1, 2))
+        i, j = _pair(q)
         for side in range(2):
             me, other = (i, j) if side == 0 else (j, i)
             e0, e1, e2 = d[me, other, 0], d[me, other, 1], d[me, other, 2]
@@ -72,8 +78,8 @@ def _ratio(rows, a, normal):  # type: ignore[no-untyped-def]
 def _squeeze(rows, q):  # type: ignore[no-untyped-def]
     """``tripod._squeeze``."""
     worst = 0.0
-    for side in range(2):
-        i = (0 if q < 2 else 1) if side == 0 else (1 if q == 0 else 2)
+    first, second = _pair(q)
+    for i in (first, second):
         n = rows[i, 0, q]
         if not n > 0.0:
             return math.inf
@@ -86,8 +92,9 @@ def _squeeze(rows, q):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _lightest(rows, i):  # type: ignore[no-untyped-def]
-    """``tripod._lightest``: contact ``i``'s least ratio in the contacts' plane."""
-    q1, q2 = (0, 1) if i == 0 else ((0, 2) if i == 1 else (1, 2))
+    """``tripod._lightest``: contact ``i``'s least ratio in the contacts' plane (``q1 < q2`` the
+    squeezes that join ``i``, which are the pairs' indices as ``_pair`` numbers them)."""
+    q1, q2 = _pair(i)
     nu1, nu2 = rows[i, 0, q1], rows[i, 0, q2]
     nn = nu1 * nu1 + nu2 * nu2
     if nn == 0.0:
@@ -195,4 +202,4 @@ def _dinkelbach(rows, theta, tol, low):  # type: ignore[no-untyped-def]
     return theta
 
 
-# compiled sources: d0e749b53ffceb155bd196e4abe083ff549703676fdc17f8e0f64922d9a53a11
+# compiled sources: a78b1798ed42b00d3c3012670c6ebfb1e10d5b1c1f6c8507d77f9621c39c6947

@@ -70,4 +70,4 @@ def sweeps(qa, qg, tried, pair_row, pair_a, first, out_p, out_r, out_row, out_t,
     return limit
 
 
-# compiled sources: d0e749b53ffceb155bd196e4abe083ff549703676fdc17f8e0f64922d9a53a11
+# compiled sources: a78b1798ed42b00d3c3012670c6ebfb1e10d5b1c1f6c8507d77f9621c39c6947

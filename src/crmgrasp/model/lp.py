@@ -143,7 +143,7 @@ def solve(t: F64, c: F64) -> tuple[int, F64]:
         return 1, cost
     for r in range(rows):  # an artificial still basic (at 0) leaves for any structural column
         if basis[r] >= structural:
-            j = next((c for c in range(structural) if abs(t[r, c]) > PIVOT_TOL), -1)
+            j = next((col for col in range(structural) if abs(t[r, col]) > PIVOT_TOL), -1)
             if j >= 0:
                 _pivot(t, cost, basis, r, j)
     cost = np.zeros(t.shape[1])  # phase 2: c, priced out of the basic rows
