@@ -23,7 +23,7 @@ the worlds of a 20-world run), the kinematic greedy success and CRMs, and the ep
 ended early.
 
 Usage: ``python benchmarks/mujoco_three_fingers.py [--task triangles-3f ...] [--episodes 3000]
-[--worlds 20] [--seeds 3] [--learner pooled-vi] [--k 1] [--param KEY=VALUE ...]
+[--worlds 20] [--seeds 3] [--first-seed 0] [--learner pooled-vi] [--k 1] [--param KEY=VALUE ...]
 [--search-worlds 1000] [--mujoco-episodes 0]`` (``--param``: a
 learner parameter, e.g. ``explore=1``). Prints one JSON object; progress on
 stderr. About 4 min at the defaults on 2 cores.
@@ -105,6 +105,7 @@ def main() -> None:
     p.add_argument("--episodes", type=int, default=3000, help="kinematic training episodes")
     p.add_argument("--worlds", type=int, default=20, help="MuJoCo worlds per policy")
     p.add_argument("--seeds", type=int, default=3)
+    p.add_argument("--first-seed", type=int, default=0, help="seeds FIRST_SEED .. FIRST_SEED + SEEDS - 1")
     p.add_argument(
         "--learner",
         choices=(*AGENTS, *SEARCHES),
@@ -138,7 +139,7 @@ def main() -> None:
     for name in tasks:
         rows = [
             one(name, a.episodes, a.worlds, seed, a.learner, a.k, extra, a.search_worlds, a.mujoco_episodes)
-            for seed in range(a.seeds)
+            for seed in range(a.first_seed, a.first_seed + a.seeds)
         ]
         out["tasks"][name] = {
             "per_seed": rows,

@@ -183,11 +183,11 @@ def test_mujoco_three_fingers_goes_on_learning_on_mujoco(capsys, monkeypatch):
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     argv = ["mujoco_three_fingers.py", "--task", "cup-family-3f", "--episodes", "5", "--worlds", "2", "--seeds", "1"]
-    monkeypatch.setattr("sys.argv", [*argv, "--mujoco-episodes", "3"])
+    monkeypatch.setattr("sys.argv", [*argv, "--mujoco-episodes", "3", "--first-seed", "2"])
     mod.main()
     out = json.loads(capsys.readouterr().out)
     (row,) = out["tasks"]["cup-family-3f"]["per_seed"]
-    assert out["mujoco_episodes"] == 3 and row["mujoco_episodes"] == 3
+    assert out["mujoco_episodes"] == 3 and row["mujoco_episodes"] == 3 and row["seed"] == 2
     assert 0 <= row["mujoco_training_sensed_grasps"] <= 3 and isinstance(row["mujoco_training_faults"], dict)
     for bad in (["--mujoco-episodes", "-1"], ["--mujoco-episodes", "2", "--learner", "policy-search"]):
         monkeypatch.setattr("sys.argv", [*argv, *bad])
