@@ -12,7 +12,9 @@ Conventions: points in metres, shape ``(n, 3)``; inward unit normals, shape ``(n
   two-contact success rule of the spatial model is therefore ``min_friction_3d <=
   mu_goal``, as in the plane.
 * [`least_friction_3d`][], three or more contacts (docs/model-3d.md section 9): the least
-  ``mu`` at which [`force_closure_3d`][] holds, ``tan`` of the least cone half-angle,
+  ``mu`` at which [`force_closure_3d`][] holds. Three contacts take the exact rule of
+  [`crmgrasp.model.tripod`][] (their internal forces, [`TRIPOD_EXACT`][]); four take a search:
+  ``tan`` of the least cone half-angle,
   bracketed to [`THETA_TOL_3D`][] (the upper end) by a first probe at [`FIRST_PROBE`][],
   midpoints and secant guesses (``_search``); ``inf`` if no probe below ``mu = 1e6`` closes. Closure only grows with
   ``mu`` (each polyhedral cone contains the one of a smaller ``mu``, up to the scaling of its
@@ -122,8 +124,9 @@ def min_friction_3d(points: ArrayLike, normals: ArrayLike) -> float:
 
 THETA_TOL_3D = 1e-7
 """The search's resolution of the least friction cone half-angle, radians
-([`least_friction_3d`][]): about 12-13 linear programs per configuration on the tripod tasks
-(24 for a plain bisection; `benchmarks/bench_tripod.py` counts them)."""
+([`least_friction_3d`][]): on three-contact configurations of the tripod tasks it took about
+12-13 linear programs (24 for a plain bisection; the exact rule takes 1-2;
+`benchmarks/bench_tripod.py` counts them)."""
 
 _THETA_MAX_3D = math.atan(1e6)  # no closure below this half-angle counts as none: inf
 
@@ -166,7 +169,8 @@ EDGES = 8
 
 def least_friction_3d(points: ArrayLike, normals: ArrayLike, edges: int = EDGES) -> float:
     """The least friction coefficient at which ``n >= 3`` contacts are force closure with
-    polyhedral cones of ``edges`` edges (see the module docstring): ``inf`` for two.
+    polyhedral cones of ``edges`` edges (see the module docstring): exactly for three
+    ([`crmgrasp.model.tripod.least_friction_tripod`][]), by the search for four, ``inf`` for two.
 
     Examples
     --------
