@@ -12,8 +12,9 @@ graspable ones (an ungraspable world costs the step limit to both, which dilutes
 gap). Per learner and task: the gaps per seed, their median, the seeds within 10% on the
 graspable worlds, success, the graspable worlds the policy does not grasp within the step
 limit (``fails_graspable``) and the part of the graspable gap they make
-(``gap_from_fails``: their CRMs beyond the optimum's over the optimum's total), and the wall
-time of training.
+(``gap_from_fails``: their CRMs beyond the optimum's over the optimum's total), the CRMs that
+erred on the graspable worlds (``errored_graspable``; the optimum's: ``optimum_errored_graspable``),
+and the wall time of training.
 
 With ``--pool P`` (P > W) the optimum's policy plans over P worlds, the W evaluation worlds
 first, and is scored on the W. The optimum over sampled worlds is optimistic, less so the
@@ -87,12 +88,17 @@ def _steps(records: list) -> np.ndarray:
     return np.array([len(r.actions) for r in records], dtype=float)
 
 
-def _optimum(task: Any, planned: list, worlds: list) -> np.ndarray:
-    """CRMs per world of the belief-space optimal policy over ``planned``: one planner for
-    every world (its memo is shared), freed on return, before ``--planner`` builds its own
-    (the memo is a run's largest object)."""
+def _errored(records: list) -> np.ndarray:
+    return np.array([sum(r.errors) for r in records], dtype=float)
+
+
+def _optimum(task: Any, planned: list, worlds: list) -> tuple[np.ndarray, np.ndarray]:
+    """CRMs and errored CRMs per world of the belief-space optimal policy over ``planned``: one
+    planner for every world (its memo is shared), freed on return, before ``--planner`` builds
+    its own (the memo is a run's largest object)."""
     planner = BeliefPolicy(task, planned)
-    return _steps(episode_records(task, lambda: planner, worlds, 0))
+    records = episode_records(task, lambda: planner, worlds, 0)
+    return _steps(records), _errored(records)
 
 
 def planner_row(
@@ -138,7 +144,7 @@ def task_row(
     planned = sample_starts(task, max(pool, n_worlds), 10_000)  # the evaluation worlds first
     worlds = planned[:n_worlds]
     graspable = graspable_starts(task, worlds)
-    optimum = _optimum(task, planned, worlds)
+    optimum, optimum_errored = _optimum(task, planned, worlds)
     print(
         f"{name}: optimum over {len(planned)} worlds planned and run in {time.perf_counter() - t_task:.0f} s",
         file=sys.stderr,
@@ -150,6 +156,7 @@ def task_row(
         "graspable": int(graspable.sum()),
         "optimum": round(float(optimum.mean()), 4),
         "optimum_graspable": round(float(optimum[graspable].mean()), 4),
+        "optimum_errored_graspable": int(optimum_errored[graspable].sum()),
     }
     reference = None
     if n_planner:
@@ -157,7 +164,7 @@ def task_row(
     params = {"symmetric": task.symmetry is not None, **(extra or {})}
     for agent in learners:
         order = ORDERS.get(agent, 1) if k is None else k
-        gaps, gaps_g, success, fails, from_fails, seconds = [], [], [], [], [], 0.0
+        gaps, gaps_g, success, fails, from_fails, errored, seconds = [], [], [], [], [], [], 0.0
         to_planner: list[float] = []
         for seed in seeds:
             t0 = time.perf_counter()
@@ -174,6 +181,7 @@ def task_row(
             lost = graspable & ~won  # graspable worlds the policy never grasps (it runs to the step limit)
             fails.append(int(lost.sum()))
             from_fails.append(round(float((steps[lost] - optimum[lost]).sum() / optimum[graspable].sum()), 4))
+            errored.append(int(_errored(records)[graspable].sum()))
             if reference is not None:
                 to_planner.append(round(float(steps[graspable].mean() / reference[graspable].mean() - 1.0), 4))
             print(
@@ -192,6 +200,7 @@ def task_row(
             "success": round(float(np.mean(success)), 4),
             "fails_graspable": fails,
             "gap_from_fails": from_fails,
+            "errored_graspable": errored,
             "train_seconds": round(seconds, 1),
         }
         if reference is not None:

@@ -143,6 +143,8 @@ def test_family_learning_smoke():
     assert all(g >= -1e-9 for g in learner["gap"])  # the belief-space optimum is a lower bound on these worlds
     for f, ff in zip(learner["fails_graspable"], learner["gap_from_fails"], strict=True):
         assert 0 <= f <= row["graspable"] and ff >= 0.0 and (f > 0 or ff == 0.0)  # a lost world costs the step limit
+    cap = row["graspable"] * mod.make_task("cup-family").max_steps  # errored CRMs: at most every CRM
+    assert 0 <= row["optimum_errored_graspable"] <= cap and all(0 <= e <= cap for e in learner["errored_graspable"])
 
 
 def test_mujoco_learning_smoke(capsys, monkeypatch):
