@@ -19,8 +19,9 @@ then goes on learning for N episodes on the MuJoCo stand-in itself (the fine-tun
 the *sensed* grasp; worlds from their own generator, not the scoring one). Success on MuJoCo: the true least
 friction from MuJoCo's contacts at or below ``mu_goal``. Printed per task: MuJoCo successes
 out of WORLDS and CRMs per seed (with more than 20 worlds, also the successes on the first 20,
-the worlds of a 20-world run), the kinematic greedy success and CRMs, and the episodes MuJoCo
-ended early.
+the worlds of a 20-world run), the worlds lost that ran to the step limit (the rest of the
+worlds lost ended on a sensed grasp that MuJoCo's contacts do not confirm, or early), the
+kinematic greedy success and CRMs, and the episodes MuJoCo ended early.
 
 Usage: ``python benchmarks/mujoco_three_fingers.py [--task triangles-3f ...] [--episodes 3000]
 [--worlds 20] [--seeds 3] [--first-seed 0] [--learner pooled-vi] [--k 1] [--param KEY=VALUE ...]
@@ -91,6 +92,9 @@ def one(
         "kinematic_success": round(float(success.mean()), 4),
         "kinematic_crms": round(float(steps.mean()), 3),
         "faults": got["faults"],
+        "mujoco_lost_at_step_limit": sum(
+            not ok and n >= task.max_steps for ok, n in zip(got["outcomes"], got["episode_crms"], strict=True)
+        ),
         "seconds": round(time.perf_counter() - t0, 1),
     }
     if worlds > 20:  # the worlds of a 20-world run come first

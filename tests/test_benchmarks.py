@@ -172,6 +172,7 @@ def test_mujoco_three_fingers_smoke(capsys, monkeypatch):
     assert out["learner"] == "backoff-vi" and out["k"] == 2 and out["params"] == {"explore": 1}
     (row,) = out["tasks"]["cup-family-3f"]["per_seed"]
     assert 0 <= row["mujoco_successes"] <= 2 and 0.0 <= row["kinematic_success"] <= 1.0
+    assert 0 <= row["mujoco_lost_at_step_limit"] <= 2 - row["mujoco_successes"]
     assert row["kinematic_episodes"] == 5 and "mujoco_episodes" not in row
 
 

@@ -262,4 +262,7 @@ def test_a_longer_scoring_run_begins_with_the_shorter_ones_worlds():
     agent = build_agent(task, encoder, "random")
     short, long = (score_on_mujoco(task, agent, encoder, n, 4) for n in (3, 5))
     assert long["outcomes"][:3] == short["outcomes"] and len(long["outcomes"]) == 5
-    assert long["success"] == np.mean(long["outcomes"])
+    assert long["success"] == np.mean(long["outcomes"]) and long["crms"] == np.mean(long["episode_crms"])
+    assert long["episode_crms"][:3] == short["episode_crms"] and all(
+        1 <= n <= task.max_steps for n in long["episode_crms"]
+    )

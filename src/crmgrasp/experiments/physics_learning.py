@@ -106,7 +106,8 @@ def score_on_mujoco(task: Task, agent: Any, encoder: Any, episodes: int, seed: i
     """The greedy policy of ``agent`` on ``episodes`` MuJoCo worlds drawn from one
     generator of ``seed`` (the same worlds for every policy scored with this seed, so the first
     of a longer run are a shorter run's): mean CRMs, true success rate, each episode's true
-    success in order (``outcomes``) and the episodes MuJoCo ended early, by kind."""
+    success and CRMs in order (``outcomes``, ``episode_crms``) and the episodes MuJoCo ended
+    early, by kind."""
     steps = MujocoSteps(task)
     env, ties = (np.random.default_rng(s) for s in np.random.SeedSequence(seed, spawn_key=(2**31,)).spawn(2))
     crms, success = [], []
@@ -115,7 +116,7 @@ def score_on_mujoco(task: Task, agent: Any, encoder: Any, episodes: int, seed: i
         crms.append(n)
         success.append(ok)
     out = {"crms": float(np.mean(crms)), "success": float(np.mean(success)), "faults": dict(steps.faults)}
-    return out | {"outcomes": [bool(ok) for ok in success]}
+    return out | {"outcomes": [bool(ok) for ok in success], "episode_crms": [int(n) for n in crms]}
 
 
 def record_mujoco_episode(policy: GreedyPolicy, seed: int, path: Path) -> Path | None:
