@@ -80,10 +80,10 @@ def one(
         row["kinematic_episodes"] = episodes
         if mujoco_episodes:
             rngs = [np.random.default_rng(s) for s in np.random.SeedSequence(seed, spawn_key=(1,)).spawn(2)]
-            steps = MujocoSteps(task)
-            _, sensed, _ = train_episodes(task, agent, encoder, mujoco_episodes, steps, rngs)
+            hand = MujocoSteps(task)
+            _, sensed, _ = train_episodes(task, agent, encoder, mujoco_episodes, hand, rngs)
             row |= {"mujoco_episodes": mujoco_episodes, "mujoco_training_sensed_grasps": int(sum(sensed))}
-            row["mujoco_training_faults"] = dict(steps.faults)
+            row["mujoco_training_faults"] = dict(hand.faults)
     steps, success = evaluate(task, agent, encoder, 1000, np.random.default_rng(seed + 1))
     got = score_on_mujoco(task, agent, encoder, worlds, seed)
     row |= {
