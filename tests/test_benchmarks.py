@@ -361,3 +361,29 @@ def test_handover_ends_are_the_two_policies():
     same = fam.task_row("u-handle", ("backoff-vi",), 40, range(3, 4), 16, k=2)["backoff-vi"]
     assert alone["gap_graspable"] == same["gap_graspable"] and alone["lost"] == same["fails_graspable"]
     assert alone["gap_graspable"][0] > 0.0  # 40 episodes are not enough: the two ends differ
+
+
+def test_memory_projection_full_history_is_the_optimum():
+    """The whole history's table is the optimum on the worlds it was made from (the optimum is
+    a function of it); the k-order memories of the learners agree with it less or as much, and
+    a k = 1 table backs off to the current observation's, as documented."""
+    spec = importlib.util.spec_from_file_location("memory_projection", BENCH.parent / "memory_projection.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    from crmgrasp.planners.references import belief_optimum, sample_starts
+    from crmgrasp.tasks import make_task
+
+    res = mod.main("u-handle", 40, 20)
+    task = make_task("u-handle")
+    assert res["optimum"] == round(belief_optimum(task, sample_starts(task, 40, 10_000)), 4)
+    assert res["full"]["agree"] == 1.0 and res["full"]["cost_on_worlds"] == res["optimum"]
+    assert res["k0"]["agree"] <= res["k1"]["agree"] <= res["k2"]["agree"] <= res["k3"]["agree"] <= 1.0
+    assert res["k0"]["values"] <= res["k1"]["values"] <= res["k2"]["values"] <= res["full"]["values"]
+    for name in mod.FEATURES:
+        assert res["optimum"] <= res[name]["cost_on_worlds"] <= task.max_steps
+        assert 0.0 <= res[name]["success_on_fresh"] <= 1.0
+    m = mod.Memory(5)
+    m.push(2, 7, True)
+    m.push(3, 9, False)
+    assert (m.last(0), m.last(1), m.last(2), m.last(3)) == ((9,), (9, 3), (9, 3, 7, 2), (9, 3, 7, 2, 5))
+    assert mod.FEATURES["k1+errored"](m) == ((9, 3), frozenset({2}))

@@ -1,0 +1,190 @@
+"""What memory a policy needs: the belief-space optimal policy projected onto memory features.
+
+A learner on k-order histories can at best act as a table from its memory to CRMs. Which
+memory would let such a table act like the belief-space optimum, and how well does the table
+then do on worlds it was not made from? This script answers it for one task without any
+learner in the way:
+
+1. W worlds are sampled (``sample_starts(task, W, 10_000)``) and the belief-space optimal
+   policy over them ([`BeliefPolicy`][crmgrasp.planners.references.BeliefPolicy]) runs on each
+   (noise-free). Its mean CRMs per episode is the optimum over the W worlds.
+2. At every decision it took, each memory feature of [`FEATURES`][] is computed from the
+   episode so far (CRMs, discretized observations, errors): for instance ``k2``, the last two
+   CRMs and observations (what ``backoff-vi`` with k = 2 sees), or ``full``, the whole history.
+3. Per feature, the *projected table* takes in each feature value the CRM the optimum took
+   there most often (ties: the lowest index). ``agree`` is the share of the optimum's
+   decisions that agree with its feature value's CRM: 1 means the optimum is a function of
+   that memory on these worlds.
+4. The table runs (noise-free, through the one episode loop) on the W worlds and on F fresh
+   worlds (``sample_starts(task, F, 20_000)``). A feature value the table does not hold acts
+   as the ``k1`` table, then as the ``k0`` table (the current observation alone), then CRM 0.
+
+The table on the W worlds is at least the optimum over them (``full`` equals it); on fresh
+worlds every table is a policy that does not know the world, so its cost there is an upper
+bound on the family's own optimum (in expectation), as the planner of
+``benchmarks/family_learning.py --planner`` is.
+
+Usage: ``python benchmarks/memory_projection.py [--task triangles-3f] [--worlds 2000] [--fresh 1000]``.
+Prints one JSON object; progress on stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections import Counter
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from crmgrasp.kernels import kernel_for
+from crmgrasp.model.hand import Error
+from crmgrasp.planners.references import BeliefPolicy, sample_starts
+from crmgrasp.sim import Percept, run_episode
+from crmgrasp.tasks import make_task
+
+
+class Memory:
+    """The episode so far: observations ``o_0 .. o_t``, CRMs ``a_1 .. a_t`` and the CRMs
+    that erred."""
+
+    def __init__(self, first: int) -> None:
+        self.obs, self.acts, self.erred = [first], [], []  # type: ignore[var-annotated]
+
+    def push(self, action: int, obs: int, error: bool) -> None:
+        self.obs.append(obs)
+        self.acts.append(action)
+        if error:
+            self.erred.append(action)
+
+    def last(self, k: int) -> tuple[int, ...]:
+        """``(o_t, a_t, o_{t-1}, ..., a_{t-k+1})``, shorter near the start."""
+        out = [self.obs[-1]]
+        for i in range(1, k + 1):
+            if i > len(self.acts):
+                break
+            out += [self.acts[-i], self.obs[-i - 1]] if i < k else [self.acts[-i]]
+        return tuple(out)
+
+
+FEATURES: dict[str, Callable[[Memory], Any]] = {
+    "k0": lambda m: m.last(0),
+    "k1": lambda m: m.last(1),
+    "k2": lambda m: m.last(2),
+    "k3": lambda m: m.last(3),
+    "full": lambda m: (tuple(m.obs), tuple(m.acts)),
+    "k1+errored": lambda m: (m.last(1), frozenset(m.erred)),
+    "k2+errored": lambda m: (m.last(2), frozenset(m.erred)),
+    "k1+first": lambda m: (m.last(1), m.obs[0]),
+    "k1+step": lambda m: (m.last(1), len(m.acts)),
+}
+"""Memory features of the episode so far, by name: ``kN`` the last N CRMs and observations
+(``k0`` the current observation alone); ``full`` the whole history; ``+errored`` with the set of
+CRMs that erred in the episode; ``+first`` with the first observation; ``+step`` with the number
+of CRMs so far."""
+
+
+class Recorder:
+    """A policy that acts as ``policy`` and counts, per feature value, the CRMs it took there;
+    it keeps each episode's cost (CRMs, plus ``error_cost`` per errored CRM)."""
+
+    def __init__(self, policy: BeliefPolicy, error_cost: float) -> None:
+        self.policy, self.error_cost = policy, error_cost
+        self.votes: dict[str, dict[Any, Counter[int]]] = {name: {} for name in FEATURES}
+        self.cost, self.mem, self.a = 0.0, Memory(0), 0
+
+    def begin(self, first: Percept) -> None:
+        self.policy.begin(first)
+        self.cost, self.mem = 0.0, Memory(first.obs_index)
+
+    def act(self) -> int:
+        self.a = self.policy.act()
+        for name, f in FEATURES.items():
+            self.votes[name].setdefault(f(self.mem), Counter())[self.a] += 1
+        return self.a
+
+    def tell(self, percept: Percept) -> None:
+        self.policy.tell(percept)
+        error = percept.error is not Error.NONE
+        self.cost += 1.0 + self.error_cost * error
+        self.mem.push(self.a, percept.obs_index, error)
+
+
+class Projected:
+    """A feature's projected table as a policy: a value it does not hold acts as the ``k1``
+    table, then the ``k0`` table, then CRM 0 (module docstring)."""
+
+    def __init__(self, tables: dict[str, dict[Any, int]], name: str, error_cost: float) -> None:
+        self.chain = [(FEATURES[n], tables[n]) for n in (name, "k1", "k0")]
+        self.error_cost, self.cost, self.mem, self.a = error_cost, 0.0, Memory(0), 0
+
+    def begin(self, first: Percept) -> None:
+        self.cost, self.mem = 0.0, Memory(first.obs_index)
+
+    def act(self) -> int:
+        self.a = next((t[f(self.mem)] for f, t in self.chain if f(self.mem) in t), 0)
+        return self.a
+
+    def tell(self, percept: Percept) -> None:
+        error = percept.error is not Error.NONE
+        self.cost += 1.0 + self.error_cost * error
+        self.mem.push(self.a, percept.obs_index, error)
+
+
+def _run(task: Any, policy: Any, worlds: list) -> tuple[float, float]:
+    """Mean cost and success of ``policy`` from each world (noise-free)."""
+    kernel, rng = kernel_for(task), np.random.default_rng(0)
+    costs, won = [], []
+    for w in worlds:
+        ep = run_episode(task, policy, rng, start=w, kernel=kernel)
+        costs.append(policy.cost)
+        won.append(ep.success)
+    return float(np.mean(costs)), float(np.mean(won))
+
+
+def main(task_name: str = "triangles-3f", n_worlds: int = 2000, n_fresh: int = 1000) -> dict:
+    """The projection of every feature (module docstring)."""
+    task = make_task(task_name)
+    t0 = time.perf_counter()
+    worlds, fresh = sample_starts(task, n_worlds, 10_000), sample_starts(task, n_fresh, 20_000)
+    rec = Recorder(BeliefPolicy(task, worlds), task.error_cost)
+    optimum, opt_success = _run(task, rec, worlds)
+    print(
+        f"{task_name}: optimum over {n_worlds} worlds {optimum:.3f} ({time.perf_counter() - t0:.0f} s)", file=sys.stderr
+    )
+    tables = {
+        name: {f: min(c.items(), key=lambda kv: (-kv[1], kv[0]))[0] for f, c in votes.items()}
+        for name, votes in rec.votes.items()
+    }
+    out: dict = {"task": task_name, "worlds": n_worlds, "fresh": n_fresh, "optimum": round(optimum, 4)}
+    out["optimum_success"] = round(opt_success, 4)
+    for name, votes in rec.votes.items():
+        decisions = sum(sum(c.values()) for c in votes.values())
+        agree = sum(max(c.values()) for c in votes.values())
+        policy = Projected(tables, name, task.error_cost)
+        own, _ = _run(task, policy, worlds)
+        new, success = _run(task, policy, fresh)
+        out[name] = {
+            "values": len(votes),
+            "agree": round(agree / decisions, 4),
+            "cost_on_worlds": round(own, 4),
+            "cost_on_fresh": round(new, 4),
+            "success_on_fresh": round(success, 4),
+        }
+        print(f"{task_name}: {name}: {out[name]}", file=sys.stderr, flush=True)
+    out["seconds"] = round(time.perf_counter() - t0, 1)
+    return out
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--task", default="triangles-3f")
+    ap.add_argument("--worlds", type=int, default=2000)
+    ap.add_argument("--fresh", type=int, default=1000)
+    a = ap.parse_args()
+    if a.worlds < 1 or a.fresh < 1:
+        ap.error("--worlds and --fresh must be at least 1")
+    print(json.dumps(main(a.task, a.worlds, a.fresh), indent=1))
