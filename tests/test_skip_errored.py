@@ -193,3 +193,28 @@ def test_every_model_based_learner_takes_the_rule(learner, tmp_path):
 def test_a_bad_setting_is_a_one_line_error_for_every_learner(learner):
     with pytest.raises(CrmgraspError, match="skip_errored must be true or false, got 1"):
         make_agent(learner, 4, skip_errored=1)
+
+
+@pytest.mark.parametrize("flag", [False, True])
+def test_skip_errored_learning_keeps_the_acting_policy_off_crms_that_erred(flag):
+    """With ``skip_errored_learning`` the learning episodes never repeat a CRM that erred since
+    the contacts last moved; without it they do (posterior draws act on a model that may still
+    rate such a CRM best). Learning goes on from the repeats' outcomes either way."""
+    from crmgrasp.agents.training import build_agent
+    from crmgrasp.sim import run_episode
+
+    task = make_task("u-handle")
+    enc = encoder_for(task, 2)
+    agent = build_agent(task, enc, "backoff-vi", {"symmetric": True, "skip_errored_learning": flag})
+    assert agent.skip_errored_learning is flag and agent.params()["skip_errored_learning"] is flag
+    rng, repeats, errors = np.random.default_rng(4), 0, 0
+    for _ in range(150):
+        ep = run_episode(task, LearnerPolicy(agent, enc, rng), rng, trace=True)
+        actions = tuple(int(t.action) for t in ep.trace)
+        erred = tuple(int(t.after.error) != 0 for t in ep.trace)
+        repeats += _repeats(type("R", (), {"actions": actions, "errors": erred}))
+        errors += sum(erred)
+    assert errors > 50
+    assert (repeats == 0) is flag
+    with pytest.raises(CrmgraspError, match="skip_errored_learning must be true or false"):
+        make_agent("backoff-vi", 4, skip_errored_learning="yes")

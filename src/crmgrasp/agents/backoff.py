@@ -122,6 +122,11 @@ class BackoffVI(TabularAgent):
         to err there ([`LearnerPolicy`][crmgrasp.agents.base.LearnerPolicy]). A history the
         learner's window cannot tell apart otherwise (after two errors, say, with k = 2) then
         no longer loops on the same failing CRMs.
+    skip_errored_learning
+        The acting policy skips them too, while it learns (False by default): after an error
+        it takes the best acting value among the CRMs not known to err there. The episodes it
+        learns from then go where the greedy policy with ``skip_errored`` goes, instead of
+        spending CRMs (and counts) on repeats that err for certain.
     decay
         Forgetting of the long level, in ``(0, 1]`` (1, the default: none). A count made in
         episode ``e`` weighs ``decay ** (E - e)`` when the model is planned in episode ``E``,
@@ -150,6 +155,7 @@ class BackoffVI(TabularAgent):
         skip_errored: bool = False,
         decay: float = 1.0,
         mean_after: int = 0,
+        skip_errored_learning: bool = False,
     ) -> None:
         super().__init__(n_actions, gamma=gamma)
         self.decay = positive(decay, "decay")
@@ -161,6 +167,7 @@ class BackoffVI(TabularAgent):
         self.plan_every = integer(plan_every, "plan_every", 1, 1_000_000)
         self.middle = boolean(middle, "middle")
         self.skip_errored = boolean(skip_errored, "skip_errored")
+        self.skip_errored_learning = boolean(skip_errored_learning, "skip_errored_learning")
         self.judge = ModelVI(n_actions, q_act, unknown, sweeps, compiled, gamma=gamma)
         self.short = PooledVI(n_actions, q_act=q_act, unknown=unknown, compiled=compiled, gamma=gamma)
         self.short.plan_acting = False  # only its greedy model is read
@@ -204,6 +211,7 @@ class BackoffVI(TabularAgent):
             "middle": self.middle,
             "skip_errored": self.skip_errored,
             "decay": self.decay,
+            "skip_errored_learning": self.skip_errored_learning,
         }
 
     def bind(self, frame: HistoryFrame) -> None:
@@ -263,10 +271,11 @@ class BackoffVI(TabularAgent):
                 self.counts = {key: {o: c * scale for o, c in row.items()} for key, row in self.counts.items()}
                 self._base, self._unit = e, 1.0
 
-    def act(self, state: int, rng: np.random.Generator) -> int:
-        """The best action by the planned acting values (uniform where there is no node); at
-        a planning episode's first step, plan them first (on a posterior draw with ``sample``, up to
-        episode ``mean_after`` where it is set)."""
+    def act(self, state: int, rng: np.random.Generator, banned: Collection[int] = ()) -> int:
+        """The best action by the planned acting values (uniform where there is no node), outside
+        ``banned`` where given ([`allowed_choice`][crmgrasp.agents.base.allowed_choice] over every
+        action); at a planning episode's first step, plan them first (on a posterior draw with
+        ``sample``, up to episode ``mean_after`` where it is set)."""
         if self._replan:
             self._replan = False
             if self.sample and (not self.mean_after or self.episodes <= self.mean_after):
@@ -277,9 +286,15 @@ class BackoffVI(TabularAgent):
                 judge = self._planned()
             self._act = {node: list(row) for node, row in judge.q.items()}
         node, flip = self._node(state, self._act)
-        if node is None:
+        if banned:
+            if flip:
+                banned = {self._amap[b] for b in banned}
+            row = self._act[node] if node is not None else [0.0] * self.n_actions
+            a = allowed_choice(row, range(self.n_actions), self.n_actions, banned, rng)
+        elif node is None:
             return int(rng.integers(self.n_actions))
-        a = greedy_choice(self._act[node], rng)
+        else:
+            a = greedy_choice(self._act[node], rng)
         return self._amap[a] if flip else a
 
     def greedy(self, state: int, rng: np.random.Generator, banned: Collection[int] = ()) -> int:

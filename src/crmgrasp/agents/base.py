@@ -14,7 +14,9 @@ from one) is also asked ``greedy(state, rng, banned)``: the best action outside 
 the CRMs that erred since the contacts last moved. An errored CRM leaves the contacts where
 they were ([docs/model.md section 3][model-3]), so without sensing noise repeating it from
 there errs again for certain: it costs a CRM and tells nothing new. `LearnerPolicy` keeps
-that set (empty after a CRM that moved the contacts and at a reset).
+that set (empty after a CRM that moved the contacts and at a reset). An agent whose
+``skip_errored_learning`` is true is asked ``act(state, rng, banned)`` the same way while it
+learns.
 
 All randomness comes from the ``rng`` passed in. `LearnerPolicy` makes an
 agent a [`Policy`][crmgrasp.sim.Policy] over k-order histories, so that learners act
@@ -97,13 +99,14 @@ class LearnerPolicy:
     the update ``(s, a, r, s', a')`` is made; a terminal step updates with
     ``a' = None``. With ``learn=False`` the agent's greedy policy acts and nothing is
     updated; if the agent's ``skip_errored`` is true, it is then asked for the best action
-    outside the CRMs that erred since the contacts last moved (module docstring).
+    outside the CRMs that erred since the contacts last moved (module docstring), and so is its
+    acting policy with ``learn=True`` if its ``skip_errored_learning`` is true.
     """
 
     def __init__(self, agent: Agent, encoder: KOrderEncoder, rng: np.random.Generator, *, learn: bool = True) -> None:
         self.agent, self.encoder, self.rng, self.learn = agent, encoder, rng, learn
         self._pick = agent.act if learn else agent.greedy
-        self._skip = not learn and bool(getattr(agent, "skip_errored", False))
+        self._skip = bool(getattr(agent, "skip_errored_learning" if learn else "skip_errored", False))
         self._banned: frozenset[int] = frozenset()
         self._hist: tuple[int, ...] = ()
         self._s = self._a = 0
@@ -117,7 +120,7 @@ class LearnerPolicy:
 
     def _choose(self, s: int) -> int:
         if self._banned:
-            return self.agent.greedy(s, self.rng, self._banned)  # type: ignore[call-arg]
+            return self._pick(s, self.rng, self._banned)  # type: ignore[call-arg]
         return self._pick(s, self.rng)
 
     def act(self) -> int:

@@ -82,16 +82,25 @@ class SymmetricAgent:
         """Forwarded to the inner learner."""
         self.inner.begin_episode()
 
-    def act(self, state: int, rng: np.random.Generator) -> int:
-        """The inner learner's behaviour, in the representative's frame."""
+    def act(self, state: int, rng: np.random.Generator, banned: Collection[int] = ()) -> int:
+        """The inner learner's behaviour, in the representative's frame (``banned``, the CRMs to
+        leave out, mirrored with it)."""
         c, flip = self._canon(state)
-        a = self.inner.act(c, rng)
+        if banned:
+            a = self.inner.act(c, rng, {self._amap[b] for b in banned} if flip else banned)  # type: ignore[call-arg]
+        else:
+            a = self.inner.act(c, rng)
         return self._amap[a] if flip else a
 
     @property
     def skip_errored(self) -> bool:
         """The inner learner's ``skip_errored`` (false where it has none)."""
         return bool(getattr(self.inner, "skip_errored", False))
+
+    @property
+    def skip_errored_learning(self) -> bool:
+        """The inner learner's ``skip_errored_learning`` (false where it has none)."""
+        return bool(getattr(self.inner, "skip_errored_learning", False))
 
     def greedy(self, state: int, rng: np.random.Generator, banned: Collection[int] = ()) -> int:
         """The inner learner's greedy action, in the representative's frame (``banned``, the
