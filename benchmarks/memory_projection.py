@@ -52,7 +52,9 @@ class Memory:
     that erred."""
 
     def __init__(self, first: int) -> None:
-        self.obs, self.acts, self.erred = [first], [], []  # type: ignore[var-annotated]
+        self.obs: list[int] = [first]
+        self.acts: list[int] = []
+        self.erred: list[int] = []
 
     def push(self, action: int, obs: int, error: bool) -> None:
         self.obs.append(obs)
