@@ -89,18 +89,33 @@ CRMs that erred in the episode; ``+first`` with the first observation; ``+step``
 of CRMs so far."""
 
 
-class Recorder:
-    """A policy that acts as ``policy`` and counts, per feature value, the CRMs it took there;
-    it keeps each episode's cost (CRMs, plus ``error_cost`` per errored CRM)."""
+class _Tracked:
+    """What both policies below keep of an episode: its memory and its cost (CRMs, plus
+    ``error_cost`` per errored CRM); subclasses set ``self.a`` in ``act``."""
+
+    def __init__(self, error_cost: float) -> None:
+        self.error_cost, self.cost, self.mem, self.a = error_cost, 0.0, Memory(0), 0
+
+    def begin(self, first: Percept) -> None:
+        self.cost, self.mem = 0.0, Memory(first.obs_index)
+
+    def tell(self, percept: Percept) -> None:
+        error = percept.error is not Error.NONE
+        self.cost += 1.0 + self.error_cost * error
+        self.mem.push(self.a, percept.obs_index, error)
+
+
+class Recorder(_Tracked):
+    """A policy that acts as ``policy`` and counts, per feature value, the CRMs it took there."""
 
     def __init__(self, policy: BeliefPolicy, error_cost: float) -> None:
-        self.policy, self.error_cost = policy, error_cost
+        super().__init__(error_cost)
+        self.policy = policy
         self.votes: dict[str, dict[Any, Counter[int]]] = {name: {} for name in FEATURES}
-        self.cost, self.mem, self.a = 0.0, Memory(0), 0
 
     def begin(self, first: Percept) -> None:
         self.policy.begin(first)
-        self.cost, self.mem = 0.0, Memory(first.obs_index)
+        super().begin(first)
 
     def act(self) -> int:
         self.a = self.policy.act()
@@ -110,30 +125,20 @@ class Recorder:
 
     def tell(self, percept: Percept) -> None:
         self.policy.tell(percept)
-        error = percept.error is not Error.NONE
-        self.cost += 1.0 + self.error_cost * error
-        self.mem.push(self.a, percept.obs_index, error)
+        super().tell(percept)
 
 
-class Projected:
+class Projected(_Tracked):
     """A feature's projected table as a policy: a value it does not hold acts as the ``k1``
     table, then the ``k0`` table, then CRM 0 (module docstring)."""
 
     def __init__(self, tables: dict[str, dict[Any, int]], name: str, error_cost: float) -> None:
+        super().__init__(error_cost)
         self.chain = [(FEATURES[n], tables[n]) for n in (name, "k1", "k0")]
-        self.error_cost, self.cost, self.mem, self.a = error_cost, 0.0, Memory(0), 0
-
-    def begin(self, first: Percept) -> None:
-        self.cost, self.mem = 0.0, Memory(first.obs_index)
 
     def act(self) -> int:
         self.a = next((t[f(self.mem)] for f, t in self.chain if f(self.mem) in t), 0)
         return self.a
-
-    def tell(self, percept: Percept) -> None:
-        error = percept.error is not Error.NONE
-        self.cost += 1.0 + self.error_cost * error
-        self.mem.push(self.a, percept.obs_index, error)
 
 
 def _run(task: Any, policy: Any, worlds: list) -> tuple[float, float]:
