@@ -340,6 +340,26 @@ def test_the_third_contact_experiment_compares_two_fingers_with_three(tmp_path):
         assert (tmp_path / name).stat().st_size > 0
 
 
+def test_the_third_contact_experiment_learns_with_a_named_preset(tmp_path):
+    """The learner is a preset of ``crmgrasp learn`` (``families`` by default: backoff-vi on
+    two-CRM histories, on the mirror quotient, never repeating an errored CRM); an unknown
+    preset is a one-line error before anything runs."""
+    from crmgrasp.experiments._episodes import train_preset
+    from crmgrasp.experiments.third_contact import ThirdContactConfig, third_contact
+
+    assert ThirdContactConfig().preset == "families"
+    agents, k = train_preset(make_task("triangles-3f"), "families", 2, 5, 0)
+    assert k == 2 and len(agents) == 2
+    assert all(type(a.inner).__name__ == "BackoffVI" and a.skip_errored for a in agents)
+    agents, k = train_preset(make_task("triangles-3f"), "fastest", 1, 5, 0)
+    assert k == 1 and type(agents[0].inner).__name__ == "PooledVI"
+    with pytest.raises(CrmgraspError, match="unknown learner preset 'nope'; known presets: paper"):
+        ThirdContactConfig(preset="nope")
+    cfg = dataclasses.replace(ThirdContactConfig.quick(), starts=6, episodes=30, mujoco_worlds=0, preset="fastest")
+    s = third_contact(tmp_path, cfg)
+    assert "learner preset fastest" in s["budget"] and s["rows"][1]["learned_crms"] is not None
+
+
 def test_the_third_contact_experiment_holds_cups_in_space(tmp_path):
     """The default pairs end with cups in 3-D; a small run of that pair gives a two-finger
     and a tripod row with the same goal, the tripod's optimum above its bound."""

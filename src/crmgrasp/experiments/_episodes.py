@@ -1,6 +1,6 @@
-"""What the family experiments share: traced episodes as records, and the learner they
-train (``model-vi``, k = 1, on the mirror quotient where the task declares one) with
-its greedy policy run on fixed worlds."""
+"""What the family experiments share: traced episodes as records, and the learners they
+train (``model-vi``, k = 1, on the mirror quotient where the task declares one, or a
+learner preset) with their greedy policies run on fixed worlds."""
 
 from __future__ import annotations
 
@@ -11,13 +11,14 @@ from typing import Any
 import numpy as np
 
 from crmgrasp.agents.base import Agent, LearnerPolicy
+from crmgrasp.agents.presets import apply_preset
 from crmgrasp.agents.training import encoder_for, train_trials
 from crmgrasp.kernels import kernel_for
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.sim import Policy, run_episode
 from crmgrasp.tasks import Task
 
-__all__ = ["EpisodeRecord", "episode_records", "train_model_vi", "greedy_records", "MODEL_VI_LABEL"]
+__all__ = ["EpisodeRecord", "episode_records", "train_model_vi", "train_preset", "greedy_records", "MODEL_VI_LABEL"]
 
 MODEL_VI_LABEL = "model-vi k=1 (mirror quotient)"
 """How the experiments name the learner of [`train_model_vi`][]."""
@@ -67,6 +68,18 @@ def train_model_vi(
     params = {"symmetric": task.symmetry is not None, **params}
     res = train_trials(task, learner, trials=trials, episodes=episodes, seed=seed, k=1, eval_episodes=0, params=params)
     return res.agents
+
+
+def train_preset(task: Task, preset: str, trials: int, episodes: int, seed: int) -> tuple[list[Agent], int]:
+    """``trials`` agents of the learner preset ``preset`` (``crmgrasp learn --preset``:
+    its agent, history order, mirror quotient and parameters) trained on ``task``, and
+    that history order."""
+    choice = apply_preset(preset, task)
+    params: dict[str, object] = {"symmetric": choice.symmetric, **dict(choice.params)}
+    res = train_trials(
+        task, choice.agent, trials=trials, episodes=episodes, seed=seed, k=choice.k, eval_episodes=0, params=params
+    )
+    return res.agents, choice.k
 
 
 def greedy_records(

@@ -319,7 +319,7 @@ def _third_contact(out: Path, seed: int, quick: bool, ctx: dict[str, Any]) -> tu
         rows.append(
             (
                 f"{fam}, mu_goal {mu:g}: graspable starts, two / three fingers; three-finger optimum / "
-                "model-vi, CRMs; friction of its final grasps (median); its worlds grasped on MuJoCo",
+                f"{cfg.preset} preset, CRMs; friction of its final grasps (median); its worlds grasped on MuJoCo",
                 f"{two['graspable_share']:.0%} / {three['graspable_share']:.0%}; {fmt(three['belief_optimum'])} / "
                 f"{fmt(three['learned_crms'])}; {fmt(three['final_friction'])}; {_share(three['mujoco_success'])}",
                 "more than two contacts 'with little modification' (Introduction, no experiment)",

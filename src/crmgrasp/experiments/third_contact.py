@@ -6,13 +6,14 @@ modification". For each pair of twin tasks (``triangles``/``triangles-3f``,
 fingers; ``box-family``/``box-family-3f`` and ``cup-family``/``cup-family-3f``: the same
 family, each hand with its own CRMs and starts; docs/families.md; and in space
 ``cup-3d``/``cup-3d-3f``, cups on a table, two fingers against a tripod, docs/model-3d.md)
-and each goal ``mu_goal`` (0.15 and 0.05), on the same number of sampled starts: the share of starts from which some
-sequence of at most ``max_steps`` CRMs grasps (the clairvoyant search, knowing the object),
-and where some do, the clairvoyant bound and the belief-space optimum (observations only),
-in CRMs per episode, and model-vi (k = 1) learned from episodes and run from the same starts:
-its CRMs per episode, success share and the least friction its final grasps need (the
-median), and the first trial's policy transferred to the MuJoCo stand-in (the hand's fingertips
-on the object free on the table; success: the true least friction from MuJoCo's contacts at or
+and each goal ``mu_goal`` (0.15 and 0.05), on the same number of sampled starts: the share
+of starts from which some sequence of at most ``max_steps`` CRMs grasps (the clairvoyant
+search, knowing the object), and where some do, the clairvoyant bound and the belief-space
+optimum (observations only), in CRMs per episode, and a learner preset (``families`` by
+default: ``backoff-vi``, k = 2) learned from episodes and run from the same starts: its CRMs
+per episode, success share and the least friction its final grasps need (the median), and
+the first trial's policy transferred to the MuJoCo stand-in (the hand's fingertips on the
+object free on the table; success: the true least friction from MuJoCo's contacts at or
 below the goal). Writes ``third_contact.csv``, ``third_contact.png`` and ``summary.json``.
 """
 
@@ -27,6 +28,8 @@ import numpy as np
 
 from crmgrasp._io import save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
+from crmgrasp._validation import CrmgraspError
+from crmgrasp.agents.presets import PRESETS
 from crmgrasp.kernels import compiled_rules
 from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts, ungraspable_fraction
 from crmgrasp.tasks import make_task
@@ -53,7 +56,8 @@ COLUMNS = (
 class ThirdContactConfig:
     """Twin tasks (two fingers, three), goals, sampled starts per task and goal, the
     learner's trials and episodes per trial, MuJoCo worlds for the first trial's policy (0:
-    none; none either without the extra ``crmgrasp[mujoco]``), seed."""
+    none; none either without the extra ``crmgrasp[mujoco]``), seed, and the learner: a
+    preset of ``crmgrasp learn --preset`` ([`crmgrasp.agents.presets.PRESETS`][])."""
 
     pairs: tuple[tuple[str, str], ...] = (
         ("triangles", "triangles-3f"),
@@ -68,6 +72,11 @@ class ThirdContactConfig:
     episodes: int = 3000
     mujoco_worlds: int = 20
     seed: int = 0
+    preset: str = "families"
+
+    def __post_init__(self) -> None:
+        if self.preset not in PRESETS:
+            raise CrmgraspError(f"unknown learner preset {self.preset!r}; known presets: {', '.join(PRESETS)}")
 
     @classmethod
     def quick(cls, seed: int = 0) -> ThirdContactConfig:
@@ -107,25 +116,25 @@ def _row(name: str, mu: float, cfg: ThirdContactConfig) -> dict[str, Any]:
 
 
 def _learned(task: Any, starts: Any, cfg: ThirdContactConfig) -> dict[str, Any]:
-    """model-vi (k = 1, mirror quotient where declared), ``cfg.trials`` x ``cfg.episodes``
-    task episodes, its greedy policies run from ``starts``: the median over trials of the mean
-    CRMs per episode, the success share, and the median least friction of the final grasps."""
-    from crmgrasp.experiments._episodes import greedy_records, train_model_vi
+    """The preset ``cfg.preset``, ``cfg.trials`` x ``cfg.episodes`` task episodes, its greedy
+    policies run from ``starts``: the median over trials of the mean CRMs per episode, the
+    success share, and the median least friction of the final grasps."""
+    from crmgrasp.experiments._episodes import greedy_records, train_preset
 
-    agents = train_model_vi(task, cfg.trials, cfg.episodes, cfg.seed)
-    records = greedy_records(task, agents, starts, cfg.seed)
+    agents, k = train_preset(task, cfg.preset, cfg.trials, cfg.episodes, cfg.seed)
+    records = greedy_records(task, agents, starts, cfg.seed, k=k)
     finals = [task.quality(r.final) for trial in records for r in trial if r.success]
     return {
         "learned_crms": float(np.median([np.mean([len(r.actions) for r in trial]) for trial in records])),
         "learned_success": float(np.mean([r.success for trial in records for r in trial])),
         "final_friction": float(np.median(finals)) if finals else None,
-        "mujoco_success": _on_mujoco(task, agents[0], cfg),
+        "mujoco_success": _on_mujoco(task, agents[0], k, cfg),
     }
 
 
-def _on_mujoco(task: Any, agent: Any, cfg: ThirdContactConfig) -> float | None:
+def _on_mujoco(task: Any, agent: Any, k: int, cfg: ThirdContactConfig) -> float | None:
     """The share of ``cfg.mujoco_worlds`` MuJoCo worlds (drawn from ``cfg.seed``) that the first
-    trial's greedy policy grasps, judged by the true least friction from MuJoCo's contacts
+    trial's greedy policy (k-order histories, ``k``) grasps, judged by the true least friction from MuJoCo's contacts
     ([`crmgrasp.experiments.physics_learning.score_on_mujoco`][]); ``None`` without worlds or
     without the extra."""
     from crmgrasp.hardware.mujoco import mujoco_available
@@ -135,7 +144,7 @@ def _on_mujoco(task: Any, agent: Any, cfg: ThirdContactConfig) -> float | None:
     from crmgrasp.agents.training import encoder_for
     from crmgrasp.experiments.physics_learning import score_on_mujoco
 
-    return float(score_on_mujoco(task, agent, encoder_for(task, 1), cfg.mujoco_worlds, cfg.seed)["success"])
+    return float(score_on_mujoco(task, agent, encoder_for(task, k), cfg.mujoco_worlds, cfg.seed)["success"])
 
 
 def third_contact(
@@ -157,9 +166,9 @@ def third_contact(
     write_csv(out / "third_contact.csv", list(COLUMNS), [[r[c] for c in COLUMNS] for r in rows])
     save_figure(_figure(rows, cfg), out / "third_contact.png")
     budget = (
-        f"{cfg.starts} sampled starts per task and goal, seed {cfg.seed}; model-vi k=1, {cfg.trials} trials x "
-        f"{cfg.episodes} task episodes per task and goal, greedy on those starts; the first trial's policy on "
-        f"{cfg.mujoco_worlds} MuJoCo worlds"
+        f"{cfg.starts} sampled starts per task and goal, seed {cfg.seed}; learner preset {cfg.preset}, "
+        f"{cfg.trials} trials x {cfg.episodes} task episodes per task and goal, greedy on those starts; "
+        f"the first trial's policy on {cfg.mujoco_worlds} MuJoCo worlds"
     )
     summary = {"budget": budget, "rows": rows}
     write_json(out / "summary.json", summary)
@@ -183,7 +192,7 @@ def _figure(rows: list[dict[str, Any]], cfg: ThirdContactConfig) -> Any:
         left.bar_label(bars, fmt="%.0f%%", fontsize=7)
     if any(by[(f, m, 3)]["mujoco_success"] is not None for f, m in groups):
         grasped = [100 * (by[(f, m, 3)]["mujoco_success"] or 0.0) for f, m in groups]
-        label = f"3 fingers, model-vi on MuJoCo ({cfg.mujoco_worlds} worlds): grasped"
+        label = f"3 fingers, {cfg.preset} preset on MuJoCo ({cfg.mujoco_worlds} worlds): grasped"
         bars = left.bar(x + 0.27, grasped, 0.27, color="tab:purple", label=label)
         left.bar_label(bars, fmt="%.0f%%", fontsize=7)
     left.set_xticks(x, labels, fontsize=8)
@@ -195,7 +204,7 @@ def _figure(rows: list[dict[str, Any]], cfg: ThirdContactConfig) -> Any:
     parts = (
         ("clairvoyant_bound", "tab:green", "clairvoyant bound"),
         ("belief_optimum", "tab:blue", "belief-space optimum"),
-        ("learned_crms", "tab:orange", f"model-vi, median of {cfg.trials} x {cfg.episodes} episodes"),
+        ("learned_crms", "tab:orange", f"{cfg.preset} preset, median of {cfg.trials} x {cfg.episodes} episodes"),
     )
     for k, (key, color, name) in enumerate(parts):
         values = [by[(f, m, 3)][key] or 0.0 for f, m in groups]
