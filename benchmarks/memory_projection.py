@@ -24,8 +24,14 @@ worlds every table is a policy that does not know the world, so its cost there i
 bound on the family's own optimum (in expectation), as the planner of
 ``benchmarks/family_learning.py --planner`` is.
 
-Usage: ``python benchmarks/memory_projection.py [--task triangles-3f] [--worlds 2000] [--fresh 1000]``.
-Prints one JSON object; progress on stderr.
+5. With ``--learn E`` (repeatable), the families preset (``crmgrasp learn --preset families``:
+   ``backoff-vi``, k = 2, ``skip_errored``, acting on the mean for its last third of the
+   episodes, ``mean_after = 2E / 3``, which is the preset's 2,000 at E = 3,000) learns E episodes
+   from scratch in each of ``--seeds`` seeds, and its greedy policy runs on the same W and F
+   worlds: the learner against the table it could at best become, on identical worlds.
+
+Usage: ``python benchmarks/memory_projection.py [--task triangles-3f] [--worlds 2000] [--fresh 1000]
+[--learn 3000 --learn 20000 --seeds 1]``. Prints one JSON object; progress on stderr.
 """
 
 from __future__ import annotations
@@ -152,8 +158,38 @@ def _run(task: Any, policy: Any, worlds: list) -> tuple[float, float]:
     return float(np.mean(costs)), float(np.mean(won))
 
 
-def main(task_name: str = "triangles-3f", n_worlds: int = 2000, n_fresh: int = 1000) -> dict:
-    """The projection of every feature (module docstring)."""
+def learned(task: Any, episodes: int, seeds: int, worlds: list, fresh: list) -> dict:
+    """Step 5 of the module docstring: per seed, the preset's greedy cost and success on the W
+    and F worlds after ``episodes`` episodes, and the training time."""
+    from crmgrasp.agents.presets import apply_preset
+    from crmgrasp.agents.training import train_trials
+    from crmgrasp.experiments._episodes import greedy_records
+
+    choice = apply_preset("families", task)
+    params: dict[str, object] = {"symmetric": choice.symmetric, **dict(choice.params)}
+    params["mean_after"] = 2 * episodes // 3
+    t0 = time.perf_counter()
+    res = train_trials(
+        task, choice.agent, trials=seeds, episodes=episodes, seed=0, k=choice.k, eval_episodes=0, params=params
+    )
+    out: dict = {"train_seconds": round(time.perf_counter() - t0, 1)}
+    for name, starts in (("worlds", worlds), ("fresh", fresh)):
+        recs = greedy_records(task, res.agents, starts, 0, k=choice.k)
+        costs = [float(np.mean([len(r.actions) + task.error_cost * sum(r.errors) for r in t])) for t in recs]
+        out[f"cost_on_{name}"] = [round(c, 4) for c in costs]
+        out[f"success_on_{name}"] = [round(float(np.mean([r.success for r in t])), 4) for t in recs]
+    return out
+
+
+def main(
+    task_name: str = "triangles-3f",
+    n_worlds: int = 2000,
+    n_fresh: int = 1000,
+    learn: tuple[int, ...] = (),
+    seeds: int = 1,
+) -> dict:
+    """The projection of every feature, and the learner at each budget of ``learn`` (module
+    docstring)."""
     task = make_task(task_name)
     t0 = time.perf_counter()
     worlds, fresh = sample_starts(task, n_worlds, 10_000), sample_starts(task, n_fresh, 20_000)
@@ -182,6 +218,9 @@ def main(task_name: str = "triangles-3f", n_worlds: int = 2000, n_fresh: int = 1
             "success_on_fresh": round(success, 4),
         }
         print(f"{task_name}: {name}: {out[name]}", file=sys.stderr, flush=True)
+    for episodes in learn:
+        out[f"families_preset_{episodes}"] = learned(task, episodes, seeds, worlds, fresh)
+        print(f"{task_name}: {episodes} episodes: {out[f'families_preset_{episodes}']}", file=sys.stderr, flush=True)
     out["seconds"] = round(time.perf_counter() - t0, 1)
     return out
 
@@ -191,7 +230,9 @@ if __name__ == "__main__":
     ap.add_argument("--task", default="triangles-3f")
     ap.add_argument("--worlds", type=int, default=2000)
     ap.add_argument("--fresh", type=int, default=1000)
+    ap.add_argument("--learn", type=int, action="append", default=[], help="the families preset's episodes")
+    ap.add_argument("--seeds", type=int, default=1, help="its seeds, 0 .. SEEDS - 1")
     a = ap.parse_args()
-    if a.worlds < 1 or a.fresh < 1:
-        ap.error("--worlds and --fresh must be at least 1")
-    print(json.dumps(main(a.task, a.worlds, a.fresh), indent=1))
+    if a.worlds < 1 or a.fresh < 1 or a.seeds < 1 or any(e < 1 for e in a.learn):
+        ap.error("--worlds, --fresh, --seeds and --learn must be at least 1")
+    print(json.dumps(main(a.task, a.worlds, a.fresh, tuple(a.learn), a.seeds), indent=1))

@@ -382,6 +382,13 @@ def test_memory_projection_full_history_is_the_optimum():
     for name in mod.FEATURES:
         assert res["optimum"] <= res[name]["cost_on_worlds"] <= task.max_steps
         assert 0.0 <= res[name]["success_on_fresh"] <= 1.0
+    res = mod.main("u-handle", 12, 10, learn=(30,), seeds=2)  # the families preset on the same worlds
+    got = res["families_preset_30"]
+    for where in ("worlds", "fresh"):
+        assert len(got[f"cost_on_{where}"]) == len(got[f"success_on_{where}"]) == 2
+        assert all(1.0 <= c <= task.max_steps for c in got[f"cost_on_{where}"])
+    again = mod.learned(task, 30, 1, sample_starts(task, 12, 10_000), sample_starts(task, 10, 20_000))
+    assert again["cost_on_fresh"] == got["cost_on_fresh"][:1]  # seed 0 alone: the same policy
     m = mod.Memory(5)
     m.push(2, 7, True)
     m.push(3, 9, False)
