@@ -161,20 +161,13 @@ def _run(task: Any, policy: Any, worlds: list) -> tuple[float, float]:
 def learned(task: Any, episodes: int, seeds: int, worlds: list, fresh: list) -> dict:
     """Step 5 of the module docstring: per seed, the preset's greedy cost and success on the W
     and F worlds after ``episodes`` episodes, and the training time."""
-    from crmgrasp.agents.presets import apply_preset
-    from crmgrasp.agents.training import train_trials
-    from crmgrasp.experiments._episodes import greedy_records
+    from crmgrasp.experiments._episodes import greedy_records, train_preset
 
-    choice = apply_preset("families", task)
-    params: dict[str, object] = {"symmetric": choice.symmetric, **dict(choice.params)}
-    params["mean_after"] = 2 * episodes // 3
     t0 = time.perf_counter()
-    res = train_trials(
-        task, choice.agent, trials=seeds, episodes=episodes, seed=0, k=choice.k, eval_episodes=0, params=params
-    )
+    agents, k = train_preset(task, "families", seeds, episodes, 0, mean_after=2 * episodes // 3)
     out: dict = {"train_seconds": round(time.perf_counter() - t0, 1)}
     for name, starts in (("worlds", worlds), ("fresh", fresh)):
-        recs = greedy_records(task, res.agents, starts, 0, k=choice.k)
+        recs = greedy_records(task, agents, starts, 0, k=k)
         costs = [float(np.mean([len(r.actions) + task.error_cost * sum(r.errors) for r in t])) for t in recs]
         out[f"cost_on_{name}"] = [round(c, 4) for c in costs]
         out[f"success_on_{name}"] = [round(float(np.mean([r.success for r in t])), 4) for t in recs]

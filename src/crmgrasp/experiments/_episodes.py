@@ -70,12 +70,14 @@ def train_model_vi(
     return res.agents
 
 
-def train_preset(task: Task, preset: str, trials: int, episodes: int, seed: int) -> tuple[list[Agent], int]:
+def train_preset(
+    task: Task, preset: str, trials: int, episodes: int, seed: int, **params: object
+) -> tuple[list[Agent], int]:
     """``trials`` agents of the learner preset ``preset`` (``crmgrasp learn --preset``:
-    its agent, history order, mirror quotient and parameters) trained on ``task``, and
-    that history order."""
+    its agent, history order, mirror quotient and parameters, with ``params`` on top)
+    trained on ``task``, and that history order."""
     choice = apply_preset(preset, task)
-    params: dict[str, object] = {"symmetric": choice.symmetric, **dict(choice.params)}
+    params = {"symmetric": choice.symmetric, **dict(choice.params), **params}
     res = train_trials(
         task, choice.agent, trials=trials, episodes=episodes, seed=seed, k=choice.k, eval_episodes=0, params=params
     )

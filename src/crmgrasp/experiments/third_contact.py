@@ -134,9 +134,9 @@ def _learned(task: Any, starts: Any, cfg: ThirdContactConfig) -> dict[str, Any]:
 
 def _on_mujoco(task: Any, agent: Any, k: int, cfg: ThirdContactConfig) -> float | None:
     """The share of ``cfg.mujoco_worlds`` MuJoCo worlds (drawn from ``cfg.seed``) that the first
-    trial's greedy policy (k-order histories, ``k``) grasps, judged by the true least friction from MuJoCo's contacts
-    ([`crmgrasp.experiments.physics_learning.score_on_mujoco`][]); ``None`` without worlds or
-    without the extra."""
+    trial's greedy policy (k-order histories, ``k``) grasps, judged by the true least friction
+    from MuJoCo's contacts ([`crmgrasp.experiments.physics_learning.score_on_mujoco`][]);
+    ``None`` without worlds or without the extra."""
     from crmgrasp.hardware.mujoco import mujoco_available
 
     if cfg.mujoco_worlds == 0 or not mujoco_available():
