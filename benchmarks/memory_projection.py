@@ -30,8 +30,17 @@ bound on the family's own optimum (in expectation), as the planner of
    from scratch in each of ``--seeds`` seeds, and its greedy policy runs on the same W and F
    worlds: the learner against the table it could at best become, on identical worlds.
 
+6. With ``--teach E`` (repeatable), the same learner is *taught*: it acts on nothing and
+   learns from E episodes in which a teacher chooses each CRM, on E worlds of its own per seed
+   (``sample_starts(task, E, 30_000 + seed)``). The teacher is the belief-space optimal policy
+   over those worlds, replaced by a uniformly drawn CRM with probability ``--epsilon`` (0.2),
+   all draws from ``default_rng(seed)``. Its greedy policy then runs on the same W and F worlds.
+   This separates where the learner's data come from (its own acting, or the optimum's
+   behaviour with exploration) from what it makes of them.
+
 Usage: ``python benchmarks/memory_projection.py [--task triangles-3f] [--worlds 2000] [--fresh 1000]
-[--learn 3000 --learn 20000 --seeds 1]``. Prints one JSON object; progress on stderr.
+[--learn 3000 --learn 20000 --seeds 1] [--teach 3000 --epsilon 0.2]``. Prints one JSON object;
+progress on stderr.
 """
 
 from __future__ import annotations
@@ -161,11 +170,78 @@ def _run(task: Any, policy: Any, worlds: list) -> tuple[float, float]:
 def learned(task: Any, episodes: int, seeds: int, worlds: list, fresh: list) -> dict:
     """Step 5 of the module docstring: per seed, the preset's greedy cost and success on the W
     and F worlds after ``episodes`` episodes, and the training time."""
-    from crmgrasp.experiments._episodes import greedy_records, train_preset
+    from crmgrasp.experiments._episodes import train_preset
 
     t0 = time.perf_counter()
     agents, k = train_preset(task, "families", seeds, episodes, 0, mean_after=2 * episodes // 3)
     out: dict = {"train_seconds": round(time.perf_counter() - t0, 1)}
+    out.update(_greedy(task, agents, k, worlds, fresh))
+    return out
+
+
+class Taught:
+    """A policy whose CRMs are a teacher's (the optimum, or with probability ``epsilon`` a
+    uniform draw), teaching ``agent`` every transition on its k-order histories."""
+
+    def __init__(self, agent: Any, encoder: Any, teacher: BeliefPolicy, epsilon: float, rng: np.random.Generator):
+        self.agent, self.encoder, self.teacher, self.epsilon, self.rng = agent, encoder, teacher, epsilon, rng
+        self.n_actions = len(teacher.task.actions)
+        self.hist: tuple[int, ...] = ()
+        self.s = self.a = 0
+
+    def _choose(self, steps_left: bool) -> int:
+        a = self.teacher.act() if steps_left else 0
+        return int(self.rng.integers(self.n_actions)) if self.rng.random() < self.epsilon else a
+
+    def begin(self, first: Percept) -> None:
+        self.teacher.begin(first)
+        self.hist = self.encoder.start(first.obs_index)
+        self.s = self.encoder.encode(self.hist)
+        self.agent.begin_episode()
+        self.a = self._choose(True)
+
+    def act(self) -> int:
+        return self.a
+
+    def tell(self, percept: Percept) -> None:
+        self.teacher.tell(percept, self.a)
+        self.hist = self.encoder.push(self.hist, self.a, percept.obs_index)
+        s2 = self.encoder.encode(self.hist)
+        if percept.terminated:
+            self.agent.update(self.s, self.a, percept.reward, s2, None, True, self.rng)
+            return
+        a2 = self._choose(not percept.truncated)
+        self.agent.update(self.s, self.a, percept.reward, s2, a2, False, self.rng)
+        self.s, self.a = s2, a2
+
+
+def taught(task: Any, episodes: int, seeds: int, epsilon: float, worlds: list, fresh: list) -> dict:
+    """Step 6 of the module docstring: per seed, the greedy cost and success on the W and F worlds
+    of the families preset's learner taught by the optimum over E worlds of its own."""
+    from crmgrasp.agents.presets import apply_preset
+    from crmgrasp.agents.training import build_agent, encoder_for
+
+    choice = apply_preset("families", task)
+    encoder = encoder_for(task, choice.k)
+    kernel, agents, t0 = kernel_for(task), [], time.perf_counter()
+    for seed in range(seeds):
+        agent = build_agent(task, encoder, choice.agent, {"symmetric": choice.symmetric, **dict(choice.params)})
+        own = sample_starts(task, episodes, 30_000 + seed)
+        rng = np.random.default_rng(seed)
+        policy = Taught(agent, encoder, BeliefPolicy(task, own), epsilon, rng)
+        for w in own:
+            run_episode(task, policy, rng, start=w, kernel=kernel)
+        agents.append(agent)
+    out: dict = {"epsilon": epsilon, "train_seconds": round(time.perf_counter() - t0, 1)}
+    out.update(_greedy(task, agents, choice.k, worlds, fresh))
+    return out
+
+
+def _greedy(task: Any, agents: list, k: int, worlds: list, fresh: list) -> dict:
+    """Per agent, its greedy policy's mean cost and success on ``worlds`` and on ``fresh``."""
+    from crmgrasp.experiments._episodes import greedy_records
+
+    out: dict = {}
     for name, starts in (("worlds", worlds), ("fresh", fresh)):
         recs = greedy_records(task, agents, starts, 0, k=k)
         costs = [float(np.mean([len(r.actions) + task.error_cost * sum(r.errors) for r in t])) for t in recs]
@@ -180,6 +256,8 @@ def main(
     n_fresh: int = 1000,
     learn: tuple[int, ...] = (),
     seeds: int = 1,
+    teach: tuple[int, ...] = (),
+    epsilon: float = 0.2,
 ) -> dict:
     """The projection of every feature, and the learner at each budget of ``learn`` (module
     docstring)."""
@@ -214,6 +292,9 @@ def main(
     for episodes in learn:
         out[f"families_preset_{episodes}"] = learned(task, episodes, seeds, worlds, fresh)
         print(f"{task_name}: {episodes} episodes: {out[f'families_preset_{episodes}']}", file=sys.stderr, flush=True)
+    for episodes in teach:
+        out[f"taught_{episodes}"] = taught(task, episodes, seeds, epsilon, worlds, fresh)
+        print(f"{task_name}: taught {episodes} episodes: {out[f'taught_{episodes}']}", file=sys.stderr, flush=True)
     out["seconds"] = round(time.perf_counter() - t0, 1)
     return out
 
@@ -225,7 +306,12 @@ if __name__ == "__main__":
     ap.add_argument("--fresh", type=int, default=1000)
     ap.add_argument("--learn", type=int, action="append", default=[], help="the families preset's episodes")
     ap.add_argument("--seeds", type=int, default=1, help="its seeds, 0 .. SEEDS - 1")
+    ap.add_argument("--teach", type=int, action="append", default=[], help="episodes taught by the optimum")
+    ap.add_argument("--epsilon", type=float, default=0.2, help="the teacher's share of uniformly drawn CRMs")
     a = ap.parse_args()
-    if a.worlds < 1 or a.fresh < 1 or a.seeds < 1 or any(e < 1 for e in a.learn):
-        ap.error("--worlds, --fresh, --seeds and --learn must be at least 1")
-    print(json.dumps(main(a.task, a.worlds, a.fresh, tuple(a.learn), a.seeds), indent=1))
+    if a.worlds < 1 or a.fresh < 1 or a.seeds < 1 or any(e < 1 for e in a.learn + a.teach):
+        ap.error("--worlds, --fresh, --seeds, --learn and --teach must be at least 1")
+    if not 0.0 <= a.epsilon <= 1.0:
+        ap.error(f"--epsilon must be in [0, 1], got {a.epsilon}")
+    res = main(a.task, a.worlds, a.fresh, tuple(a.learn), a.seeds, tuple(a.teach), a.epsilon)
+    print(json.dumps(res, indent=1))

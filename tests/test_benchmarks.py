@@ -366,7 +366,8 @@ def test_handover_ends_are_the_two_policies():
 def test_memory_projection_full_history_is_the_optimum():
     """The whole history's table is the optimum on the worlds it was made from (the optimum is
     a function of it); the k-order memories of the learners agree with it less or as much, and
-    a k = 1 table backs off to the current observation's, as documented."""
+    a k = 1 table backs off to the current observation's, as documented; the learner runs and is
+    taught by the optimum, whose CRMs it then follows unless epsilon draws others."""
     spec = importlib.util.spec_from_file_location("memory_projection", BENCH.parent / "memory_projection.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
@@ -389,6 +390,29 @@ def test_memory_projection_full_history_is_the_optimum():
         assert all(1.0 <= c <= task.max_steps for c in got[f"cost_on_{where}"])
     again = mod.learned(task, 30, 1, sample_starts(task, 12, 10_000), sample_starts(task, 10, 20_000))
     assert again["cost_on_fresh"] == got["cost_on_fresh"][:1]  # seed 0 alone: the same policy
+    res = mod.main("u-handle", 12, 10, seeds=2, teach=(30,), epsilon=0.2)  # taught by the optimum
+    got = res["taught_30"]
+    assert got["epsilon"] == 0.2 and len(got["cost_on_fresh"]) == 2
+    assert all(1.0 <= c <= task.max_steps for c in got["cost_on_worlds"] + got["cost_on_fresh"])
+    worlds, fresh = sample_starts(task, 12, 10_000), sample_starts(task, 10, 20_000)
+    assert mod.taught(task, 30, 1, 0.2, worlds, fresh)["cost_on_fresh"] == got["cost_on_fresh"][:1]
+    from crmgrasp.agents.presets import apply_preset
+    from crmgrasp.agents.training import build_agent, encoder_for
+    from crmgrasp.planners.references import BeliefPolicy
+    from crmgrasp.sim import run_episode
+
+    choice = apply_preset("families", task)
+    enc = encoder_for(task, choice.k)
+
+    def actions(policy: object, w: object) -> tuple:
+        ep = run_episode(task, policy, np.random.default_rng(0), start=w, trace=True)
+        return tuple(int(t.action) for t in ep.trace)
+
+    alone = [actions(BeliefPolicy(task, worlds), w) for w in worlds]
+    for eps, same in ((0.0, True), (1.0, False)):  # without draws the taught CRMs are the optimum's
+        agent = build_agent(task, enc, choice.agent, {"symmetric": choice.symmetric, **dict(choice.params)})
+        teacher = mod.Taught(agent, enc, BeliefPolicy(task, worlds), eps, np.random.default_rng(1))
+        assert ([actions(teacher, w) for w in worlds] == alone) is same
     m = mod.Memory(5)
     m.push(2, 7, True)
     m.push(3, 9, False)
