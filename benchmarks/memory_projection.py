@@ -190,6 +190,8 @@ class Taught:
         self.s = self.a = 0
 
     def _choose(self, steps_left: bool) -> int:
+        """The next CRM; after the last step (the teacher has no plan there) only a placeholder
+        for the update's ``a2``, which the model-based learner does not read."""
         a = self.teacher.act() if steps_left else 0
         return int(self.rng.integers(self.n_actions)) if self.rng.random() < self.epsilon else a
 
@@ -218,14 +220,10 @@ class Taught:
 def taught(task: Any, episodes: int, seeds: int, epsilon: float, worlds: list, fresh: list) -> dict:
     """Step 6 of the module docstring: per seed, the greedy cost and success on the W and F worlds
     of the families preset's learner taught by the optimum over E worlds of its own."""
-    from crmgrasp.agents.presets import apply_preset
-    from crmgrasp.agents.training import build_agent, encoder_for
-
-    choice = apply_preset("families", task)
-    encoder = encoder_for(task, choice.k)
+    k, make = families_learner(task)
     kernel, agents, t0 = kernel_for(task), [], time.perf_counter()
     for seed in range(seeds):
-        agent = build_agent(task, encoder, choice.agent, {"symmetric": choice.symmetric, **dict(choice.params)})
+        agent, encoder = make()
         own = sample_starts(task, episodes, 30_000 + seed)
         rng = np.random.default_rng(seed)
         policy = Taught(agent, encoder, BeliefPolicy(task, own), epsilon, rng)
@@ -233,8 +231,20 @@ def taught(task: Any, episodes: int, seeds: int, epsilon: float, worlds: list, f
             run_episode(task, policy, rng, start=w, kernel=kernel)
         agents.append(agent)
     out: dict = {"epsilon": epsilon, "train_seconds": round(time.perf_counter() - t0, 1)}
-    out.update(_greedy(task, agents, choice.k, worlds, fresh))
+    out.update(_greedy(task, agents, k, worlds, fresh))
     return out
+
+
+def families_learner(task: Any) -> tuple[int, Callable[[], tuple[Any, Any]]]:
+    """The families preset's history order, and a maker of a fresh learner of it (its
+    agent, on the mirror quotient where the task declares one, and its history encoder)."""
+    from crmgrasp.agents.presets import apply_preset
+    from crmgrasp.agents.training import build_agent, encoder_for
+
+    choice = apply_preset("families", task)
+    encoder = encoder_for(task, choice.k)
+    params = {"symmetric": choice.symmetric, **dict(choice.params)}
+    return choice.k, lambda: (build_agent(task, encoder, choice.agent, params), encoder)
 
 
 def _greedy(task: Any, agents: list, k: int, worlds: list, fresh: list) -> dict:

@@ -396,13 +396,10 @@ def test_memory_projection_full_history_is_the_optimum():
     assert all(1.0 <= c <= task.max_steps for c in got["cost_on_worlds"] + got["cost_on_fresh"])
     worlds, fresh = sample_starts(task, 12, 10_000), sample_starts(task, 10, 20_000)
     assert mod.taught(task, 30, 1, 0.2, worlds, fresh)["cost_on_fresh"] == got["cost_on_fresh"][:1]
-    from crmgrasp.agents.presets import apply_preset
-    from crmgrasp.agents.training import build_agent, encoder_for
     from crmgrasp.planners.references import BeliefPolicy
     from crmgrasp.sim import run_episode
 
-    choice = apply_preset("families", task)
-    enc = encoder_for(task, choice.k)
+    _, make = mod.families_learner(task)
 
     def actions(policy: object, w: object) -> tuple:
         ep = run_episode(task, policy, np.random.default_rng(0), start=w, trace=True)
@@ -410,8 +407,7 @@ def test_memory_projection_full_history_is_the_optimum():
 
     alone = [actions(BeliefPolicy(task, worlds), w) for w in worlds]
     for eps, same in ((0.0, True), (1.0, False)):  # without draws the taught CRMs are the optimum's
-        agent = build_agent(task, enc, choice.agent, {"symmetric": choice.symmetric, **dict(choice.params)})
-        teacher = mod.Taught(agent, enc, BeliefPolicy(task, worlds), eps, np.random.default_rng(1))
+        teacher = mod.Taught(*make(), BeliefPolicy(task, worlds), eps, np.random.default_rng(1))
         assert ([actions(teacher, w) for w in worlds] == alone) is same
     m = mod.Memory(5)
     m.push(2, 7, True)
