@@ -97,11 +97,14 @@ FEATURES: dict[str, Callable[[Memory], Any]] = {
     "k2+errored": lambda m: (m.last(2), frozenset(m.erred)),
     "k1+first": lambda m: (m.last(1), m.obs[0]),
     "k1+step": lambda m: (m.last(1), len(m.acts)),
+    "k1+previous_crm": lambda m: (m.last(1), tuple(m.acts[-2:-1])),
+    "k1+previous_obs": lambda m: (m.last(1), tuple(m.obs[-2:-1])),
 }
 """Memory features of the episode so far, by name: ``kN`` the last N CRMs and observations
 (``k0`` the current observation alone); ``full`` the whole history; ``+errored`` with the set of
 CRMs that erred in the episode; ``+first`` with the first observation; ``+step`` with the number
-of CRMs so far."""
+of CRMs so far; ``+previous_crm`` and ``+previous_obs`` with one half of what ``k2`` adds to ``k1``
+(the CRM before the last, or the observation before the current one)."""
 
 
 class _Tracked:

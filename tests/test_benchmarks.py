@@ -380,6 +380,9 @@ def test_memory_projection_full_history_is_the_optimum():
     assert res["full"]["agree"] == 1.0 and res["full"]["cost_on_worlds"] == res["optimum"]
     assert res["k0"]["agree"] <= res["k1"]["agree"] <= res["k2"]["agree"] <= res["k3"]["agree"] <= 1.0
     assert res["k0"]["values"] <= res["k1"]["values"] <= res["k2"]["values"] <= res["full"]["values"]
+    for half in ("k1+previous_crm", "k1+previous_obs"):  # each a function of k2, k1 a function of each
+        assert res["k1"]["values"] <= res[half]["values"] <= res["k2"]["values"]
+        assert res["k1"]["agree"] <= res[half]["agree"] <= res["k2"]["agree"]
     for name in mod.FEATURES:
         assert res["optimum"] <= res[name]["cost_on_worlds"] <= task.max_steps
         assert 0.0 <= res[name]["success_on_fresh"] <= 1.0
@@ -414,3 +417,4 @@ def test_memory_projection_full_history_is_the_optimum():
     m.push(3, 9, False)
     assert (m.last(0), m.last(1), m.last(2), m.last(3)) == ((9,), (9, 3), (9, 3, 7, 2), (9, 3, 7, 2, 5))
     assert mod.FEATURES["k1+errored"](m) == ((9, 3), frozenset({2}))
+    assert mod.FEATURES["k1+previous_crm"](m) == ((9, 3), (2,)) and mod.FEATURES["k1+previous_obs"](m) == ((9, 3), (7,))
