@@ -118,6 +118,49 @@ def compare(
     ``config.task`` names (a task from a file); with a run folder ``store``, each
     learner's trials are saved there as they finish and reused by a resumed run."""
     task = make_task(config.task) if task is None else task
+    rows, curves = _learner_rows(task, config, backend, progress, store, jobs)
+    t0 = time.perf_counter()
+    steps, ok = run_controller(task, config.trials * config.eval_episodes, np.random.default_rng(config.seed))
+    rows.append(_fixed_row("grasp controller", "baseline", steps, float(ok.mean()), t0))
+    controller = rows[-1][2]
+    starts = sample_starts(task, config.reference_starts, config.seed)
+    fresh = sample_starts(task, config.trials * config.eval_episodes, config.seed + 1)
+    _note(progress, "compare: the deep-RL peer (RecurrentPPO) ...")
+    deep_rows, deep_info = _deep_row(task, config, fresh, curves, controller, Path(out_dir), backend)
+    rows += deep_rows
+    _note(progress, "compare: belief-space policy, sampled POMDP, exact references ...")
+    planners, pomdp = _planner_rows(task, config, starts, fresh)
+    rows += planners
+    refs = _reference_rows(task, starts, fresh, rows)
+    _write_outputs(Path(out_dir), task, config, rows, curves, {**refs, "grasp controller": controller})
+    best = min((r for r in rows if r[1] == "learner"), key=lambda r: r[2])
+    summary = {
+        "best_learner": best[0],
+        "best_learner_mean_crms": round(best[2], 3),
+        "belief_optimum": round(refs["belief-space optimum"], 4),
+        "belief_optimum_evaluation_starts": round(rows[-1][2], 4),
+        "clairvoyant_bound": round(refs["clairvoyant bound"], 4),
+        "grasp_controller_mean_crms": round(controller, 3),
+        "belief_policy_executed_mean_crms": round(planners[0][2], 3),
+        **pomdp,
+        "best_learner_vs_optimum_pct": round(100 * (best[2] / refs["belief-space optimum"] - 1), 2),
+        "deep_rl": deep_info,
+    }
+    config_json = {**asdict(config), "learners": [asdict(s) for s in config.learners]}
+    write_json(Path(out_dir) / "config.json", {"experiment": "compare", "config": config_json, "summary": summary})
+    return summary
+
+
+def _learner_rows(
+    task: Task,
+    config: CompareConfig,
+    backend: str,
+    progress: Progress | None,
+    store: RunFolder | None,
+    jobs: int,
+) -> tuple[list[list[Any]], dict[str, tuple[np.ndarray, np.ndarray]]]:
+    """Each usable learner and baseline of ``config.learners``: its table row (interval over
+    the trials' greedy means), and each learner's curve for the figure."""
     rows: list[list[Any]] = []
     curves = {}
     for spec in usable(task, config.learners):
@@ -137,92 +180,65 @@ def compare(
         per_trial = res.greedy_steps.mean(axis=1)
         lo, hi = bootstrap_ci(per_trial, config.seed)
         kind = "baseline" if spec.agent in ("random", "fixed") else "learner"
-        rows.append(
-            [
-                spec.name,
-                kind,
-                float(per_trial.mean()),
-                lo,
-                hi,
-                "trials",
-                iqm(per_trial),
-                float(res.greedy_success.mean()),
-                s["episodes_to_5pct"],
-                s["greedy_episodes_to_5pct"],
-                s["seconds"],
-            ]
-        )
+        success = float(res.greedy_success.mean())
+        to5 = (s["episodes_to_5pct"], s["greedy_episodes_to_5pct"], s["seconds"])
+        rows.append([spec.name, kind, float(per_trial.mean()), lo, hi, "trials", iqm(per_trial), success, *to5])
         if kind == "learner":
             curves[spec.name] = (res.curve, res.sem)
+    return rows, curves
+
+
+def _planner_rows(
+    task: Task, config: CompareConfig, starts: list, fresh: list
+) -> tuple[list[list[Any]], dict[str, Any]]:
+    """The belief-space policy over ``starts`` and, on one polygonal object, the sampled
+    POMDP's PBVI policy, each executed on ``fresh``: their rows (the belief-space policy
+    first) and the POMDP's summary entries."""
     t0 = time.perf_counter()
-    steps, ok = run_controller(task, config.trials * config.eval_episodes, np.random.default_rng(config.seed))
-    rows.append(_fixed_row("grasp controller", "baseline", steps, float(ok.mean()), t0))
-    controller = rows[-1][2]
-    starts = sample_starts(task, config.reference_starts, config.seed)
-    fresh = sample_starts(task, config.trials * config.eval_episodes, config.seed + 1)
-    _note(progress, "compare: the deep-RL peer (RecurrentPPO) ...")
-    deep = _deep_row(task, config, fresh, curves, controller, Path(out_dir), backend)
-    rows += deep[0]
+    rows = [_executed_row("belief-space policy, executed", BeliefPolicy(task, starts).run, fresh, t0)]
     t0 = time.perf_counter()
-    _note(progress, "compare: belief-space policy, sampled POMDP, exact references ...")
-    policy = BeliefPolicy(task, starts)
-    rows.append(_executed_row("belief-space policy, executed", policy.run, fresh, t0))
-    belief_executed = rows[-1][2]
-    t0 = time.perf_counter()
-    pomdp_executed: float | None = None
-    pomdp_value: float | None = None
-    pomdp_counts: Any = "skipped: the sampled POMDP needs one polygonal object"
-    if task.family is None and isinstance(task.obj, Polygon):
-        tp = build_task_pomdp(task, cell=0.01, samples=20, n_starts=config.reference_starts, seed=config.seed)
-        agent = POMDPAgent(tp, n_beliefs=300, seed=config.seed)
-        label = f"sampled POMDP ({tp.model.n_states} states), PBVI, executed"
-        rows.append(_executed_row(label, agent.run, fresh, t0))
-        pomdp_executed, pomdp_value, pomdp_counts = rows[-1][2], agent.model_value(), tp.model.counts
+    if task.family is not None or not isinstance(task.obj, Polygon):
+        skipped = "skipped: the sampled POMDP needs one polygonal object"
+        return rows, {"pomdp_executed_mean_crms": "skipped", "pomdp_model_value": "skipped", "pomdp_counts": skipped}
+    tp = build_task_pomdp(task, cell=0.01, samples=20, n_starts=config.reference_starts, seed=config.seed)
+    agent = POMDPAgent(tp, n_beliefs=300, seed=config.seed)
+    label = f"sampled POMDP ({tp.model.n_states} states), PBVI, executed"
+    rows.append(_executed_row(label, agent.run, fresh, t0))
+    pomdp = {
+        "pomdp_executed_mean_crms": round(rows[-1][2], 3),
+        "pomdp_model_value": round(agent.model_value(), 4),
+        "pomdp_counts": tp.model.counts,
+    }
+    return rows, pomdp
+
+
+def _reference_rows(task: Task, starts: list, fresh: list, rows: list[list[Any]]) -> dict[str, float]:
+    """Append the exact references' rows to ``rows``: the belief-space optimum and the
+    clairvoyant bound on ``starts``, then the optimum of ``fresh`` (the starts every executed
+    row ran on: the gap to it is the method's), last. Returns the two references on ``starts``."""
     refs = {}
     for name, fn in (("belief-space optimum", belief_optimum), ("clairvoyant bound", clairvoyant_bound)):
         t0 = time.perf_counter()
         refs[name] = fn(task, starts)
         seconds = round(time.perf_counter() - t0, 3)
         rows.append([name, "reference", refs[name], None, None, "exact", None, 1.0, None, None, seconds])
-    t0 = time.perf_counter()  # the optimum of the starts every executed row ran on: the gap to it is the method's
+    t0 = time.perf_counter()
     on_eval = belief_optimum(task, fresh)
     seconds = round(time.perf_counter() - t0, 3)
     rows.append([EVAL_OPTIMUM, "reference", on_eval, None, None, "exact", None, 1.0, None, None, seconds])
-    out = Path(out_dir)
+    return refs
+
+
+def _write_outputs(
+    out: Path, task: Task, config: CompareConfig, rows: list[list[Any]], curves: dict, hlines: dict[str, float]
+) -> None:
+    """``compare.csv``, ``compare.md`` and ``compare.png`` (the learners' curves, ``hlines`` as
+    horizontal lines)."""
     write_csv(out / "compare.csv", COLUMNS, rows)
     atomic_write_text(out / "compare.md", _markdown(rows, config))
-    fig = learning_curve_figure(
-        curves,
-        None,
-        f"{task.name}: learners ({budget(config.trials, config.episodes, config.seed)}), references and the "
-        "grasp controller",
-        hlines={**refs, "grasp controller": controller},
-    )
+    title = f"{task.name}: learners ({budget(config.trials, config.episodes, config.seed)}), references and the "
+    fig = learning_curve_figure(curves, None, title + "grasp controller", hlines=hlines)
     save_figure(fig, out / "compare.png", dpi=120)
-    best = min((r for r in rows if r[1] == "learner"), key=lambda r: r[2])
-    summary = {
-        "best_learner": best[0],
-        "best_learner_mean_crms": round(best[2], 3),
-        "belief_optimum": round(refs["belief-space optimum"], 4),
-        "belief_optimum_evaluation_starts": round(on_eval, 4),
-        "clairvoyant_bound": round(refs["clairvoyant bound"], 4),
-        "grasp_controller_mean_crms": round(controller, 3),
-        "belief_policy_executed_mean_crms": round(belief_executed, 3),
-        "pomdp_executed_mean_crms": "skipped" if pomdp_executed is None else round(pomdp_executed, 3),
-        "pomdp_model_value": "skipped" if pomdp_value is None else round(pomdp_value, 4),
-        "pomdp_counts": pomdp_counts,
-        "best_learner_vs_optimum_pct": round(100 * (best[2] / refs["belief-space optimum"] - 1), 2),
-        "deep_rl": deep[1],
-    }
-    write_json(
-        out / "config.json",
-        {
-            "experiment": "compare",
-            "config": {**asdict(config), "learners": [asdict(s) for s in config.learners]},
-            "summary": summary,
-        },
-    )
-    return summary
 
 
 def _deep_row(

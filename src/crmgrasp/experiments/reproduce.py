@@ -141,11 +141,58 @@ def reproduce(
     if backend not in BACKENDS:
         raise CrmgraspError(f"unknown backend {backend!r}; choose one of {', '.join(BACKENDS)}")
     names, skipped = select(names)
-    which = "" if set(names) == set(select(None)[0]) else "".join(f" {n}" for n in names)  # if not all
     out = Path(out_dir)
-    results: dict[str, dict[str, Any]] = {}
     ctx: dict[str, Any] = {"backend": backend, "progress": progress, "jobs": jobs}
-    full = full_run_rows() if quick else {}
+    stage = progress.stage("reproduce", len(names), "experiments") if progress else None
+    outcomes = _recorded(names, store, ctx, stage)
+    pending = [n for n in names if n not in outcomes]
+    groups = _groups(pending)
+    shared = {k: v for k, v in ctx.items() if k not in ("progress", "jobs")}
+    if usable_jobs(jobs) > 1 and len(groups) > 1:
+        calls = [(g, partial(_run_group, g, str(out), seed, quick, shared)) for g in groups]
+        finished = (item for _, items in run_parallel(calls, min(usable_jobs(jobs), len(groups))) for item in items)
+    else:
+        finished = (_run_one(name, out, seed, quick, ctx, progress) for name in pending)
+    for name, summary, rows, added in finished:
+        outcomes[name] = summary, rows
+        if store is not None:
+            store.complete(name, json_safe({"summary": summary, "rows": rows, "context": added}))
+        if stage:
+            stage.advance()
+    if stage:
+        stage.end()
+    atomic_write_text(out / "README.md", _index(out, names, skipped, outcomes, seed, quick))
+    return {name: outcomes[name][0] for name in names}
+
+
+def _recorded(
+    names: list[str], store: RunFolder | None, ctx: dict[str, Any], stage: Any
+) -> dict[str, tuple[dict[str, Any], list[Any]]]:
+    """The experiments of ``names`` that the run folder ``store`` records as finished (a
+    resumed run): their summaries and index rows; their recorded context joins ``ctx``."""
+    outcomes: dict[str, tuple[dict[str, Any], list[Any]]] = {}
+    for name in names:
+        done = store.done(name) if store is not None else None
+        if isinstance(done, dict) and {"summary", "rows"} <= set(done):
+            outcomes[name] = done["summary"], [tuple(r) for r in done["rows"]]
+            ctx.update(done.get("context", {}))
+            if stage:
+                stage.advance()
+    return outcomes
+
+
+def _index(
+    out: Path,
+    names: list[str],
+    skipped: list[str],
+    outcomes: dict[str, tuple[dict[str, Any], list[Any]]],
+    seed: int,
+    quick: bool,
+) -> str:
+    """The run's ``README.md``: how to regenerate it, one table of every experiment's numbers
+    beside the paper's (and, in a quick run, beside a full run's), then each experiment's
+    figures."""
+    which = "" if set(names) == set(select(None)[0]) else "".join(f" {n}" for n in names)  # if not all
     lines = [
         "# crmgrasp reproduction",
         "",
@@ -163,34 +210,10 @@ def reproduce(
         ]
     else:
         lines += ["| figure | quantity | ours | paper |", "| --- | --- | --- | --- |"]
+    full = full_run_rows() if quick else {}
     body: list[str] = []
-    stage = progress.stage("reproduce", len(names), "experiments") if progress else None
-    outcomes: dict[str, tuple[dict[str, Any], list[Any]]] = {}
     for name in names:
-        done = store.done(name) if store is not None else None
-        if isinstance(done, dict) and {"summary", "rows"} <= set(done):
-            outcomes[name] = done["summary"], [tuple(r) for r in done["rows"]]
-            ctx.update(done.get("context", {}))
-            if stage:
-                stage.advance()
-    pending = [n for n in names if n not in outcomes]
-    groups = _groups(pending)
-    shared = {k: v for k, v in ctx.items() if k not in ("progress", "jobs")}
-    if usable_jobs(jobs) > 1 and len(groups) > 1:
-        calls = [(g, partial(_run_group, g, str(out), seed, quick, shared)) for g in groups]
-        finished = (item for _, items in run_parallel(calls, min(usable_jobs(jobs), len(groups))) for item in items)
-    else:
-        finished = (_run_one(name, out, seed, quick, ctx, progress) for name in pending)
-    for name, summary, rows, added in finished:
-        outcomes[name] = summary, rows
-        if store is not None:
-            store.complete(name, json_safe({"summary": summary, "rows": rows, "context": added}))
-        if stage:
-            stage.advance()
-    for name in names:
-        desc = EXPERIMENTS[name][0]
         summary, rows = outcomes[name]
-        results[name] = summary
         for q, ours, paper in rows:
             if quick:
                 small, learned = QUICK_BUDGETS.get(name, ("", ()))
@@ -199,13 +222,10 @@ def reproduce(
                 lines.append(f"| {name} | {_cell(q)} | {_cell(ours)}{mark} | {ref} | {_cell(paper)} |")
             else:
                 lines.append(f"| {name} | {_cell(q)} | {_cell(ours)} | {_cell(paper)} |")
-        body += [f"## {name}", "", desc, ""] + [
+        body += [f"## {name}", "", EXPERIMENTS[name][0], ""] + [
             f"![{name}]({name}/{img})" for img in IMAGES[name] if (out / name / img).exists()
         ]
         body += ["", f"Data and config: `{name}/` ({summary['seconds']} s).", ""]
-    if stage:
-        stage.end()
     dash = " - |" * (3 if quick else 2)
     lines += [f"| {name} | skipped: needs `pip install 'crmgrasp[mujoco]'` |{dash}" for name in skipped]
-    atomic_write_text(out / "README.md", "\n".join([*lines, "", *body]))
-    return results
+    return "\n".join([*lines, "", *body])

@@ -77,84 +77,31 @@ def build_task_pomdp(
     seed: int = 0,
     max_states: int = 20000,
 ) -> TaskPOMDP:
-    """Build the sampled POMDP of ``task`` (noise-free dynamics)."""
+    """Build the sampled POMDP of ``task`` (noise-free dynamics).
+
+    The hidden states are the cells reached from ``n_starts`` sampled starts (seed ``seed``)
+    and, breadth first, from ``samples`` acceptable configurations drawn in each reached cell
+    and moved by every CRM; a grasp leads to one absorbing goal state. Transition and
+    observation probabilities are the counted frequencies."""
     obj = task.obj
     if not isinstance(obj, Polygon):
         raise CrmgraspError(f"the sampled POMDP needs a polygonal object, got {type(obj).__name__}")
     if task.model.n_contacts != 2:
         raise CrmgraspError(f"the sampled POMDP grids two contacts; {task.name!r} has {task.model.n_contacts}")
     rng = np.random.default_rng(seed)
-    bins = [max(1, math.ceil(math.sqrt(e[4]) / cell)) for e in obj.edges]
-    n_obs = task.discretizer.size + 1
-    goal_obs = n_obs - 1
-    cells: list[Cell] = []
-    index: dict[Cell, int] = {}
-
-    def state(c: Cell) -> int:
-        if c not in index:
-            if len(cells) >= max_states:
-                raise CrmgraspError(f"more than {max_states} reachable cells; use a larger cell size")
-            index[c] = len(cells)
-            cells.append(c)
-        return index[c]
-
+    grid = _CellIndex(obj, [max(1, math.ceil(math.sqrt(e[4]) / cell)) for e in obj.edges], max_states)
     start_counts: dict[int, int] = {}
     z0_counts: dict[tuple[int, int], int] = {}
     for _ in range(n_starts):
         cfg = task.sample_start(rng)
-        s = state(_cell(obj, bins, cfg))
+        s = grid.state(cfg)
         start_counts[s] = start_counts.get(s, 0) + 1
         o = task.discretizer.index(observe(cfg), Error.NONE)
         z0_counts[(s, o)] = z0_counts.get((s, o), 0) + 1
-    t_counts: dict[tuple[int, int, int], int] = {}
-    z_counts: dict[tuple[int, int, int], int] = {}
-    done = 0
-    executed = 0
-    while done < len(cells):
-        c = cells[done]
-        configs = []
-        for _ in range(samples * 5):
-            cfg = _sample_in(obj, bins, c, rng)
-            if acceptable(obj, task.hand, task.mu_goal, cfg):
-                configs.append(cfg)
-                if len(configs) == samples:
-                    break
-        if not configs:  # a cell only touched at its feasible edge: keep it, treat it as the sample seen
-            configs = [_sample_in(obj, bins, c, rng)]
-        for a, crm in enumerate(task.actions):
-            for cfg in configs:
-                out = execute_crm(obj, task.hand, cfg, crm, cfg)
-                executed += 1
-                if task.is_success(out.config):
-                    s2, o = -1, goal_obs
-                else:
-                    s2 = state(_cell(obj, bins, out.config))
-                    o = task.discretizer.index(observe(out.config), out.error)
-                t_counts[(a, done, s2)] = t_counts.get((a, done, s2), 0) + 1
-                z_counts[(a, s2, o)] = z_counts.get((a, s2, o), 0) + 1
-        done += 1
-    n = len(cells) + 1  # the last state is the goal
-    g = n - 1
-    totals: dict[tuple[int, int], int] = {}
-    for (a, s, _), k in t_counts.items():
-        totals[(a, s)] = totals.get((a, s), 0) + k
-    trans = []
-    for a in range(len(task.actions)):
-        rows, cols, vals = [g], [g], [1.0]
-        for (aa, s, s2), k in t_counts.items():
-            if aa == a:
-                rows.append(s)
-                cols.append(g if s2 == -1 else s2)
-                vals.append(k / totals[(a, s)])
-        trans.append(sparse.csr_matrix((vals, (rows, cols)), shape=(n, n)))
-    obs_p = np.zeros((len(task.actions), n, n_obs))
-    for (a, s2, o), k in z_counts.items():
-        obs_p[a, g if s2 == -1 else s2, o] += k
-    for a in range(len(task.actions)):
-        obs_p[a, g, :] = 0.0
-        obs_p[a, g, goal_obs] = 1.0
-        seen = obs_p[a].sum(axis=1, keepdims=True)
-        obs_p[a] = np.divide(obs_p[a], seen, out=np.full_like(obs_p[a], 1.0 / n_obs), where=seen > 0)
+    t_counts, z_counts, executed = _explore(task, grid, samples, rng)
+    n, n_obs = len(grid.cells) + 1, task.discretizer.size + 1  # the last state is the goal, the last observation its
+    trans = _transitions(t_counts, len(task.actions), n)
+    obs_p = _observations(z_counts, len(task.actions), n, n_obs)
     b0 = np.zeros(n)
     for s, k in start_counts.items():
         b0[s] = k / n_starts
@@ -164,10 +111,99 @@ def build_task_pomdp(
     rows = z0.sum(axis=1, keepdims=True)
     z0 = np.divide(z0, rows, out=np.zeros_like(z0), where=rows > 0)  # Pr(first observation | start cell)
     goal = np.zeros(n, dtype=bool)
-    goal[g] = True
+    goal[n - 1] = True
     counts = {"states": n, "start_samples": n_starts, "crm_samples": executed, "samples_per_cell": samples}
-    model = POMDP(n, len(task.actions), n_obs, trans, obs_p, b0, goal, goal_obs, counts)
-    return TaskPOMDP(task, model, [*cells, (-1, -1, -1, -1)], z0, bins)
+    model = POMDP(n, len(task.actions), n_obs, trans, obs_p, b0, goal, n_obs - 1, counts)
+    return TaskPOMDP(task, model, [*grid.cells, (-1, -1, -1, -1)], z0, grid.bins)
+
+
+class _CellIndex:
+    """The cells met so far, numbered in the order first met (at most ``max_states``)."""
+
+    def __init__(self, obj: Polygon, bins: list[int], max_states: int) -> None:
+        self.obj, self.bins, self.max_states = obj, bins, max_states
+        self.cells: list[Cell] = []
+        self.index: dict[Cell, int] = {}
+
+    def state(self, cfg: Config | Grip) -> int:
+        """The number of the cell of configuration ``cfg``, numbering it if it is new."""
+        c = _cell(self.obj, self.bins, cfg)
+        if c not in self.index:
+            if len(self.cells) >= self.max_states:
+                raise CrmgraspError(f"more than {self.max_states} reachable cells; use a larger cell size")
+            self.index[c] = len(self.cells)
+            self.cells.append(c)
+        return self.index[c]
+
+
+def _explore(
+    task: Task, grid: _CellIndex, samples: int, rng: np.random.Generator
+) -> tuple[dict[tuple[int, int, int], int], dict[tuple[int, int, int], int], int]:
+    """Expand every cell met, in order, newly met cells included: up to ``samples`` acceptable
+    configurations drawn in it (of ``5 samples`` tries), each moved by every CRM. Returns the
+    counts of ``(a, s, s2)`` (``s2 = -1``: a grasp) and of ``(a, s2, o)``, and the CRMs executed."""
+    obj, goal_obs = grid.obj, task.discretizer.size
+    t_counts: dict[tuple[int, int, int], int] = {}
+    z_counts: dict[tuple[int, int, int], int] = {}
+    done = executed = 0
+    while done < len(grid.cells):
+        c = grid.cells[done]
+        configs = []
+        for _ in range(samples * 5):
+            cfg = _sample_in(obj, grid.bins, c, rng)
+            if acceptable(obj, task.hand, task.mu_goal, cfg):
+                configs.append(cfg)
+                if len(configs) == samples:
+                    break
+        if not configs:  # a cell only touched at its feasible edge: keep it, treat it as the sample seen
+            configs = [_sample_in(obj, grid.bins, c, rng)]
+        for a, crm in enumerate(task.actions):
+            for cfg in configs:
+                out = execute_crm(obj, task.hand, cfg, crm, cfg)
+                executed += 1
+                if task.is_success(out.config):
+                    s2, o = -1, goal_obs
+                else:
+                    s2 = grid.state(out.config)
+                    o = task.discretizer.index(observe(out.config), out.error)
+                t_counts[(a, done, s2)] = t_counts.get((a, done, s2), 0) + 1
+                z_counts[(a, s2, o)] = z_counts.get((a, s2, o), 0) + 1
+        done += 1
+    return t_counts, z_counts, executed
+
+
+def _transitions(t_counts: dict[tuple[int, int, int], int], n_actions: int, n: int) -> list[sparse.csr_matrix]:
+    """Per action, the ``n x n`` matrix of ``Pr(s2 | s, a)`` (counted frequencies; the goal,
+    state ``n - 1``, absorbing)."""
+    g = n - 1
+    totals: dict[tuple[int, int], int] = {}
+    for (a, s, _), k in t_counts.items():
+        totals[(a, s)] = totals.get((a, s), 0) + k
+    trans = []
+    for a in range(n_actions):
+        rows, cols, vals = [g], [g], [1.0]
+        for (aa, s, s2), k in t_counts.items():
+            if aa == a:
+                rows.append(s)
+                cols.append(g if s2 == -1 else s2)
+                vals.append(k / totals[(a, s)])
+        trans.append(sparse.csr_matrix((vals, (rows, cols)), shape=(n, n)))
+    return trans
+
+
+def _observations(z_counts: dict[tuple[int, int, int], int], n_actions: int, n: int, n_obs: int) -> np.ndarray:
+    """``Pr(o | s2, a)`` of shape ``(n_actions, n, n_obs)``: counted frequencies, the goal's
+    own observation at the goal, uniform where a state was never reached by ``a``."""
+    g, goal_obs = n - 1, n_obs - 1
+    obs_p = np.zeros((n_actions, n, n_obs))
+    for (a, s2, o), k in z_counts.items():
+        obs_p[a, g if s2 == -1 else s2, o] += k
+    for a in range(n_actions):
+        obs_p[a, g, :] = 0.0
+        obs_p[a, g, goal_obs] = 1.0
+        seen = obs_p[a].sum(axis=1, keepdims=True)
+        obs_p[a] = np.divide(obs_p[a], seen, out=np.full_like(obs_p[a], 1.0 / n_obs), where=seen > 0)
+    return obs_p
 
 
 class POMDPAgent:
