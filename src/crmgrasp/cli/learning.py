@@ -91,31 +91,16 @@ def _warn_if_ungraspable(task: Task, seed: int) -> None:
 
 def _cmd_learn(args: argparse.Namespace) -> int:
     from crmgrasp.agents.deep import DEEP_AGENTS
-    from crmgrasp.agents.deep_trials import check_deep
-    from crmgrasp.agents.training import build_agent, check_budget, encoder_for, prior_settings
-    from crmgrasp.experiments.learning import LearnerSpec, check_hand, learn, write_learn_outputs
+    from crmgrasp.experiments.learning import LearnerSpec, learn, write_learn_outputs
 
     task = _task(args)
     _apply_preset(args, task)
     deep = args.agent in DEEP_AGENTS
     spec = LearnerSpec(args.agent, args.k, _learner_params(args), args.agent if deep else "")
-    check_budget(args.trials, args.episodes, args.eval_episodes)
     checkpoint_episodes = args.checkpoint_episodes
     if checkpoint_episodes is None:
         checkpoint_episodes = 100 if args.hand == "kinematic" else 0
-    check_hand(args.hand, args.lockstep, spec.agent)  # before any folder
-    if deep:  # bad settings, or the extra missing, fail before any folder
-        check_deep(spec.agent, spec.params)
-    else:
-        build_agent(task, encoder_for(task, spec.k), spec.agent, spec.params)
-    _warn_if_ungraspable(task, args.seed)
-    prior = prior_settings(spec.params)
-    if prior is not None:
-        print(
-            f"crmgrasp: prior: {prior['episodes']:,} episodes on {prior['task']} (seed {prior['seed']}, weight "
-            f"{prior['weight']}), learned once before the task episodes and counted with them",
-            file=sys.stderr,
-        )
+    prior = _check_learn(args, task, spec, deep)
     config = {
         "task": task_to_dict(task),
         "agent": spec.agent,
@@ -146,18 +131,52 @@ def _cmd_learn(args: argparse.Namespace) -> int:
             hand=args.hand,
         )
         paths = write_learn_outputs(task, run, folder.path)
+    _print_learned(args, task.name, run.summary, prior)
+    print(f"  run folder: {folder.path.resolve()}")
+    for path in paths:
+        print(f"  wrote {path.name}")
+    return 0
+
+
+def _check_learn(args: argparse.Namespace, task: Any, spec: Any, deep: bool) -> dict[str, Any] | None:
+    """Everything ``learn`` can refuse before it makes a run folder (budget, hand, the
+    learner's settings or its missing extra), the warning about ungraspable starts, and the
+    prior's settings (None without one), announced on stderr."""
+    from crmgrasp.agents.deep_trials import check_deep
+    from crmgrasp.agents.training import build_agent, check_budget, encoder_for, prior_settings
+    from crmgrasp.experiments.learning import check_hand
+
+    check_budget(args.trials, args.episodes, args.eval_episodes)
+    check_hand(args.hand, args.lockstep, spec.agent)
+    if deep:
+        check_deep(spec.agent, spec.params)
+    else:
+        build_agent(task, encoder_for(task, spec.k), spec.agent, spec.params)
+    _warn_if_ungraspable(task, args.seed)
+    prior = prior_settings(spec.params)
+    if prior is not None:
+        print(
+            f"crmgrasp: prior: {prior['episodes']:,} episodes on {prior['task']} (seed {prior['seed']}, weight "
+            f"{prior['weight']}), learned once before the task episodes and counted with them",
+            file=sys.stderr,
+        )
+    return prior
+
+
+def _print_learned(args: argparse.Namespace, task_name: str, s: dict[str, Any], prior: dict[str, Any] | None) -> None:
+    """The summary of a finished ``learn``: budget and time, the hand's faults, the prior,
+    the last training episodes and the greedy policy with its interval over the trials."""
     from crmgrasp.experiments.stats import budget, ci_text, fmt
 
-    s = run.summary
     lo, hi = (math.nan if v is None else v for v in s["greedy_ci95_over_trials"])
     where = "" if args.hand == "kinematic" else f" ({args.hand} hand)"
     cost = f"{budget(s['trials'], s['episodes'], s['seed'])}, {fmt(s['seconds'], 1)} s"
-    print(f"{s['label']} on {task.name}{where}: {cost}")
+    print(f"{s['label']} on {task_name}{where}: {cost}")
     if args.hand != "kinematic":
         ended = ", ".join(f"{n} {kind}" for kind, n in s["faults"].items()) or "none"
         print(f"  episodes the {args.hand} hand ended early (physics faults, lost contacts): {ended}")
     if prior is not None:
-        print(f"  after a prior of {prior['episodes']:,} episodes on {prior['task']} (not {task.name})")
+        print(f"  after a prior of {prior['episodes']:,} episodes on {prior['task']} (not {task_name})")
     print(f"  CRMs per episode, last 10 training episodes: {fmt(s['final_mean_steps'])}")
     print(
         f"  greedy policy: {fmt(s['greedy_mean_steps'])} CRMs ({ci_text(lo, hi)}, "
@@ -165,10 +184,6 @@ def _cmd_learn(args: argparse.Namespace) -> int:
     )
     if s["reference_mean_steps"]:
         print("\n".join(_to_5pct_lines(s)))
-    print(f"  run folder: {folder.path.resolve()}")
-    for path in paths:
-        print(f"  wrote {path.name}")
-    return 0
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
