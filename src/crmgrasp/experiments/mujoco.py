@@ -129,6 +129,27 @@ def animate(task: Task, start: Any, policy: Any, rng: np.random.Generator, path:
     return f"{len(rec.frames)} frames"
 
 
+FIGURE9_COLUMNS = [
+    "trial",
+    "fingers",
+    "actions",
+    "crms_mujoco",
+    "crms_kinematic",
+    "stopped",
+    "success",
+    "true_min_friction",
+    "rho_0",
+    "m_0",
+    "rho_1",
+    "m_1",
+    "rho_last",
+    "m_last",
+]
+"""The columns of Fig. 9 on MuJoCo's ``data.csv``: per trial its CRMs on MuJoCo and on the
+kinematic hand from the same start, whether and how it stopped, the true least friction, and
+the sensed points (``rho``, ``|m|``) of its first, second and last logged reading."""
+
+
 def figure_9_mujoco(
     out_dir: str | Path, config: MujocoFigure9Config = MujocoFigure9Config(), *, backend: str = "auto"
 ) -> dict[str, Any]:
@@ -161,26 +182,7 @@ def figure_9_mujoco(
         seconds += hand.crm_seconds
         actions = " ".join(names[r[action]] for r in run.rows if r[action] != "")
         rows.append([trial, fingers, actions, run.crms, kin.crms, run.stopped, task.grasped(mu), mu, *np.ravel(pts)])
-    write_csv(
-        out / "data.csv",
-        [
-            "trial",
-            "fingers",
-            "actions",
-            "crms_mujoco",
-            "crms_kinematic",
-            "stopped",
-            "success",
-            "true_min_friction",
-            "rho_0",
-            "m_0",
-            "rho_1",
-            "m_1",
-            "rho_last",
-            "m_last",
-        ],
-        rows,
-    )
+    write_csv(out / "data.csv", FIGURE9_COLUMNS, rows)
     centroids = clusters.save(
         f"Kinematic policy on the MuJoCo hand, {c.trials} trials (paper Fig. 9)",
         "frictionless force residual rho (sensed)",

@@ -55,6 +55,35 @@ class SpatialConfig:
         return cls(trials=2, episodes=(300, 150), heldout=(80, 40), checkpoints=(20, 100, 300), seed=seed)
 
 
+def _learner(
+    task: Task, learner: str, k: int, episodes: int, worlds: list[World], opt: float, cfg: SpatialConfig
+) -> tuple[Any, dict[str, Any], np.ndarray]:
+    """Train ``cfg.trials`` agents of ``learner`` on ``task`` and run each greedy policy on
+    ``worlds``: the training result, the learner's summary entry (greedy CRMs with a 95%
+    interval over the trials, success, gap to the optimum ``opt``) and the trials' means."""
+    res = train_trials(
+        task,
+        learner,
+        trials=cfg.trials,
+        episodes=episodes,
+        seed=cfg.seed,
+        k=k,
+        eval_episodes=0,
+        checkpoints=cfg.checkpoints,
+        checkpoint_episodes=cfg.checkpoint_episodes,
+    )
+    records = greedy_records(task, res.agents, worlds, cfg.seed, lambda t: np.random.default_rng(cfg.seed + t), k)
+    means = np.array([np.mean([len(r.actions) for r in rs]) for rs in records])
+    lo, hi = bootstrap_ci(means, cfg.seed)  # over trials: nan, none given, below MIN_TRIALS
+    entry = {
+        "greedy_mean_crms": float(means.mean()),
+        "greedy_ci95": [lo, hi],
+        "success_rate": float(np.mean([np.mean([r.success for r in rs]) for rs in records])),
+        "gap_to_optimum": float(means.mean() / opt - 1.0),
+    }
+    return res, entry, means
+
+
 def spatial(
     out_dir: str | Path, cfg: SpatialConfig = SpatialConfig(), progress: Progress | None = None
 ) -> dict[str, Any]:
@@ -89,28 +118,7 @@ def spatial(
         if stage is not None:
             stage.advance(1)
         for label, (learner, k) in LEARNERS.items():
-            res = train_trials(
-                task,
-                learner,
-                trials=cfg.trials,
-                episodes=episodes,
-                seed=cfg.seed,
-                k=k,
-                eval_episodes=0,
-                checkpoints=cfg.checkpoints,
-                checkpoint_episodes=cfg.checkpoint_episodes,
-            )
-            records = greedy_records(
-                task, res.agents, worlds, cfg.seed, lambda t: np.random.default_rng(cfg.seed + t), k
-            )
-            means = np.array([np.mean([len(r.actions) for r in rs]) for rs in records])
-            lo, hi = bootstrap_ci(means, cfg.seed)  # over trials: nan, none given, below MIN_TRIALS
-            row["learners"][label] = {
-                "greedy_mean_crms": float(means.mean()),
-                "greedy_ci95": [lo, hi],
-                "success_rate": float(np.mean([np.mean([r.success for r in rs]) for rs in records])),
-                "gap_to_optimum": float(means.mean() / opt - 1.0),
-            }
+            res, row["learners"][label], means = _learner(task, learner, k, episodes, worlds, opt, cfg)
             ckpt = res.checkpoint_steps.mean(axis=0)
             curves += [[name, label, int(e), float(v)] for e, v in zip(res.checkpoints, ckpt, strict=True)]
             if learner == "model-vi" and name == cfg.tasks[0]:
