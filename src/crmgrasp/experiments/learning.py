@@ -262,18 +262,8 @@ def learn(
     check_hand(hand, lockstep, spec.agent)
     t0 = time.perf_counter()
     job = _GroupJob(task, spec, lockstep, episodes, seed, eval_episodes, checkpoint_episodes, backend, hand)
-    parts: dict[int, _Part] = {}
     stage = progress.stage(f"{spec.name} on {task.name}", trials * episodes, "episodes") if progress else None
-    pending = []
-    for first, n in _groups(trials, lockstep):
-        unit = f"trials {first:05d}-{first + n - 1:05d}"
-        info = store.done(unit) if store is not None else None
-        if info is not None:
-            parts[first] = _load_part(task, store, unit, info, n, episodes)  # type: ignore[arg-type]
-            if stage:
-                stage.advance(n * episodes)
-        else:
-            pending.append((first, n, unit))
+    parts, pending = _recorded_parts(task, store, _groups(trials, lockstep), episodes, stage)
 
     def finished(first: int, unit: str, part: _Part) -> None:
         parts[first] = part
@@ -300,6 +290,25 @@ def learn(
     summary["faults"] = dict(sorted(sum((Counter(p.faults) for p in parts_list), Counter()).items()))
     summary["seconds"] = round(time.perf_counter() - t0, 3)
     return LearnRun(spec, res, summary, parts_list[best].policy)
+
+
+def _recorded_parts(
+    task: Task, store: RunFolder | None, groups: list[tuple[int, int]], episodes: int, stage: Any
+) -> tuple[dict[int, _Part], list[tuple[int, int, str]]]:
+    """The groups of trials (first trial, count) that ``store`` records as done, loaded, by
+    their first trial; and the others, still to train, with their unit names."""
+    parts: dict[int, _Part] = {}
+    pending = []
+    for first, n in groups:
+        unit = f"trials {first:05d}-{first + n - 1:05d}"
+        info = store.done(unit) if store is not None else None
+        if info is not None:
+            parts[first] = _load_part(task, store, unit, info, n, episodes)  # type: ignore[arg-type]
+            if stage:
+                stage.advance(n * episodes)
+        else:
+            pending.append((first, n, unit))
+    return parts, pending
 
 
 def _summary(
