@@ -156,6 +156,25 @@ def _figure(rows: list[list[Any]], c: SpatialMujocoConfig, mu_goal: dict[str, fl
     save_figure(fig, path)
 
 
+def _task_summary(c: SpatialMujocoConfig, mine: list[list[Any]], seconds: list[float], flags: dict[str, int]) -> dict:
+    """One task's summary: successes on MuJoCo and on the kinematic hand, CRMs on both, the true
+    least friction and the CRMs' wall time (``mine``: its rows of ``data.csv``), and how often a
+    random CRM raised the same error flag on MuJoCo as on the kinematic hand (``flags``)."""
+    same = sum(n for k, n in flags.items() if k.split(" -> ")[0] == k.split(" -> ")[1])
+    return {
+        "trials": c.trials,
+        "successes": int(sum(r[8] for r in mine)),
+        "kinematic_successes": int(sum(r[7] for r in mine)),
+        "mean_crms_mujoco": round(statistics.fmean(r[4] for r in mine), 3),
+        "mean_crms_kinematic": round(statistics.fmean(r[5] for r in mine), 3),
+        "median_true_min_friction": round(float(np.median([r[9] for r in mine])), 4),
+        "median_crm_seconds": round(float(np.median(seconds)), 4) if seconds else None,
+        "max_crm_seconds": round(float(np.max(seconds)), 4) if seconds else None,
+        "random_crms_same_error_as_kinematic": f"{same} of {c.random_crms}",
+        "random_crm_flags_kinematic_to_mujoco": flags,
+    }
+
+
 def spatial_mujoco(
     out_dir: str | Path,
     config: SpatialMujocoConfig = SpatialMujocoConfig(),
@@ -192,22 +211,10 @@ def spatial_mujoco(
             gif = out / "spatial_mujoco.gif"
             summary["animation"] = animate(hw, first.config, policy, np.random.default_rng(c.seed), gif)
         flags, more = _same_errors(task, c, errors)
-        same = sum(n for k, n in flags.items() if k.split(" -> ")[0] == k.split(" -> ")[1])
         rows += mine
         all_seconds += seconds + more
         mu_goal[name] = task.mu_goal
-        summary["tasks"][name] = {
-            "trials": c.trials,
-            "successes": int(sum(r[8] for r in mine)),
-            "kinematic_successes": int(sum(r[7] for r in mine)),
-            "mean_crms_mujoco": round(statistics.fmean(r[4] for r in mine), 3),
-            "mean_crms_kinematic": round(statistics.fmean(r[5] for r in mine), 3),
-            "median_true_min_friction": round(float(np.median([r[9] for r in mine])), 4),
-            "median_crm_seconds": round(float(np.median(seconds)), 4) if seconds else None,
-            "max_crm_seconds": round(float(np.max(seconds)), 4) if seconds else None,
-            "random_crms_same_error_as_kinematic": f"{same} of {c.random_crms}",
-            "random_crm_flags_kinematic_to_mujoco": flags,
-        }
+        summary["tasks"][name] = _task_summary(c, mine, seconds, flags)
         if stage is not None:
             stage.advance(1)
     write_csv(out / "data.csv", COLUMNS, rows)

@@ -156,6 +156,29 @@ def _spread(values: list[Any], digits: int = 3) -> str:
     return show(med) if xs[0] == xs[-1] else f"{show(med)} [{show(xs[0])}-{show(xs[-1])}]"
 
 
+def _seed_measures(res: Any, curve: np.ndarray, episodes: int) -> dict[str, float]:
+    """One seed's measures of its mean curve (``_measure``), with the states its learners held
+    at the probe and the CRMs (all, and the errored ones) per episode over episodes 1-60."""
+    m = _measure(curve)
+    early = slice(0, min(60, episodes))
+    m["states_at_60"] = float(res.states_at_probe.mean())
+    m["error_crms_per_episode_1_60"] = float(res.errors[:, early].mean())
+    m["crms_per_episode_1_60"] = float(res.steps[:, early].mean())
+    return m
+
+
+def _reading_summary(optimum: float, per_seed: list[dict[str, float]]) -> dict[str, Any]:
+    """A reading's summary: its optimum, and the spread over the seeds of each measure."""
+    return {
+        "belief_optimum": round(optimum, 4),
+        "plateau": _spread([m["plateau"] for m in per_seed]),
+        "episodes_to_own_plateau": _spread([m["episodes_to_own_plateau"] for m in per_seed], 0),
+        "episodes_to_paper_level": _spread([m["episodes_to_paper_level"] for m in per_seed], 0),
+        "states_at_60": _spread([m["states_at_60"] for m in per_seed], 1),
+        "error_crms_per_episode_1_60": _spread([m["error_crms_per_episode_1_60"] for m in per_seed], 2),
+    }
+
+
 def figure_7_sensitivity(
     out_dir: str | Path,
     config: SensitivityConfig = SensitivityConfig(),
@@ -186,11 +209,7 @@ def figure_7_sensitivity(
         for seed in config.seeds:
             res = traces[(reading.label, seed)]
             curve = res.steps.mean(axis=0)
-            m = _measure(curve)
-            early = slice(0, min(60, config.episodes))
-            m["states_at_60"] = float(res.states_at_probe.mean())
-            m["error_crms_per_episode_1_60"] = float(res.errors[:, early].mean())
-            m["crms_per_episode_1_60"] = float(res.steps[:, early].mean())
+            m = _seed_measures(res, curve, config.episodes)
             per_seed.append(m)
             rows.append([reading.label, seed, optimum, *(m[k] for k in _KEYS)])
             if seed == config.seeds[0]:
@@ -199,14 +218,7 @@ def figure_7_sensitivity(
                 n = config.mechanism_episodes
                 err = res.errors[:, :n].mean(axis=0)
                 mechanism[reading.label] = (err, res.steps[:, :n].mean(axis=0) - err)
-        summary[reading.label] = {
-            "belief_optimum": round(optimum, 4),
-            "plateau": _spread([m["plateau"] for m in per_seed]),
-            "episodes_to_own_plateau": _spread([m["episodes_to_own_plateau"] for m in per_seed], 0),
-            "episodes_to_paper_level": _spread([m["episodes_to_paper_level"] for m in per_seed], 0),
-            "states_at_60": _spread([m["states_at_60"] for m in per_seed], 1),
-            "error_crms_per_episode_1_60": _spread([m["error_crms_per_episode_1_60"] for m in per_seed], 2),
-        }
+        summary[reading.label] = _reading_summary(optimum, per_seed)
     if stage:
         stage.end()
     write_csv(out / "sensitivity.csv", ["reading", "seed", "belief_optimum", *_KEYS], rows)
