@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -14,6 +14,9 @@ from crmgrasp._validation import CrmgraspError
 from crmgrasp.cli.common import _print_result, _progress, _run_folder, _task
 from crmgrasp.cli.parser import _AGENT_FLAGS
 from crmgrasp.tasks import Task, task_to_dict
+
+if TYPE_CHECKING:
+    from crmgrasp.experiments.learning import LearnerSpec
 
 
 def _to_5pct_lines(s: dict[str, Any]) -> list[str]:
@@ -138,7 +141,7 @@ def _cmd_learn(args: argparse.Namespace) -> int:
     return 0
 
 
-def _check_learn(args: argparse.Namespace, task: Any, spec: Any, deep: bool) -> dict[str, Any] | None:
+def _check_learn(args: argparse.Namespace, task: Task, spec: LearnerSpec, deep: bool) -> dict[str, Any] | None:
     """Everything ``learn`` can refuse before it makes a run folder (budget, hand, the
     learner's settings or its missing extra), the warning about ungraspable starts, and the
     prior's settings (None without one), announced on stderr."""

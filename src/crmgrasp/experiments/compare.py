@@ -131,14 +131,14 @@ def compare(
     _note(progress, "compare: belief-space policy, sampled POMDP, exact references ...")
     planners, pomdp = _planner_rows(task, config, starts, fresh)
     rows += planners
-    refs = _reference_rows(task, starts, fresh, rows)
+    refs, on_eval = _reference_rows(task, starts, fresh, rows)
     _write_outputs(Path(out_dir), task, config, rows, curves, {**refs, "grasp controller": controller})
     best = min((r for r in rows if r[1] == "learner"), key=lambda r: r[2])
     summary = {
         "best_learner": best[0],
         "best_learner_mean_crms": round(best[2], 3),
         "belief_optimum": round(refs["belief-space optimum"], 4),
-        "belief_optimum_evaluation_starts": round(rows[-1][2], 4),
+        "belief_optimum_evaluation_starts": round(on_eval, 4),
         "clairvoyant_bound": round(refs["clairvoyant bound"], 4),
         "grasp_controller_mean_crms": round(controller, 3),
         "belief_policy_executed_mean_crms": round(planners[0][2], 3),
@@ -212,10 +212,11 @@ def _planner_rows(
     return rows, pomdp
 
 
-def _reference_rows(task: Task, starts: list, fresh: list, rows: list[list[Any]]) -> dict[str, float]:
+def _reference_rows(task: Task, starts: list, fresh: list, rows: list[list[Any]]) -> tuple[dict[str, float], float]:
     """Append the exact references' rows to ``rows``: the belief-space optimum and the
     clairvoyant bound on ``starts``, then the optimum of ``fresh`` (the starts every executed
-    row ran on: the gap to it is the method's), last. Returns the two references on ``starts``."""
+    row ran on: the gap to it is the method's). Returns the two references on ``starts``, by
+    name, and the optimum of ``fresh``."""
     refs = {}
     for name, fn in (("belief-space optimum", belief_optimum), ("clairvoyant bound", clairvoyant_bound)):
         t0 = time.perf_counter()
@@ -226,7 +227,7 @@ def _reference_rows(task: Task, starts: list, fresh: list, rows: list[list[Any]]
     on_eval = belief_optimum(task, fresh)
     seconds = round(time.perf_counter() - t0, 3)
     rows.append([EVAL_OPTIMUM, "reference", on_eval, None, None, "exact", None, 1.0, None, None, seconds])
-    return refs
+    return refs, on_eval
 
 
 def _write_outputs(

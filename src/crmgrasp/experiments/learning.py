@@ -293,7 +293,7 @@ def learn(
 
 
 def _recorded_parts(
-    task: Task, store: RunFolder | None, groups: list[tuple[int, int]], episodes: int, stage: Any
+    task: Task, store: RunFolder | None, groups: list[tuple[int, int]], episodes: int, stage: Progress | None
 ) -> tuple[dict[int, _Part], list[tuple[int, int, str]]]:
     """The groups of trials (first trial, count) that ``store`` records as done, loaded, by
     their first trial; and the others, still to train, with their unit names."""

@@ -166,7 +166,7 @@ def reproduce(
 
 
 def _recorded(
-    names: list[str], store: RunFolder | None, ctx: dict[str, Any], stage: Any
+    names: list[str], store: RunFolder | None, ctx: dict[str, Any], stage: Progress | None
 ) -> dict[str, tuple[dict[str, Any], list[Any]]]:
     """The experiments of ``names`` that the run folder ``store`` records as finished (a
     resumed run): their summaries and index rows; their recorded context joins ``ctx``."""

@@ -156,7 +156,7 @@ def _spread(values: list[Any], digits: int = 3) -> str:
     return show(med) if xs[0] == xs[-1] else f"{show(med)} [{show(xs[0])}-{show(xs[-1])}]"
 
 
-def _seed_measures(res: Any, curve: np.ndarray, episodes: int) -> dict[str, float]:
+def _seed_measures(res: TraceResult, curve: np.ndarray, episodes: int) -> dict[str, float]:
     """One seed's measures of its mean curve (``_measure``), with the states its learners held
     at the probe and the CRMs (all, and the errored ones) per episode over episodes 1-60."""
     m = _measure(curve)

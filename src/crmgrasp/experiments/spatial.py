@@ -23,7 +23,7 @@ import numpy as np
 from crmgrasp._io import atomic_path, save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
 from crmgrasp.agents.base import Agent, LearnerPolicy
-from crmgrasp.agents.training import encoder_for, train_trials
+from crmgrasp.agents.training import TrialResult, encoder_for, train_trials
 from crmgrasp.experiments._episodes import greedy_records
 from crmgrasp.experiments.stats import bootstrap_ci
 from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts, ungraspable_fraction
@@ -57,7 +57,7 @@ class SpatialConfig:
 
 def _learner(
     task: Task, learner: str, k: int, episodes: int, worlds: list[World], opt: float, cfg: SpatialConfig
-) -> tuple[Any, dict[str, Any], np.ndarray]:
+) -> tuple[TrialResult, dict[str, Any], np.ndarray]:
     """Train ``cfg.trials`` agents of ``learner`` on ``task`` and run each greedy policy on
     ``worlds``: the training result, the learner's summary entry (greedy CRMs with a 95%
     interval over the trials, success, gap to the optimum ``opt``) and the trials' means."""
