@@ -16,7 +16,14 @@ belief-space optimum on those starts and the median's gap to it. Usage:
 minutes on 2 cores; ``--grid``: every task's grid, offsets per coordinate; ``--param``: a learner
 parameter, e.g. ``start_level=3`` or ``refine_after=1`` for refine-vi; ``--heldout N``: also
 score each greedy policy on N fresh worlds, those of ``reference_bias.py --heldout N``; ``--k``:
-the learner's history order instead of [`ORDERS`][]'s).
+the learner's history order instead of [`ORDERS`][]'s; ``--grid 0``: the task's own hand-picked
+CRMs instead of a grid).
+
+With ``--counts`` (``backoff-vi`` only) each trial also reports how much of its own data its
+greedy choices rest on: at every decision of its greedy policy on the optimum's starts, the
+outcomes the long level has counted for the chosen CRM in that history (0 where the history
+has no long node, so that the CRM's model is the k = 1 level's alone). Per trial: the
+decisions, the median of those counts and the share of decisions below 5.
 """
 
 from __future__ import annotations
@@ -42,6 +49,30 @@ REFINE = {"u-handle": (33, 2), "cup-3d": (9, 1)}
 """refine-vi's grid and start level per task."""
 
 
+class OwnCounts:
+    """A trained ``backoff-vi`` agent (on a mirror quotient or not) whose greedy choices record
+    the outcomes its long level has counted for the chosen CRM in the history (``seen``)."""
+
+    def __init__(self, agent: Any) -> None:
+        self.agent, self.seen = agent, []
+        self.inner = getattr(agent, "inner", agent)
+        self.skip_errored = bool(getattr(agent, "skip_errored", False))
+        if not hasattr(self.inner, "counts"):
+            raise SystemExit(f"--counts needs backoff-vi, got {self.inner.name}")
+
+    def begin_episode(self) -> None:
+        self.agent.begin_episode()
+
+    def greedy(self, state: int, rng: np.random.Generator, banned: Any = ()) -> int:
+        a = self.agent.greedy(state, rng, banned) if banned else self.agent.greedy(state, rng)
+        c, b = state, a
+        if self.inner is not self.agent:  # the representative's frame
+            c, flip = self.agent._canon(state)
+            b = self.agent._amap[a] if flip else a
+        self.seen.append(sum(self.inner.counts.get((c, b), {}).values()))
+        return a
+
+
 def per_trial(
     task: Task,
     learner: str,
@@ -49,20 +80,25 @@ def per_trial(
     params: dict[str, Any],
     heldout: int = 0,
     k: int | None = None,
-) -> tuple[list[float], list[float]]:
-    """CRMs per episode of each trial's greedy policy on the optimum's starts, and on
-    ``heldout`` fresh worlds (seed 20,000: ``reference_bias.py``'s held-out worlds; none
-    for 0)."""
+    counts: bool = False,
+) -> tuple[list[float], list[float], list[dict[str, float]]]:
+    """CRMs per episode of each trial's greedy policy on the optimum's starts, on ``heldout``
+    fresh worlds (seed 20,000: ``reference_bias.py``'s held-out worlds; none for 0), and with
+    ``counts`` each trial's own counts behind its choices on the starts (module docstring)."""
     k = ORDERS[learner] if k is None else k
     params = {"symmetric": task.symmetry is not None, **params}
     res = train_trials(
         task, learner, trials=cfg.trials, episodes=cfg.episodes, seed=cfg.seed, k=k, eval_episodes=0, params=params
     )
-    out = []
+    agents = [OwnCounts(a) for a in res.agents] if counts else res.agents
+    means, own = [], []
     for worlds in (sample_starts(task, cfg.starts, cfg.seed), sample_starts(task, heldout, 20_000) if heldout else []):
-        records = greedy_records(task, res.agents, worlds, cfg.seed, k=k) if worlds else []
-        out.append([float(np.mean([len(r.actions) for r in trial])) for trial in records])
-    return out[0], out[1]
+        records = greedy_records(task, agents, worlds, cfg.seed, k=k) if worlds else []
+        means.append([float(np.mean([len(r.actions) for r in trial])) for trial in records])
+        for a in agents if counts and not own else []:  # on the optimum's starts
+            v = np.array(a.seen)  # type: ignore[union-attr]
+            own.append({"decisions": len(v), "median": float(np.median(v)), "below_5": round(float(np.mean(v < 5)), 4)})
+    return means[0], means[1], own
 
 
 def main(
@@ -76,12 +112,14 @@ def main(
     params: dict[str, Any] | None = None,
     heldout: int = 0,
     k: int | None = None,
+    counts: bool = False,
 ) -> dict[str, Any]:
     """Per task: the learner's CRMs per episode per trial, their median, the optimum and the
     gap. ``refine``: refine-vi's grid and start level per task (default [`REFINE`][]);
-    ``grid``: every task's grid instead; ``params``: the learner's parameters (refine-vi's
-    ``start_level`` overrides ``refine``'s); ``heldout``: also each greedy policy on that many
-    fresh worlds; ``k``: the history order instead of [`ORDERS`][]'s."""
+    ``grid``: every task's grid instead (0: the task's own CRMs); ``params``: the learner's
+    parameters (refine-vi's ``start_level`` overrides ``refine``'s); ``heldout``: also each
+    greedy policy on that many fresh worlds; ``k``: the history order instead of [`ORDERS`][]'s;
+    ``counts``: the own counts behind the greedy choices (module docstring)."""
     refine = REFINE if refine is None else refine
     cfg = ContinuousOffsetsConfig(trials=trials, episodes=episodes, starts=starts)
     out: dict[str, Any] = {
@@ -96,10 +134,10 @@ def main(
         mine = dict(params or {})
         if learner == "refine-vi":
             mine.setdefault("start_level", refine[name][1])
-        n = grid or (refine[name][0] if learner == "refine-vi" else GRIDS[name])
-        task = offset_grid(make_task(name), n)
+        n = grid if grid is not None else (refine[name][0] if learner == "refine-vi" else GRIDS[name])
+        task = offset_grid(make_task(name), n) if n else make_task(name)
         optimum = belief_optimum(task, sample_starts(task, starts, cfg.seed))
-        values, fresh = per_trial(task, learner, cfg, mine, heldout, k)
+        values, fresh, own = per_trial(task, learner, cfg, mine, heldout, k, counts)
         median = float(np.median(values))
         out[task.name] = {
             "per_trial": values,
@@ -109,6 +147,8 @@ def main(
         }
         if heldout:
             out[task.name].update(heldout=heldout, heldout_per_trial=fresh, heldout_median=float(np.median(fresh)))
+        if counts:
+            out[task.name]["own_counts"] = own
     return out
 
 
@@ -117,12 +157,17 @@ if __name__ == "__main__":
     ap.add_argument("--episodes", type=int, default=5000)
     ap.add_argument("--learner", choices=tuple(ORDERS), default="model-vi")
     ap.add_argument("--task", action="append", dest="tasks", choices=tuple(GRIDS))
-    ap.add_argument("--grid", type=int, default=None, help="offsets per coordinate and pair, every task")
+    ap.add_argument("--grid", type=int, default=None, help="offsets per coordinate and pair, every task (0: own CRMs)")
     ap.add_argument("--param", action="append", default=[], metavar="KEY=NUMBER|true|false", type=setting)
     ap.add_argument("--heldout", type=int, default=0, help="also score each policy on this many fresh worlds")
     ap.add_argument("--k", type=int, default=None, help="the learner's history order (default: ORDERS)")
+    ap.add_argument("--counts", action="store_true", help="the own counts behind each greedy choice (backoff-vi)")
     a = ap.parse_args()
+    if a.grid is not None and a.grid < 0:
+        ap.error(f"--grid must be at least 0, got {a.grid}")
     extra = dict(a.param)
     tasks = tuple(a.tasks or GRIDS)
-    res = main(a.episodes, learner=a.learner, tasks=tasks, grid=a.grid, params=extra, heldout=a.heldout, k=a.k)
+    res = main(
+        a.episodes, learner=a.learner, tasks=tasks, grid=a.grid, params=extra, heldout=a.heldout, k=a.k, counts=a.counts
+    )
     print(json.dumps(res, indent=2))

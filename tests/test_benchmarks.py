@@ -126,6 +126,13 @@ def test_offset_learning_smoke():
     assert res["params"] == params and list(res)[-1] == "u-handle-grid5"
     assert res["u-handle-grid5"]["heldout"] == 4 and len(res["u-handle-grid5"]["heldout_per_trial"]) == 1
     assert res["k"] == 1 and mod.main(10, 1, 6, "backoff-vi", tasks=("u-handle",), grid=3, k=2)["k"] == 2
+    res = mod.main(30, 2, 6, "backoff-vi", tasks=("u-handle",), grid=0, k=2, counts=True)  # the task's own CRMs
+    own = res["u-handle"]["own_counts"]  # the grid-free task keeps its name
+    assert len(own) == 2 and all(o["decisions"] >= 6 and 0.0 <= o["below_5"] <= 1.0 for o in own)
+    assert all(o["median"] >= 0.0 for o in own)
+    assert "own_counts" not in mod.main(10, 1, 6, "backoff-vi", tasks=("u-handle",), grid=0, k=2)["u-handle"]
+    with pytest.raises(SystemExit, match="--counts needs backoff-vi"):
+        mod.main(10, 1, 6, "model-vi", tasks=("u-handle",), grid=0, counts=True)
 
 
 def test_family_learning_smoke():
