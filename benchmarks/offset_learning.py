@@ -91,14 +91,17 @@ def per_trial(
         task, learner, trials=cfg.trials, episodes=cfg.episodes, seed=cfg.seed, k=k, eval_episodes=0, params=params
     )
     agents = [OwnCounts(a) for a in res.agents] if counts else res.agents
-    means, own = [], []
-    for worlds in (sample_starts(task, cfg.starts, cfg.seed), sample_starts(task, heldout, 20_000) if heldout else []):
+
+    def means(worlds: list) -> list[float]:
         records = greedy_records(task, agents, worlds, cfg.seed, k=k) if worlds else []
-        means.append([float(np.mean([len(r.actions) for r in trial])) for trial in records])
-        for a in agents if counts and not own else []:  # on the optimum's starts
-            v = np.array(a.seen)  # type: ignore[union-attr]
-            own.append({"decisions": len(v), "median": float(np.median(v)), "below_5": round(float(np.mean(v < 5)), 4)})
-    return means[0], means[1], own
+        return [float(np.mean([len(r.actions) for r in trial])) for trial in records]
+
+    on_starts = means(sample_starts(task, cfg.starts, cfg.seed))
+    own = []
+    for a in agents if counts else []:  # the choices on the optimum's starts alone
+        v = np.array(a.seen)  # type: ignore[union-attr]
+        own.append({"decisions": len(v), "median": float(np.median(v)), "below_5": round(float(np.mean(v < 5)), 4)})
+    return on_starts, means(sample_starts(task, heldout, 20_000) if heldout else []), own
 
 
 def main(
