@@ -53,9 +53,10 @@ class OwnCounts:
     """A trained ``backoff-vi`` agent (on a mirror quotient or not) whose greedy choices record
     the outcomes its long level has counted for the chosen CRM in the history (``seen``)."""
 
-    def __init__(self, agent: Any) -> None:
+    def __init__(self, agent: Any, task: Task) -> None:
         self.agent, self.seen = agent, []
         self.inner = getattr(agent, "inner", agent)
+        self.amap = list(task.symmetry.actions) if task.symmetry is not None else []
         self.skip_errored = bool(getattr(agent, "skip_errored", False))
         if not hasattr(self.inner, "counts"):
             raise SystemExit(f"--counts needs backoff-vi, got {self.inner.name}")
@@ -66,9 +67,9 @@ class OwnCounts:
     def greedy(self, state: int, rng: np.random.Generator, banned: Any = ()) -> int:
         a = self.agent.greedy(state, rng, banned) if banned else self.agent.greedy(state, rng)
         c, b = state, a
-        if self.inner is not self.agent:  # the representative's frame
-            c, flip = self.agent._canon(state)
-            b = self.agent._amap[a] if flip else a
+        if self.inner is not self.agent:  # the representative's frame: the lower of the code and its mirror's
+            m = self.agent.mirror(state)
+            c, b = (m, self.amap[a]) if m < state else (state, a)
         self.seen.append(sum(self.inner.counts.get((c, b), {}).values()))
         return a
 
@@ -90,7 +91,7 @@ def per_trial(
     res = train_trials(
         task, learner, trials=cfg.trials, episodes=cfg.episodes, seed=cfg.seed, k=k, eval_episodes=0, params=params
     )
-    agents = [OwnCounts(a) for a in res.agents] if counts else res.agents
+    agents = [OwnCounts(a, task) for a in res.agents] if counts else res.agents
 
     def means(worlds: list) -> list[float]:
         records = greedy_records(task, agents, worlds, cfg.seed, k=k) if worlds else []
