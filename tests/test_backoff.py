@@ -154,6 +154,13 @@ def test_the_middle_level_pools_histories_with_the_same_last_two_crms(box, middl
     assert grasped == pytest.approx((2 + 0.25) / 3 if middle else 0.25)
 
 
+def test_the_middle_level_needs_its_counts_pooled_first():
+    from crmgrasp.agents.backoff_middle import SuffixPool
+
+    with pytest.raises(CrmgraspError, match="before any counts were pooled"):
+        SuffixPool().code(5)
+
+
 def test_training_repeats_bit_for_bit_and_the_file_is_the_greedy_policy(box, tmp_path):
     kw = {"trials": 1, "episodes": 80, "seed": 4, "k": 3, "eval_episodes": 0, "params": {"symmetric": True}}
     a = train_trials(box, "backoff-vi", **kw, checkpoints=(40, 80), checkpoint_episodes=100)

@@ -38,8 +38,8 @@ def test_frame_reads_an_outcome_in_its_states_frame_on_the_mirror_quotient(box, 
         s = enc.encode(h)
         a, o = int(rng.integers(4)), int(rng.integers(box.discretizer.size))
         s2 = enc.encode(enc.push(h, a, o))
-        c, flip = sym._canon(s)
-        c2, _ = sym._canon(s2)
+        c, flip = sym.representative(s)
+        c2, _ = sym.representative(s2)
         a_c, o_c = (amap[a], omap[o]) if flip else (a, o)
         assert frame.next_state(c, a_c, o_c) == c2
         seen = frame.outcome_observations(c, a_c, c2)

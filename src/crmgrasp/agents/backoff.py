@@ -59,6 +59,7 @@ from typing import Any
 import numpy as np
 
 from crmgrasp._validation import CrmgraspError, boolean, integer, non_negative, positive
+from crmgrasp.agents.backoff_middle import SuffixPool
 from crmgrasp.agents.base import allowed_choice, greedy_choice
 from crmgrasp.agents.model_based import ModelVI, Outcome
 from crmgrasp.agents.pooled import HistoryFrame, PooledVI
@@ -190,10 +191,8 @@ class BackoffVI(TabularAgent):
         self._short_of: dict[int, tuple[Node, bool]] = {}
         self._next: dict[tuple[int, int, int], int] = {}
         self._seen: dict[tuple[int, int, int], tuple[int, ...]] = {}
-        self._outcomes: dict[tuple[int, int], list[tuple[float, bool, float, tuple[int, ...]]]] = {}
-        self._mid_counts: dict[tuple[int, int], dict[tuple[float, int, bool], float]] = {}
-        self._mid: dict[tuple[int, int], dict[tuple[float, int, bool], float]] = {}
-        self._mid_code: dict[int, int] = {}
+        self._outcomes: dict[tuple[int, int, bool], list[tuple[float, int, bool, float, int]]] = {}
+        self._pool = SuffixPool()
         self._amap: list[int] = []
         self._omap: list[int] = []
 
@@ -226,6 +225,7 @@ class BackoffVI(TabularAgent):
         short_enc = KOrderEncoder(enc.n_obs, enc.n_actions, 1)
         self._frame = frame
         self._suffix, self._short_of, self._next, self._seen = {}, {}, {}, {}
+        self._pool = SuffixPool()
         if frame.symmetric is not None:
             self._short_sym = SymmetricAgent(self.short, task, short_enc)
             self._amap = list(task.symmetry.actions)  # type: ignore[union-attr]
@@ -250,7 +250,7 @@ class BackoffVI(TabularAgent):
 
     def _short_node(self, s1: int) -> tuple[Node, bool]:
         """The short node of k = 1 code ``s1`` and whether it is ``s1``'s mirror image."""
-        c, flip = (s1, False) if self._short_sym is None else self._short_sym._canon(s1)
+        c, flip = (s1, False) if self._short_sym is None else self._short_sym.representative(s1)
         return ("S", c), flip
 
     def _node(self, s: int, nodes: Mapping[Any, Any]) -> tuple[Node | None, bool]:
@@ -339,7 +339,7 @@ class BackoffVI(TabularAgent):
         judge.q_greedy = {node: [judge.unknown] * n for node in nodes}  # type: ignore[misc]
         self._outcomes = {}
         if self.middle:
-            self._pool_middle()
+            self._pool.pool(self.counts, self._scale, self._bound()[0])
         for (s1, b), entry in short.model.items():
             self._add(("S", s1), b, {(r, ("S", t2), t): c for (r, t2, t), c in entry.items()})
         known = set(longs)
@@ -418,72 +418,33 @@ class BackoffVI(TabularAgent):
         if own and self.beta == 0.0:
             return entry
         weight = self.beta if own else 1.0
-        mid = self._middle_outcomes(s, b) if self.middle else None
+        mid = self._pool.outcomes(s, b, self.beta, self._short_in_frame) if self.middle else None
         if mid:
             for (r, obs, t), p in mid.items():
                 o = (r, self._route(self._next_state(s, b, obs), known), t)
                 entry[o] = entry.get(o, 0.0) + weight * p
             return entry
-        (_, s1), flip = self._suffix_short(s)
-        outcomes = self._short_outcomes(s1, self._amap[b] if flip else b)
-        if not outcomes:
-            return entry
-        for r, t, p, seen in outcomes:
-            for obs in seen:
-                s2 = self._next_state(s, b, self._omap[obs] if flip else obs)
-                o = (r, self._route(s2, known), t)
-                entry[o] = entry.get(o, 0.0) + weight * p / len(seen)
+        for r, obs, t, p, n_seen in self._short_in_frame(s, b):
+            o = (r, self._route(self._next_state(s, b, obs), known), t)
+            entry[o] = entry.get(o, 0.0) + weight * p / n_seen
         return entry
 
-    def _middle_code(self, s: int) -> int:
-        """The code of history ``s``'s last two CRMs and observations (its k = 2 suffix)."""
-        v = self._mid_code.get(s)
-        if v is None:
-            enc = self._bound()[0].encoder
-            v = self._mid_code[s] = KOrderEncoder(enc.n_obs, enc.n_actions, 2).encode(enc.decode(s)[:4])
-        return v
-
-    def _pool_middle(self) -> None:
-        """Pool the long counts by k = 2 suffix: outcome ``(r, observation, terminal)``, the
-        observation in the long histories' own frame (one per suffix code)."""
-        frame = self._bound()[0]
-        pooled: dict[tuple[int, int], dict[tuple[float, int, bool], float]] = {}
-        for (s, b), counts in self.counts.items():
-            row = pooled.setdefault((self._middle_code(s), b), {})
-            for (r, s2, t), c in counts.items():
-                seen = frame.outcome_observations(s, b, s2)
-                for obs in seen:
-                    key = (r, obs, t)
-                    row[key] = row.get(key, 0.0) + c * self._scale / len(seen)
-        self._mid_counts, self._mid = pooled, {}
-
-    def _middle_outcomes(self, s: int, b: int) -> dict[tuple[float, int, bool], float] | None:
-        """``p_2(r, o, t | h_2, b) = (n_2 + beta p_1) / (N_2 + beta)`` over the pooled counts of
-        ``s``'s k = 2 suffix (``None`` where the suffix never tried ``b``); cached per plan."""
-        key = (self._middle_code(s), b)
-        out = self._mid.get(key)
-        if out is not None or key not in self._mid_counts:
-            return out
-        counts = self._mid_counts[key]
-        blend = dict(counts)
+    def _short_in_frame(self, s: int, b: int) -> list[tuple[float, int, bool, float, int]]:
+        """The short level's outcomes of CRM ``b`` after history ``s``, read in ``s``'s frame:
+        ``(r, observation, terminal, p, n)`` for each of the ``n`` observations (in ``s``'s
+        frame) that can have led to an outcome of probability ``p`` under ``p_1(. | h_1, b)``
+        (cached per plan; empty where the suffix never tried ``b``)."""
         (_, s1), flip = self._suffix_short(s)
-        for r, t, p, seen in self._short_outcomes(s1, self._amap[b] if flip else b):
-            for obs in seen:
-                o = (r, self._omap[obs] if flip else obs, t)
-                blend[o] = blend.get(o, 0.0) + self.beta * p / len(seen)
-        total = sum(blend.values())
-        out = self._mid[key] = {o: c / total for o, c in blend.items()}
-        return out
-
-    def _short_outcomes(self, s1: int, b1: int) -> list[tuple[float, bool, float, tuple[int, ...]]]:
-        """The short level's outcomes of CRM ``b1`` in ``s1``: reward, terminal, probability,
-        and the observations (in ``s1``'s frame) that can have led there (cached per plan)."""
-        out = self._outcomes.get((s1, b1))
+        out = self._outcomes.get((s1, b, flip))
         if out is None:
+            b1 = self._amap[b] if flip else b
             pooled = self.short.greedy_model().model.get((s1, b1)) or {}
             total = sum(pooled.values())
-            out = [(r, t, c / total, self._short_seen(s1, b1, t2)) for (r, t2, t), c in pooled.items()]
-            self._outcomes[(s1, b1)] = out
+            out = []
+            for (r, t2, t), c in pooled.items():
+                seen = self._short_seen(s1, b1, t2)
+                out.extend((r, self._omap[obs] if flip else obs, t, c / total, len(seen)) for obs in seen)
+            self._outcomes[(s1, b, flip)] = out
         return out
 
     # ----------------------------------------------------------------- policy tables
@@ -506,5 +467,5 @@ class BackoffVI(TabularAgent):
         table = {node[1]: judge.q_greedy[node] for node in judge.tried if node[0] == "S"}  # type: ignore[index]
         tried = {node[1]: acts for node, acts in judge.tried.items() if node[0] == "S"}  # type: ignore[index]
         if self._short_sym is not None:
-            table, tried = self._short_sym._mirrored(table), self._short_sym._mirrored_sets(tried)
+            table, tried = self._short_sym.mirrored_table(table), self._short_sym.mirrored_sets(tried)
         return 1, table, tried

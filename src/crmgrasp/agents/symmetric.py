@@ -70,7 +70,9 @@ class SymmetricAgent:
             self._mirror[s] = m
         return m
 
-    def _canon(self, s: int) -> tuple[int, bool]:
+    def representative(self, s: int) -> tuple[int, bool]:
+        """The representative of history code ``s`` (the smaller of ``s`` and its mirror image's
+        code) and whether it is the mirror image."""
         m = self.mirror(s)
         return (m, True) if m < s else (s, False)
 
@@ -85,7 +87,7 @@ class SymmetricAgent:
     def act(self, state: int, rng: np.random.Generator, banned: Collection[int] = ()) -> int:
         """The inner learner's behaviour, in the representative's frame (``banned``, the CRMs to
         leave out, mirrored with it)."""
-        c, flip = self._canon(state)
+        c, flip = self.representative(state)
         if banned:
             a = self.inner.act(c, rng, {self._amap[b] for b in banned} if flip else banned)  # type: ignore[call-arg]
         else:
@@ -105,7 +107,7 @@ class SymmetricAgent:
     def greedy(self, state: int, rng: np.random.Generator, banned: Collection[int] = ()) -> int:
         """The inner learner's greedy action, in the representative's frame (``banned``, the
         CRMs to leave out, mirrored with it)."""
-        c, flip = self._canon(state)
+        c, flip = self.representative(state)
         if banned:
             a = self.inner.greedy(c, rng, {self._amap[b] for b in banned} if flip else banned)  # type: ignore[call-arg]
         else:
@@ -116,13 +118,13 @@ class SymmetricAgent:
         self, s: int, a: int, r: float, s2: int, a2: int | None, terminal: bool, rng: np.random.Generator
     ) -> None:
         """Update the inner learner on the transition mapped to representatives."""
-        c, flip = self._canon(s)
-        c2, flip2 = self._canon(s2)
+        c, flip = self.representative(s)
+        c2, flip2 = self.representative(s2)
         b = self._amap[a] if flip else a
         b2 = None if a2 is None else (self._amap[a2] if flip2 else a2)
         self.inner.update(c, b, r, c2, b2, terminal, rng)
         if self._tie_start and self._is_mirror_start(c) and self._amap[b] != b:
-            c3, flip3 = self._canon(self.mirror(s2))  # the mirrored transition: a2 becomes sigma(a2)
+            c3, flip3 = self.representative(self.mirror(s2))  # the mirrored transition: a2 becomes sigma(a2)
             b3 = None if a2 is None else (a2 if flip3 else self._amap[a2])
             self.inner.update(c, self._amap[b], r, c3, b3, terminal, rng)
 
@@ -133,14 +135,15 @@ class SymmetricAgent:
     @property
     def q(self) -> dict[int, list[float]]:
         """The full table: every representative's row and its mirror image's."""
-        return self._mirrored(self.inner.q)
+        return self.mirrored_table(self.inner.q)
 
     @property
     def greedy_table(self) -> dict[int, list[float]]:
         """The inner learner's greedy values, mirrored like [`q`][]."""
-        return self._mirrored(self.inner.greedy_table)
+        return self.mirrored_table(self.inner.greedy_table)
 
-    def _mirrored(self, table: dict[int, list[float]]) -> dict[int, list[float]]:
+    def mirrored_table(self, table: dict[int, list[float]]) -> dict[int, list[float]]:
+        """A table of representatives' rows with every mirror image's row added (its actions mirrored)."""
         out = {}
         for s, row in table.items():
             out[s] = list(row)
@@ -152,14 +155,15 @@ class SymmetricAgent:
     @property
     def tried(self) -> dict[int, set[int]]:
         """Tried actions, mirrored like [`q`][]."""
-        return self._mirrored_sets(self.inner.tried)
+        return self.mirrored_sets(self.inner.tried)
 
     @property
     def greedy_tried(self) -> dict[int, set[int]]:
         """The inner learner's greedy choices per state, mirrored like [`q`][]."""
-        return self._mirrored_sets(self.inner.greedy_tried)
+        return self.mirrored_sets(self.inner.greedy_tried)
 
-    def _mirrored_sets(self, sets: dict[int, set[int]]) -> dict[int, set[int]]:
+    def mirrored_sets(self, sets: dict[int, set[int]]) -> dict[int, set[int]]:
+        """Representatives' action sets with every mirror image's set added (mirrored)."""
         out = {}
         for s, acts in sets.items():
             out[s] = set(acts)
