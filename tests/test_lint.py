@@ -31,3 +31,14 @@ def test_mypy_clean():
         [_tool("mypy"), "src/crmgrasp", "--cache-dir=/dev/null"], cwd=ROOT, capture_output=True, text=True
     )
     assert res.returncode == 0, res.stdout + res.stderr
+
+
+def test_the_package_ships_its_data_and_its_typing_marker():
+    """Every file pyproject.toml lists as package data exists, and ``py.typed`` (PEP 561) is one
+    of them, so that a user's type checker reads crmgrasp's annotations."""
+    import tomllib
+
+    data = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]["crmgrasp"]
+    assert "py.typed" in data
+    for name in data:
+        assert (ROOT / "src" / "crmgrasp" / name).is_file(), name
