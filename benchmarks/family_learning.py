@@ -35,15 +35,17 @@ worlds than a planner given the family.
 
 Usage: ``python benchmarks/family_learning.py [--episodes 3000] [--seeds 10] [--first 0]
 [--worlds 300] [--pool P] [--planner N] [--task NAME ...] [--learner NAME ...] [--param KEY=NUMBER ...]
-[--k K] [--fallback nearest|restart]`` (``--param``:
+[--k K] [--fallback nearest|restart] [--mirror]`` (``--param``:
 a learner parameter, e.g. ``explore=1`` for ``backoff-vi``, given to every learner run; ``--k``: every
-learner's history order instead of [`ORDERS`][]).
+learner's history order instead of [`ORDERS`][]; ``--mirror``: the learners on the mirror quotient of
+a spatial task that declares none, [`MIRRORED`][]).
 Prints one JSON object; progress on stderr.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import statistics
 import sys
@@ -52,11 +54,12 @@ from typing import Any
 
 import numpy as np
 
-from crmgrasp._validation import setting
+from crmgrasp._validation import CrmgraspError, setting
 from crmgrasp.agents.training import train_trials
 from crmgrasp.experiments._episodes import episode_records, greedy_records
 from crmgrasp.planners.references import FALLBACKS, BeliefPolicy, graspable_starts, sample_starts
 from crmgrasp.tasks import make_task
+from crmgrasp.tasks.spatial import SPATIAL_HAND, TRIPOD_HAND, spatial_symmetry
 
 TASKS = (
     "box-family",
@@ -78,6 +81,21 @@ THREE_FINGERS = ("triangles-3f", "odd-polygons-3f", "box-family-3f", "cup-family
 """Three-finger twins a run may name with ``--task`` (not run by default)."""
 MESHES = ("open-cup-3d",)
 """Tasks on meshes (readable rules only, slower) a run may name with ``--task`` (not run by default)."""
+MIRRORED = {"box-3d": SPATIAL_HAND, "cup-3d": SPATIAL_HAND, "box-3d-3f": TRIPOD_HAND, "cup-3d-3f": TRIPOD_HAND}
+"""Spatial tasks whose worlds have the mirror symmetry they do not declare (its equivariance is
+checked in ``tests/test_spatial_tasks.py``), and their hands: ``--mirror`` declares it."""
+
+
+def mirrored(task: Any) -> Any:
+    """``task`` with its mirror symmetry declared (unchanged where it declares one), so that the
+    learners run on the mirror quotient; an error for a task not in [`MIRRORED`][]."""
+    if task.symmetry is not None:
+        return task
+    if task.name not in MIRRORED:
+        raise CrmgraspError(f"--mirror: {task.name} has no mirror symmetry known to hold; tasks: {', '.join(MIRRORED)}")
+    return dataclasses.replace(task, symmetry=spatial_symmetry(task.actions, MIRRORED[task.name]))
+
+
 LEARNERS = ("backoff-vi", "pooled-vi", "model-vi")
 ORDERS = {"backoff-vi": 2}
 """History order per learner (1 where not listed): ``backoff-vi`` runs with k = 2, as ``--preset
@@ -137,9 +155,11 @@ def task_row(
     k: int | None = None,
     n_planner: int = 0,
     fallback: str = "nearest",
+    mirror: bool = False,
 ) -> dict:
-    """One task: the optimum, then every learner over the seeds (see the module docstring)."""
-    task = make_task(name)
+    """One task: the optimum, then every learner over the seeds (see the module docstring);
+    ``mirror``: the task's mirror symmetry declared ([`mirrored`][])."""
+    task = mirrored(make_task(name)) if mirror else make_task(name)
     t_task = time.perf_counter()
     planned = sample_starts(task, max(pool, n_worlds), 10_000)  # the evaluation worlds first
     worlds = planned[:n_worlds]
@@ -222,15 +242,18 @@ def main(
     k: int | None = None,
     n_planner: int = 0,
     fallback: str = "nearest",
+    mirror: bool = False,
 ) -> dict:
     """Every task and learner; see the module docstring."""
     out: dict = {"episodes": episodes, "seeds": [first, first + seeds - 1], "worlds": n_worlds, "params": extra or {}}
     if k is not None:
         out["k"] = k
+    if mirror:
+        out["mirror"] = True
     for name in tasks:
         print(f"{name} ...", file=sys.stderr, flush=True)
         seeds_run = range(first, first + seeds)
-        out[name] = task_row(name, learners, episodes, seeds_run, n_worlds, extra, pool, k, n_planner, fallback)
+        out[name] = task_row(name, learners, episodes, seeds_run, n_worlds, extra, pool, k, n_planner, fallback, mirror)
     return out
 
 
@@ -247,9 +270,16 @@ if __name__ == "__main__":
     ap.add_argument("--k", type=int, default=None, help="every learner's history order (default: ORDERS)")
     ap.add_argument("--planner", type=int, default=0, help="worlds of a realizable planner's reference (0: none)")
     ap.add_argument("--fallback", choices=FALLBACKS, default="nearest", help="the planner's belief when it empties")
+    ap.add_argument("--mirror", action="store_true", help=f"declare the mirror symmetry on {', '.join(MIRRORED)}")
     a = ap.parse_args()
     if a.planner < 0:
         ap.error(f"--planner must be >= 0, got {a.planner}")
+    if a.mirror:
+        try:
+            for name in a.tasks or TASKS:
+                mirrored(make_task(name))
+        except CrmgraspError as exc:
+            ap.error(str(exc))
     extra = dict(a.param)
     res = main(
         a.episodes,
@@ -263,5 +293,6 @@ if __name__ == "__main__":
         a.k,
         a.planner,
         a.fallback,
+        a.mirror,
     )
     print(json.dumps(res, indent=1))

@@ -154,6 +154,24 @@ def test_family_learning_smoke():
     assert 0 <= row["optimum_errored_graspable"] <= cap and all(0 <= e <= cap for e in learner["errored_graspable"])
 
 
+def test_family_learning_declares_the_spatial_mirror_where_asked():
+    spec = importlib.util.spec_from_file_location("family_learning", BENCH.parent / "family_learning.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    from crmgrasp._validation import CrmgraspError
+    from crmgrasp.tasks.spatial import TRIPOD_HAND, spatial_symmetry
+
+    tripod = mod.make_task("box-3d-3f")
+    assert tripod.symmetry is None
+    assert mod.mirrored(tripod).symmetry == spatial_symmetry(tripod.actions, TRIPOD_HAND)
+    u = mod.make_task("u-handle")
+    assert mod.mirrored(u) is u  # its own declared symmetry
+    with pytest.raises(CrmgraspError, match="open-cup-3d has no mirror symmetry known to hold"):
+        mod.mirrored(mod.make_task("open-cup-3d"))
+    res = mod.main(episodes=4, seeds=1, n_worlds=3, tasks=("box-3d",), learners=("pooled-vi",), mirror=True)
+    assert res["mirror"] is True and len(res["box-3d"]["pooled-vi"]["gap"]) == 1
+
+
 def test_mujoco_learning_smoke(capsys, monkeypatch):
     pytest.importorskip("mujoco", reason="needs the extra crmgrasp[mujoco]")
     spec = importlib.util.spec_from_file_location("mujoco_learning", BENCH.parent / "mujoco_learning.py")

@@ -397,10 +397,11 @@ def test_bad_spatial_task_files_get_one_line_errors(tmp_path, edit, message) -> 
 
 
 def test_the_spatial_mirror_symmetry_holds_on_sampled_worlds() -> None:
-    """Reflecting the world in y -> -y and swapping the labels maps every CRM's outcome
-    to the mirrored CRM's (SpatialTask.mirror_crm), with the moments swapped."""
-    from crmgrasp.model.spatial import observe3d
-    from crmgrasp.tasks.spatial import spatial_symmetry
+    """Reflecting the world in y -> -y and reversing the labels maps every CRM's outcome
+    to the mirrored CRM's (SpatialTask.mirror_crm), with the moments' magnitudes reversed
+    too: for two contacts (a <-> b) and for the tripods (a <-> c, b stays)."""
+    from crmgrasp.model.spatial import config3d, observe3d
+    from crmgrasp.tasks.spatial import SPATIAL_HAND, TRIPOD_HAND, spatial_symmetry
 
     m = np.diag([1.0, -1.0, 1.0])
 
@@ -411,12 +412,17 @@ def test_the_spatial_mirror_symmetry_holds_on_sampled_worlds() -> None:
 
     def config(c):  # type: ignore[no-untyped-def]
         flip = [Contact3D(tuple((m @ np.array(k.x)).tolist()), tuple((m @ np.array(k.n)).tolist())) for k in c]
-        return Config3D(flip[1], flip[0])
+        return config3d(flip[::-1])
 
     checked = 0
-    for name in ("cup-3d", "box-3d"):
+    for name, hand in (
+        ("cup-3d", SPATIAL_HAND),
+        ("box-3d", SPATIAL_HAND),
+        ("cup-3d-3f", TRIPOD_HAND),
+        ("box-3d-3f", TRIPOD_HAND),
+    ):
         task = make_task(name)
-        sym = spatial_symmetry(task.actions)
+        sym = spatial_symmetry(task.actions, hand)
         mirrored = dataclasses.replace(task, symmetry=sym)  # the declaration itself is checked
         assert mirrored.symmetry == sym
         rng = np.random.default_rng(4)
@@ -428,14 +434,12 @@ def test_the_spatial_mirror_symmetry_holds_on_sampled_worlds() -> None:
                 b = execute_crm3d(mir, inst.hand3d, config(w.config), inst.actions[sym.actions[i]], table=0.0)
                 assert a.error is b.error
                 want = config(a.config)
-                assert np.allclose(
-                    [*want.a.x, *want.a.n, *want.b.x, *want.b.n],
-                    [*b.config.a.x, *b.config.a.n, *b.config.b.x, *b.config.b.n],
-                    atol=1e-9,
-                )
-                rho, ma, mb = observe3d(a.config)
-                assert np.allclose(observe3d(b.config), (rho, mb, ma), atol=1e-9)
+                assert np.allclose([[*k.x, *k.n] for k in want], [[*k.x, *k.n] for k in b.config], atol=1e-9)
+                rho, *moments = observe3d(a.config)
+                assert np.allclose(observe3d(b.config), (rho, *moments[::-1]), atol=1e-9)
                 checked += 1
-    assert checked == 800
+    assert checked == 2 * 40 * 10 + 2 * 40 * 18
+    with pytest.raises(CrmgraspError, match="contact 'c' is not one of the hand's contacts a, b"):
+        spatial_symmetry(make_task("box-3d-3f").actions)  # the two-contact hand's mirror of tripod CRMs
     with pytest.raises(CrmgraspError, match="no mirror"):
         spatial_symmetry(make_task("cup-3d").actions[:3])

@@ -273,6 +273,8 @@ class LabelledContacts:
 
     def mirror_label(self, label: str) -> str:
         """The label a mirror gives contact ``label`` (the labels reversed)."""
+        if label not in self.labels:
+            raise CrmgraspError(f"contact {label!r} is not one of the hand's contacts {', '.join(self.labels)}")
         return self.labels[len(self.labels) - 1 - self.labels.index(label)]
 
     @property

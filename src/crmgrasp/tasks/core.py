@@ -9,7 +9,7 @@ factory under a new name with [`register_task`][].
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple, overload
 
@@ -31,6 +31,7 @@ __all__ = [
     "Task",
     "World",
     "Symmetry",
+    "symmetry_of",
     "paper_box",
     "make_task",
     "register_task",
@@ -56,6 +57,23 @@ class Symmetry:
     """
 
     actions: tuple[int, ...]
+
+
+def symmetry_of(actions: Sequence[Any], mirror: Callable[[Any], Any]) -> Symmetry:
+    """The [`Symmetry`][] that maps each CRM of ``actions`` to ``mirror(crm)`` (a contact
+    model's ``mirror_crm``); an error naming the first CRM whose mirror the set lacks.
+
+    >>> symmetry_of(paper_box().actions, paper_box().model.mirror_crm)
+    Symmetry(actions=(1, 0, 3, 2))
+    """
+    index = {a: i for i, a in enumerate(actions)}
+    perm = []
+    for a in actions:
+        i = index.get(mirror(a))
+        if i is None:
+            raise CrmgraspError(f"the CRM set has no mirror of {a}; declare no symmetry")
+        perm.append(i)
+    return Symmetry(tuple(perm))
 
 
 def _check_symmetry(sym: Symmetry, actions: tuple[Any, ...], disc: Discretizer, model: ContactModel) -> None:

@@ -49,7 +49,7 @@ from crmgrasp.model.geometry import Disc, Polygon, Shape
 from crmgrasp.model.hand import CRM, Hand
 from crmgrasp.model.planar_model import mirror_crm
 from crmgrasp.model.sensing import Discretizer
-from crmgrasp.tasks.core import PAPER_BINS, PAPER_CRMS, PAPER_HAND, Symmetry, Task, register_task
+from crmgrasp.tasks.core import PAPER_BINS, PAPER_CRMS, PAPER_HAND, Symmetry, Task, register_task, symmetry_of
 from crmgrasp.tasks.presets import VertexStarts
 from crmgrasp.tasks.starts import CornerStarts, StartSampler, acceptable
 
@@ -191,16 +191,8 @@ def default_crms(offsets: Sequence[float] = (0.04, 0.08)) -> tuple[CRM, ...]:
 def mirror_symmetry(actions: Sequence[CRM], labels: tuple[str, ...] = LABELS) -> Symmetry:
     """The [`Symmetry`][] mapping each CRM to its mirror ``(c', f', -r)`` in ``actions``
     (primes: the hand's ``labels`` reversed); an error if some CRM's mirror is not in the
-    set."""
-    index = {(a.c, a.f, a.r): i for i, a in enumerate(actions)}
-    perm = []
-    for a in actions:
-        m = mirror_crm(a, labels)
-        key = (m.c, m.f, m.r if a.r else 0.0)
-        if key not in index:
-            raise CrmgraspError(f"the CRM set has no mirror of {a}; declare no symmetry")
-        perm.append(index[key])
-    return Symmetry(tuple(perm))
+    set ([`symmetry_of`][crmgrasp.tasks.core.symmetry_of])."""
+    return symmetry_of(actions, lambda a: mirror_crm(a, labels))
 
 
 RUBBER = 0.6

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.tasks.core import Symmetry, Task
+from crmgrasp.tasks.core import Symmetry, Task, symmetry_of
 
 __all__ = ["offset_grid", "grid_crms", "mirror_symmetry", "OffsetTree", "offset_tree", "MAX_DEPTH"]
 
@@ -37,13 +37,10 @@ def mirror_symmetry(task: Task, actions: tuple[Any, ...]) -> Symmetry | None:
     in the set; else ``None``."""
     if task.symmetry is None:
         return None
-    perm = []
-    for crm in actions:
-        try:
-            perm.append(actions.index(task.mirror_crm(crm)))
-        except ValueError:
-            return None
-    return Symmetry(tuple(perm))
+    try:
+        return symmetry_of(actions, task.mirror_crm)
+    except CrmgraspError:
+        return None
 
 
 def offset_grid(task: Task, n: int) -> Task:

@@ -35,7 +35,7 @@ from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable, OpenCupOn
 from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, Solid, dot, surface_point
 from crmgrasp.model.spatial import CRM3D, Contacts3D, Hand3D, config3d
 from crmgrasp.model.spatial_model import SpatialModel, contact3d
-from crmgrasp.tasks.core import PAPER_BINS, Symmetry, Task, register_task
+from crmgrasp.tasks.core import PAPER_BINS, Symmetry, Task, register_task, symmetry_of
 
 __all__ = [
     "SpatialTask",
@@ -198,27 +198,25 @@ class SpatialTask(Task):
         return self.model.rows_of([self.sample_start(rng) for _ in range(n)])
 
 
-def spatial_symmetry(actions: tuple[CRM3D, ...]) -> Symmetry:
+def spatial_symmetry(actions: tuple[CRM3D, ...], hand: Hand3D = SPATIAL_HAND) -> Symmetry:
     """The mirror symmetry of a spatial CRM set closed under
-    [`mirror_crm`][crmgrasp.model.spatial_model.SpatialModel.mirror_crm].
+    [`mirror_crm`][crmgrasp.model.spatial_model.SpatialModel.mirror_crm] for ``hand``
+    (two contacts by default; ``TRIPOD_HAND`` for three).
 
     A reflection ``M`` in a vertical plane that contains the hand's forward axis ``g``
     (``y -> -y`` for the default axes) maps each tangent frame's ``t_1`` to ``-M t_1`` and
     ``t_2`` to ``M t_2`` (a reflection reverses cross products), the palm side to its
-    mirror once the labels are swapped, and leaves ``rho`` and the pair
-    ``{|m_a|, |m_b|}`` unchanged. A task whose object and start distributions are
-    invariant under it (``box-3d``, ``cup-3d``: any yaw, offsets symmetric about 0)
-    may declare the symmetry; ``tests/test_spatial_tasks.py`` checks the equivariance on
-    sampled worlds. The registered tasks do not declare it: model-vi on the mirror
-    quotient did worse on ``cup-3d`` (10.4% above the optimum after 6,000 episodes
-    against 4.8% without) and about the same on ``box-3d`` (40.8% against 42%), and a
-    declared symmetry makes ``--preset fastest`` use it."""
-    index = {a: i for i, a in enumerate(actions)}
-    mirror = SpatialModel(SPATIAL_HAND).mirror_crm
-    try:
-        return Symmetry(tuple(index[mirror(a)] for a in actions))
-    except KeyError as exc:
-        raise CrmgraspError(f"the CRM set has no mirror of {exc.args[0]}") from None
+    mirror once the labels are reversed, and leaves ``rho`` and the set of moment
+    magnitudes unchanged (``|m_a|`` and ``|m_b|`` swapped; with three contacts ``|m_a|``
+    and ``|m_c|``). A task whose object and start distributions are
+    invariant under it (``box-3d``, ``cup-3d`` and their tripods: any yaw, offsets
+    symmetric about 0) may declare the symmetry; ``tests/test_spatial_tasks.py`` checks the
+    equivariance on sampled worlds, for two and three contacts. The registered tasks do not
+    declare it: model-vi on the mirror quotient did worse on ``cup-3d`` (10.4% above the
+    optimum after 6,000 episodes against 4.8% without) and about the same on ``box-3d``
+    (40.8% against 42%), `backoff-vi` as well (docs/model-3d.md), and a declared symmetry
+    makes ``--preset fastest`` use it."""
+    return symmetry_of(actions, SpatialModel(hand).mirror_crm)
 
 
 def _spatial_task(
