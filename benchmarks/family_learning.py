@@ -38,14 +38,13 @@ Usage: ``python benchmarks/family_learning.py [--episodes 3000] [--seeds 10] [--
 [--k K] [--fallback nearest|restart] [--mirror]`` (``--param``:
 a learner parameter, e.g. ``explore=1`` for ``backoff-vi``, given to every learner run; ``--k``: every
 learner's history order instead of [`ORDERS`][]; ``--mirror``: the learners on the mirror quotient of
-a spatial task that declares none, [`MIRRORED`][]).
+a spatial task that declares none, ``crmgrasp.tasks.spatial.mirrored``).
 Prints one JSON object; progress on stderr.
 """
 
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import statistics
 import sys
@@ -59,7 +58,7 @@ from crmgrasp.agents.training import train_trials
 from crmgrasp.experiments._episodes import episode_records, greedy_records
 from crmgrasp.planners.references import FALLBACKS, BeliefPolicy, graspable_starts, sample_starts
 from crmgrasp.tasks import make_task
-from crmgrasp.tasks.spatial import SPATIAL_HAND, TRIPOD_HAND, spatial_symmetry
+from crmgrasp.tasks.spatial import MIRROR_INVARIANT, mirrored
 
 TASKS = (
     "box-family",
@@ -81,19 +80,6 @@ THREE_FINGERS = ("triangles-3f", "odd-polygons-3f", "box-family-3f", "cup-family
 """Three-finger twins a run may name with ``--task`` (not run by default)."""
 MESHES = ("open-cup-3d",)
 """Tasks on meshes (readable rules only, slower) a run may name with ``--task`` (not run by default)."""
-MIRRORED = {"box-3d": SPATIAL_HAND, "cup-3d": SPATIAL_HAND, "box-3d-3f": TRIPOD_HAND, "cup-3d-3f": TRIPOD_HAND}
-"""Spatial tasks whose worlds have the mirror symmetry they do not declare (its equivariance is
-checked in ``tests/test_spatial_tasks.py``), and their hands: ``--mirror`` declares it."""
-
-
-def mirrored(task: Any) -> Any:
-    """``task`` with its mirror symmetry declared (unchanged where it declares one), so that the
-    learners run on the mirror quotient; an error for a task not in [`MIRRORED`][]."""
-    if task.symmetry is not None:
-        return task
-    if task.name not in MIRRORED:
-        raise CrmgraspError(f"--mirror: {task.name} has no mirror symmetry known to hold; tasks: {', '.join(MIRRORED)}")
-    return dataclasses.replace(task, symmetry=spatial_symmetry(task.actions, MIRRORED[task.name]))
 
 
 LEARNERS = ("backoff-vi", "pooled-vi", "model-vi")
@@ -158,7 +144,7 @@ def task_row(
     mirror: bool = False,
 ) -> dict:
     """One task: the optimum, then every learner over the seeds (see the module docstring);
-    ``mirror``: the task's mirror symmetry declared ([`mirrored`][])."""
+    ``mirror``: the task's mirror symmetry declared ([`crmgrasp.tasks.spatial.mirrored`][])."""
     task = mirrored(make_task(name)) if mirror else make_task(name)
     t_task = time.perf_counter()
     planned = sample_starts(task, max(pool, n_worlds), 10_000)  # the evaluation worlds first
@@ -270,7 +256,9 @@ if __name__ == "__main__":
     ap.add_argument("--k", type=int, default=None, help="every learner's history order (default: ORDERS)")
     ap.add_argument("--planner", type=int, default=0, help="worlds of a realizable planner's reference (0: none)")
     ap.add_argument("--fallback", choices=FALLBACKS, default="nearest", help="the planner's belief when it empties")
-    ap.add_argument("--mirror", action="store_true", help=f"declare the mirror symmetry on {', '.join(MIRRORED)}")
+    ap.add_argument(
+        "--mirror", action="store_true", help=f"declare the mirror symmetry on {', '.join(MIRROR_INVARIANT)}"
+    )
     a = ap.parse_args()
     if a.planner < 0:
         ap.error(f"--planner must be >= 0, got {a.planner}")

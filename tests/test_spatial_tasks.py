@@ -443,3 +443,16 @@ def test_the_spatial_mirror_symmetry_holds_on_sampled_worlds() -> None:
         spatial_symmetry(make_task("box-3d-3f").actions)  # the two-contact hand's mirror of tripod CRMs
     with pytest.raises(CrmgraspError, match="no mirror"):
         spatial_symmetry(make_task("cup-3d").actions[:3])
+
+
+def test_mirrored_declares_the_spatial_mirror_where_it_holds() -> None:
+    from crmgrasp.tasks.spatial import MIRROR_INVARIANT, TRIPOD_HAND, mirrored, spatial_symmetry
+
+    tripod = make_task("box-3d-3f")
+    assert tripod.symmetry is None and tripod.name in MIRROR_INVARIANT
+    declared = mirrored(tripod)
+    assert declared.symmetry == spatial_symmetry(tripod.actions, TRIPOD_HAND) and declared.name == tripod.name
+    u = make_task("u-handle")
+    assert mirrored(u) is u  # its own declared symmetry
+    with pytest.raises(CrmgraspError, match="open-cup-3d has no mirror symmetry known to hold"):
+        mirrored(make_task("open-cup-3d"))

@@ -42,6 +42,8 @@ __all__ = [
     "SurfaceStarts",
     "spatial_crms",
     "spatial_symmetry",
+    "mirrored",
+    "MIRROR_INVARIANT",
     "SPATIAL_HAND",
     "TRIPOD_HAND",
     "TRIPOD_BINS",
@@ -217,6 +219,28 @@ def spatial_symmetry(actions: tuple[CRM3D, ...], hand: Hand3D = SPATIAL_HAND) ->
     (40.8% against 42%), `backoff-vi` as well (docs/model-3d.md), and a declared symmetry
     makes ``--preset fastest`` use it."""
     return symmetry_of(actions, SpatialModel(hand).mirror_crm)
+
+
+MIRROR_INVARIANT = ("box-3d", "cup-3d", "box-3d-3f", "cup-3d-3f")
+"""The registered spatial tasks whose worlds have the mirror symmetry of [`spatial_symmetry`][]
+without declaring it (``tests/test_spatial_tasks.py`` checks the equivariance on their sampled
+worlds)."""
+
+
+def mirrored(task: Task) -> Task:
+    """``task`` on which learners may use the mirror quotient: unchanged where it declares a
+    symmetry; for a task of [`MIRROR_INVARIANT`][], the same task with
+    ``spatial_symmetry(task.actions, task.hand)`` declared; an error otherwise. For
+    measuring what the quotient buys on those tasks (``benchmarks/family_learning.py
+    --mirror``; docs/model-3d.md)."""
+    if task.symmetry is not None:
+        return task
+    if task.name not in MIRROR_INVARIANT:
+        raise CrmgraspError(
+            f"{task.name} has no mirror symmetry known to hold; the tasks that have one undeclared: "
+            + ", ".join(MIRROR_INVARIANT)
+        )
+    return replace(task, symmetry=spatial_symmetry(task.actions, task.hand))  # type: ignore[arg-type]
 
 
 def _spatial_task(
