@@ -225,7 +225,6 @@ class BackoffVI(TabularAgent):
         short_enc = KOrderEncoder(enc.n_obs, enc.n_actions, 1)
         self._frame = frame
         self._suffix, self._short_of, self._next, self._seen = {}, {}, {}, {}
-        self._pool = SuffixPool()
         if frame.symmetric is not None:
             self._short_sym = SymmetricAgent(self.short, task, short_enc)
             self._amap = list(task.symmetry.actions)  # type: ignore[union-attr]
