@@ -80,8 +80,6 @@ THREE_FINGERS = ("triangles-3f", "odd-polygons-3f", "box-family-3f", "cup-family
 """Three-finger twins a run may name with ``--task`` (not run by default)."""
 MESHES = ("open-cup-3d",)
 """Tasks on meshes (readable rules only, slower) a run may name with ``--task`` (not run by default)."""
-
-
 LEARNERS = ("backoff-vi", "pooled-vi", "model-vi")
 ORDERS = {"backoff-vi": 2}
 """History order per learner (1 where not listed): ``backoff-vi`` runs with k = 2, as ``--preset

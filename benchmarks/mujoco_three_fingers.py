@@ -27,8 +27,8 @@ Usage: ``python benchmarks/mujoco_three_fingers.py [--task triangles-3f ...] [--
 [--worlds 20] [--seeds 3] [--first-seed 0] [--learner pooled-vi] [--k 1] [--param KEY=VALUE ...]
 [--search-worlds 1000] [--mujoco-episodes 0] [--mirror]`` (``--param``: a
 learner parameter, e.g. ``explore=1``; ``--mirror``: the learner on the mirror quotient of a
-spatial task that has the symmetry undeclared, ``crmgrasp.tasks.spatial.mirrored``). Prints one JSON object; progress on
-stderr. About 4 min at the defaults on 2 cores.
+spatial task that has the symmetry undeclared, ``crmgrasp.tasks.spatial.mirrored``). Prints one
+JSON object; progress on stderr. About 4 min at the defaults on 2 cores.
 """
 
 from __future__ import annotations
