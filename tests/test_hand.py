@@ -7,7 +7,7 @@ import pytest
 
 from crmgrasp import CRM, Config, Contact, CrmgraspError, Disc, Error, Hand, Polygon, min_friction, observe
 from crmgrasp.model.geometry import regular_polygon
-from crmgrasp.model.hand import palm_point
+from crmgrasp.model.palm import palm_point
 
 from .test_geometry import U_SHAPE
 

@@ -7,7 +7,7 @@ One module per concept, each rule written once in readable Python:
   [`geometry`][crmgrasp.model.geometry]: objects, their boundary, inside test and first entry;
 * [`contacts`][crmgrasp.model.contacts]: contacts and configurations;
 * [`hand`][crmgrasp.model.hand]: the hand, feasibility (aperture and palm), the CRM
-  transition and its error flags;
+  transition and its error flags; [`palm`][crmgrasp.model.palm]: the palm's side and point;
 * [`sensing`][crmgrasp.model.sensing]: observations, sensing noise, observation bins;
 * [`quality`][crmgrasp.model.quality]: min friction and force closure;
 * [`history`][crmgrasp.model.history]: the k-order history state.

@@ -19,6 +19,9 @@ contact lies strictly between ``a`` and ``z``; it may face the palm, wrapping ar
 the object). Under large sensing noise a CRM can land the moving contact a fraction
 of a millimetre from another one; a hand with fingertips of diameter ``D`` models that
 with ``min_separation = D``.
+The geometry (``u``, ``P``, the facing and crossing tests) is
+[`crmgrasp.model.palm`][]; [`feasible`][] applies the rule.
+
 
 CRM ``(c, f, r)``
 -----------------
@@ -41,7 +44,6 @@ contact and the stationary contact's reach are in the true world.
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -63,6 +65,7 @@ from crmgrasp.model.contacts import (
     replaced,
 )
 from crmgrasp.model.geometry import Shape
+from crmgrasp.model.palm import crossed, outer_faces, palm_at, palm_axis, palm_point, spread
 
 
 class Sensor(Protocol):
@@ -84,9 +87,6 @@ __all__ = [
     "Outcome",
     "check_config",
     "CONTACT_TOL",
-    "palm_axis",
-    "palm_point",
-    "faces_palm",
     "feasible",
     "execute_crm",
 ]
@@ -348,93 +348,28 @@ def check_config(
     return config
 
 
-def palm_axis(config: Config | Grip) -> tuple[float, float, float]:
-    """``(|x_z - x_a|, u_x, u_y)``: the outer contacts' distance (first ``a``, last ``z``)
-    and the unit vector ``u`` to the right of a -> z, the side the palm is on (``u`` is NaN
-    if they coincide)."""
-    a, *_, b = config  # unpacking, not indexing: a Config's [] also takes labels, in Python
-    dx, dy = b.x - a.x, b.y - a.y
-    dist = math.sqrt(dx * dx + dy * dy)
-    if dist == 0.0:
-        return 0.0, math.nan, math.nan
-    return dist, dy / dist, -dx / dist
-
-
-def _palm_at(config: Config | Grip, ux: float, uy: float, h: float) -> tuple[float, float]:
-    """``mean_i x_i + h u``, the sum taken in label order."""
-    first, *rest = config
-    sx, sy = first.x, first.y
-    for c in rest:
-        sx += c.x
-        sy += c.y
-    n = len(config)
-    return (sx / n + h * ux, sy / n + h * uy)
-
-
-def _faces(a: Contact, b: Contact, ux: float, uy: float, tol: float) -> bool:
-    return a.nx * ux + a.ny * uy > tol or b.nx * ux + b.ny * uy > tol
-
-
-def palm_point(config: Config | Grip, palm_depth: float) -> tuple[float, float]:
-    """``P = mean_i x_i + h u`` with ``u`` the right of a -> z (NaN if ``a`` and ``z``
-    coincide); ``(x_a + x_b)/2 + h u`` for two contacts."""
-    _, ux, uy = palm_axis(config)
-    return _palm_at(config, ux, uy, palm_depth)
-
-
-def faces_palm(config: Config | Grip, tol: float) -> bool:
-    """True if an outer contact's surface faces the palm side: ``n . u > tol`` for ``n_a``
-    or ``n_z`` (the object would lie between palm and finger). False if they coincide."""
-    _, ux, uy = palm_axis(config)
-    a, *_, b = config
-    return _faces(a, b, ux, uy, tol)
-
-
-def _spread(config: Config | Grip) -> tuple[float, float]:
-    """The largest and the smallest distance between two contacts (m)."""
-    far, near = 0.0, math.inf
-    for i, p in enumerate(config):
-        for q in itertools.islice(config, i + 1, None):
-            dx, dy = q.x - p.x, q.y - p.y
-            dist = math.sqrt(dx * dx + dy * dy)
-            far, near = max(far, dist), min(near, dist)
-    return far, near
-
-
-def _crossed(config: Config | Grip, ux: float, uy: float) -> bool:
-    """True if the contacts' positions along ``d = (-u_y, u_x)`` (a -> z) do not increase
-    strictly in label order (never for two contacts)."""
-    a, *rest = config
-    last = 0.0
-    for c in rest:
-        s = (c.x - a.x) * -uy + (c.y - a.y) * ux
-        if s <= last:
-            return True
-        last = s
-    return False
-
-
 def feasible(obj: Shape, hand: Hand, config: Config | Grip) -> Error:
     """Feasibility of a configuration ([docs/model.md sections 2 and 8][model-2]), as an [`Error`][]:
     APERTURE if two contacts are more than ``A`` apart; PALM if two collide (at most
     ``min_separation`` apart, coincident by default), an outer contact faces the palm side
-    ([`faces_palm`][]), the fingers cross (positions along a -> z not increasing) or the
-    palm point ([`palm_point`][]) is inside."""
+    ([`faces_palm`][crmgrasp.model.palm.faces_palm]), the fingers cross (positions along
+    a -> z not increasing) or the palm point ([`palm_point`][crmgrasp.model.palm.palm_point])
+    is inside."""
     dist, ux, uy = palm_axis(config)
     if dist > hand.aperture:
         return Error.APERTURE
     if len(config) == 2:
         near = dist
     else:
-        far, near = _spread(config)
+        far, near = spread(config)
         if far > hand.aperture:
             return Error.APERTURE
     a, *_, z = config
-    if near <= hand.min_separation or _faces(a, z, ux, uy, hand.palm_normal_tol):
+    if near <= hand.min_separation or outer_faces(a, z, ux, uy, hand.palm_normal_tol):
         return Error.PALM
-    if len(config) > 2 and _crossed(config, ux, uy):
+    if len(config) > 2 and crossed(config, ux, uy):
         return Error.PALM
-    if obj.contains(_palm_at(config, ux, uy, hand.palm_depth)):
+    if obj.contains(palm_at(config, ux, uy, hand.palm_depth)):
         return Error.PALM
     return Error.NONE
 

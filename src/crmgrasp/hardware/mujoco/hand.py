@@ -42,7 +42,8 @@ from crmgrasp.hardware.contact_sensing import Circle, ContactDetector, NoContact
 from crmgrasp.hardware.mujoco import require_mujoco
 from crmgrasp.hardware.mujoco.model import PhysicsParams, mjcf
 from crmgrasp.model.contacts import Config, Contact, Grip
-from crmgrasp.model.hand import CRM, Error, faces_palm, goal_line, palm_point
+from crmgrasp.model.hand import CRM, Error, goal_line
+from crmgrasp.model.palm import faces_palm, palm_point
 from crmgrasp.tasks import Task
 
 __all__ = ["MujocoHand", "PhysicsError", "FAULTS"]
