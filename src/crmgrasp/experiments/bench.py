@@ -79,21 +79,11 @@ def _timed(fn: Callable[[], None]) -> float:
     return time.perf_counter() - t0
 
 
-def run_benchmarks(
-    *,
-    rounds: int = 15,
-    steps: int = 20_000,
-    vec_steps: int = 200,
-    num_envs: int = 1024,
-    sarsa_rounds: int = 3,
-    sarsa_trials: int = 20,
-    sarsa_episodes: int = 2000,
-    quick: bool = True,
-    seed: int = 0,
-    import_rounds: int = 7,
-) -> dict[str, Any]:
-    """Run every workload; return the results (see the module docstring)."""
-    rng = np.random.default_rng(seed)
+def _step_timings(
+    rng: np.random.Generator, rounds: int, steps: int, vec_steps: int, num_envs: int, seed: int
+) -> tuple[dict[str, float], str]:
+    """Best of ``rounds`` timings (s) of the single and vectorised paper-box and CartPole
+    workloads (keys ``pb``, ``cp``, ``vpb``, ``vcp``), and the paper-box env's kernel name."""
     pb, cp = gym.make(ENV_ID), gym.make("CartPole-v1")
     pb.reset(seed=seed)
     cp.reset(seed=seed)
@@ -109,12 +99,11 @@ def run_benchmarks(
     for _ in range(rounds):
         for key, fn in (("pb", pb_run), ("cp", cp_run), ("vpb", vpb_run), ("vcp", vcp_run)):
             best[key] = min(best[key], _timed(fn))
-    task = paper_box()
+    return best, pb.unwrapped.kernel.name  # type: ignore[attr-defined]
 
-    def sarsa_run() -> None:
-        train_trials(task, "sarsa", trials=sarsa_trials, episodes=sarsa_episodes, seed=seed, eval_episodes=0)
 
-    sarsa = min(_timed(sarsa_run) for _ in range(sarsa_rounds))
+def _batch_peak_mb(rng: np.random.Generator, num_envs: int, seed: int) -> float:
+    """Peak traced memory (MiB) of 100 steps of the vectorised paper-box env."""
     tracemalloc.start()
     env = gym.make_vec(ENV_ID, num_envs=num_envs, vectorization_mode="vector_entry_point")
     env.reset(seed=seed)
@@ -122,6 +111,41 @@ def run_benchmarks(
         env.step(a)
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
+    return round(peak / 2**20, 2)
+
+
+def _reproduce_quick_seconds() -> float:
+    """Wall time (s) of ``crmgrasp reproduce --quick`` in a fresh process."""
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        subprocess.run(
+            [sys.executable, "-m", "crmgrasp", "reproduce", "--quick", "--out", tmp], check=True, capture_output=True
+        )
+        return round(time.perf_counter() - t0, 2)
+
+
+def run_benchmarks(
+    *,
+    rounds: int = 15,
+    steps: int = 20_000,
+    vec_steps: int = 200,
+    num_envs: int = 1024,
+    sarsa_rounds: int = 3,
+    sarsa_trials: int = 20,
+    sarsa_episodes: int = 2000,
+    quick: bool = True,
+    seed: int = 0,
+    import_rounds: int = 7,
+) -> dict[str, Any]:
+    """Run every workload; return the results (see the module docstring)."""
+    rng = np.random.default_rng(seed)
+    best, kernel = _step_timings(rng, rounds, steps, vec_steps, num_envs, seed)
+    task = paper_box()
+
+    def sarsa_run() -> None:
+        train_trials(task, "sarsa", trials=sarsa_trials, episodes=sarsa_episodes, seed=seed, eval_episodes=0)
+
+    sarsa = min(_timed(sarsa_run) for _ in range(sarsa_rounds))
     result: dict[str, Any] = {
         "step_ratio_vs_cartpole": round(best["pb"] / best["cp"], 3),
         "batch_ratio_vs_cartpole_vec": round(best["vcp"] / best["vpb"], 3),
@@ -130,9 +154,9 @@ def run_benchmarks(
         "cartpole_step_us": round(best["cp"] / steps * 1e6, 3),
         "paperbox_vec_steps_per_s": round(vec_steps * num_envs / best["vpb"]),
         "cartpole_vec_steps_per_s": round(vec_steps * num_envs / best["vcp"]),
-        "batch_peak_mb": round(peak / 2**20, 2),
+        "batch_peak_mb": _batch_peak_mb(rng, num_envs, seed),
         "import_over_gymnasium_seconds": round(_import_cost(import_rounds), 3),
-        "kernel": pb.unwrapped.kernel.name,  # type: ignore[attr-defined]
+        "kernel": kernel,
         "rounds": rounds,
         "num_envs": num_envs,
         "python": platform.python_version(),
@@ -140,14 +164,7 @@ def run_benchmarks(
         "gymnasium": gym.__version__,
     }
     if quick:
-        with tempfile.TemporaryDirectory() as tmp:
-            t0 = time.perf_counter()
-            subprocess.run(
-                [sys.executable, "-m", "crmgrasp", "reproduce", "--quick", "--out", tmp],
-                check=True,
-                capture_output=True,
-            )
-            result["reproduce_quick_seconds"] = round(time.perf_counter() - t0, 2)
+        result["reproduce_quick_seconds"] = _reproduce_quick_seconds()
     return result
 
 
