@@ -221,22 +221,15 @@ def _recorded_study(rec: dict[str, Any], out: Path) -> Study:
         raise CrmgraspError(f"run record of {str(out)!r} holds no readable study ({exc})") from None
 
 
-def report(folder: str | Path) -> Path:
-    """``report.md``, ``profile.png`` and one ``param_<key>.png`` per swept key, from a
-    study folder: per cell, the mean greedy CRMs per episode with a bootstrap 95%
-    interval over all its trials (every seed), the interquartile mean, and a performance
-    profile (the share of a cell's trials whose greedy CRMs are at most tau). It reads
-    only inside the folder; a damaged record or unit file is a one-line error."""
-    from crmgrasp.experiments.runs import _read, read_status
-
-    out = Path(folder)
-    rec = _read(out)
-    if rec.get("command") != "sweep":
-        raise CrmgraspError(f"{str(out)!r} is not a study folder (command {shown(rec.get('command'))})")
-    study = _recorded_study(rec, out)
+def _cell_results(
+    rec: dict[str, Any], out: Path, study: Study
+) -> tuple[dict[str, np.ndarray], dict[str, list[Any]], dict[str, float]]:
+    """Per cell of a study folder's record: the greedy CRMs of every trial of its completed
+    runs, each run's episodes to 5%, and its task's optimum as the runs recorded it
+    (``reference_mean_steps``; absent where the task states none)."""
     per_cell: dict[str, np.ndarray] = {}
     to5: dict[str, list[Any]] = {}
-    optimum: dict[str, float] = {}  # a cell's task's optimum, as its runs recorded it (reference_mean_steps)
+    optimum: dict[str, float] = {}
     for c in study.cells:
         vals: list[float] = []
         for s in study.seeds:
@@ -250,6 +243,39 @@ def report(folder: str | Path) -> Path:
                 if isinstance(ref, (int, float)) and ref > 0:
                     optimum[cell_id(c)] = float(ref)
         per_cell[cell_id(c)] = np.asarray(vals, dtype=float)
+    return per_cell, to5, optimum
+
+
+def _cell_row(c: dict[str, Any], v: np.ndarray, swept: list[str], to5: list[Any], ref: float | None) -> str:
+    """One cell's row of ``report.md``: its settings, trials, mean CRMs, gap to the optimum
+    ``ref``, bootstrap 95% interval, interquartile mean and median episodes to 5% over ``to5``."""
+    lo, hi = bootstrap_ci(v, 0)
+    mean = fmt(float(v.mean())) if v.size else "failed"
+    settings = " | ".join(str(c.get(k)) for k in swept)
+    middle = fmt(iqm(v)) if v.size else "-"
+    seeds_to5 = sorted(math.inf if not isinstance(x, (int, float)) else x for x in to5)
+    med = seeds_to5[len(seeds_to5) // 2] if seeds_to5 else None
+    shown_to5 = "-" if med is None else ("never" if med == math.inf else f"{int(med):,}")
+    ci = f"{fmt(lo)}-{fmt(hi)}" if math.isfinite(lo) else "-"
+    gap = f"{float(v.mean()) / ref - 1.0:+.1%}" if ref and v.size else "-"
+    row = f"| {c.get('task')} | {cell_id(c)} | {settings}{' | ' if swept else ''}{v.size} | {mean} | {gap} | {ci} | "
+    return f"{row}{middle} | {shown_to5} |"
+
+
+def report(folder: str | Path) -> Path:
+    """``report.md``, ``profile.png`` and one ``param_<key>.png`` per swept key, from a
+    study folder: per cell, the mean greedy CRMs per episode with a bootstrap 95%
+    interval over all its trials (every seed), the interquartile mean, and a performance
+    profile (the share of a cell's trials whose greedy CRMs are at most tau). It reads
+    only inside the folder; a damaged record or unit file is a one-line error."""
+    from crmgrasp.experiments.runs import _read, read_status
+
+    out = Path(folder)
+    rec = _read(out)
+    if rec.get("command") != "sweep":
+        raise CrmgraspError(f"{str(out)!r} is not a study folder (command {shown(rec.get('command'))})")
+    study = _recorded_study(rec, out)
+    per_cell, to5, optimum = _cell_results(rec, out, study)
     swept = [k for k in table_keys(study) if k != "task" and len({json.dumps(c.get(k)) for c in study.cells}) > 1]
     lines = [
         f"# Study {study.name}: {len(study.cells)} cells x {len(study.seeds)} seeds x {study.trials} trials",
@@ -272,21 +298,7 @@ def report(folder: str | Path) -> Path:
         return str(c.get("task")), float(np.mean(v)) if v.size else math.inf
 
     for c in sorted(study.cells, key=order):
-        v = per_cell[cell_id(c)]
-        lo, hi = bootstrap_ci(v, 0)
-        mean = fmt(float(v.mean())) if v.size else "failed"
-        settings = " | ".join(str(c.get(k)) for k in swept)
-        middle = fmt(iqm(v)) if v.size else "-"
-        seeds_to5 = sorted(math.inf if not isinstance(x, (int, float)) else x for x in to5.get(cell_id(c), []))
-        med = seeds_to5[len(seeds_to5) // 2] if seeds_to5 else None
-        shown_to5 = "-" if med is None else ("never" if med == math.inf else f"{int(med):,}")
-        ci = f"{fmt(lo)}-{fmt(hi)}" if math.isfinite(lo) else "-"
-        ref = optimum.get(cell_id(c))
-        gap = f"{float(v.mean()) / ref - 1.0:+.1%}" if ref and v.size else "-"
-        row = (
-            f"| {c.get('task')} | {cell_id(c)} | {settings}{' | ' if swept else ''}{v.size} | {mean} | {gap} | {ci} | "
-        )
-        lines.append(f"{row}{middle} | {shown_to5} |")
+        lines.append(_cell_row(c, per_cell[cell_id(c)], swept, to5.get(cell_id(c), []), optimum.get(cell_id(c))))
     atomic_write_text(out / "report.md", "\n".join(lines) + "\n")
     _figures(out, study, per_cell, swept)
     return out / "report.md"
