@@ -56,7 +56,8 @@ from crmgrasp._validation import CrmgraspError, integer
 from crmgrasp.agents.policy import GreedyPolicy
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import KOrderEncoder
-from crmgrasp.planners.references import BeliefPolicy, Start, State, _Model
+from crmgrasp.planners.references import BeliefPolicy
+from crmgrasp.planners.sampled import SampledModel, Start, State
 from crmgrasp.sim import OneStep, Percept, SimState, run_episode, step_reward
 from crmgrasp.tasks import Task
 
@@ -78,7 +79,7 @@ class _Episodes:
     """Every start's noise-free episode under a policy table: cost and visited histories."""
 
     def __init__(self, task: Task, starts: Sequence[Start], k: int, horizon: int) -> None:
-        self.model = _Model(task)
+        self.model = SampledModel(task)
         self.enc = KOrderEncoder(task.discretizer.size, len(task.actions), k)
         self.horizon = horizon
         self.states: list[State] = [self.model.state(c) for c in starts]

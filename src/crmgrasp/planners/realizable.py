@@ -21,7 +21,8 @@ from crmgrasp._progress import Progress
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.hand import Error
 from crmgrasp.model.sensing import SensorNoise
-from crmgrasp.planners.references import BeliefPolicy, Start, _kernel, graspable_starts, sample_starts
+from crmgrasp.planners.references import BeliefPolicy, graspable_starts, sample_starts
+from crmgrasp.planners.sampled import Start, expansion_kernel
 from crmgrasp.sim import run_episode
 from crmgrasp.tasks import Task
 
@@ -47,7 +48,7 @@ def policy_costs(
     task, backend = policy.task, policy.backend
     if task.noise.active:  # noise-free dynamics, as the references' own
         task = dataclasses.replace(task, noise=SensorNoise())
-    kernel, counted = _kernel(task, backend), task.error_cost > 0.0
+    kernel, counted = expansion_kernel(task, backend), task.error_cost > 0.0
     rng = np.random.default_rng(0)  # never drawn from: no sensing noise, and every start given
     costs = np.empty(len(starts))
     for i, start in enumerate(starts):
