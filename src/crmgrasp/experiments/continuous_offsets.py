@@ -196,6 +196,55 @@ def continuous_offsets(
     return summary
 
 
+def _panel(ax: Any, name: str, mine: list[dict[str, Any]], mine_learned: list[dict[str, Any]]) -> None:
+    """One task's panel of [`_figure`][] on ``ax``: its optima per grid (``mine``) and its
+    learners' greedy means (``mine_learned``)."""
+    hand = next(r for r in mine if r["grid"] is None)["belief_optimum"]
+    top = max([1.6 * hand] + [1.1 * r["greedy_mean"] for r in mine_learned])
+    ax.axhline(hand, color="tab:gray", lw=1, label="optimum, hand-picked CRMs")
+    grids = [r for r in mine if r["grid"] is not None]
+    odd = [r for r in grids if r["grid"] % 2]
+    ax.plot(
+        [r["offsets_per_pair"] for r in odd],
+        [r["belief_optimum"] for r in odd],
+        "o-",
+        color="tab:blue",
+        label="optimum, odd grid (holds r = 0)",
+    )
+    for r in (r for r in grids if not r["grid"] % 2):
+        y = min(r["belief_optimum"], 0.97 * top)
+        ax.plot([r["offsets_per_pair"]], [y], "x", color="tab:red", label="optimum, even grid")
+        if r["belief_optimum"] > top:
+            ax.annotate(
+                f"{r['belief_optimum']:.3g}",
+                (r["offsets_per_pair"], y),
+                fontsize=6,
+                color="tab:red",
+                xytext=(3, -9),
+                textcoords="offset points",
+            )
+    for r in mine_learned:
+        at = r["offsets_per_pair"] or 1
+        refined = r["learner"] == "refine-vi"
+        label = "model-vi, hand-picked CRMs" if at == 1 else "model-vi, on a grid"
+        ax.plot(
+            [at],
+            [r["greedy_mean"]],
+            "P" if refined else "*",
+            ms=9 if refined else 11,
+            color="tab:green" if refined else "tab:gray" if at == 1 else "tab:blue",
+            label="refine-vi, offsets chosen on its finest grid" if refined else label,
+        )
+    ticks = [1, *sorted({r["offsets_per_pair"] for r in [*grids, *mine_learned] if r["offsets_per_pair"]})]
+    ax.set_xscale("log", base=2)
+    ax.set_xticks(ticks, ["hand", *map(str, ticks[1:])], fontsize=7)
+    ax.minorticks_off()
+    ax.set_ylim(0.85 * min(r["belief_optimum"] for r in mine), top)
+    ax.set_title(name, fontsize=9)
+    ax.set_xlabel("offsets per contact pair", fontsize=8)
+    ax.tick_params(labelsize=7)
+
+
 def _figure(rows: list[dict[str, Any]], learned: list[dict[str, Any]], cfg: ContinuousOffsetsConfig) -> Any:
     """One panel per task: the belief-space optimum against offsets per pair (odd grids, which
     hold ``r = 0``, joined; even grids as crosses, drawn at the top edge with their value when
@@ -208,52 +257,7 @@ def _figure(rows: list[dict[str, Any]], learned: list[dict[str, Any]], cfg: Cont
     fig = Figure(figsize=(max(6.0, 2.9 * len(names)), 4.2), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, len(names)))
     for ax, name in zip(axes, names, strict=True):
-        mine = [r for r in rows if r["task"] == name]
-        mine_learned = [r for r in learned if r["task"] == name]
-        hand = next(r for r in mine if r["grid"] is None)["belief_optimum"]
-        top = max([1.6 * hand] + [1.1 * r["greedy_mean"] for r in mine_learned])
-        ax.axhline(hand, color="tab:gray", lw=1, label="optimum, hand-picked CRMs")
-        grids = [r for r in mine if r["grid"] is not None]
-        odd = [r for r in grids if r["grid"] % 2]
-        ax.plot(
-            [r["offsets_per_pair"] for r in odd],
-            [r["belief_optimum"] for r in odd],
-            "o-",
-            color="tab:blue",
-            label="optimum, odd grid (holds r = 0)",
-        )
-        for r in (r for r in grids if not r["grid"] % 2):
-            y = min(r["belief_optimum"], 0.97 * top)
-            ax.plot([r["offsets_per_pair"]], [y], "x", color="tab:red", label="optimum, even grid")
-            if r["belief_optimum"] > top:
-                ax.annotate(
-                    f"{r['belief_optimum']:.3g}",
-                    (r["offsets_per_pair"], y),
-                    fontsize=6,
-                    color="tab:red",
-                    xytext=(3, -9),
-                    textcoords="offset points",
-                )
-        for r in mine_learned:
-            at = r["offsets_per_pair"] or 1
-            refined = r["learner"] == "refine-vi"
-            label = "model-vi, hand-picked CRMs" if at == 1 else "model-vi, on a grid"
-            ax.plot(
-                [at],
-                [r["greedy_mean"]],
-                "P" if refined else "*",
-                ms=9 if refined else 11,
-                color="tab:green" if refined else "tab:gray" if at == 1 else "tab:blue",
-                label="refine-vi, offsets chosen on its finest grid" if refined else label,
-            )
-        ticks = [1, *sorted({r["offsets_per_pair"] for r in [*grids, *mine_learned] if r["offsets_per_pair"]})]
-        ax.set_xscale("log", base=2)
-        ax.set_xticks(ticks, ["hand", *map(str, ticks[1:])], fontsize=7)
-        ax.minorticks_off()
-        ax.set_ylim(0.85 * min(r["belief_optimum"] for r in mine), top)
-        ax.set_title(name, fontsize=9)
-        ax.set_xlabel("offsets per contact pair", fontsize=8)
-        ax.tick_params(labelsize=7)
+        _panel(ax, name, [r for r in rows if r["task"] == name], [r for r in learned if r["task"] == name])
     axes[0].set_ylabel("CRMs per episode")
     handles, labels = axes[0].get_legend_handles_labels()
     unique = dict(zip(labels, handles, strict=True))

@@ -212,6 +212,24 @@ def figure_9_mujoco(
     return summary
 
 
+def _random_crms_agreeing(
+    task: Task, rng: np.random.Generator, n: int, errors: SensingErrors, seconds: list[float]
+) -> int:
+    """Of ``n`` random CRMs from random task starts on the MuJoCo hand, how many end with the
+    kinematic model's error flag; the contacts sensed before and after each go to ``errors``,
+    the CRMs' wall times (s) to ``seconds``."""
+    agree = 0
+    for _ in range(n):
+        start = two_contacts(task.sample_start(rng), "the MuJoCo stand-in")
+        hand = MujocoHand(task, start, rng)
+        errors.add(hand.sense(), hand.true_config())
+        crm = task.actions[int(rng.integers(len(task.actions)))]
+        agree += hand.execute(crm) == execute_crm(task.obj, task.hand, start, crm).error
+        errors.add(hand.sense(), hand.true_config())
+        seconds.extend(hand.crm_seconds)
+    return agree
+
+
 def figure_4_mujoco(out_dir: str | Path, config: MujocoFigure4Config = MujocoFigure4Config()) -> dict[str, Any]:
     """Opposition CRMs on the MuJoCo hand and the contact-sensing accuracy; write CSV, PNG, config."""
     c = config
@@ -232,15 +250,7 @@ def figure_4_mujoco(out_dir: str | Path, config: MujocoFigure4Config = MujocoFig
         values.append(mu)
         x, y, yaw = hand.object_pose()
         rows.append([trial, *start.a.point, *start.b.point, str(crm), error.name.lower(), mu, x, y, yaw])
-    agree = 0
-    for _ in range(c.extra_starts):
-        start = two_contacts(task.sample_start(rng), "the MuJoCo stand-in")
-        hand = MujocoHand(task, start, rng)
-        errors.add(hand.sense(), hand.true_config())
-        crm = task.actions[int(rng.integers(len(task.actions)))]
-        agree += hand.execute(crm) == execute_crm(task.obj, task.hand, start, crm).error
-        errors.add(hand.sense(), hand.true_config())
-        seconds += hand.crm_seconds
+    agree = _random_crms_agreeing(task, rng, c.extra_starts, errors, seconds)
     out = Path(out_dir)
     write_csv(
         out / "data.csv",
