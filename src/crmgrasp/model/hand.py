@@ -18,10 +18,8 @@ cross: the contacts' positions along ``d`` increase strictly in label order (a m
 contact lies strictly between ``a`` and ``z``; it may face the palm, wrapping around
 the object). Under large sensing noise a CRM can land the moving contact a fraction
 of a millimetre from another one; a hand with fingertips of diameter ``D`` models that
-with ``min_separation = D``.
-The geometry (``u``, ``P``, the facing and crossing tests) is
-[`crmgrasp.model.palm`][]; [`feasible`][] applies the rule.
-
+with ``min_separation = D``. The geometry (``u``, ``P``, the facing and crossing tests)
+is in [`crmgrasp.model.palm`][]; [`feasible`][] applies the rule.
 
 CRM ``(c, f, r)``
 -----------------

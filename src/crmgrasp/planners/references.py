@@ -20,7 +20,8 @@ the learners do (success ends an episode; ``task.max_steps`` truncates it).
   branch-and-bound cut (every start still in play costs at least its clairvoyant
   number of CRMs). The gap between the two is the price of perceptual aliasing.
 
-Both searches expand a state by every CRM at once, through the kernel of its object
+Both searches run over the starts' cached model ([`crmgrasp.planners.sampled`][]), which
+expands a state by every CRM at once, through the kernel of its object
 ([`crmgrasp.kernels.base.Kernel.successors`][]: compiled where a kernel exists on the
 default ``backend="auto"``, the readable rules with ``backend="reference"``). Every kernel
 gives the readable rules' results bit for bit, so every value here is the same on either
