@@ -144,6 +144,7 @@ def test_policy_file_roundtrip_and_errors(learned, tmp_path):
     check(lambda d: d.update(version=9), "unsupported policy version")
     check(lambda d: d.update(task="other"), "for task 'other'")
     check(lambda d: d.pop("bins"), "missing field")
+    check(lambda d: d.update(agent={"name": 5}), '"agent" must be the learner')
     check(lambda d: d.update(k=-1), "k must be")
     check(lambda d: d.update(k=1000000), r"k must be an integer in \[0, 10\]")
     check(lambda d: d["actions"][0].__setitem__(2, 0.1), "CRM set")

@@ -379,6 +379,9 @@ class GreedyPolicy:
             where = first_difference(_written(doc["task_spec"]), task_to_dict(task))
             if where is not None:
                 raise bad(f"policy was made for another version of task {task.name!r} (it differs in {where})")
+        agent = doc.get("agent", "unknown")
+        if not isinstance(agent, str):
+            raise bad(f'"agent" must be the learner\'s name (a string), got {shown(agent)}')
         k = doc["k"]
         if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k <= MAX_K:
             raise bad(f"k must be an integer in [0, {MAX_K}], got {shown(k)}")
@@ -395,7 +398,7 @@ class GreedyPolicy:
         backoff = None
         if doc["version"] == 3 or "backoff" in doc:
             backoff = _read_backoff(doc, task, k, bad)
-        return cls(task, k, table, str(doc.get("agent", "unknown")), backoff, ranked)
+        return cls(task, k, table, agent, backoff, ranked)
 
 
 def _best_actions(ranked: dict[int, tuple[tuple[int, ...], ...]]) -> dict[int, tuple[int, ...]]:
@@ -461,7 +464,7 @@ def _read_backoff(doc: dict[str, Any], task: Task, k: int, bad: Any) -> GreedyPo
     encoder = KOrderEncoder(task.discretizer.size, len(task.actions), k1)
     table = _read_table(part["greedy"], encoder, bad)
     ranked = _read_ranked(part["ranked"], table, encoder, bad) if "ranked" in part else None
-    return GreedyPolicy(task, k1, table, str(doc.get("agent", "unknown")), None, ranked)
+    return GreedyPolicy(task, k1, table, doc.get("agent", "unknown"), None, ranked)
 
 
 def _read_table(greedy: Any, encoder: KOrderEncoder, bad: Any) -> dict[int, tuple[int, ...]]:
