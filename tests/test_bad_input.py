@@ -140,6 +140,13 @@ def test_api_configurations_and_generators_are_checked(task):
         with pytest.raises(CrmgraspError, match=re.escape(msg)):
             env.reset(options={"config": config})
     assert env.reset(options={"config": good})[1]["config"] == good
+    for options, msg in (
+        ({"confg": good}, "unknown reset option(s) confg; known: config, world"),
+        ({"config": good, "world": None}, "options['config'] or options['world'], not both"),
+        ("config", "reset options must be a dict, got 'config'"),
+    ):
+        with pytest.raises(CrmgraspError, match=re.escape(msg)):
+            env.reset(options=options)  # type: ignore[arg-type]
 
 
 def test_the_fused_kernel_refuses_an_action_out_of_range(task):

@@ -195,6 +195,7 @@ def test_the_paper_crms_step_as_the_discrete_environment():
         ({"pair": 0, "r": [0.0, 0.0]}, "1 number"),
         ({"pair": 0, "r": "x"}, "1 number"),
         ({"pair": 0}, "keys 'pair' and 'r'"),
+        ({"pair": 0, "r": [0.0], "x": 1}, "keys 'pair' and 'r' only"),
         (3, "keys 'pair' and 'r'"),
     ],
 )
@@ -408,6 +409,7 @@ def test_the_continuous_vector_env_steps_the_paper_crms_as_the_discrete_one():
         ({"pair": np.zeros(4, dtype=int), "r": np.full((4, 1), np.nan)}, "finite and within"),
         ({"pair": np.zeros(4, dtype=int), "r": np.zeros((4, 2))}, r"shape \(4, 1\)"),
         (np.zeros(4, dtype=int), "keys 'pair' and 'r'"),
+        ({"pair": np.zeros(4, dtype=int), "r": np.zeros((4, 1)), "x": 0}, r"only, got \['pair', 'r', 'x'\]"),
     ],
 )
 def test_bad_batched_continuous_actions_fail_in_one_line(actions, message):

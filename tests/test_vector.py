@@ -99,3 +99,5 @@ def test_bad_vector_input():
         env.step(np.zeros(3, dtype=int))
     with pytest.raises(CrmgraspError, match=r"\[0, 4\)"):
         env.step(np.full(4, 9))
+    with pytest.raises(CrmgraspError, match="takes no reset options"):
+        env.reset(options={"config": None})

@@ -48,8 +48,13 @@ class PairOffsetActions:
 
     def one(self, action: Any) -> tuple[int, list[float]]:
         """``(pair, offsets)`` of one action, checked, the offsets clipped into the pair's range."""
-        if (type(action) is not dict and not isinstance(action, Mapping)) or "pair" not in action or "r" not in action:
-            raise CrmgraspError(f"action must be a dict with keys 'pair' and 'r', got {action!r:.80}")
+        if (
+            (type(action) is not dict and not isinstance(action, Mapping))
+            or len(action) != 2
+            or "pair" not in action
+            or "r" not in action
+        ):
+            raise CrmgraspError(f"action must be a dict with keys 'pair' and 'r' only, got {action!r:.80}")
         pair, r = action["pair"], action["r"]
         if type(pair) is not int:
             if (
@@ -92,8 +97,9 @@ class PairOffsetActions:
     def batch(self, actions: Any, n: int) -> np.ndarray:
         """The action table ``(n, 2 + d)`` of a batch ``{"pair": (n,), "r": (n, d)}``, checked
         and clipped as [`one`][] (one-line errors naming the problem)."""
-        if not isinstance(actions, Mapping) or "pair" not in actions or "r" not in actions:
-            raise CrmgraspError(f"actions must be a dict with keys 'pair' and 'r', got {type(actions).__name__}")
+        if not isinstance(actions, Mapping) or len(actions) != 2 or "pair" not in actions or "r" not in actions:
+            keys = list(actions) if isinstance(actions, Mapping) else type(actions).__name__
+            raise CrmgraspError(f"actions must be a dict with keys 'pair' and 'r' only, got {keys}")
         pair, r = np.asarray(actions["pair"]), np.asarray(actions["r"])
         if pair.shape != (n,) or pair.dtype.kind not in "iu":
             raise CrmgraspError(f"actions['pair'] must be {n} integers, got shape {pair.shape} dtype {pair.dtype}")

@@ -12,7 +12,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from crmgrasp._validation import CrmgraspError, boolean
+from crmgrasp._validation import CrmgraspError, boolean, shown
 from crmgrasp.kernels import Kernel, kernel_for
 from crmgrasp.model.contact_model import ContactModel
 from crmgrasp.model.contacts import Config
@@ -31,11 +31,31 @@ __all__ = [
     "observation_space",
     "space_observation",
     "MUJOCO_ENVS",
+    "RESET_OPTIONS",
+    "check_reset_options",
 ]
 
 ENV_ID = "crmgrasp/PaperBox-v0"
 _empty = np.empty
 _FIRST_BLOCK, _MAX_BLOCK = 16, 1024
+
+
+RESET_OPTIONS = ("config", "world")
+"""The keys ``reset(options=...)`` takes: a start configuration or, on a family task, a world."""
+
+
+def check_reset_options(options: Any) -> None:
+    """A one-line error unless ``options`` is ``None`` or a dict of at most one of
+    [`RESET_OPTIONS`][]."""
+    if options is None:
+        return
+    if not isinstance(options, dict):
+        raise CrmgraspError(f"reset options must be a dict, got {shown(options)}")
+    unknown = sorted(map(str, set(options) - set(RESET_OPTIONS)))
+    if unknown:
+        raise CrmgraspError(f"unknown reset option(s) {', '.join(unknown)}; known: {', '.join(RESET_OPTIONS)}")
+    if len(options) > 1:
+        raise CrmgraspError("reset takes options['config'] or options['world'], not both")
 
 
 def observation_space(model: ContactModel) -> spaces.Dict:
@@ -165,6 +185,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         object and configuration (a family draws the object of each episode)."""
         super().reset(seed=seed)
         self._last = None
+        check_reset_options(options)
         if options and "world" in options:
             cfg = self._use_world(options["world"])
         elif options and "config" in options:

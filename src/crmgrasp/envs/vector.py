@@ -28,7 +28,7 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from crmgrasp._validation import CrmgraspError, boolean
+from crmgrasp._validation import CrmgraspError, boolean, shown
 from crmgrasp.envs.single import observation_space
 from crmgrasp.kernels import Kernel, kernel_for
 from crmgrasp.sim import episode_end, step_reward
@@ -128,6 +128,8 @@ class CRMGraspVectorEnv(VectorEnv):
         """Reset every sub-environment (``seed`` seeds the shared generator)."""
         if isinstance(seed, list):
             raise CrmgraspError("the vector environment takes one integer seed for its generator")
+        if options:
+            raise CrmgraspError(f"the vector environment takes no reset options, got {shown(options)}")
         super().reset(seed=seed)
         self._buffer, self._next = np.empty((0, self._width)), 0
         n = self.num_envs
@@ -194,6 +196,8 @@ class FamilyVectorEnv(CRMGraspVectorEnv):
         """Reset every sub-environment: a new object and start per row."""
         if isinstance(seed, list):
             raise CrmgraspError("the vector environment takes one integer seed for its generator")
+        if options:
+            raise CrmgraspError(f"the vector environment takes no reset options, got {shown(options)}")
         VectorEnv.reset(self, seed=seed)
         self._steps[:] = 0
         self._prev_done[:] = False

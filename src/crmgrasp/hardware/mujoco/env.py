@@ -16,7 +16,7 @@ import numpy as np
 from gymnasium import spaces
 
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.envs.single import observation_space, space_observation
+from crmgrasp.envs.single import check_reset_options, observation_space, space_observation
 from crmgrasp.hardware.mujoco.model import PhysicsParams
 from crmgrasp.hardware.mujoco.steps import MujocoSteps
 from crmgrasp.sim import OneStep, SimState
@@ -98,6 +98,7 @@ class MujocoCRMEnv(gym.Env[dict[str, Any], np.int64]):
         """Start an episode in a world drawn from the task, or at ``options={"config":
         Config}`` (``{"world": World}`` on a family task)."""
         super().reset(seed=seed)
+        check_reset_options(options)
         rng = self.np_random
         for _ in range(MAX_START_TRIES):
             if options and "world" in options:
