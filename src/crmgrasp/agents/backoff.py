@@ -220,7 +220,7 @@ class BackoffVI(TabularAgent):
         its own mirror quotient where the long level has one)."""
         enc = frame.encoder
         if enc.k < 2:
-            raise CrmgraspError(f"backoff-vi needs long histories, k >= 2 (6 recommended), got k = {enc.k}")
+            raise CrmgraspError(f"backoff-vi needs long histories, k >= 2 (--preset families uses 2), got k = {enc.k}")
         task = frame.task
         short_enc = KOrderEncoder(enc.n_obs, enc.n_actions, 1)
         self._frame = frame
