@@ -28,8 +28,8 @@ seeds = [0, 1]
 agent = ["sarsa", "q"]
 alpha = [0.3, 0.6]
 [[cell]]
-agent = "random"
-task = "missing.toml"
+agent = "backoff-vi"
+k = 1
 """
 
 
@@ -105,6 +105,21 @@ def test_every_agents_scalar_parameters_are_cell_keys_and_columns(tmp_path, caps
     assert sorted((p["beta"], p["mean_after"]) for p in params) == [(0.5, 10), (1.0, 10)]
 
 
+@pytest.mark.parametrize(
+    ("cell", "message"),
+    [
+        ('task = "missing.toml"', "cell task '"),
+        ('task = "nonexistent"', "cell task 'nonexistent': unknown task 'nonexistent'"),
+        ('start_preset = "bogus"', "cell task 'paper-box': unknown start preset 'bogus'"),
+    ],
+)
+def test_a_task_that_does_not_resolve_is_refused_before_any_run(tmp_path, cell, message):
+    path = _write(tmp_path, f'name = "t"\n[[cell]]\nagent = "sarsa"\n{cell}\n')
+    with pytest.raises(CrmgraspError, match=re.escape(message)) as err:
+        load_study(path)
+    assert "\n" not in str(err.value) and "study file" in str(err.value)
+
+
 def test_a_cells_relative_task_file_is_read_beside_the_study(tmp_path, monkeypatch):
     from crmgrasp.tasks import TEMPLATE
 
@@ -121,7 +136,7 @@ def test_a_cells_relative_task_file_is_read_beside_the_study(tmp_path, monkeypat
 def test_sweep_runs_tables_report_and_resume(tmp_path, capsys, monkeypatch):
     path = _write(tmp_path)
     one, two = tmp_path / "one", tmp_path / "two"
-    assert main(["sweep", str(path), "--quiet", "--jobs", "1", "--out", str(one)]) == 1  # the random cell fails
+    assert main(["sweep", str(path), "--quiet", "--jobs", "1", "--out", str(one)]) == 1  # backoff-vi, k = 1, fails
     assert "8 runs ok, 2 failed" in capsys.readouterr().out
     assert main(["sweep", str(path), "--quiet", "--jobs", "2", "--out", str(two)]) == 1
     assert (one / "results.csv").read_bytes() == (two / "results.csv").read_bytes()
@@ -131,7 +146,7 @@ def test_sweep_runs_tables_report_and_resume(tmp_path, capsys, monkeypatch):
     with open(one / "cells.csv") as fh:
         cells = list(csv.DictReader(fh))
     failed = [c for c in cells if c["status"] == "failed"]
-    assert len(failed) == 2 and "missing.toml" in failed[0]["error"]
+    assert len(failed) == 2 and "needs long histories" in failed[0]["error"]
     assert '"failed": 2' in (one / "study.json").read_text()
     assert read_status(one) == "complete"
     calls = []
@@ -140,9 +155,9 @@ def test_sweep_runs_tables_report_and_resume(tmp_path, capsys, monkeypatch):
     assert calls == []  # every unit was recorded: nothing runs again
     assert main(["sweep", "report", str(one)]) == 0
     report = (one / "report.md").read_text()
-    assert "| task | cell | agent | alpha | trials | mean CRMs | vs optimum |" in report and "failed" in report
-    assert re.search(r"\| paper-box \| sarsa-k2-\w+ \| sarsa \| 0\.\d \| 6 \| [\d.]+ \| \+\d+\.\d% \|", report)
-    for name in ("profile.png", "param_agent.png", "param_alpha.png"):
+    assert "| task | cell | agent | k | alpha | trials | mean CRMs | vs optimum |" in report and "failed" in report
+    assert re.search(r"\| paper-box \| sarsa-k2-\w+ \| sarsa \| 2 \| 0\.\d \| 6 \| [\d.]+ \| \+\d+\.\d% \|", report)
+    for name in ("profile.png", "param_agent.png", "param_k.png", "param_alpha.png"):
         assert (one / name).exists()
 
 

@@ -227,7 +227,24 @@ def load_study(path: str | Path) -> Study:
         raise CrmgraspError(f"study file {str(p)!r}: {exc}") from None
     here = p.resolve().parent
     cells = tuple({**c, "task": _beside(here, c["task"])} for c in study.cells)
+    try:
+        _check_tasks(cells)
+    except CrmgraspError as exc:
+        raise CrmgraspError(f"study file {str(p)!r}: {exc}") from None
     return dataclasses.replace(study, cells=cells)
+
+
+def _check_tasks(cells: tuple[dict[str, Any], ...]) -> None:
+    """Build each distinct task of the cells (with its start preset and grasp reward) once,
+    so that a task name, file or preset that does not resolve is a one-line error before any
+    run starts, not a failed run per cell and seed."""
+    from crmgrasp.tasks.files import resolve_reading
+
+    for task, starts, reward in dict.fromkeys((c["task"], c.get("start_preset"), c.get("grasp_reward")) for c in cells):
+        try:
+            resolve_reading(task, starts=starts, grasp_reward=reward)
+        except CrmgraspError as exc:
+            raise CrmgraspError(f"cell task {task!r}: {exc}") from None
 
 
 def _beside(folder: Path, task: str) -> str:
