@@ -204,6 +204,11 @@ def test_run_command(tmp_path, capsys):
     )
     out = capsys.readouterr().out
     assert out.startswith("grasp sensed after 2 CRMs") and log.read_text().startswith("step,ax,ay")
+    again = ["run", "--policy", str(pol / "policy.json"), "--a", "-0.15,-0.02", "--b", "-0.01,-0.05", "--log", str(log)]
+    log.write_text("an earlier run")
+    assert main(again) == 2 and "exists (the log of an earlier run)" in capsys.readouterr().err
+    assert log.read_text() == "an earlier run"
+    assert main([*again, "--overwrite"]) == 0 and log.read_text().startswith("step,ax,ay")
     assert main(["run", "--policy", str(tmp_path / "nope.json"), "--a", "0,0", "--b", "0,0", "--log", str(log)]) == 2
 
 

@@ -330,7 +330,7 @@ def test_the_command_line_on_spatial_tasks(tmp_path, capsys) -> None:  # type: i
     assert "after" in out and "true min_friction" in out
     with open(tmp_path / "l.csv") as fh:
         assert fh.readline().startswith("step,ax,ay,az,anx,any,anz,bx")
-    assert main([*hand_run, "--a=0.1,0", "--b=0,0.1,0.12"]) == 2
+    assert main([*hand_run, "--overwrite", "--a=0.1,0", "--b=0,0.1,0.12"]) == 2
     assert "take X,Y,Z" in capsys.readouterr().err
 
 

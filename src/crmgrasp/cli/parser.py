@@ -346,8 +346,9 @@ def _parser_run(sub: Any) -> None:
         type=_path,
         required=True,
         help="step log to write: CSV, or an MCAP record in Foxglove's schemas for a name ending in .mcap "
-        "(extra crmgrasp[mcap])",
+        "(extra crmgrasp[mcap]); an existing one is refused unless --overwrite",
     )
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --log")
     _add_noise(p)
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
     _add_hand(p)

@@ -180,6 +180,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from crmgrasp.hardware.runner import KinematicHand, PolicyRunner
 
     check_output(args.log, "--log")
+    if args.log.exists() and not args.overwrite:
+        raise CrmgraspError(f"--log {str(args.log)!r} exists (the log of an earlier run); --overwrite replaces it")
     policy = load_policy(args.policy)
     task = policy.task
     if task.family is not None:  # the family's nominal object
