@@ -73,6 +73,19 @@ def test_baselines_and_agent_errors():
         make_agent("fixed", 4, sequence=(5,))
 
 
+@pytest.mark.parametrize("seed", [-1, 1.5, 2**63, "x", None])
+def test_train_trials_checks_its_seed(task, seed):
+    with pytest.raises(CrmgraspError, match=r"seed must be an integer in \[0, 9223372036854775807\]"):
+        train_trials(task, "sarsa", trials=1, episodes=1, seed=seed, eval_episodes=0)
+
+
+def test_a_numpy_integer_seed_is_the_same_seed(task):
+    a = train_trials(task, "sarsa", trials=2, episodes=20, seed=np.int64(3), eval_episodes=5)
+    b = train_trials(task, "sarsa", trials=2, episodes=20, seed=3, eval_episodes=5)
+    np.testing.assert_array_equal(a.steps, b.steps)
+    np.testing.assert_array_equal(a.greedy_steps, b.greedy_steps)
+
+
 def test_sarsa_beats_random_and_is_deterministic(task):
     a = train_trials(task, "sarsa", trials=3, episodes=300, seed=1, eval_episodes=200)
     b = train_trials(task, "sarsa", trials=3, episodes=300, seed=1, eval_episodes=200)

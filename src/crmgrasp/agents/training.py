@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from crmgrasp._progress import Progress
-from crmgrasp._validation import CrmgraspError, boolean, integer
+from crmgrasp._validation import SEED_MAX, CrmgraspError, boolean, integer
 from crmgrasp.agents.backoff import BackoffVI
 from crmgrasp.agents.base import Agent, LearnerPolicy
 from crmgrasp.agents.baselines import FixedSequence, RandomAgent
@@ -276,7 +276,9 @@ def checkpoint_generators(seed: int) -> tuple[np.random.Generator, np.random.Gen
 def trial_generators(seed: int, trials: int, first: int = 0) -> list[tuple[np.random.Generator, ...]]:
     """``(env, agent, eval)`` generators of trials ``first .. first + trials - 1``, from
     one seed: trial ``t`` draws from child ``t`` of ``SeedSequence(seed)`` whatever the
-    other trials, so trials can run in any grouping, order or process."""
+    other trials, so trials can run in any grouping, order or process. A seed outside
+    ``[0, 2**63 - 1]`` or not an integer is a one-line error."""
+    seed = integer(int(seed) if isinstance(seed, np.integer) else seed, "seed", 0, SEED_MAX)
     children = [np.random.SeedSequence(seed, spawn_key=(t,)) for t in range(first, first + trials)]
     return [tuple(np.random.default_rng(s) for s in child.spawn(3)) for child in children]
 
