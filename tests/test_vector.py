@@ -91,6 +91,8 @@ def test_next_step_autoreset():
 def test_bad_vector_input():
     with pytest.raises(CrmgraspError, match="num_envs"):
         CRMGraspVectorEnv(0)
+    with pytest.raises(CrmgraspError, match=r"num_envs must be an integer in \[1, 1,000,000\], got 1000000000"):
+        CRMGraspVectorEnv(10**9)  # refused before its spaces are allocated (once: 23 GB, then the OOM killer)
     env = CRMGraspVectorEnv(4)
     with pytest.raises(CrmgraspError, match="reset"):
         env.step(np.zeros(4, dtype=int))

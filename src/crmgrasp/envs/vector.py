@@ -40,7 +40,13 @@ __all__ = [
     "ContinuousVectorEnv",
     "ContinuousFamilyVectorEnv",
     "continuous_vector_env",
+    "MAX_ENVS",
 ]
+
+MAX_ENVS = 1_000_000
+"""Most sub-environments one vector environment holds; more is refused before anything is
+allocated. Measured peak memory (tracemalloc, reset and three steps): about 0.9 kB per
+sub-environment on paper-box, 5.7 kB on box-family (a kernel per row)."""
 
 
 class CRMGraspVectorEnv(VectorEnv):
@@ -61,8 +67,8 @@ class CRMGraspVectorEnv(VectorEnv):
         replaces the task's ``max_steps``: episodes are cut off inside the batch.
         ``exact_friction`` as in [`CRMGraspEnv`][crmgrasp.envs.single.CRMGraspEnv]: false, and
         the steps only decide the grasp (``info`` without ``min_friction``)."""
-        if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
-            raise CrmgraspError(f"num_envs must be an integer >= 1, got {num_envs!r}")
+        if isinstance(num_envs, bool) or not isinstance(num_envs, int) or not 1 <= num_envs <= MAX_ENVS:
+            raise CrmgraspError(f"num_envs must be an integer in [1, {MAX_ENVS:,}], got {num_envs!r}")
         if render_mode is not None:
             raise CrmgraspError("the vector environment does not render; use CRMGraspEnv")
         self.task = make_task(task) if isinstance(task, str) else task
