@@ -61,6 +61,18 @@ def test_bad_reference_input(task):
     with pytest.raises(CrmgraspError, match="integer >= 1"):
         sample_starts(make_task("paper-box"), 0, seed=0)
     assert clairvoyant_steps(task, Config(Contact(-0.15, 0.0, 1.0, 0.0), Contact(0.15, 0.0, -1.0, 0.0))) >= 1
+    starts = sample_starts(task, 5, seed=0)
+    for horizon in (-1, 0, 1.5, 1001):  # -1 gave a mean of -1.0 CRMs, 0 the task's step limit
+        with pytest.raises(CrmgraspError, match=r"horizon must be an integer in \[1, 1000\]"):
+            belief_optimum(task, starts, horizon=horizon)
+        with pytest.raises(CrmgraspError, match="horizon must be"):
+            clairvoyant_bound(task, starts, horizon=horizon)
+    assert belief_optimum(task, starts, horizon=task.max_steps) == belief_optimum(task, starts)
+    with pytest.raises(CrmgraspError, match="start must be a Config of two Contacts, got 'x'"):
+        clairvoyant_steps(task, "x")  # type: ignore[arg-type]
+    off = Config(Contact(-0.5, 0.0, 1.0, 0.0), Contact(0.15, 0.0, -1.0, 0.0))
+    with pytest.raises(CrmgraspError, match=r"start: contact a at \(-0.5, 0\) is 0.35 m off the object"):
+        belief_optimum(task, [*starts, off])
 
 
 def test_belief_policy_executes_its_own_value(task):

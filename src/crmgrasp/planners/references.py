@@ -40,6 +40,7 @@ from crmgrasp.model.hand import Error
 from crmgrasp.planners.sampled import SampledModel, Start, State
 from crmgrasp.sim import Percept, run_episode
 from crmgrasp.tasks import Task, World
+from crmgrasp.tasks.core import MAX_STEPS
 
 __all__ = [
     "clairvoyant_steps",
@@ -53,6 +54,12 @@ __all__ = [
     "BeliefPolicy",
     "FALLBACKS",
 ]
+
+
+def _horizon(task: Task, horizon: int | None) -> int:
+    """The CRMs a search looks ahead: ``task.max_steps`` when ``horizon`` is None, else
+    ``horizon`` checked (an integer in ``[1, MAX_STEPS]``, one-line error otherwise)."""
+    return task.max_steps if horizon is None else integer(horizon, "horizon", 1, MAX_STEPS)
 
 
 def sample_starts(task: Task, n: int, seed: int) -> list[Config | Grip] | list[World]:
@@ -69,13 +76,13 @@ def clairvoyant_steps(task: Task, config: Start, horizon: int | None = None, bac
     """Fewest CRMs from ``config`` (or a world) to a grasp (``horizon``, default
     ``task.max_steps``, if none is reachable within it)."""
     model = SampledModel(task, backend)
-    return model.clairvoyant(model.state(config), horizon or task.max_steps)
+    return model.clairvoyant(model.state(config), _horizon(task, horizon))
 
 
 def clairvoyant_bound(task: Task, starts: Sequence[Start], horizon: int | None = None, backend: str = "auto") -> float:
     """Mean of [`clairvoyant_steps`][] over ``starts``."""
     model = SampledModel(task, backend)
-    h = horizon or task.max_steps
+    h = _horizon(task, horizon)
     return float(np.mean([model.clairvoyant(model.state(c), h) for c in starts]))
 
 
@@ -87,7 +94,7 @@ def graspable_starts(
     if not starts:
         raise CrmgraspError("graspable_starts needs at least one start")
     model = SampledModel(task, backend)
-    h = horizon or task.max_steps
+    h = _horizon(task, horizon)
     return np.array([model.depth(model.state(c), h) is not None for c in starts], dtype=bool)
 
 
@@ -131,7 +138,7 @@ def belief_optimum(task: Task, starts: Sequence[Start], horizon: int | None = No
     if not starts:
         raise CrmgraspError("belief_optimum needs at least one start")
     model = SampledModel(task, backend)
-    h = horizon or task.max_steps
+    h = _horizon(task, horizon)
     memo: dict[tuple[tuple[State, ...], int], float] = {}
     total = sum(len(g) * _value(model, g, h, memo) for g in _first_groups(model, starts).values())
     return total / len(starts)

@@ -87,7 +87,7 @@ class SampledModel:
             return self._state((i, start.config))
         if self.task.family is not None:
             raise CrmgraspError(f"task {self.task.name!r} draws an object per episode: give worlds, not configurations")
-        return self._state((0, start))
+        return self._state((0, self.task.check_config(start, "start")))
 
     def observation(self, state: State) -> int:
         """The bin index of the state's own observation (no error): what an episode
