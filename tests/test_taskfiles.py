@@ -68,6 +68,8 @@ def test_disc_and_rectangle_objects(tmp_path):
         ("name = ", "nom = ", "unknown key 'nom'"),
         ("[hand]", "[hand]\n[hand.extra]", "unknown key 'extra' in [hand]"),
         ("abs_moments = true", "abs_moments = 1", "bins.abs_moments must be true or false"),
+        ("abs_moments = true", "abs_moments = true\nmu_goal = 0.1", "'mu_goal' sits in [bins] but is a top-level key"),
+        ('[[crm]]\nc = "b"', '[[crm]]\nsymmetry = [1, 0, 3, 2]\nc = "b"', "'symmetry' sits in [crm] but is a top"),
     ],
 )
 def test_bad_task_file_names_the_key(tmp_path, old, new, message):
@@ -77,6 +79,13 @@ def test_bad_task_file_names_the_key(tmp_path, old, new, message):
         load_task_file(path)
     text = str(err.value)
     assert message in text and "\n" not in text and str(path) in text
+
+
+def test_the_templates_symmetry_line_declares_the_mirror(tmp_path):
+    """Uncommented as it stands, the template's symmetry line is a top-level key (it once sat
+    after the [starts] header, where TOML made it a key of [starts])."""
+    task = load_task_file(_write(tmp_path, TEMPLATE.replace("# symmetry = [1, 0, 3, 2]", "symmetry = [1, 0, 3, 2]")))
+    assert task.symmetry is not None and task.symmetry.actions == (1, 0, 3, 2)
 
 
 def test_unreadable_task_files(tmp_path):

@@ -33,6 +33,7 @@ from crmgrasp.tasks.schema import (
     COMMON_SECTIONS,
     DEFAULT_GRID,
     SCALAR_KEYS,
+    check_top_level,
     checked_name,
     common_dict,
     common_keys,
@@ -77,6 +78,8 @@ max_steps = 10                     # optional: CRMs before an episode is cut off
 grasp_reward = -1.0                # optional: reward of the grasping CRM (every other CRM: -1)
 error_cost = 0.0                   # optional: extra cost of a CRM that ends in an error
 # reference_mean_steps = 1.66      # optional: the best mean CRMs per episode, if known
+# symmetry = [1, 0, 3, 2]          # optional: a declared mirror symmetry, the action each action
+                                   # maps to (the object and the starts must have it too)
 
 [object]   # exactly one of: polygon = [[x, y], ...] (simple, counter-clockwise or not);
            # disc = { radius = r, center = [x, y] }; rectangle = { length = l, width = w }
@@ -140,8 +143,6 @@ kind = "uniform"                   # "uniform" on the whole boundary; for polygo
 # [noise]                          # optional sensing noise
 # sigma_n = 0.0                    # normal rotation, radians (<= 0.785)
 # sigma_p = 0.0                    # position, metres (<= 0.1)
-
-# symmetry = [1, 0, 3, 2]          # optional declared mirror symmetry: the action each action maps to
 
 # A spatial task (3-D: boxes, cylinders, meshes on a table) sets model = "spatial" and states
 # [solid] or a 3-D [family]: see docs/model-3d.md, section 6.
@@ -282,6 +283,7 @@ def _fields(cls: type) -> tuple[str, ...]:
 def task_from_dict(doc: Any) -> Task:
     """The [`Task`][] a task document (parsed TOML, or [`task_to_dict`][]) states;
     ``model = "spatial"`` states a spatial task (`crmgrasp.tasks.spatial_files`)."""
+    check_top_level(doc)
     model = doc.get("model", "planar") if isinstance(doc, dict) else "planar"
     if model not in ("planar", "spatial"):
         raise CrmgraspError(f'model must be "planar" or "spatial", got {shown(model)}')

@@ -35,6 +35,8 @@ __all__ = [
     "field_rows",
     "SCALAR_KEYS",
     "COMMON_SECTIONS",
+    "TOP_ONLY",
+    "check_top_level",
     "common_dict",
     "table_keys",
     "number",
@@ -275,6 +277,26 @@ itself: read by their field types, bounded by the Task."""
 
 COMMON_SECTIONS = ("name", "hand", "crm", "bins", "starts", "noise", "family", "symmetry", *SCALAR_KEYS)
 """The keys planar and spatial task files share."""
+
+
+TOP_ONLY = ("symmetry", *SCALAR_KEYS)
+"""Top-level keys that no table of a task file takes."""
+
+
+def check_top_level(doc: Any) -> None:
+    """A one-line error naming the table when a key of [`TOP_ONLY`][] sits inside one: TOML
+    puts every key written after a ``[table]`` header into that table, so a top-level key
+    must come before the first header."""
+    if not isinstance(doc, dict):
+        return
+    for name, value in doc.items():
+        for table in value if isinstance(value, list) else [value]:
+            stray = [k for k in table if k in TOP_ONLY] if isinstance(table, dict) else []
+            if stray:
+                raise CrmgraspError(
+                    f"{stray[0]!r} sits in [{name}] but is a top-level key: TOML puts every key after a "
+                    "[table] header into that table, so write it before the first [table]"
+                )
 
 
 def common_keys(d: dict[str, Any], kw: dict[str, Any]) -> None:
