@@ -67,12 +67,20 @@ class PairOffsetActions:
         if not 0 <= pair < len(self.ranges):
             raise CrmgraspError(f"action['pair'] must be an integer in [0, {len(self.ranges)}), got {pair}")
         values = r.tolist() if type(r) is np.ndarray and r.shape == self._shape else self._offsets(r)
-        for v, lo, hi in zip(values, self._low, self._high):
-            if not lo <= v <= hi:  # also NaN
-                raise CrmgraspError(f"action['r'] = {v!r} must be finite and within [{lo:g}, {hi:g}] m")
+        if self.dim == 1:  # the planar offset, the common case: no loop
+            if not self._low[0] <= values[0] <= self._high[0]:  # also NaN
+                self._out_of_range(values)
+        elif not all(lo <= v <= hi for v, lo, hi in zip(values, self._low, self._high)):
+            self._out_of_range(values)
         if not self.uniform:
             values = list(self.ranges[pair].clip(values))
         return pair, values
+
+    def _out_of_range(self, values: list[float]) -> None:
+        """The one-line error for the first offset that is not finite or not in its range."""
+        for v, lo, hi in zip(values, self._low, self._high):
+            if not lo <= v <= hi:
+                raise CrmgraspError(f"action['r'] = {v!r} must be finite and within [{lo:g}, {hi:g}] m")
 
     def _offsets(self, r: Any) -> list[float]:
         """``r`` as ``d`` numbers, else a one-line error."""
