@@ -79,6 +79,15 @@ def test_train_trials_checks_its_seed(task, seed):
         train_trials(task, "sarsa", trials=1, episodes=1, seed=seed, eval_episodes=0)
 
 
+def test_a_policy_from_an_agent_of_another_task_or_order_is_refused(task):
+    agent = train_trials(task, "sarsa", trials=1, episodes=50, seed=0, eval_episodes=0).agents[0]
+    with pytest.raises(CrmgraspError, match="the agent chooses among 4 CRMs; task 'u-handle' has 10"):
+        GreedyPolicy.from_agent(make_task("u-handle"), 2, agent)
+    with pytest.raises(CrmgraspError, match="not k = 1 histories of task 'paper-box'"):
+        GreedyPolicy.from_agent(task, 1, agent)  # k = 2 codes read as k = 1 ones
+    assert GreedyPolicy.from_agent(task, 2, agent).table
+
+
 def test_a_numpy_integer_seed_is_the_same_seed(task):
     a = train_trials(task, "sarsa", trials=2, episodes=20, seed=np.int64(3), eval_episodes=5)
     b = train_trials(task, "sarsa", trials=2, episodes=20, seed=3, eval_episodes=5)

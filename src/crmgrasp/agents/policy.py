@@ -258,6 +258,7 @@ class GreedyPolicy:
         (``backoff_tables()``)."""
         skip = bool(getattr(agent, "skip_errored", False))
         values, choices = agent.greedy_table, agent.greedy_tried
+        _check_fits(task, k, agent.n_actions, values)
         tables = getattr(getattr(agent, "inner", agent), "backoff_tables", None)
         backoff = None
         if tables is not None:
@@ -399,6 +400,19 @@ class GreedyPolicy:
         if doc["version"] == 3 or "backoff" in doc:
             backoff = _read_backoff(doc, task, k, bad)
         return cls(task, k, table, agent, backoff, ranked)
+
+
+def _check_fits(task: Task, k: int, n_actions: int, values: dict[int, list[float]]) -> None:
+    """A one-line error unless an agent of ``n_actions`` whose greedy table is ``values`` can
+    be a policy of ``task`` over k-order histories: the same number of CRMs, every state
+    code a k-order history code of the task."""
+    if n_actions != len(task.actions):
+        raise CrmgraspError(f"the agent chooses among {n_actions} CRMs; task {task.name!r} has {len(task.actions)}")
+    size = KOrderEncoder(task.discretizer.size, len(task.actions), k).size
+    if values and max(values) >= size:
+        raise CrmgraspError(
+            f"the agent's states are not k = {k} histories of task {task.name!r} (it learned another k or task)"
+        )
 
 
 def _best_actions(ranked: dict[int, tuple[tuple[int, ...], ...]]) -> dict[int, tuple[int, ...]]:
