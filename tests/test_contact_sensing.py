@@ -74,6 +74,9 @@ def test_threshold_and_bad_input():
         contact_from_wrench(Circle(0.01), (0.0, 1.0, 0.0), 0.0)
     with pytest.raises(CrmgraspError, match="radius must be > 0"):
         Circle(0.0)
+    for threshold in (0.0, -1.0, float("nan"), float("inf")):  # NaN took every reading for a contact
+        with pytest.raises(CrmgraspError, match="contact threshold must be a finite force > 0 N"):
+            contact_from_wrench(Circle(0.01), (0.0, 1.0), 0.0, threshold)
 
 
 def test_high_pass_removes_drift_and_passes_steps():

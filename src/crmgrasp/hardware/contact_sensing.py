@@ -128,6 +128,8 @@ def contact_from_wrench(
     m = np.asarray(torque, dtype=float)
     if not (np.all(np.isfinite(f)) and np.all(np.isfinite(m))):
         raise CrmgraspError("force and torque readings must be finite")
+    if not 0.0 < threshold < math.inf:  # also NaN; at 0 a zero force would divide by zero
+        raise CrmgraspError(f"the contact threshold must be a finite force > 0 N, got {threshold!r}")
     planar = isinstance(tip, (Circle, Flat))
     if planar and (f.shape != (2,) or m.ndim != 0):
         raise CrmgraspError(f"a planar fingertip needs a 2-vector force and a scalar torque, got {f.shape}, {m.shape}")
