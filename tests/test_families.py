@@ -258,6 +258,9 @@ def test_family_env_resets_from_a_given_world() -> None:
     assert info["config"] == w.config and env.scene_task.obj == w.task.obj
     with pytest.raises(CrmgraspError, match="World"):
         env.reset(options={"world": w.config})
+    u = make_task("u-handle").sample_world(np.random.default_rng(0))  # other CRMs: other action space
+    with pytest.raises(CrmgraspError, match="a world of task 'u-handle', whose CRMs, hand or bins are not"):
+        env.reset(options={"world": u})
 
 
 def test_family_training_is_the_same_on_every_backend() -> None:

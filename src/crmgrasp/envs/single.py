@@ -33,6 +33,7 @@ __all__ = [
     "MUJOCO_ENVS",
     "RESET_OPTIONS",
     "check_reset_options",
+    "world_config",
 ]
 
 ENV_ID = "crmgrasp/PaperBox-v0"
@@ -56,6 +57,24 @@ def check_reset_options(options: Any) -> None:
         raise CrmgraspError(f"unknown reset option(s) {', '.join(unknown)}; known: {', '.join(RESET_OPTIONS)}")
     if len(options) > 1:
         raise CrmgraspError("reset takes options['config'] or options['world'], not both")
+
+
+def world_config(task: Task, world: Any) -> Any:
+    """The start configuration of ``world`` given as ``options['world']`` to an environment of the
+    family task ``task``, checked: a [`World`][crmgrasp.tasks.World] on one object whose CRMs,
+    hand and bins are the task's (they make the environment's spaces), its configuration on
+    that object (one-line errors)."""
+    if task.family is None:
+        raise CrmgraspError("options['world'] needs a family task; use options['config']")
+    if not isinstance(world, World) or not isinstance(world.task, Task) or world.task.family is not None:
+        raise CrmgraspError(f"options['world'] must be a World(task on one object, config), got {world!r}")
+    t = world.task
+    if t.actions != task.actions or t.hand != task.hand or t.discretizer != task.discretizer:
+        raise CrmgraspError(
+            f"options['world'] is a world of task {t.name!r}, whose CRMs, hand or bins are not task "
+            f"{task.name!r}'s: draw it from the environment's task"
+        )
+    return t.check_config(world.config, "options['world'].config")
 
 
 def observation_space(model: ContactModel) -> spaces.Dict:
@@ -224,11 +243,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         return self.kernel.instance
 
     def _use_world(self, world: Any) -> Config:
-        if self.task.family is None:
-            raise CrmgraspError("options['world'] needs a family task; use options['config']")
-        if not isinstance(world, World) or not isinstance(world.task, Task) or world.task.family is not None:
-            raise CrmgraspError(f"options['world'] must be a World(task on one object, config), got {world!r}")
-        cfg = world.task.check_config(world.config, "options['world'].config")
+        cfg = world_config(self.task, world)
         self.kernel.use(world.task)
         return cfg
 

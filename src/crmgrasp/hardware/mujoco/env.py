@@ -16,11 +16,11 @@ import numpy as np
 from gymnasium import spaces
 
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.envs.single import check_reset_options, observation_space, space_observation
+from crmgrasp.envs.single import check_reset_options, observation_space, space_observation, world_config
 from crmgrasp.hardware.mujoco.model import PhysicsParams
 from crmgrasp.hardware.mujoco.steps import MujocoSteps
 from crmgrasp.sim import OneStep, SimState
-from crmgrasp.tasks import Task, World, make_task
+from crmgrasp.tasks import Task, make_task
 
 __all__ = ["MujocoCRMEnv", "MAX_START_TRIES"]
 
@@ -102,11 +102,8 @@ class MujocoCRMEnv(gym.Env[dict[str, Any], np.int64]):
         rng = self.np_random
         for _ in range(MAX_START_TRIES):
             if options and "world" in options:
-                world = options["world"]
-                if not isinstance(world, World):
-                    raise CrmgraspError(f"options['world'] must be a World(task on one object, config), got {world!r}")
-                self.steps.use(world.task)
-                config = world.task.check_config(world.config, "options['world'].config")
+                config = world_config(self.task, options["world"])
+                self.steps.use(options["world"].task)
             elif options and "config" in options:
                 config = self.steps.instance.check_config(options["config"], "options['config']")
             else:
