@@ -49,6 +49,12 @@ allocated. Measured peak memory (tracemalloc, reset and three steps): about 0.9 
 sub-environment on paper-box, 5.7 kB on box-family (a kernel per row)."""
 
 
+def _no_options(options: Any) -> None:
+    """A one-line error for reset options: a vector environment draws every start itself."""
+    if options:
+        raise CrmgraspError(f"the vector environment takes no reset options, got {shown(options)}")
+
+
 class CRMGraspVectorEnv(VectorEnv):
     """``num_envs`` independent episodes of a task, batched (see the module docstring)."""
 
@@ -134,8 +140,7 @@ class CRMGraspVectorEnv(VectorEnv):
         """Reset every sub-environment (``seed`` seeds the shared generator)."""
         if isinstance(seed, list):
             raise CrmgraspError("the vector environment takes one integer seed for its generator")
-        if options:
-            raise CrmgraspError(f"the vector environment takes no reset options, got {shown(options)}")
+        _no_options(options)
         super().reset(seed=seed)
         self._buffer, self._next = np.empty((0, self._width)), 0
         n = self.num_envs
@@ -202,8 +207,7 @@ class FamilyVectorEnv(CRMGraspVectorEnv):
         """Reset every sub-environment: a new object and start per row."""
         if isinstance(seed, list):
             raise CrmgraspError("the vector environment takes one integer seed for its generator")
-        if options:
-            raise CrmgraspError(f"the vector environment takes no reset options, got {shown(options)}")
+        _no_options(options)
         VectorEnv.reset(self, seed=seed)
         self._steps[:] = 0
         self._prev_done[:] = False
