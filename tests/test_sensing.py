@@ -43,7 +43,16 @@ def test_custom_bins():
 
 
 @pytest.mark.parametrize(
-    "kwargs, msg", [({"rho": (2.0, 1.0)}, "increasing"), ({"m_a": ("x",)}, "number"), ({"m_b": (math.nan,)}, "finite")]
+    "kwargs, msg",
+    [
+        ({"rho": (2.0, 1.0)}, "increasing"),
+        ({"m_a": ("x",)}, "number"),
+        ({"m_b": (math.nan,)}, "finite"),
+        (  # 1,001 bins each: once refused only by the history encoder, naming n_obs
+            {q: tuple(range(1, 1001)) for q in ("rho", "m_a", "m_b")},
+            r"3,009,009,003 discrete observations \(1001 x 1001 x 1001 bins x 3 error flags\); a history takes",
+        ),
+    ],
 )
 def test_bad_discretizer(kwargs, msg):
     with pytest.raises(CrmgraspError, match=msg):

@@ -17,13 +17,14 @@ from functools import cached_property
 
 from crmgrasp._validation import CrmgraspError, integer
 
-__all__ = ["KOrderEncoder", "MAX_K"]
+__all__ = ["KOrderEncoder", "MAX_K", "MAX_SYMBOLS"]
 
 MAX_K = 10
 """Largest history order: beyond it the state space (at least ``n_obs * n_actions**k``)
 is far past anything a table can learn, and encoding grows with ``k``."""
 
-_MAX_SYMBOLS = 1_000_000  # observations or actions an encoder accepts
+MAX_SYMBOLS = 1_000_000
+"""The most discrete observations, or actions, a history encoder accepts."""
 
 History = tuple[int, ...]
 
@@ -52,8 +53,8 @@ class KOrderEncoder:
     k: int
 
     def __post_init__(self) -> None:
-        integer(self.n_obs, "n_obs", 1, _MAX_SYMBOLS)
-        integer(self.n_actions, "n_actions", 1, _MAX_SYMBOLS)
+        integer(self.n_obs, "n_obs", 1, MAX_SYMBOLS)
+        integer(self.n_actions, "n_actions", 1, MAX_SYMBOLS)
         integer(self.k, "history order k", 0, MAX_K)
 
     @cached_property

@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from crmgrasp._validation import CrmgraspError, boolean, finite, non_negative
 from crmgrasp.model.contacts import Config, Contact, Grip, check_contacts, make_config
 from crmgrasp.model.hand import Error
+from crmgrasp.model.history import MAX_SYMBOLS
 
 __all__ = [
     "Error",
@@ -237,6 +238,12 @@ class Discretizer:
         strides = [len(Error)]
         for t in reversed(th[1:]):
             strides.insert(0, strides[0] * (len(t) + 1))
+        if strides[0] * (len(th[0]) + 1) > MAX_SYMBOLS:
+            raise CrmgraspError(
+                f"the bins make {strides[0] * (len(th[0]) + 1):,} discrete observations "
+                f"({' x '.join(str(len(t) + 1) for t in th)} bins x {len(Error)} error flags); "
+                f"a history takes at most {MAX_SYMBOLS:,}"
+            )
         object.__setattr__(self, "names", names)
         object.__setattr__(self, "thresholds", th)
         object.__setattr__(self, "abs_moments", abs_moments)
