@@ -45,6 +45,7 @@ def test_a_missing_extra_fails_before_any_folder(hide_module, tmp_path, capsys):
         (["--agent", "ppo", "--symmetric"], "--symmetric does not apply to --agent ppo"),
         (["--agent", "sarsa", "--continuous"], "--continuous does not apply to --agent sarsa"),
         (["--agent", "ppo", "--alpha", "0.1"], "--alpha does not apply to --agent ppo"),
+        (["--agent", "recurrent-ppo", "--k", "2"], "--k does not apply to --agent recurrent-ppo"),
         (["--agent", "ppo", "--lockstep"], "not with lockstep"),
     ],
 )

@@ -71,8 +71,11 @@ def _apply_preset(args: argparse.Namespace, task: Any) -> None:
     """Fill ``--agent``, ``--k``, ``--symmetric``, ``--prior-task`` and the preset's agent
     parameters (``--explore``, ...) from ``--preset`` where not given
     ([`crmgrasp.agents.presets.apply_preset`][])."""
+    from crmgrasp.agents.deep import DEEP_AGENTS
     from crmgrasp.agents.presets import apply_preset
 
+    if args.k is not None and args.agent in DEEP_AGENTS:  # it would be dropped silently
+        raise CrmgraspError(f"--k does not apply to --agent {args.agent}: a deep learner keeps no k-order history")
     choice = apply_preset(
         args.preset, task, agent=args.agent, k=args.k, symmetric=args.symmetric, prior_task=args.prior_task
     )
