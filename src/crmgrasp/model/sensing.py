@@ -238,9 +238,10 @@ class Discretizer:
         strides = [len(Error)]
         for t in reversed(th[1:]):
             strides.insert(0, strides[0] * (len(t) + 1))
-        if strides[0] * (len(th[0]) + 1) > MAX_SYMBOLS:
+        size = strides[0] * (len(th[0]) + 1)
+        if size > MAX_SYMBOLS:
             raise CrmgraspError(
-                f"the bins make {strides[0] * (len(th[0]) + 1):,} discrete observations "
+                f"the bins make {size:,} discrete observations "
                 f"({' x '.join(str(len(t) + 1) for t in th)} bins x {len(Error)} error flags); "
                 f"a history takes at most {MAX_SYMBOLS:,}"
             )
