@@ -139,23 +139,19 @@ def test_reproduce_index_and_cli(tmp_path, capsys):
 
 
 def _same_in_worker_processes(one: Path, out: Path) -> None:
-    """Figures 4, 7, 8 and 9 run in two worker processes give the summaries and files of the
-    one-process run in ``one`` (the whole quick run above)."""
-    names = ["figure4", "figure7", "figure8", "figure9"]
+    """Figures 4, 8 and 9 (each draws starts; 8 and 9 train a policy) run in two worker
+    processes give the summaries and files of the one-process run in ``one`` (the whole quick
+    run above). Figure 7, the longest, is left out for time."""
+    names = ["figure4", "figure8", "figure9"]
     two = reproduce(out, names, quick=True, jobs=2)
     done = json.loads((one / "run.json").read_text())["completed"]
     strip = lambda s: {k: v for k, v in s.items() if k != "seconds"}  # noqa: E731
     mine = json.loads(json.dumps({k: strip(v) for k, v in two.items()}))  # as run.json holds them
     assert {k: strip(done[k]["summary"]) for k in names} == mine
     files = sorted(f for name in names for f in (one / name).rglob("*.csv"))
-    assert len(files) >= 4
+    assert len(files) == 3
     for f in files:
-        other = out / f.relative_to(one)
-        if f.name == "learners.csv":  # its last column is wall time
-            cut = [[line.rsplit(",", 1)[0] for line in p.read_text().splitlines()] for p in (f, other)]
-            assert cut[0] == cut[1]
-        else:
-            assert f.read_bytes() == other.read_bytes(), f
+        assert f.read_bytes() == (out / f.relative_to(one)).read_bytes(), f
 
 
 def test_reproduce_writes_the_same_files_on_every_kernel_backend(tmp_path):
