@@ -110,7 +110,9 @@ class MujocoHand:
         self._raw = np.zeros((n, 6))
         self._wrench = np.zeros((n, 6))
         sensor = m.sensor
-        self._sensors = [(int(sensor(f"force_{x}").adr[0]), int(sensor(f"torque_{x}").adr[0])) for x in self.labels]
+        # per fingertip, the sensordata indices of its force (3) and torque (3) readings
+        first = np.array([[sensor(f"{kind}_{x}").adr[0] for kind in ("force", "torque")] for x in self.labels])
+        self._sensors = (first[:, :, None] + np.arange(3)).reshape(n, 6)
         self._cmd = np.zeros((n, 3))
         self._sensed: Config | Grip | None = None
         self._palm_hit = False
@@ -155,13 +157,11 @@ class MujocoHand:
             d.mocap_pos[0] = palm
         d.ctrl[:] = self._cmd.ravel()
         self.mj.mj_step(self.model, d, nstep=p.control_steps)
-        for i, (fa, ta_) in enumerate(self._sensors):
-            wrench = np.concatenate([d.sensordata[fa : fa + 3], d.sensordata[ta_ : ta_ + 3]])
-            # the sensors report what the tip transmits to its carriage: the object's
-            # push on the fingertip is the negative
-            self._raw[i] = (
-                -wrench + self._bias[i] + self._rates[i] * d.time + self.rng.normal(0.0, 1.0, 6) * self._noise_sd
-            )
+        # the sensors report what the tip transmits to its carriage: the object's push on the
+        # fingertip is the negative (one draw of 6 normals per fingertip, in label order)
+        wrench = d.sensordata[self._sensors]
+        noise = self.rng.normal(0.0, 1.0, self._raw.shape)
+        self._raw[:] = -wrench + self._bias + self._rates * d.time + noise * self._noise_sd
         if self.model.geom_contype[self._palm] and d.ncon:
             geoms = d.contact.geom
             self._palm_hit |= bool(np.any(geoms == self._palm))
