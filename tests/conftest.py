@@ -22,6 +22,13 @@ settings.register_profile("stress", parent=settings.get_profile("default"), max_
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE") or ("ci" if os.environ.get("CI") else "default"))
 
 
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Tests marked ``slow`` run first, the rest in their order: pytest-xdist hands tests out
+    from the front, so with ``-n 2`` the longest ones start at once and not near the end, where
+    one worker would run on alone."""
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+
+
 @pytest.fixture
 def task():
     return paper_box()

@@ -36,6 +36,7 @@ def _random_grips(seed: int, count: int) -> list[Grip3D]:
 
 
 @pytest.mark.parametrize("seed", range(3))
+@pytest.mark.slow
 def test_compiled_least_friction_equals_the_readable_rule(seed: int) -> None:
     """Random grips, equilibria among them: the same float, bit for bit (or both inf)."""
     compiled = compiled_least_friction()
@@ -45,6 +46,7 @@ def test_compiled_least_friction_equals_the_readable_rule(seed: int) -> None:
         assert got == want or (math.isinf(got) and math.isinf(want)), (grip, got, want)
 
 
+@pytest.mark.slow
 def test_compiled_least_friction_on_the_tripod_tasks_episodes() -> None:
     """Along random episodes of both tripod tasks the compiled kernel's steps equal the
     readable kernel's: configurations, observations, rewards and least friction."""

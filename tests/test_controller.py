@@ -76,6 +76,7 @@ def test_compare_small(tmp_path):
     assert s["deep_rl"] == "not run (deep=None)"
 
 
+@pytest.mark.slow
 def test_compare_cli_quick(tmp_path, capsys):
     """The command line's quick comparison; RecurrentPPO is left out (``--deep-steps 0``), as
     ``reproduce --quick`` runs it (``tests/test_experiments.py``)."""

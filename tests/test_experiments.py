@@ -105,6 +105,7 @@ def test_figures_8_and_9(tmp_path):
     assert figure_9_robonaut_trials(tmp_path / "f9b", Figure9Config(train_trials=2, train_episodes=1500)) == s9
 
 
+@pytest.mark.slow
 def test_reproduce_index_and_cli(tmp_path, capsys):
     from crmgrasp._validation import CrmgraspError
     from crmgrasp.experiments.reproduce import full_run_rows, record_full_run
@@ -154,6 +155,7 @@ def _same_in_worker_processes(one: Path, out: Path) -> None:
         assert f.read_bytes() == (out / f.relative_to(one)).read_bytes(), f
 
 
+@pytest.mark.slow
 def test_reproduce_writes_the_same_files_on_every_kernel_backend(tmp_path):
     """Figures 8 and 9 (each trains its policy) on the compiled and on the reference kernel."""
     outs = {}

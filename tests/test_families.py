@@ -358,6 +358,7 @@ def test_default_crms_and_their_mirror() -> None:
     assert t.symmetry is not None and t.symmetry.actions == (1, 0, 3, 2, 5, 4)
 
 
+@pytest.mark.slow
 def test_compare_and_lockstep_on_a_family(tmp_path) -> None:  # type: ignore[no-untyped-def]
     import dataclasses
 

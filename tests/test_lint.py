@@ -26,6 +26,7 @@ def _tool(name: str) -> str | None:
 
 
 @pytest.mark.skipif(_tool("mypy") is None, reason="mypy not installed")
+@pytest.mark.slow
 def test_mypy_clean():
     res = subprocess.run(
         [_tool("mypy"), "src/crmgrasp", "--cache-dir=/dev/null"], cwd=ROOT, capture_output=True, text=True

@@ -148,6 +148,7 @@ def test_a_lost_contact_ends_the_episode(monkeypatch):
     assert out.truncated and out.obs_index == first.obs_index and steps.faults == {"contact lost": 1}
 
 
+@pytest.mark.slow
 def test_pooled_vi_learns_paper_box_on_mujoco():
     """95% greedy success after 40 MuJoCo episodes (seed 0; benchmarks/mujoco_learning.py
     measures 10 seeds at 100 episodes)."""
@@ -204,6 +205,7 @@ def test_learn_on_mujoco_from_the_cli(tmp_path, capsys):
     assert "lockstep steps the kinematic model only" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_an_interrupted_mujoco_run_resumes_to_identical_results(tmp_path, monkeypatch):
     import crmgrasp.experiments.learning as learning
 

@@ -103,6 +103,7 @@ def test_open_cups_in_task_files_round_trip_and_refuse_unknown_keys(tmp_path) ->
     assert load_task_file(path).family.wall == 0.004  # type: ignore[union-attr]
 
 
+@pytest.mark.slow
 def test_open_cups_have_references_and_a_learner_beats_random_deterministically() -> None:
     task = make_task("open-cup-3d")
     worlds = sample_starts(task, 12, 0)
@@ -111,4 +112,5 @@ def test_open_cups_have_references_and_a_learner_beats_random_deterministically(
     kw = {"trials": 1, "episodes": 120, "seed": 2, "k": 1, "eval_episodes": 60}
     a, b = train_trials(task, "model-vi", **kw), train_trials(task, "model-vi", **kw)
     assert np.array_equal(a.steps, b.steps) and np.array_equal(a.greedy_steps, b.greedy_steps)
-    assert a.greedy_steps.mean() < 0.6 * train_trials(task, "random", **kw).greedy_steps.mean()
+    random = train_trials(task, "random", **{**kw, "episodes": 1})  # it learns nothing: scored on 60 episodes
+    assert a.greedy_steps.mean() < 0.6 * random.greedy_steps.mean()

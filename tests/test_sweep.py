@@ -181,6 +181,7 @@ def test_parquet_tables(tmp_path):
     assert pq.read_table(out / "cells.parquet").num_rows == 10
 
 
+@pytest.mark.slow
 def test_ray_gives_the_local_results_on_one_and_two_nodes(tmp_path, capsys):
     ray = pytest.importorskip("ray", reason="needs the extra: pip install 'crmgrasp[ray]'")
     from ray.cluster_utils import Cluster
