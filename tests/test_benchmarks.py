@@ -87,6 +87,18 @@ def test_bench_fingers_smoke():
         assert res[backend]["us_per_step_with_resets"] >= res[backend]["us_per_step_alone"] > 0
 
 
+def test_bench_planning_smoke(capsys):
+    spec = importlib.util.spec_from_file_location("bench_planning", BENCH.parent / "bench_planning.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    res = mod.main(["--smoke"])
+    assert set(res) == {f"{t} k={k}" for t, k in mod.CASES}
+    for row in res.values():
+        assert row["plans"] > 0 and row["compiled_us"] > 0 and row["readable_us"] > 0
+        assert 0.0 < row["sweeps_share"] < 1.0
+    assert '"compiled_over_readable"' in capsys.readouterr().out
+
+
 def test_bench_continuous_smoke():
     spec = importlib.util.spec_from_file_location("bench_continuous", BENCH.parent / "bench_continuous.py")
     mod = importlib.util.module_from_spec(spec)

@@ -5,6 +5,7 @@ then writes the values back; the agent's readable sweeps are the definition."""
 
 from __future__ import annotations
 
+from itertools import chain, repeat
 from typing import Any
 
 import numpy as np
@@ -19,42 +20,23 @@ def value_iteration(agent: Any, tol: float) -> int:
     n = agent.n_actions
     states = list(agent.q)
     row = {s: i for i, s in enumerate(states)}
-    qa = np.array([agent.q[s] for s in states], dtype=np.float64).reshape(-1, n)
+    qa = _table(agent.q.values(), len(states), n)
     blank = [agent.unknown] * n  # a row outside the model (never a pair's source) has no greedy values
-    qg = np.array([agent.q_greedy.get(s, blank) for s in states], dtype=np.float64).reshape(-1, n)
+    qg = _table(map(agent.q_greedy.get, states, repeat(blank)), len(states), n)
     tried = np.zeros(qa.shape, dtype=np.bool_)
-    for s, acts in agent.tried.items():
-        i = row.get(s)
-        if i is not None:
-            tried[i, list(acts)] = True
-    pair_row, pair_a, first = [], [], [0]
-    out_p: list[float] = []
-    out_r: list[float] = []
-    out_row: list[int] = []
-    out_t: list[bool] = []
-    add_p, add_r, add_row, add_t, index = out_p.append, out_r.append, out_row.append, out_t.append, row.get
-    for (s, a), cs in agent.model.items():
-        total = sum(cs.values())
-        pair_row.append(row[s])
-        pair_a.append(a)
-        for (r, s2, t), c in cs.items():
-            add_p(c / total)
-            add_r(r)
-            add_row(index(s2, -1))
-            add_t(t)
-        first.append(len(out_p))
-    rows, cols = np.array(pair_row, dtype=np.int64), np.array(pair_a, dtype=np.int64)
+    tried.flat[[i * n + a for s, acts in agent.tried.items() if (i := row.get(s)) is not None for a in acts]] = True
+    rows, cols, first, p, r, nxt, t = _outcomes(agent.model, row)
     done = _vi_jit.sweeps(
         qa,
         qg,
         tried,
         rows,
         cols,
-        np.array(first, dtype=np.int64),
-        np.array(out_p, dtype=np.float64),
-        np.array(out_r, dtype=np.float64),
-        np.array(out_row, dtype=np.int64),
-        np.array(out_t, dtype=np.bool_),
+        first,
+        p,
+        r,
+        nxt,
+        t,
         float(agent.q_act),
         float(agent.unknown),
         float(agent.gamma),
@@ -67,3 +49,34 @@ def value_iteration(agent: Any, tol: float) -> int:
         if s in greedy:
             greedy[s][a] = vg
     return int(done)
+
+
+def _table(rows: Any, size: int, n: int) -> np.ndarray:
+    """``size`` rows of ``n`` floats (lists) as a ``(size, n)`` array."""
+    return np.fromiter(chain.from_iterable(rows), dtype=np.float64, count=size * n).reshape(size, n)
+
+
+def _outcomes(model: Any, row: dict[Any, int]) -> tuple[np.ndarray, ...]:
+    """The model's pairs and outcomes as the sweeps' arrays (``_vi_jit``'s layout): each pair's
+    row and action, the offsets of its outcomes, and per outcome ``p = count / total`` (the
+    pair's total summed in insertion order, as the readable sweeps do), reward, the next
+    state's row (-1 outside ``row``) and whether it is terminal. Built with whole-list
+    operations, not a Python step per outcome: this runs after every real step."""
+    sources, tables = list(model), list(model.values())
+    totals = [sum(cs.values()) for cs in tables]
+    sizes = np.fromiter(map(len, tables), dtype=np.int64, count=len(tables))
+    first = np.zeros(len(tables) + 1, dtype=np.int64)
+    np.cumsum(sizes, out=first[1:])
+    keys = list(chain.from_iterable(tables))
+    counts = np.fromiter(chain.from_iterable(map(dict.values, tables)), dtype=np.float64, count=len(keys))
+    rewards, nexts, ends = zip(*keys, strict=True) if keys else ((), (), ())
+    p = counts / np.repeat(np.array(totals, dtype=np.float64), sizes)
+    return (
+        np.array([row[s] for s, _ in sources], dtype=np.int64),
+        np.array([a for _, a in sources], dtype=np.int64),
+        first,
+        p,
+        np.array(rewards, dtype=np.float64),
+        np.fromiter(map(row.get, nexts, repeat(-1)), dtype=np.int64, count=len(nexts)),
+        np.array(ends, dtype=np.bool_),
+    )

@@ -1,0 +1,118 @@
+"""The cost of ``model-vi``'s planning step: the compiled value iteration against the readable
+sweeps, timed inside the same learning runs.
+
+``ModelVI`` solves its model after every real step, from the previous solution. The compiled
+path (`crmgrasp.kernels.planning.value_iteration`) copies the agent's tables into arrays, runs
+the sweeps in compiled code and writes the values back; the readable path
+(``ModelVI._sweeps_reference``) is the definition, and both give the same values bit for bit,
+so the two runs of a case take the same steps. Per case, ``model-vi`` learns for
+``--episodes`` episodes (seed 0) once with each path, alternating over ``--rounds`` rounds; the
+least total time spent planning is kept. The compiled path's time is split into the compiled
+sweeps and the copying around them.
+
+Columns: the model's states, pairs and outcomes at the end; plans; microseconds per plan,
+compiled and readable, and their ratio (below 1: the compiled path is faster); of the compiled
+time, the share spent in the sweeps themselves.
+
+Usage: ``python benchmarks/bench_planning.py [--episodes 300] [--rounds 3] [--smoke]``. Prints a
+table and one JSON object.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from typing import Any
+
+CASES = (("paper-box", 1), ("u-handle", 1), ("u-handle", 2))
+"""(task, history order) of each case."""
+
+
+class _Clock:
+    """Seconds spent in ``ModelVI._plan`` and in the compiled sweeps while installed."""
+
+    def __init__(self) -> None:
+        self.plan = self.sweeps = 0.0
+        self.plans = 0
+
+    def __enter__(self) -> _Clock:
+        import crmgrasp.kernels._vi_jit as jit
+        from crmgrasp.agents.model_based import ModelVI
+
+        self._saved = (ModelVI._plan, jit.sweeps)
+        plan, sweeps = self._saved
+
+        def timed_plan(agent: Any) -> None:
+            t0 = time.perf_counter()
+            plan(agent)
+            self.plan += time.perf_counter() - t0
+            self.plans += 1
+
+        def timed_sweeps(*args: Any) -> Any:
+            t0 = time.perf_counter()
+            out = sweeps(*args)
+            self.sweeps += time.perf_counter() - t0
+            return out
+
+        ModelVI._plan, jit.sweeps = timed_plan, timed_sweeps  # type: ignore[method-assign]
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        import crmgrasp.kernels._vi_jit as jit
+        from crmgrasp.agents.model_based import ModelVI
+
+        ModelVI._plan, jit.sweeps = self._saved  # type: ignore[method-assign]
+
+
+def _run(task: Any, k: int, episodes: int, compiled: bool) -> tuple[_Clock, Any]:
+    from crmgrasp.agents.training import train_trials
+
+    with _Clock() as clock:
+        result = train_trials(
+            task, "model-vi", trials=1, episodes=episodes, seed=0, k=k, eval_episodes=1, params={"compiled": compiled}
+        )
+    return clock, result.agents[0]
+
+
+def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
+    from crmgrasp.tasks import make_task
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--episodes", type=int, default=300, help="learning episodes per run")
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--smoke", action="store_true", help="tiny sizes (for CI)")
+    args = ap.parse_args(argv)
+    if args.smoke:
+        args.episodes, args.rounds = 10, 1
+    out: dict[str, dict[str, float]] = {}
+    print("| task, k | states | pairs | outcomes | plans | compiled us | readable us | ratio | in the sweeps |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for task_name, k in CASES:
+        task = make_task(task_name)
+        _run(task, k, 2, True)  # load the compiled sweeps before timing
+        best: dict[bool, _Clock] = {}
+        for _ in range(args.rounds):
+            for compiled in (True, False):
+                clock, agent = _run(task, k, args.episodes, compiled)
+                if compiled not in best or clock.plan < best[compiled].plan:
+                    best[compiled] = clock
+        fast, slow = best[True], best[False]
+        row = {
+            "states": len(agent.q),
+            "pairs": len(agent.model),
+            "outcomes": sum(len(cs) for cs in agent.model.values()),
+            "plans": fast.plans,
+            "compiled_us": round(fast.plan / fast.plans * 1e6, 1),
+            "readable_us": round(slow.plan / slow.plans * 1e6, 1),
+            "compiled_over_readable": round(fast.plan / slow.plan, 3),
+            "sweeps_share": round(fast.sweeps / fast.plan, 3),
+        }
+        out[f"{task_name} k={k}"] = row
+        print(f"| {task_name}, {k} | " + " | ".join(str(v) for v in row.values()) + " |")
+    print(json.dumps({"episodes": args.episodes, "rounds": args.rounds, "cases": out}))
+    return out
+
+
+if __name__ == "__main__":
+    main()
