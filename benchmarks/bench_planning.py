@@ -14,19 +14,30 @@ Columns: the model's states, pairs and outcomes at the end; plans; microseconds 
 compiled and readable, and their ratio (below 1: the compiled path is faster); of the compiled
 time, the share spent in the sweeps themselves.
 
-Usage: ``python benchmarks/bench_planning.py [--episodes 300] [--rounds 3] [--smoke]``. Prints a
-table and one JSON object.
+A second table times whole ``--preset families`` runs (``backoff-vi``, k = 2, on the mirror
+quotient; ``--families-episodes`` episodes, seed 0) with the cyclic garbage collector held off
+while the planning model is rebuilt (`crmgrasp.agents.model_based.collector_paused`, what the
+learner does) and without (the collector left to itself), alternating, least of the rounds;
+also the seconds the collector's full passes took in each.
+
+Usage: ``python benchmarks/bench_planning.py [--episodes 300] [--families-episodes 1000]
+[--rounds 3] [--smoke]``. Prints two tables and one JSON object.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import gc
 import json
 import time
 from typing import Any
 
 CASES = (("paper-box", 1), ("u-handle", 1), ("u-handle", 2))
 """(task, history order) of each case."""
+
+FAMILIES = ("u-handle", "triangles-3f")
+"""Tasks of the ``--preset families`` runs."""
 
 
 class _Clock:
@@ -75,16 +86,79 @@ def _run(task: Any, k: int, episodes: int, compiled: bool) -> tuple[_Clock, Any]
     return clock, result.agents[0]
 
 
+def _families_run(task: Any, episodes: int, paused: bool) -> tuple[float, float]:
+    """Seconds of one ``--preset families`` run, and of the collector's full passes in it;
+    ``paused=False`` replaces the learner's pause by a null context."""
+    import crmgrasp.agents.backoff as backoff
+    import crmgrasp.agents.pooled as pooled
+    from crmgrasp.agents.presets import apply_preset
+    from crmgrasp.agents.training import train_trials
+
+    choice = apply_preset("families", task)
+    params = {**dict(choice.params), "symmetric": choice.symmetric}
+    full, began = [0.0], [0.0]
+
+    def clock(phase: str, info: dict[str, int]) -> None:
+        if info["generation"] == 2:
+            if phase == "start":
+                began[0] = time.perf_counter()
+            else:
+                full[0] += time.perf_counter() - began[0]
+
+    saved = backoff.collector_paused, pooled.collector_paused
+    if not paused:
+        backoff.collector_paused = pooled.collector_paused = contextlib.nullcontext  # type: ignore[assignment]
+    gc.collect()
+    gc.callbacks.append(clock)
+    try:
+        t0 = time.perf_counter()
+        train_trials(
+            task, choice.agent, trials=1, episodes=episodes, seed=0, k=choice.k, eval_episodes=1, params=params
+        )
+        return time.perf_counter() - t0, full[0]
+    finally:
+        gc.callbacks.remove(clock)
+        backoff.collector_paused, pooled.collector_paused = saved
+
+
+def _families_table(episodes: int, rounds: int) -> dict[str, dict[str, float]]:
+    from crmgrasp.tasks import make_task
+
+    out: dict[str, dict[str, float]] = {}
+    print("| task | episodes | paused s | full collections s | not paused s | full collections s | ratio |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    for name in FAMILIES:
+        task = make_task(name)
+        best: dict[bool, tuple[float, float]] = {}
+        for _ in range(rounds):
+            for paused in (True, False):
+                got = _families_run(task, episodes, paused)
+                if paused not in best or got[0] < best[paused][0]:
+                    best[paused] = got
+        row = {
+            "episodes": episodes,
+            "paused_s": round(best[True][0], 2),
+            "paused_full_collections_s": round(best[True][1], 2),
+            "not_paused_s": round(best[False][0], 2),
+            "not_paused_full_collections_s": round(best[False][1], 2),
+            "paused_over_not_paused": round(best[True][0] / best[False][0], 3),
+        }
+        out[name] = row
+        print(f"| {name} | " + " | ".join(str(v) for v in row.values()) + " |")
+    return out
+
+
 def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
     from crmgrasp.tasks import make_task
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--episodes", type=int, default=300, help="learning episodes per run")
+    ap.add_argument("--families-episodes", type=int, default=1000, help="episodes per families-preset run")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--smoke", action="store_true", help="tiny sizes (for CI)")
     args = ap.parse_args(argv)
     if args.smoke:
-        args.episodes, args.rounds = 10, 1
+        args.episodes, args.families_episodes, args.rounds = 10, 10, 1
     out: dict[str, dict[str, float]] = {}
     print("| task, k | states | pairs | outcomes | plans | compiled us | readable us | ratio | in the sweeps |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
@@ -110,8 +184,10 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
         }
         out[f"{task_name} k={k}"] = row
         print(f"| {task_name}, {k} | " + " | ".join(str(v) for v in row.values()) + " |")
-    print(json.dumps({"episodes": args.episodes, "rounds": args.rounds, "cases": out}))
-    return out
+    print()
+    families = _families_table(args.families_episodes, args.rounds)
+    print(json.dumps({"episodes": args.episodes, "rounds": args.rounds, "cases": out, "families": families}))
+    return {**out, **{f"families {name}": row for name, row in families.items()}}
 
 
 if __name__ == "__main__":

@@ -278,3 +278,29 @@ def test_model_vi_prior_from_a_family_and_its_errors():
         build_agent(task, enc, "model-vi", {"prior_task": "cup-family"})
     with pytest.raises(CrmgraspError, match="needs a model-based agent"):
         build_agent(task, enc, "sarsa", {"prior_task": "box-family"})
+
+
+def test_the_collector_is_held_off_while_a_planning_model_is_rebuilt_and_restored_after():
+    """``collector_paused`` restores the collector as it found it (on or off), also on an
+    error, and a learner that rebuilds its planning model leaves it on."""
+    import gc
+
+    from crmgrasp.agents.model_based import collector_paused
+    from crmgrasp.agents.training import train_trials
+
+    with collector_paused():
+        assert not gc.isenabled()
+    assert gc.isenabled()
+    with pytest.raises(ValueError), collector_paused():
+        raise ValueError("inside")
+    assert gc.isenabled()
+    gc.disable()
+    try:
+        with collector_paused():
+            pass
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
+    for agent in ("backoff-vi", "pooled-vi"):
+        train_trials(make_task("u-handle"), agent, trials=1, episodes=5, seed=0, eval_episodes=1)
+        assert gc.isenabled()

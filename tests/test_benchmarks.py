@@ -1,5 +1,6 @@
 """Smoke run of the benchmark script (tiny sizes; no thresholds asserted)."""
 
+import gc
 import importlib.util
 import json
 from pathlib import Path
@@ -92,10 +93,14 @@ def test_bench_planning_smoke(capsys):
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     res = mod.main(["--smoke"])
-    assert set(res) == {f"{t} k={k}" for t, k in mod.CASES}
-    for row in res.values():
+    assert set(res) == {f"{t} k={k}" for t, k in mod.CASES} | {f"families {t}" for t in mod.FAMILIES}
+    for t, k in mod.CASES:
+        row = res[f"{t} k={k}"]
         assert row["plans"] > 0 and row["compiled_us"] > 0 and row["readable_us"] > 0
         assert 0.0 < row["sweeps_share"] < 1.0
+    for t in mod.FAMILIES:
+        assert res[f"families {t}"]["paused_s"] > 0 and res[f"families {t}"]["not_paused_s"] > 0
+    assert gc.isenabled()
     assert '"compiled_over_readable"' in capsys.readouterr().out
 
 
@@ -203,6 +208,7 @@ def test_mujoco_three_fingers_smoke(capsys, monkeypatch):
     assert row["kinematic_episodes"] == 5 and "mujoco_episodes" not in row
 
 
+@pytest.mark.slow
 def test_mujoco_three_fingers_on_the_mirror_quotient(capsys, monkeypatch):
     """``--mirror`` runs a tripod's learner on the mirror quotient (recorded in the output); a
     task whose mirror is not known to hold is a usage error."""

@@ -61,7 +61,7 @@ import numpy as np
 from crmgrasp._validation import CrmgraspError, boolean, integer, non_negative, positive
 from crmgrasp.agents.backoff_middle import SuffixPool
 from crmgrasp.agents.base import allowed_choice, greedy_choice
-from crmgrasp.agents.model_based import ModelVI, Outcome
+from crmgrasp.agents.model_based import ModelVI, Outcome, collector_paused
 from crmgrasp.agents.pooled import HistoryFrame, PooledVI
 from crmgrasp.agents.symmetric import SymmetricAgent, mirror_observation_map
 from crmgrasp.agents.tabular import TabularAgent
@@ -328,6 +328,11 @@ class BackoffVI(TabularAgent):
         """The planning model of all data so far, solved (built afresh after new data)."""
         if self._solved:
             return self.judge
+        with collector_paused():
+            return self._rebuilt(rng)
+
+    def _rebuilt(self, rng: np.random.Generator | None) -> ModelVI:
+        """Build the planning model afresh and solve it (``rng``: the posterior draw's)."""
         short = self.short.greedy_model()
         judge, n = self.judge, self.n_actions
         judge.model, judge.tried = {}, {}

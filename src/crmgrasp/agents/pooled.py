@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from crmgrasp._validation import CrmgraspError, finite
-from crmgrasp.agents.model_based import Model, ModelVI, Outcome
+from crmgrasp.agents.model_based import Model, ModelVI, Outcome, collector_paused
 from crmgrasp.agents.symmetric import SymmetricAgent, mirror_observation_map
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import KOrderEncoder
@@ -238,17 +238,18 @@ class PooledVI(ModelVI):
         not on when it was last asked for."""
         if self._solved:
             return
-        judge, n = self.judge, self.n_actions
-        judge.model, judge.tried = {}, {}
-        judge.q = {h: [judge.q_act] * n for h in sorted(self._known)}
-        judge.q_greedy = {h: [judge.unknown] * n for h in judge.q}
-        for h in judge.q:
-            for b in range(n):
-                entry = self._entry(h, b)
-                if entry is not None:
-                    judge.model[(h, b)] = entry
-                    judge._mark(h, b)
-        judge._plan()
+        with collector_paused():
+            judge, n = self.judge, self.n_actions
+            judge.model, judge.tried = {}, {}
+            judge.q = {h: [judge.q_act] * n for h in sorted(self._known)}
+            judge.q_greedy = {h: [judge.unknown] * n for h in judge.q}
+            for h in judge.q:
+                for b in range(n):
+                    entry = self._entry(h, b)
+                    if entry is not None:
+                        judge.model[(h, b)] = entry
+                        judge._mark(h, b)
+            judge._plan()
         self._solved = True
 
     def _entry(self, h: int, b: int) -> dict[Outcome, float] | None:
