@@ -14,14 +14,16 @@ Columns: the model's states, pairs and outcomes at the end; plans; microseconds 
 compiled and readable, and their ratio (below 1: the compiled path is faster); of the compiled
 time, the share spent in the sweeps themselves.
 
-A second table times whole ``--preset families`` runs (``backoff-vi``, k = 2, on the mirror
-quotient; ``--families-episodes`` episodes, seed 0) with the cyclic garbage collector held off
-while the planning model is rebuilt (`crmgrasp.agents.model_based.collector_paused`, what the
-learner does) and without (the collector left to itself), alternating, least of the rounds;
-also the seconds the collector's full passes took in each.
+A second table times work that builds large acyclic structures with the cyclic garbage
+collector held off (`crmgrasp._collector.collector_paused`, what the code does) and left to
+itself, alternating, least of the rounds, and the seconds the collector's full passes took in
+each: whole ``--preset families`` runs (``backoff-vi``, k = 2, on the mirror quotient;
+``--families-episodes`` episodes, seed 0), which rebuild their planning model after new data,
+and the belief-space optimum over ``--optimum-starts`` sampled starts (seed 0), which memoises
+every belief it meets.
 
 Usage: ``python benchmarks/bench_planning.py [--episodes 300] [--families-episodes 1000]
-[--rounds 3] [--smoke]``. Prints two tables and one JSON object.
+[--optimum-starts 4000] [--rounds 3] [--smoke]``. Prints two tables and one JSON object.
 """
 
 from __future__ import annotations
@@ -29,8 +31,10 @@ from __future__ import annotations
 import argparse
 import contextlib
 import gc
+import importlib
 import json
 import time
+from collections.abc import Callable
 from typing import Any
 
 CASES = (("paper-box", 1), ("u-handle", 1), ("u-handle", 2))
@@ -38,6 +42,9 @@ CASES = (("paper-box", 1), ("u-handle", 1), ("u-handle", 2))
 
 FAMILIES = ("u-handle", "triangles-3f")
 """Tasks of the ``--preset families`` runs."""
+
+OPTIMA = ("u-handle",)
+"""Tasks of the belief-space optimum runs."""
 
 
 class _Clock:
@@ -86,16 +93,15 @@ def _run(task: Any, k: int, episodes: int, compiled: bool) -> tuple[_Clock, Any]
     return clock, result.agents[0]
 
 
-def _families_run(task: Any, episodes: int, paused: bool) -> tuple[float, float]:
-    """Seconds of one ``--preset families`` run, and of the collector's full passes in it;
-    ``paused=False`` replaces the learner's pause by a null context."""
-    import crmgrasp.agents.backoff as backoff
-    import crmgrasp.agents.pooled as pooled
-    from crmgrasp.agents.presets import apply_preset
-    from crmgrasp.agents.training import train_trials
+PAUSING = ("crmgrasp.agents.backoff", "crmgrasp.agents.pooled", "crmgrasp.planners.references")
+"""The modules that hold the collector off (each imports ``collector_paused``)."""
 
-    choice = apply_preset("families", task)
-    params = {**dict(choice.params), "symmetric": choice.symmetric}
+
+def _timed(work: Callable[[], object], paused: bool) -> tuple[float, float]:
+    """Seconds of ``work()``, and of the collector's full passes in it; ``paused=False``
+    replaces the pause in every module of ``PAUSING`` by a null context."""
+    modules = [importlib.import_module(name) for name in PAUSING]
+    saved = [m.collector_paused for m in modules]
     full, began = [0.0], [0.0]
 
     def clock(phase: str, info: dict[str, int]) -> None:
@@ -105,46 +111,67 @@ def _families_run(task: Any, episodes: int, paused: bool) -> tuple[float, float]
             else:
                 full[0] += time.perf_counter() - began[0]
 
-    saved = backoff.collector_paused, pooled.collector_paused
     if not paused:
-        backoff.collector_paused = pooled.collector_paused = contextlib.nullcontext  # type: ignore[assignment]
+        for m in modules:
+            m.collector_paused = contextlib.nullcontext  # type: ignore[attr-defined]
     gc.collect()
     gc.callbacks.append(clock)
     try:
         t0 = time.perf_counter()
-        train_trials(
-            task, choice.agent, trials=1, episodes=episodes, seed=0, k=choice.k, eval_episodes=1, params=params
-        )
+        work()
         return time.perf_counter() - t0, full[0]
     finally:
         gc.callbacks.remove(clock)
-        backoff.collector_paused, pooled.collector_paused = saved
+        for m, pause in zip(modules, saved, strict=True):
+            m.collector_paused = pause  # type: ignore[attr-defined]
 
 
-def _families_table(episodes: int, rounds: int) -> dict[str, dict[str, float]]:
+def _families_work(name: str, episodes: int) -> Callable[[], object]:
+    """One ``--preset families`` run of ``episodes`` episodes on task ``name``, seed 0."""
+    from crmgrasp.agents.presets import apply_preset
+    from crmgrasp.agents.training import train_trials
     from crmgrasp.tasks import make_task
 
+    task = make_task(name)
+    choice = apply_preset("families", task)
+    params = {**dict(choice.params), "symmetric": choice.symmetric}
+    return lambda: train_trials(
+        task, choice.agent, trials=1, episodes=episodes, seed=0, k=choice.k, eval_episodes=1, params=params
+    )
+
+
+def _optimum_work(name: str, starts: int) -> Callable[[], object]:
+    """The belief-space optimum of task ``name`` over ``starts`` sampled starts, seed 0."""
+    from crmgrasp.planners.references import belief_optimum, sample_starts
+    from crmgrasp.tasks import make_task
+
+    task = make_task(name)
+    sampled = sample_starts(task, starts, 0)
+    belief_optimum(task, sampled[:2])  # load the compiled kernels before timing
+    return lambda: belief_optimum(task, sampled)
+
+
+def _pause_table(cases: dict[str, Callable[[], object]], rounds: int) -> dict[str, dict[str, float]]:
+    """Each case with the collector held off and left alone, alternating, least of ``rounds``."""
     out: dict[str, dict[str, float]] = {}
-    print("| task | episodes | paused s | full collections s | not paused s | full collections s | ratio |")
-    print("| --- | --- | --- | --- | --- | --- | --- |")
-    for name in FAMILIES:
-        task = make_task(name)
+    print("| case | held off s | full collections s | left alone s | full collections s | ratio |")
+    print("| --- | --- | --- | --- | --- | --- |")
+    for label, work in cases.items():
         best: dict[bool, tuple[float, float]] = {}
         for _ in range(rounds):
             for paused in (True, False):
-                got = _families_run(task, episodes, paused)
+                got = _timed(work, paused)
                 if paused not in best or got[0] < best[paused][0]:
                     best[paused] = got
         row = {
-            "episodes": episodes,
             "paused_s": round(best[True][0], 2),
             "paused_full_collections_s": round(best[True][1], 2),
             "not_paused_s": round(best[False][0], 2),
             "not_paused_full_collections_s": round(best[False][1], 2),
             "paused_over_not_paused": round(best[True][0] / best[False][0], 3),
         }
-        out[name] = row
-        print(f"| {name} | " + " | ".join(str(v) for v in row.values()) + " |")
+        out[label] = row
+        print(f"| {label} | " + " | ".join(str(v) for v in row.values()) + " |")
     return out
 
 
@@ -154,11 +181,12 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--episodes", type=int, default=300, help="learning episodes per run")
     ap.add_argument("--families-episodes", type=int, default=1000, help="episodes per families-preset run")
+    ap.add_argument("--optimum-starts", type=int, default=4000, help="sampled starts of the belief-space optimum")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--smoke", action="store_true", help="tiny sizes (for CI)")
     args = ap.parse_args(argv)
     if args.smoke:
-        args.episodes, args.families_episodes, args.rounds = 10, 10, 1
+        args.episodes, args.families_episodes, args.optimum_starts, args.rounds = 10, 10, 20, 1
     out: dict[str, dict[str, float]] = {}
     print("| task, k | states | pairs | outcomes | plans | compiled us | readable us | ratio | in the sweeps |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
@@ -185,9 +213,16 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
         out[f"{task_name} k={k}"] = row
         print(f"| {task_name}, {k} | " + " | ".join(str(v) for v in row.values()) + " |")
     print()
-    families = _families_table(args.families_episodes, args.rounds)
-    print(json.dumps({"episodes": args.episodes, "rounds": args.rounds, "cases": out, "families": families}))
-    return {**out, **{f"families {name}": row for name, row in families.items()}}
+    cases = {
+        f"families {name}, {args.families_episodes} episodes": _families_work(name, args.families_episodes)
+        for name in FAMILIES
+    }
+    cases |= {
+        f"optimum {name}, {args.optimum_starts} starts": _optimum_work(name, args.optimum_starts) for name in OPTIMA
+    }
+    paused = _pause_table(cases, args.rounds)
+    print(json.dumps({"episodes": args.episodes, "rounds": args.rounds, "cases": out, "collector": paused}))
+    return {**out, **paused}
 
 
 if __name__ == "__main__":

@@ -282,11 +282,14 @@ def test_model_vi_prior_from_a_family_and_its_errors():
 
 def test_the_collector_is_held_off_while_a_planning_model_is_rebuilt_and_restored_after():
     """``collector_paused`` restores the collector as it found it (on or off), also on an
-    error, and a learner that rebuilds its planning model leaves it on."""
+    error; the learners that rebuild their planning model, the belief-space optimum and the
+    belief policy leave it on."""
     import gc
 
-    from crmgrasp.agents.model_based import collector_paused
+    from crmgrasp._collector import collector_paused
     from crmgrasp.agents.training import train_trials
+    from crmgrasp.planners.references import BeliefPolicy, belief_optimum, sample_starts
+    from crmgrasp.sim import run_episode
 
     with collector_paused():
         assert not gc.isenabled()
@@ -304,3 +307,10 @@ def test_the_collector_is_held_off_while_a_planning_model_is_rebuilt_and_restore
     for agent in ("backoff-vi", "pooled-vi"):
         train_trials(make_task("u-handle"), agent, trials=1, episodes=5, seed=0, eval_episodes=1)
         assert gc.isenabled()
+    task = make_task("u-handle")
+    starts = sample_starts(task, 20, 0)
+    belief_optimum(task, starts)
+    policy = BeliefPolicy(task, starts)
+    policy.optimum()
+    run_episode(task, policy, np.random.default_rng(0))
+    assert gc.isenabled()

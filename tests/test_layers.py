@@ -13,7 +13,7 @@ import pytest
 PKG = Path(__file__).resolve().parents[1] / "src" / "crmgrasp"
 
 LAYERS = [
-    ("infrastructure", ("crmgrasp._validation", "crmgrasp._io", "crmgrasp._progress")),
+    ("infrastructure", ("crmgrasp._validation", "crmgrasp._io", "crmgrasp._progress", "crmgrasp._collector")),
     ("model", ("crmgrasp.model",)),
     ("tasks", ("crmgrasp.tasks", "crmgrasp.sim")),
     ("kernels", ("crmgrasp.kernels",)),
@@ -104,7 +104,7 @@ def test_root_holds_only_the_core():
     """Layers live in folders; the package root keeps the entry points, the task layer
     and the small shared helpers."""
     root = sorted(p.name for p in PKG.glob("*.py"))
-    assert root == ["__init__.py", "__main__.py", "_io.py", "_progress.py", "_validation.py", "sim.py"]
+    assert root == ["__init__.py", "__main__.py", "_collector.py", "_io.py", "_progress.py", "_validation.py", "sim.py"]
 
 
 def _edges() -> dict[str, set[str]]:

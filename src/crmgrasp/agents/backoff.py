@@ -58,10 +58,11 @@ from typing import Any
 
 import numpy as np
 
+from crmgrasp._collector import collector_paused
 from crmgrasp._validation import CrmgraspError, boolean, integer, non_negative, positive
 from crmgrasp.agents.backoff_middle import SuffixPool
 from crmgrasp.agents.base import allowed_choice, greedy_choice
-from crmgrasp.agents.model_based import ModelVI, Outcome, collector_paused
+from crmgrasp.agents.model_based import ModelVI, Outcome
 from crmgrasp.agents.pooled import HistoryFrame, PooledVI
 from crmgrasp.agents.symmetric import SymmetricAgent, mirror_observation_map
 from crmgrasp.agents.tabular import TabularAgent

@@ -30,9 +30,7 @@ with ``prior_task``); the agent's own counts outweigh it after a few visits.
 
 from __future__ import annotations
 
-import gc
-from collections.abc import Collection, Iterator
-from contextlib import contextmanager
+from collections.abc import Collection
 from typing import Any
 
 import numpy as np
@@ -41,7 +39,7 @@ from crmgrasp._validation import CrmgraspError, boolean, finite, integer, positi
 from crmgrasp.agents.base import allowed_choice, greedy_choice
 from crmgrasp.agents.tabular import TabularAgent
 
-__all__ = ["ModelVI", "Model", "collector_paused"]
+__all__ = ["ModelVI", "Model"]
 
 TOL = 1e-6
 """Value iteration stops when no value changed by this much in a sweep (reward units)."""
@@ -217,24 +215,3 @@ def check_same_space(task_a: Any, task_b: Any) -> None:
         raise CrmgraspError(f"prior task {task_b.name!r} has other CRMs than {task_a.name!r}")
     if task_a.discretizer != task_b.discretizer:
         raise CrmgraspError(f"prior task {task_b.name!r} has other observation bins than {task_a.name!r}")
-
-
-@contextmanager
-def collector_paused() -> Iterator[None]:
-    """Hold off Python's cyclic garbage collector while a planning model is built afresh.
-
-    A rebuild (``backoff-vi``'s and ``pooled-vi``'s greedy model, after new data) allocates a
-    tuple and a dict per outcome, none of them in a reference cycle, and they live until the
-    next rebuild. With the collector on, those allocations set off full collections that walk
-    every object the learner holds: a ``--preset families`` run of 1,000 episodes on
-    ``triangles-3f`` took 16.2 s, 4.7 s of it in full collections, and takes 12.3 s held off
-    (``python benchmarks/bench_planning.py``, docs/performance.md).
-    Reference counting still frees whatever the rebuild drops; the collector resumes, if it
-    was on, when the block ends, also on an error. What is learned is the same."""
-    was = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if was:
-            gc.enable()

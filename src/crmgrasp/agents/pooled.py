@@ -42,8 +42,9 @@ from typing import Any
 
 import numpy as np
 
+from crmgrasp._collector import collector_paused
 from crmgrasp._validation import CrmgraspError, finite
-from crmgrasp.agents.model_based import Model, ModelVI, Outcome, collector_paused
+from crmgrasp.agents.model_based import Model, ModelVI, Outcome
 from crmgrasp.agents.symmetric import SymmetricAgent, mirror_observation_map
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import KOrderEncoder

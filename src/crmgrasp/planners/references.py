@@ -34,6 +34,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from crmgrasp._collector import collector_paused
 from crmgrasp._validation import CrmgraspError, integer
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import Error
@@ -140,7 +141,8 @@ def belief_optimum(task: Task, starts: Sequence[Start], horizon: int | None = No
     model = SampledModel(task, backend)
     h = _horizon(task, horizon)
     memo: dict[tuple[tuple[State, ...], int], float] = {}
-    total = sum(len(g) * _value(model, g, h, memo) for g in _first_groups(model, starts).values())
+    with collector_paused():  # the memo is large and acyclic
+        total = sum(len(g) * _value(model, g, h, memo) for g in _first_groups(model, starts).values())
     return total / len(starts)
 
 
@@ -254,12 +256,15 @@ class BeliefPolicy:
         value, from the policy's own memo)."""
         h = self.task.max_steps
         groups = self._groups.values()
-        return sum(len(g) * _value(self._model, g, h, self._memo) for g in groups) / sum(len(g) for g in groups)
+        with collector_paused():
+            total = sum(len(g) * _value(self._model, g, h, self._memo) for g in groups)
+        return total / sum(len(g) for g in groups)
 
     def _action(self, belief: tuple[State, ...], h: int) -> int:
         key = (belief, h)
         if key not in self._acts:
-            _value(self._model, belief, h, self._memo, self._acts)
+            with collector_paused():
+                _value(self._model, belief, h, self._memo, self._acts)
         return self._acts[key]
 
     # -- the Policy interface (crmgrasp.sim.run_episode)
