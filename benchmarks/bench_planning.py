@@ -175,18 +175,11 @@ def _pause_table(cases: dict[str, Callable[[], object]], rounds: int) -> dict[st
     return out
 
 
-def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
+def _planning_table(episodes: int, rounds: int) -> dict[str, dict[str, float]]:
+    """Each case of ``CASES`` learned with the compiled and the readable planning,
+    alternating, least planning time of ``rounds``."""
     from crmgrasp.tasks import make_task
 
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--episodes", type=int, default=300, help="learning episodes per run")
-    ap.add_argument("--families-episodes", type=int, default=1000, help="episodes per families-preset run")
-    ap.add_argument("--optimum-starts", type=int, default=4000, help="sampled starts of the belief-space optimum")
-    ap.add_argument("--rounds", type=int, default=3)
-    ap.add_argument("--smoke", action="store_true", help="tiny sizes (for CI)")
-    args = ap.parse_args(argv)
-    if args.smoke:
-        args.episodes, args.families_episodes, args.optimum_starts, args.rounds = 10, 10, 20, 1
     out: dict[str, dict[str, float]] = {}
     print("| task, k | states | pairs | outcomes | plans | compiled us | readable us | ratio | in the sweeps |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
@@ -194,9 +187,9 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
         task = make_task(task_name)
         _run(task, k, 2, True)  # load the compiled sweeps before timing
         best: dict[bool, _Clock] = {}
-        for _ in range(args.rounds):
+        for _ in range(rounds):
             for compiled in (True, False):
-                clock, agent = _run(task, k, args.episodes, compiled)
+                clock, agent = _run(task, k, episodes, compiled)
                 if compiled not in best or clock.plan < best[compiled].plan:
                     best[compiled] = clock
         fast, slow = best[True], best[False]
@@ -212,6 +205,20 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
         }
         out[f"{task_name} k={k}"] = row
         print(f"| {task_name}, {k} | " + " | ".join(str(v) for v in row.values()) + " |")
+    return out
+
+
+def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--episodes", type=int, default=300, help="learning episodes per run")
+    ap.add_argument("--families-episodes", type=int, default=1000, help="episodes per families-preset run")
+    ap.add_argument("--optimum-starts", type=int, default=4000, help="sampled starts of the belief-space optimum")
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--smoke", action="store_true", help="tiny sizes (for CI)")
+    args = ap.parse_args(argv)
+    if args.smoke:
+        args.episodes, args.families_episodes, args.optimum_starts, args.rounds = 10, 10, 20, 1
+    out = _planning_table(args.episodes, args.rounds)
     print()
     cases = {
         f"families {name}, {args.families_episodes} episodes": _families_work(name, args.families_episodes)
