@@ -22,8 +22,14 @@ each: whole ``--preset families`` runs (``backoff-vi``, k = 2, on the mirror quo
 and the belief-space optimum over ``--optimum-starts`` sampled starts (seed 0), which memoises
 every belief it meets.
 
+A third table times the same ``--preset families`` runs with ``backoff-vi``'s entries for CRMs
+a long history never tried made once per plan for all histories that share their newest
+``k - 1`` CRMs (``BackoffVI._untried_entry``, what the code does) and made afresh for each
+history (the peer: the same entries, so the same steps, which the table checks): whole-run
+seconds and the seconds spent rebuilding the planning model, least of the rounds.
+
 Usage: ``python benchmarks/bench_planning.py [--episodes 300] [--families-episodes 1000]
-[--optimum-starts 4000] [--rounds 3] [--smoke]``. Prints two tables and one JSON object.
+[--optimum-starts 4000] [--rounds 3] [--smoke]``. Prints three tables and one JSON object.
 """
 
 from __future__ import annotations
@@ -34,7 +40,7 @@ import gc
 import importlib
 import json
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 CASES = (("paper-box", 1), ("u-handle", 1), ("u-handle", 2))
@@ -208,6 +214,70 @@ def _planning_table(episodes: int, rounds: int) -> dict[str, dict[str, float]]:
     return out
 
 
+@contextlib.contextmanager
+def _rebuild_clock(shared: bool) -> Iterator[list[float]]:
+    """Seconds spent in ``BackoffVI._rebuilt`` while open (the list's one item); with
+    ``shared=False`` every untried entry is made afresh (the cache emptied before each)."""
+    from crmgrasp.agents.backoff import BackoffVI
+
+    saved = (BackoffVI._rebuilt, BackoffVI._untried_entry)
+    rebuilt, untried = saved
+    spent = [0.0]
+
+    def timed(agent: Any, rng: Any) -> Any:
+        t0 = time.perf_counter()
+        out = rebuilt(agent, rng)
+        spent[0] += time.perf_counter() - t0
+        return out
+
+    def afresh(agent: Any, s: int, b: int, known: set[int]) -> Any:
+        agent._untried.clear()
+        return untried(agent, s, b, known)
+
+    BackoffVI._rebuilt = timed  # type: ignore[method-assign]
+    if not shared:
+        BackoffVI._untried_entry = afresh  # type: ignore[method-assign]
+    try:
+        yield spent
+    finally:
+        BackoffVI._rebuilt, BackoffVI._untried_entry = saved  # type: ignore[method-assign]
+
+
+def _sharing_table(cases: dict[str, Callable[[], Any]], rounds: int) -> dict[str, dict[str, float]]:
+    """Each families run with the untried entries shared and made afresh, alternating, least
+    of ``rounds``; the two must take the same steps."""
+    import numpy as np
+
+    out: dict[str, dict[str, float]] = {}
+    print("| case | shared s | in rebuilds s | afresh s | in rebuilds s | ratio | rebuilds ratio |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    for label, work in cases.items():
+        best: dict[bool, tuple[float, float]] = {}
+        steps: dict[bool, Any] = {}
+        for _ in range(rounds):
+            for shared in (True, False):
+                with _rebuild_clock(shared) as spent:
+                    t0 = time.perf_counter()
+                    steps[shared] = work().steps
+                    got = (time.perf_counter() - t0, spent[0])
+                if shared not in best or got[0] < best[shared][0]:
+                    best[shared] = got
+        if not np.array_equal(steps[True], steps[False]):
+            raise AssertionError(f"{label}: shared and afresh untried entries took different steps")
+        (fast, fast_rb), (slow, slow_rb) = best[True], best[False]
+        row = {
+            "shared_s": round(fast, 2),
+            "shared_rebuilds_s": round(fast_rb, 2),
+            "afresh_s": round(slow, 2),
+            "afresh_rebuilds_s": round(slow_rb, 2),
+            "shared_over_afresh": round(fast / slow, 3),
+            "rebuilds_shared_over_afresh": round(fast_rb / slow_rb, 3),
+        }
+        out[label] = row
+        print(f"| {label} | " + " | ".join(str(v) for v in row.values()) + " |")
+    return out
+
+
 def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--episodes", type=int, default=300, help="learning episodes per run")
@@ -220,16 +290,19 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
         args.episodes, args.families_episodes, args.optimum_starts, args.rounds = 10, 10, 20, 1
     out = _planning_table(args.episodes, args.rounds)
     print()
-    cases = {
+    families = {
         f"families {name}, {args.families_episodes} episodes": _families_work(name, args.families_episodes)
         for name in FAMILIES
     }
-    cases |= {
+    cases = families | {
         f"optimum {name}, {args.optimum_starts} starts": _optimum_work(name, args.optimum_starts) for name in OPTIMA
     }
     paused = _pause_table(cases, args.rounds)
-    print(json.dumps({"episodes": args.episodes, "rounds": args.rounds, "cases": out, "collector": paused}))
-    return {**out, **paused}
+    print()
+    shared = _sharing_table(families, args.rounds)
+    doc = {"episodes": args.episodes, "rounds": args.rounds, "cases": out, "collector": paused, "untried": shared}
+    print(json.dumps(doc))
+    return {**out, **paused, **{f"untried {label}": row for label, row in shared.items()}}
 
 
 if __name__ == "__main__":

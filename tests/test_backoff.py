@@ -197,6 +197,31 @@ def test_training_repeats_bit_for_bit_and_the_file_is_the_greedy_policy(box, tmp
     assert min(kinds.values()) > 0, kinds
 
 
+@pytest.mark.parametrize(("task_name", "k", "symmetric"), [("paper-box", 2, False), ("u-handle", 3, True)])
+def test_a_crm_a_history_never_tried_gets_the_entry_its_own_routing_gives(task_name, k, symmetric):
+    """Histories that share their newest ``k - 1`` CRMs share one untried entry per plan: it
+    must be, outcome for outcome and in the same order, the entry routed from each history
+    on its own (``p_1(. | h_1, b)`` through ``next_state`` to the nodes with data)."""
+    task = make_task(task_name)
+    trained = train_trials(
+        task, "backoff-vi", trials=1, episodes=60, seed=1, k=k, eval_episodes=0, params={"symmetric": symmetric}
+    )
+    agent = getattr(trained.agents[0], "inner", trained.agents[0])
+    judge = agent._planned()
+    known = {s for s, _ in agent.counts}
+    shared = 0
+    for (node, b), entry in judge.model.items():
+        if node[0] != "L" or (node[1], b) in agent.counts:
+            continue
+        s, own = node[1], {}
+        for r, obs, t, p, n_seen in agent._short_in_frame(s, b):
+            o = (r, agent._route(agent._next_state(s, b, obs), known), t)
+            own[o] = own.get(o, 0.0) + 1.0 * p / n_seen
+        assert list(entry.items()) == list(own.items())
+        shared += 1
+    assert shared > len(known)  # most long pairs were never tried, and each was checked
+
+
 def test_the_back_off_table_is_checked(box, refused_policy):
     res = train_trials(box, "backoff-vi", trials=1, episodes=20, seed=0, k=2, eval_episodes=0)
     doc = GreedyPolicy.from_agent(box, 2, res.agents[0]).to_dict()  # type: ignore[arg-type]

@@ -94,13 +94,17 @@ def test_bench_planning_smoke(capsys):
     spec.loader.exec_module(mod)
     res = mod.main(["--smoke"])
     timed = {f"families {t}, 10 episodes" for t in mod.FAMILIES} | {f"optimum {t}, 20 starts" for t in mod.OPTIMA}
-    assert set(res) == {f"{t} k={k}" for t, k in mod.CASES} | timed
+    shared = {f"untried families {t}, 10 episodes" for t in mod.FAMILIES}
+    assert set(res) == {f"{t} k={k}" for t, k in mod.CASES} | timed | shared
     for t, k in mod.CASES:
         row = res[f"{t} k={k}"]
         assert row["plans"] > 0 and row["compiled_us"] > 0 and row["readable_us"] > 0
         assert 0.0 < row["sweeps_share"] < 1.0
     for label in timed:
         assert res[label]["paused_s"] > 0 and res[label]["not_paused_s"] > 0
+    for label in shared:
+        assert 0 < res[label]["shared_rebuilds_s"] < res[label]["shared_s"]
+        assert 0 < res[label]["afresh_rebuilds_s"] < res[label]["afresh_s"]
     assert gc.isenabled()
     assert '"compiled_over_readable"' in capsys.readouterr().out
 

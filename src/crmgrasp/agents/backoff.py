@@ -193,6 +193,7 @@ class BackoffVI(TabularAgent):
         self._next: dict[tuple[int, int, int], int] = {}
         self._seen: dict[tuple[int, int, int], tuple[int, ...]] = {}
         self._outcomes: dict[tuple[int, int, bool], list[tuple[float, int, bool, float, int]]] = {}
+        self._untried: dict[tuple[int, int], dict[Any, float]] = {}  # per plan, see _long_entry
         self._pool = SuffixPool()
         self._amap: list[int] = []
         self._omap: list[int] = []
@@ -342,7 +343,7 @@ class BackoffVI(TabularAgent):
         nodes: list[Node] = [("S", s1) for s1 in short.q] + [("L", s) for s in longs]
         judge.q = {node: [judge.q_act] * n for node in nodes}  # type: ignore[misc]
         judge.q_greedy = {node: [judge.unknown] * n for node in nodes}  # type: ignore[misc]
-        self._outcomes = {}
+        self._outcomes, self._untried = {}, {}
         if self.middle:
             self._pool.pool(self.counts, self._scale, self._bound()[0])
         for (s1, b), entry in short.model.items():
@@ -415,8 +416,10 @@ class BackoffVI(TabularAgent):
     def _long_entry(self, s: int, b: int, known: set[int]) -> dict[Any, float]:
         """``n(h, b, .) + beta p_1(. | h_1, b)`` with outcomes routed to nodes (``p_1``
         alone where ``h`` never tried ``b``; empty where neither level has data)."""
-        entry: dict[Any, float] = {}
         own = self.counts.get((s, b))
+        if own is None and not self.middle:
+            return dict(self._untried_entry(s, b, known))
+        entry: dict[Any, float] = {}
         for (r, s2, t), c in (own or {}).items():
             o = (r, self._route(s2, known), t)
             entry[o] = entry.get(o, 0.0) + c * self._scale
@@ -432,6 +435,22 @@ class BackoffVI(TabularAgent):
         for r, obs, t, p, n_seen in self._short_in_frame(s, b):
             o = (r, self._route(self._next_state(s, b, obs), known), t)
             entry[o] = entry.get(o, 0.0) + weight * p / n_seen
+        return entry
+
+    def _untried_entry(self, s: int, b: int, known: set[int]) -> dict[Any, float]:
+        """``p_1(. | h_1, b)`` routed from history ``s``, which never tried ``b``, made once
+        per plan for all the histories that share ``s``'s newest ``k - 1`` CRMs (``s``'s
+        code without its oldest two slots): they have the same suffix ``h_1`` and the same
+        next histories, so the same entry, summed in the same order. Shared, not to be
+        changed: [`_long_entry`][] hands out copies."""
+        frame = self._bound()[0]
+        key = (s // ((frame.encoder.n_obs + 1) * (self.n_actions + 1)), b)
+        entry = self._untried.get(key)
+        if entry is None:
+            entry = self._untried[key] = {}
+            for r, obs, t, p, n_seen in self._short_in_frame(s, b):
+                o = (r, self._route(self._next_state(s, b, obs), known), t)
+                entry[o] = entry.get(o, 0.0) + p / n_seen
         return entry
 
     def _short_in_frame(self, s: int, b: int) -> list[tuple[float, int, bool, float, int]]:

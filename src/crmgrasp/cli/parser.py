@@ -77,7 +77,11 @@ def _parser_reproduce(sub: Any) -> None:
         help=f"experiments to run: {', '.join(EXPERIMENTS)} (default: all; the MuJoCo ones need crmgrasp[mujoco])",
     )
     p.add_argument("--seed", type=_SEED, default=0, help="seed of the run (default 0; 0 to 2**63-1)")
-    p.add_argument("--quick", action="store_true", help="small budgets (under a minute on 2 cores; not converged)")
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="small budgets (not converged; 1.5 minutes on 2 cores in one process, under one with --jobs 0)",
+    )
     _add_run(p, "reproduce")
     _add_jobs(p)
     _add_kernel_backend(p)
