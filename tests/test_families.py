@@ -358,14 +358,15 @@ def test_default_crms_and_their_mirror() -> None:
     assert t.symmetry is not None and t.symmetry.actions == (1, 0, 3, 2, 5, 4)
 
 
-@pytest.mark.slow
 def test_compare_and_lockstep_on_a_family(tmp_path) -> None:  # type: ignore[no-untyped-def]
     import dataclasses
 
     from crmgrasp.agents import train_trials_lockstep
     from crmgrasp.experiments.compare import CompareConfig, compare
 
-    cfg = dataclasses.replace(CompareConfig.quick("cup-family"), deep=None, reference_starts=60, eval_episodes=20)
+    cfg = dataclasses.replace(
+        CompareConfig.quick("cup-family"), deep=None, reference_starts=60, eval_episodes=20, trials=2, episodes=20
+    )
     s = compare(tmp_path, cfg)
     assert s["belief_optimum"] == 1.0 and s["pomdp_counts"].startswith("skipped")
     with pytest.raises(CrmgraspError, match="draws an object per episode: train without lockstep"):
