@@ -22,11 +22,12 @@ each: whole ``--preset families`` runs (``backoff-vi``, k = 2, on the mirror quo
 and the belief-space optimum over ``--optimum-starts`` sampled starts (seed 0), which memoises
 every belief it meets.
 
-A third table times the same ``--preset families`` runs with ``backoff-vi``'s entries for CRMs
-a long history never tried made once per plan for all histories that share their newest
-``k - 1`` CRMs (``BackoffVI._untried_entry``, what the code does) and made afresh for each
-history (the peer: the same entries, so the same steps, which the table checks): whole-run
-seconds and the seconds spent rebuilding the planning model, least of the rounds.
+A third table times the same ``--preset families`` runs with the entries for CRMs a history
+never tried made once per plan for all histories that lead to the same next histories
+(``BackoffVI._untried_entry``, ``PooledVI._pooled_entry``: what the code does) and made afresh
+for each history (the peer: the same entries, so the same steps, which the table checks):
+whole-run seconds and the seconds spent rebuilding the planning models (``BackoffVI._rebuilt``
+with its short level's ``PooledVI._solve`` inside), least of the rounds.
 
 Usage: ``python benchmarks/bench_planning.py [--episodes 300] [--families-episodes 1000]
 [--optimum-starts 4000] [--rounds 3] [--smoke]``. Prints three tables and one JSON object.
@@ -214,33 +215,52 @@ def _planning_table(episodes: int, rounds: int) -> dict[str, dict[str, float]]:
     return out
 
 
+REBUILDS = (("BackoffVI", "_rebuilt", "_untried_entry"), ("PooledVI", "_solve", "_pooled_entry"))
+"""Per learner class: the method that rebuilds its planning model and the one that makes an
+untried entry from its per-plan cache (``agent._untried``)."""
+
+
 @contextlib.contextmanager
 def _rebuild_clock(shared: bool) -> Iterator[list[float]]:
-    """Seconds spent in ``BackoffVI._rebuilt`` while open (the list's one item); with
+    """Seconds spent rebuilding planning models while open (the list's one item; a rebuild
+    inside another, the short level's inside ``backoff-vi``'s, counted once); with
     ``shared=False`` every untried entry is made afresh (the cache emptied before each)."""
-    from crmgrasp.agents.backoff import BackoffVI
+    from crmgrasp.agents import backoff, pooled
 
-    saved = (BackoffVI._rebuilt, BackoffVI._untried_entry)
-    rebuilt, untried = saved
-    spent = [0.0]
+    classes = {"BackoffVI": backoff.BackoffVI, "PooledVI": pooled.PooledVI}
+    saved = [(classes[c], name, getattr(classes[c], name)) for c, *names in REBUILDS for name in names]
+    spent, depth = [0.0], [0]
 
-    def timed(agent: Any, rng: Any) -> Any:
-        t0 = time.perf_counter()
-        out = rebuilt(agent, rng)
-        spent[0] += time.perf_counter() - t0
-        return out
+    def timed(method: Callable[..., Any]) -> Callable[..., Any]:
+        def run(*args: Any) -> Any:
+            depth[0] += 1
+            t0 = time.perf_counter()
+            try:
+                return method(*args)
+            finally:
+                depth[0] -= 1
+                if not depth[0]:
+                    spent[0] += time.perf_counter() - t0
 
-    def afresh(agent: Any, s: int, b: int, known: set[int]) -> Any:
-        agent._untried.clear()
-        return untried(agent, s, b, known)
+        return run
 
-    BackoffVI._rebuilt = timed  # type: ignore[method-assign]
-    if not shared:
-        BackoffVI._untried_entry = afresh  # type: ignore[method-assign]
+    def afresh(method: Callable[..., Any]) -> Callable[..., Any]:
+        def run(agent: Any, *args: Any) -> Any:
+            agent._untried.clear()
+            return method(agent, *args)
+
+        return run
+
+    for c, rebuild, untried in REBUILDS:
+        cls = classes[c]
+        setattr(cls, rebuild, timed(getattr(cls, rebuild)))
+        if not shared:
+            setattr(cls, untried, afresh(getattr(cls, untried)))
     try:
         yield spent
     finally:
-        BackoffVI._rebuilt, BackoffVI._untried_entry = saved  # type: ignore[method-assign]
+        for cls, name, method in saved:
+            setattr(cls, name, method)
 
 
 def _sharing_table(cases: dict[str, Callable[[], Any]], rounds: int) -> dict[str, dict[str, float]]:

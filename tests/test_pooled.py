@@ -120,6 +120,31 @@ def test_a_self_mirror_start_teaches_both_mirror_crms(box):
     assert plain.inner.tried[s0] == {1}  # type: ignore[attr-defined]
 
 
+@pytest.mark.parametrize(("task_name", "k", "symmetric"), [("u-handle", 1, True), ("paper-box", 2, False)])
+def test_a_crm_a_state_never_tried_gets_the_pooled_entry_its_own_routing_gives(task_name, k, symmetric):
+    """States with the same pooling key and the same next states share one untried entry
+    per solve: it must be, outcome for outcome and in the same order, the pooled estimate
+    routed from each state on its own."""
+    task = make_task(task_name)
+    trained = train_trials(
+        task, "pooled-vi", trials=1, episodes=60, seed=1, k=k, eval_episodes=0, params={"symmetric": symmetric}
+    )
+    agent = getattr(trained.agents[0], "inner", trained.agents[0])
+    judge, frame = agent.greedy_model(), agent.frame
+    checked = 0
+    for (h, b), entry in judge.model.items():
+        pooled = agent.pool.get((frame.key(h, b), b))
+        if agent.model.get((h, b)) or not pooled:
+            continue
+        own, weight = {}, 1.0 / sum(pooled.values())
+        for (r, obs, t), c in pooled.items():
+            o = (r, frame.next_state(h, b, obs), t)
+            own[o] = own.get(o, 0.0) + weight * c
+        assert list(entry.items()) == list(own.items())
+        checked += 1
+    assert checked > len(agent.model)  # most pairs were never tried, and each was checked
+
+
 def test_bad_settings_are_one_line_errors(box):
     with pytest.raises(CrmgraspError, match="beta must be >= 0"):
         make_agent("pooled-vi", 4, beta=-1.0)

@@ -171,6 +171,7 @@ class PooledVI(ModelVI):
         self.pool: dict[tuple[Key, int], dict[Outcome, float]] = {}
         self._known: set[int] = set()
         self._solved = True
+        self._untried: dict[tuple[Key, int, int], dict[Outcome, float]] = {}  # per solve, see _entry
 
     def params(self) -> dict[str, Any]:
         return {**super().params(), "beta": self.beta}
@@ -244,6 +245,7 @@ class PooledVI(ModelVI):
             judge.model, judge.tried = {}, {}
             judge.q = {h: [judge.q_act] * n for h in sorted(self._known)}
             judge.q_greedy = {h: [judge.unknown] * n for h in judge.q}
+            self._untried = {}
             for h in judge.q:
                 for b in range(n):
                     entry = self._entry(h, b)
@@ -262,9 +264,30 @@ class PooledVI(ModelVI):
         pooled = self.pool.get((frame.key(h, b), b))
         if not pooled or (own and self.beta == 0.0):
             return dict(own) if own else None
-        weight = (self.beta if own else 1.0) / sum(pooled.values())
-        entry = dict(own) if own else {}
+        if not own:
+            return dict(self._pooled_entry(h, b, pooled))
+        weight = self.beta / sum(pooled.values())
+        entry = dict(own)
         for (r, obs, t), c in pooled.items():
             o = (r, frame.next_state(h, b, obs), t)
             entry[o] = entry.get(o, 0.0) + weight * c
+        return entry
+
+    def _pooled_entry(self, h: int, b: int, pooled: dict[Outcome, float]) -> dict[Outcome, float]:
+        """The pooled estimate of CRM ``b`` routed from state ``h``, which never tried it, made
+        once per solve for every state with the same pooling key and the same next states:
+        ``next_state`` keeps ``h``'s code without its oldest two slots (``h // D``, ``D`` the
+        radix of one observation and CRM; 0 for every state when k = 1). Shared, not to be
+        changed: [`_entry`][] hands out copies."""
+        frame = self.frame
+        assert frame is not None
+        enc = frame.encoder
+        key = (frame.key(h, b), b, h // ((enc.n_obs + 1) * (self.n_actions + 1)))
+        entry = self._untried.get(key)
+        if entry is None:
+            entry = self._untried[key] = {}
+            weight = 1.0 / sum(pooled.values())
+            for (r, obs, t), c in pooled.items():
+                o = (r, frame.next_state(h, b, obs), t)
+                entry[o] = entry.get(o, 0.0) + weight * c
         return entry
