@@ -36,6 +36,17 @@ def test_roundtrip_and_push(k, n_obs, n_act, data):
     assert enc.is_padded(h) == (k > 0 and len(acts) < k)
 
 
+@given(st.integers(0, 4), st.integers(1, 8), st.integers(1, 4), st.data())
+def test_kept_is_what_the_next_history_keeps(k, n_obs, n_act, data):
+    """Two histories with the same ``kept`` have the same next history after every CRM and
+    observation, and two with different ones never do (``backoff-vi`` and ``pooled-vi`` share
+    planning entries on it)."""
+    enc = KOrderEncoder(n_obs, n_act, k)
+    h, g = (data.draw(st.integers(0, enc.size - 1)) for _ in range(2))
+    a, o = data.draw(st.integers(0, n_act - 1)), data.draw(st.integers(0, n_obs - 1))
+    assert (enc.push_code(h, a, o) == enc.push_code(g, a, o)) == (enc.kept(h) == enc.kept(g))
+
+
 def test_distinct_histories_get_distinct_codes():
     enc = KOrderEncoder(3, 2, 2)
     codes = set()

@@ -439,12 +439,12 @@ class BackoffVI(TabularAgent):
 
     def _untried_entry(self, s: int, b: int, known: set[int]) -> dict[Any, float]:
         """``p_1(. | h_1, b)`` routed from history ``s``, which never tried ``b``, made once
-        per plan for all the histories that share ``s``'s newest ``k - 1`` CRMs (``s``'s
-        code without its oldest two slots): they have the same suffix ``h_1`` and the same
-        next histories, so the same entry, summed in the same order. Shared, not to be
-        changed: [`_long_entry`][] hands out copies."""
-        frame = self._bound()[0]
-        key = (s // ((frame.encoder.n_obs + 1) * (self.n_actions + 1)), b)
+        per plan for all the histories that share ``s``'s newest ``k - 1`` CRMs: they have the
+        same suffix ``h_1`` and the same next histories
+        ([`KOrderEncoder.kept`][crmgrasp.model.history.KOrderEncoder.kept]), so the same
+        entry, summed in the same order. Shared, not to be changed: [`_long_entry`][] hands
+        out copies."""
+        key = (self._bound()[0].encoder.kept(s), b)
         entry = self._untried.get(key)
         if entry is None:
             entry = self._untried[key] = {}

@@ -275,14 +275,12 @@ class PooledVI(ModelVI):
 
     def _pooled_entry(self, h: int, b: int, pooled: dict[Outcome, float]) -> dict[Outcome, float]:
         """The pooled estimate of CRM ``b`` routed from state ``h``, which never tried it, made
-        once per solve for every state with the same pooling key and the same next states:
-        ``next_state`` keeps ``h``'s code without its oldest two slots (``h // D``, ``D`` the
-        radix of one observation and CRM; 0 for every state when k = 1). Shared, not to be
-        changed: [`_entry`][] hands out copies."""
+        once per solve for every state with the same pooling key and the same next states
+        (the same [`KOrderEncoder.kept`][crmgrasp.model.history.KOrderEncoder.kept]; at k = 1,
+        every state). Shared, not to be changed: [`_entry`][] hands out copies."""
         frame = self.frame
         assert frame is not None
-        enc = frame.encoder
-        key = (frame.key(h, b), b, h // ((enc.n_obs + 1) * (self.n_actions + 1)))
+        key = (frame.key(h, b), b, frame.encoder.kept(h))
         entry = self._untried.get(key)
         if entry is None:
             entry = self._untried[key] = {}

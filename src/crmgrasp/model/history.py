@@ -106,7 +106,22 @@ class KOrderEncoder:
         top = obs * (self.n_actions + 1) + action
         if self.k == 1:
             return top
-        return top * self._weight + code // ((self.n_obs + 1) * (self.n_actions + 1))
+        return top * self._weight + self.kept(code)
+
+    def kept(self, code: int) -> int:
+        """What [`push_code`][] keeps of history ``code``: the code of its newest ``k - 1``
+        CRMs and observations, ``code // ((nO+1)(nA+1))`` (0 for ``k <= 1``, whose next
+        history keeps nothing). Histories with the same value have the same next history
+        after every CRM and observation.
+
+        >>> enc = KOrderEncoder(n_obs=3, n_actions=2, k=2)
+        >>> h, g = enc.encode((1, 0, 2, 1)), enc.encode((1, 0, 0, 0))
+        >>> enc.kept(h) == enc.kept(g), enc.push_code(h, 1, 2) == enc.push_code(g, 1, 2)
+        (True, True)
+        """
+        if self.k <= 1:
+            return 0
+        return code // ((self.n_obs + 1) * (self.n_actions + 1))
 
     @cached_property
     def _weight(self) -> int:
