@@ -12,7 +12,9 @@ sweeps and the copying around them.
 
 Columns: the model's states, pairs and outcomes at the end; plans; microseconds per plan,
 compiled and readable, and their ratio (below 1: the compiled path is faster); of the compiled
-time, the share spent in the sweeps themselves.
+time, the share spent in the sweeps themselves; the share of compiled plans that kept their
+outcome arrays from the plan before (``kernels.planning._Outcomes``) instead of copying the
+whole model.
 
 A second table times work that builds large acyclic structures with the cyclic garbage
 collector held off (`crmgrasp._collector.collector_paused`, what the code does) and left to
@@ -55,18 +57,25 @@ OPTIMA = ("u-handle",)
 
 
 class _Clock:
-    """Seconds spent in ``ModelVI._plan`` and in the compiled sweeps while installed."""
+    """Seconds spent in ``ModelVI._plan`` and in the compiled sweeps while installed, and how
+    many compiled plans found their kept outcome arrays usable (``_Outcomes.refresh``)."""
 
     def __init__(self) -> None:
         self.plan = self.sweeps = 0.0
-        self.plans = 0
+        self.plans = self.kept = 0
 
     def __enter__(self) -> _Clock:
         import crmgrasp.kernels._vi_jit as jit
+        import crmgrasp.kernels.planning as planning
         from crmgrasp.agents.model_based import ModelVI
 
-        self._saved = (ModelVI._plan, jit.sweeps)
-        plan, sweeps = self._saved
+        self._saved = (ModelVI._plan, jit.sweeps, planning._Outcomes.refresh)
+        plan, sweeps, refresh = self._saved
+
+        def counted(kept: Any, *args: Any) -> bool:
+            ok = refresh(kept, *args)
+            self.kept += ok
+            return ok
 
         def timed_plan(agent: Any) -> None:
             t0 = time.perf_counter()
@@ -81,13 +90,15 @@ class _Clock:
             return out
 
         ModelVI._plan, jit.sweeps = timed_plan, timed_sweeps  # type: ignore[method-assign]
+        planning._Outcomes.refresh = counted  # type: ignore[method-assign]
         return self
 
     def __exit__(self, *exc: object) -> None:
         import crmgrasp.kernels._vi_jit as jit
+        import crmgrasp.kernels.planning as planning
         from crmgrasp.agents.model_based import ModelVI
 
-        ModelVI._plan, jit.sweeps = self._saved  # type: ignore[method-assign]
+        ModelVI._plan, jit.sweeps, planning._Outcomes.refresh = self._saved  # type: ignore[method-assign]
 
 
 def _run(task: Any, k: int, episodes: int, compiled: bool) -> tuple[_Clock, Any]:
@@ -188,8 +199,8 @@ def _planning_table(episodes: int, rounds: int) -> dict[str, dict[str, float]]:
     from crmgrasp.tasks import make_task
 
     out: dict[str, dict[str, float]] = {}
-    print("| task, k | states | pairs | outcomes | plans | compiled us | readable us | ratio | in the sweeps |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("| task, k | states | pairs | outcomes | plans | compiled us | readable us | ratio | in the sweeps | kept |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for task_name, k in CASES:
         task = make_task(task_name)
         _run(task, k, 2, True)  # load the compiled sweeps before timing
@@ -209,6 +220,7 @@ def _planning_table(episodes: int, rounds: int) -> dict[str, dict[str, float]]:
             "readable_us": round(slow.plan / slow.plans * 1e6, 1),
             "compiled_over_readable": round(fast.plan / slow.plan, 3),
             "sweeps_share": round(fast.sweeps / fast.plan, 3),
+            "kept_share": round(fast.kept / fast.plans, 3),
         }
         out[f"{task_name} k={k}"] = row
         print(f"| {task_name}, {k} | " + " | ".join(str(v) for v in row.values()) + " |")

@@ -460,6 +460,44 @@ def test_compiled_value_iteration_equals_the_readable_sweeps(name, k, params):
         assert inner_a.q == inner_b.q and inner_a.greedy_table == inner_b.greedy_table
 
 
+@pytest.mark.parametrize(
+    ("name", "agent", "k", "params"),
+    [
+        ("u-handle", "model-vi", 2, {}),
+        ("u-handle", "model-vi", 1, {"symmetric": True}),
+        ("paper-box", "pooled-vi", 1, {"symmetric": True}),
+        ("box-3d", "model-vi", 1, {}),
+    ],
+)
+def test_the_kept_outcome_arrays_are_a_copy_of_the_whole_model_at_every_plan(monkeypatch, name, agent, k, params):
+    """model-vi keeps its plan's outcome arrays between plans and brings them in step with the
+    model (changed counts, new pairs, new states): at every plan of a learning run they equal,
+    bit for bit, the arrays copied from the whole model, and most plans keep them."""
+    import crmgrasp.kernels.planning as planning
+    from crmgrasp.agents.training import train_trials
+
+    real, refresh = planning._model_arrays, planning._Outcomes.refresh
+    kept = []
+
+    def counted(self, *args):  # type: ignore[no-untyped-def]
+        kept.append(refresh(self, *args))
+        return kept[-1]
+
+    def checked(agent, states, row):  # type: ignore[no-untyped-def]
+        arrays = real(agent, states, row)
+        fresh = planning._outcomes(agent.model, row)[:-1]
+        assert len(arrays) == len(fresh) == 7
+        for a, b in zip(arrays, fresh, strict=True):
+            assert a.dtype == b.dtype
+            np.testing.assert_array_equal(a, b)
+        return arrays
+
+    monkeypatch.setattr(planning, "_model_arrays", checked)
+    monkeypatch.setattr(planning._Outcomes, "refresh", counted)
+    train_trials(make_task(name), agent, trials=1, episodes=120, seed=3, k=k, eval_episodes=5, params=params)
+    assert sum(kept) > 0.8 * len(kept) > 0  # the kept arrays served most plans, and each was checked
+
+
 @pytest.mark.parametrize("name", ["box-family", "u-handle", "box-3d", "cup-3d", "triangles-3f", "box-family-3f"])
 def test_a_rebound_kernel_is_the_kernel_built_afresh(name):
     """A family's compiled kernel rebound to a new object holds exactly the arrays a kernel

@@ -173,6 +173,7 @@ class BackoffVI(TabularAgent):
         self.skip_errored = boolean(skip_errored, "skip_errored")
         self.skip_errored_learning = boolean(skip_errored_learning, "skip_errored_learning")
         self.judge = ModelVI(n_actions, q_act, unknown, sweeps, compiled, gamma=gamma)
+        self.judge.keeps_arrays = False  # rebuilt whole before each plan
         self.short = PooledVI(n_actions, q_act=q_act, unknown=unknown, compiled=compiled, gamma=gamma)
         self.short.plan_acting = False  # only its greedy model is read
         self.counts: dict[tuple[int, int], dict[Outcome, float]] = {}

@@ -76,6 +76,11 @@ class ModelVI(TabularAgent):
     """
 
     name = "model-vi"
+    keeps_arrays = True
+    """The compiled plan keeps its outcome arrays between plans and writes only the pairs in
+    ``changed`` again (False for a planning model rebuilt whole before each plan, as
+    ``backoff-vi``'s and ``pooled-vi``'s: there is nothing to keep, and keeping the arrays
+    would keep the replaced model alive)."""
 
     def __init__(
         self,
@@ -98,6 +103,12 @@ class ModelVI(TabularAgent):
         self.plan_acting = True
         """Plan after every update (False: a learner kept for its model only, planned by
         whoever reads it)."""
+        self.changed: set[tuple[Any, int]] | None = None
+        """The pairs whose counts changed since the last compiled plan, or None where that is
+        not known (the next plan copies the whole model into its arrays). [`update`][] and
+        [`set_prior`][] keep it; code that changes ``model`` in place otherwise must set it to
+        None. The compiled plan copies only these pairs' outcome probabilities when nothing
+        else changed ([`crmgrasp.kernels.planning.value_iteration`][])."""
 
     def params(self) -> dict[str, Any]:  # type: ignore[override]
         return {
@@ -123,6 +134,7 @@ class ModelVI(TabularAgent):
             for o, c in counts.items():
                 mine[o] = mine.get(o, 0.0) + w * c / total
             self._mark(*key)
+        self.changed = None
         if prior:
             self._plan()
 
@@ -154,6 +166,8 @@ class ModelVI(TabularAgent):
         counts = self.model.setdefault((s, a), {})
         o = (r, s2, terminal)
         counts[o] = counts.get(o, 0.0) + 1.0
+        if self.changed is not None:
+            self.changed.add((s, a))
         if self.plan_acting:
             self._plan()
 

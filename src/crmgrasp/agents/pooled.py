@@ -167,6 +167,7 @@ class PooledVI(ModelVI):
             raise CrmgraspError(f"beta must be >= 0, got {self.beta}")
         sweeps = max(self.sweeps, 1000)  # the greedy model is solved from its initial values
         self.judge = ModelVI(n_actions, self.q_act, self.unknown, sweeps, self.compiled, gamma=self.gamma)
+        self.judge.keeps_arrays = False  # rebuilt whole before each plan
         self.frame: HistoryFrame | None = None
         self.pool: dict[tuple[Key, int], dict[Outcome, float]] = {}
         self._known: set[int] = set()

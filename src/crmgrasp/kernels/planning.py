@@ -1,16 +1,92 @@
 """The fast path of model-based planning: [`value_iteration`][] runs
 `ModelVI`'s sweeps in compiled code
 (`crmgrasp.kernels._vi_jit`) on arrays built from the agent's model and values,
-then writes the values back; the agent's readable sweeps are the definition."""
+then writes the values back; the agent's readable sweeps are the definition.
+
+A learner that plans after every real step changes little between two plans: one pair's
+counts, now and then a new pair, outcome or state. Its outcome arrays are kept between plans
+(`_Outcomes`) while the model and the value table are the same objects, which only grow: the
+changed pairs' probabilities are written again by the same division (``agent.changed``, kept by
+``ModelVI.update``), new pairs are appended in the model's order, and an outcome that led outside
+the table points to its state's row once the state has one. A pair that gained an outcome has
+them all copied afresh. The arrays are those a copy of the whole model would give (tested)."""
 
 from __future__ import annotations
 
-from itertools import chain, repeat
+import weakref
+from itertools import chain, islice, repeat
 from typing import Any
 
 import numpy as np
 
 __all__ = ["value_iteration"]
+
+
+class _Outcomes:
+    """The outcome arrays of one agent's model (``_vi_jit``'s layout, as `_outcomes` makes
+    them) and what keeps them in step with it: the model and value-table objects they were made
+    from, the table's size and last state, each pair's position and number of outcomes, and the
+    positions of the outcomes whose next state had no row, by state."""
+
+    def __init__(self, agent: Any, states: list[Any], row: dict[Any, int]) -> None:
+        self.model, self.q = agent.model, agent.q
+        self.n_states, self.last = len(states), states[-1] if states else None
+        self.index = {key: i for i, key in enumerate(agent.model)}
+        *self.arrays, nexts = _outcomes(agent.model, row)
+        self.sizes: list[int] = np.diff(self.arrays[2]).tolist()
+        self.unresolved: dict[Any, list[int]] = {}
+        for j in np.flatnonzero(self.arrays[5] < 0).tolist():
+            self.unresolved.setdefault(nexts[j], []).append(j)
+
+    def refresh(self, agent: Any, states: list[Any], row: dict[Any, int], changed: set[Any]) -> bool:
+        """Bring the arrays in step with the model and say True, or say False (and change
+        nothing) where they cannot be kept: another model or table object, a table that did
+        not only grow, a pair that gained an outcome."""
+        model, old = agent.model, self.n_states
+        if model is not self.model or agent.q is not self.q or len(states) < old:
+            return False
+        if old and states[old - 1] != self.last:
+            return False
+        recount = []
+        for key in changed:
+            i = self.index.get(key)
+            if i is not None and len(model[key]) != self.sizes[i]:
+                return False
+            if i is not None:
+                recount.append((key, i))
+        for s in states[old:]:
+            for j in self.unresolved.pop(s, ()):
+                self.arrays[5][j] = row[s]
+        self.n_states, self.last = len(states), states[-1] if states else None
+        if len(model) > len(self.sizes):
+            self._append(model, row)
+        first, p = self.arrays[2], self.arrays[3]
+        for key, i in recount:
+            counts = list(model[key].values())
+            p[first[i] : first[i + 1]] = np.array(counts, dtype=np.float64) / sum(counts)
+        return True
+
+    def _append(self, model: Any, row: dict[Any, int]) -> None:
+        """Append the pairs the model gained (its last ones, in its order)."""
+        base, start = len(self.sizes), int(self.arrays[2][-1])
+        new = dict(islice(model.items(), base, None))
+        rows, cols, first, p, r, nxt, t, nexts = _outcomes(new, row)
+        for i, key in enumerate(new):
+            self.index[key] = base + i
+        self.sizes += np.diff(first).tolist()
+        for j in np.flatnonzero(nxt < 0).tolist():
+            self.unresolved.setdefault(nexts[j], []).append(start + j)
+        old = self.arrays
+        self.arrays = [
+            np.concatenate((old[0], rows)),
+            np.concatenate((old[1], cols)),
+            np.concatenate((old[2], first[1:] + start)),
+            *(np.concatenate((a, b)) for a, b in zip(old[3:], (p, r, nxt, t), strict=True)),
+        ]
+
+
+_KEPT: weakref.WeakKeyDictionary[Any, _Outcomes] = weakref.WeakKeyDictionary()
+"""Per agent that keeps its arrays between plans (``keeps_arrays``), the last ones."""
 
 
 def value_iteration(agent: Any, tol: float) -> int:
@@ -25,7 +101,7 @@ def value_iteration(agent: Any, tol: float) -> int:
     qg = _table(map(agent.q_greedy.get, states, repeat(blank)), len(states), n)
     tried = np.zeros(qa.shape, dtype=np.bool_)
     tried.flat[[i * n + a for s, acts in agent.tried.items() if (i := row.get(s)) is not None for a in acts]] = True
-    rows, cols, first, p, r, nxt, t = _outcomes(agent.model, row)
+    rows, cols, first, p, r, nxt, t = _model_arrays(agent, states, row)
     done = _vi_jit.sweeps(
         qa,
         qg,
@@ -51,17 +127,33 @@ def value_iteration(agent: Any, tol: float) -> int:
     return int(done)
 
 
+def _model_arrays(agent: Any, states: list[Any], row: dict[Any, int]) -> list[np.ndarray]:
+    """The outcome arrays of ``agent``'s model: the kept ones, brought in step, where they can
+    be kept (see the module docstring), else made afresh (and kept if the agent keeps its
+    arrays)."""
+    changed = getattr(agent, "changed", None)
+    kept = _KEPT.get(agent)
+    if kept is None or changed is None or not kept.refresh(agent, states, row, changed):
+        if not getattr(agent, "keeps_arrays", False):
+            return list(_outcomes(agent.model, row)[:-1])
+        kept = _KEPT[agent] = _Outcomes(agent, states, row)
+        agent.changed = set()
+    changed = agent.changed
+    changed.clear()
+    return kept.arrays
+
+
 def _table(rows: Any, size: int, n: int) -> np.ndarray:
     """``size`` rows of ``n`` floats (lists) as a ``(size, n)`` array."""
     return np.fromiter(chain.from_iterable(rows), dtype=np.float64, count=size * n).reshape(size, n)
 
 
-def _outcomes(model: Any, row: dict[Any, int]) -> tuple[np.ndarray, ...]:
+def _outcomes(model: Any, row: dict[Any, int]) -> tuple[Any, ...]:
     """The model's pairs and outcomes as the sweeps' arrays (``_vi_jit``'s layout): each pair's
     row and action, the offsets of its outcomes, and per outcome ``p = count / total`` (the
     pair's total summed in insertion order, as the readable sweeps do), reward, the next
-    state's row (-1 outside ``row``) and whether it is terminal. Built with whole-list
-    operations, not a Python step per outcome: this runs after every real step."""
+    state's row (-1 outside ``row``) and whether it is terminal; last, the next states
+    themselves. Built with whole-list operations, not a Python step per outcome."""
     sources, tables = list(model), list(model.values())
     totals = [sum(cs.values()) for cs in tables]
     sizes = np.fromiter(map(len, tables), dtype=np.int64, count=len(tables))
@@ -79,4 +171,5 @@ def _outcomes(model: Any, row: dict[Any, int]) -> tuple[np.ndarray, ...]:
         np.array(rewards, dtype=np.float64),
         np.fromiter(map(row.get, nexts, repeat(-1)), dtype=np.int64, count=len(nexts)),
         np.array(ends, dtype=np.bool_),
+        nexts,
     )
