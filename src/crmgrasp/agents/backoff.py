@@ -433,6 +433,10 @@ class BackoffVI(TabularAgent):
                 o = (r, self._route(self._next_state(s, b, obs), known), t)
                 entry[o] = entry.get(o, 0.0) + weight * p
             return entry
+        return self._add_short(entry, s, b, known, weight)
+
+    def _add_short(self, entry: dict[Any, float], s: int, b: int, known: set[int], weight: float) -> dict[Any, float]:
+        """``entry`` with ``weight p_1(. | h_1, b)`` added, routed from history ``s`` (in place)."""
         for r, obs, t, p, n_seen in self._short_in_frame(s, b):
             o = (r, self._route(self._next_state(s, b, obs), known), t)
             entry[o] = entry.get(o, 0.0) + weight * p / n_seen
@@ -448,10 +452,7 @@ class BackoffVI(TabularAgent):
         key = (self._bound()[0].encoder.kept(s), b)
         entry = self._untried.get(key)
         if entry is None:
-            entry = self._untried[key] = {}
-            for r, obs, t, p, n_seen in self._short_in_frame(s, b):
-                o = (r, self._route(self._next_state(s, b, obs), known), t)
-                entry[o] = entry.get(o, 0.0) + p / n_seen
+            entry = self._untried[key] = self._add_short({}, s, b, known, 1.0)
         return entry
 
     def _short_in_frame(self, s: int, b: int) -> list[tuple[float, int, bool, float, int]]:

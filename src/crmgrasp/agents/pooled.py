@@ -267,8 +267,15 @@ class PooledVI(ModelVI):
             return dict(own) if own else None
         if not own:
             return dict(self._pooled_entry(h, b, pooled))
-        weight = self.beta / sum(pooled.values())
-        entry = dict(own)
+        return self._add_pooled(dict(own), h, b, pooled, self.beta)
+
+    def _add_pooled(
+        self, entry: dict[Outcome, float], h: int, b: int, pooled: dict[Outcome, float], share: float
+    ) -> dict[Outcome, float]:
+        """``entry`` with ``share m(., b) / m(b)`` added, routed from state ``h`` (in place)."""
+        frame = self.frame
+        assert frame is not None
+        weight = share / sum(pooled.values())
         for (r, obs, t), c in pooled.items():
             o = (r, frame.next_state(h, b, obs), t)
             entry[o] = entry.get(o, 0.0) + weight * c
@@ -284,9 +291,5 @@ class PooledVI(ModelVI):
         key = (frame.key(h, b), b, frame.encoder.kept(h))
         entry = self._untried.get(key)
         if entry is None:
-            entry = self._untried[key] = {}
-            weight = 1.0 / sum(pooled.values())
-            for (r, obs, t), c in pooled.items():
-                o = (r, frame.next_state(h, b, obs), t)
-                entry[o] = entry.get(o, 0.0) + weight * c
+            entry = self._untried[key] = self._add_pooled({}, h, b, pooled, 1.0)
         return entry

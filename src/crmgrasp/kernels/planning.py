@@ -50,10 +50,11 @@ class _Outcomes:
         recount = []
         for key in changed:
             i = self.index.get(key)
-            if i is not None and len(model[key]) != self.sizes[i]:
+            if i is None:
+                continue  # a new pair: appended below
+            if len(model[key]) != self.sizes[i]:
                 return False
-            if i is not None:
-                recount.append((key, i))
+            recount.append((key, i))
         for s in states[old:]:
             for j in self.unresolved.pop(s, ()):
                 self.arrays[5][j] = row[s]
@@ -138,8 +139,7 @@ def _model_arrays(agent: Any, states: list[Any], row: dict[Any, int]) -> list[np
             return list(_outcomes(agent.model, row)[:-1])
         kept = _KEPT[agent] = _Outcomes(agent, states, row)
         agent.changed = set()
-    changed = agent.changed
-    changed.clear()
+    agent.changed.clear()
     return kept.arrays
 
 
