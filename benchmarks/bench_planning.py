@@ -27,7 +27,9 @@ every belief it meets.
 A third table times the same ``--preset families`` runs with the entries for CRMs a history
 never tried made once per plan for all histories that lead to the same next histories
 (``BackoffVI._untried_entry``, ``PooledVI._pooled_entry``: what the code does) and made afresh
-for each history (the peer: the same entries, so the same steps, which the table checks):
+for each history (the peer, with ``backoff-vi``'s routed terms of the short level,
+``BackoffVI._short_routed``, made afresh as well: the same entries, so the same steps, which
+the table checks):
 whole-run seconds and the seconds spent rebuilding the planning models (``BackoffVI._rebuilt``
 with its short level's ``PooledVI._solve`` inside), least of the rounds.
 
@@ -259,6 +261,7 @@ def _rebuild_clock(shared: bool) -> Iterator[list[float]]:
     def afresh(method: Callable[..., Any]) -> Callable[..., Any]:
         def run(agent: Any, *args: Any) -> Any:
             agent._untried.clear()
+            getattr(agent, "_routed", {}).clear()  # backoff-vi's routed terms, shared the same way
             return method(agent, *args)
 
         return run

@@ -323,3 +323,27 @@ def test_explore_tried_retries_a_crm_whose_first_tries_erred():
         (records,) = greedy_records(task, res.agents, test, 27, k=6)
         cost[tried] = np.mean([len(r.actions) + sum(r.errors) for r in records])
     assert cost[0.0] >= 1.95 and cost[2.0] <= 1.45
+
+
+def test_a_draw_and_its_grasp_bonus_leave_the_shared_untried_entries_as_they_are():
+    """A plan hands every history of a group the group's one untried entry (no copy); the
+    posterior draw makes new entries, and the ``explore`` bonus is added to a copy. So the shared
+    entries after a drawn plan with a bonus are those a plan without either makes, and the drawn
+    plan's untried entries are the draws, one per history, with the bonus outcome in them."""
+    task = make_task("u-handle")
+    trained = train_trials(
+        task, "backoff-vi", trials=1, episodes=60, seed=2, k=2, eval_episodes=0, params={"symmetric": True}
+    )
+    agent = getattr(trained.agents[0], "inner", trained.agents[0])
+    agent.explore = 1.0
+    judge = agent._rebuilt(np.random.default_rng(0))
+    after_draw = {key: list(entry.items()) for key, entry in agent._untried.items()}
+    untried = [(node, b) for node, b in judge.model if node[0] == "L" and (node[1], b) not in agent.counts]
+    assert len(untried) > 100 and len({id(judge.model[pair]) for pair in untried}) == len(untried)
+    grasp = task.grasp_reward
+    assert all((grasp, node, True) in judge.model[(node, b)] for node, b in untried)
+    agent._rebuilt(None)  # the mean model: the shared entries made afresh, nothing drawn or added
+    assert {key: list(entry.items()) for key, entry in agent._untried.items()} == after_draw
+    model = agent._planned().model
+    shared = [(node, b) for node, b in model if node[0] == "L" and (node[1], b) not in agent.counts]
+    assert len({id(model[pair]) for pair in shared}) < len(shared) / 2  # held, not copied

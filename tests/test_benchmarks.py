@@ -474,3 +474,27 @@ def test_memory_projection_full_history_is_the_optimum():
     assert (m.last(0), m.last(1), m.last(2), m.last(3)) == ((9,), (9, 3), (9, 3, 7, 2), (9, 3, 7, 2, 5))
     assert mod.FEATURES["k1+errored"](m) == ((9, 3), frozenset({2}))
     assert mod.FEATURES["k1+previous_crm"](m) == ((9, 3), (2,)) and mod.FEATURES["k1+previous_obs"](m) == ((9, 3), (7,))
+
+
+def test_bench_commits_times_a_command_on_two_trees_and_compares_their_files(capsys):
+    import shutil
+    import subprocess
+
+    root = BENCH.parents[1]
+    inside = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, check=False)
+    if shutil.which("git") is None or inside.returncode != 0:
+        pytest.skip("bench_commits needs git and a checkout with a commit")
+    spec = importlib.util.spec_from_file_location("bench_commits", BENCH.parent / "bench_commits.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    command = ["learn", "--task", "paper-box", "--agent", "sarsa", "--trials", "1", "--episodes", "5"]
+    res = mod.main("HEAD", [*command, "--backend", "reference", "--eval-episodes", "10"], rounds=1, warm_up=False)
+    assert res["ref_s"] > 0 and res["tree_s"] > 0 and res["tree_over_ref"] > 0
+    assert res["files"] >= 3 and res["files_differ"] == []  # the learned policy is the same on both trees
+    assert "| files the same |" in capsys.readouterr().out
+    with pytest.raises(SystemExit, match="cannot check out 'no-such-ref'"):
+        mod.main("no-such-ref", command, rounds=1, warm_up=False)
+    with pytest.raises(SystemExit, match=r"the command failed .*unknown task"):
+        mod.main("HEAD", ["learn", "--task", "no-such-task"], rounds=1, warm_up=False)
+    listed = subprocess.run(["git", "-C", str(root), "worktree", "list"], capture_output=True, text=True, check=True)
+    assert "bench-commits-" not in listed.stdout  # every temporary worktree removed

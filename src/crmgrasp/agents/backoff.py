@@ -194,7 +194,8 @@ class BackoffVI(TabularAgent):
         self._next: dict[tuple[int, int, int], int] = {}
         self._seen: dict[tuple[int, int, int], tuple[int, ...]] = {}
         self._outcomes: dict[tuple[int, int, bool], list[tuple[float, int, bool, float, int]]] = {}
-        self._untried: dict[tuple[int, int], dict[Any, float]] = {}  # per plan, see _long_entry
+        self._untried: dict[tuple[int, int], dict[Any, float]] = {}  # per plan, see _untried_entry
+        self._routed: dict[tuple[int, int], list[tuple[Any, float, int]]] = {}  # per plan, see _short_routed
         self._pool = SuffixPool()
         self._amap: list[int] = []
         self._omap: list[int] = []
@@ -344,42 +345,55 @@ class BackoffVI(TabularAgent):
         nodes: list[Node] = [("S", s1) for s1 in short.q] + [("L", s) for s in longs]
         judge.q = {node: [judge.q_act] * n for node in nodes}  # type: ignore[misc]
         judge.q_greedy = {node: [judge.unknown] * n for node in nodes}  # type: ignore[misc]
-        self._outcomes, self._untried = {}, {}
+        self._outcomes, self._untried, self._routed = {}, {}, {}
         if self.middle:
             self._pool.pool(self.counts, self._scale, self._bound()[0])
         for (s1, b), entry in short.model.items():
             self._add(("S", s1), b, {(r, ("S", t2), t): c for (r, t2, t), c in entry.items()})
         known = set(longs)
         entries: list[tuple[Node, int, dict[Any, float]]] = []
+        kept = self._bound()[0].encoder.kept
         for s in longs:
+            node, group = ("L", s), kept(s)
             for b in range(n):
-                entry = self._long_entry(s, b, known)
-                if entry and rng is not None:
-                    bonus = self.explore_tried if (s, b) in self.counts else self.explore
-                    if bonus:  # a grasp stays possible in the draw
-                        grasp: Any = (self._bound()[0].task.grasp_reward, ("L", s), True)
-                        entry[grasp] = entry.get(grasp, 0.0) + bonus
-                if entry:
-                    entries.append((("L", s), b, entry))
+                tried = (s, b) in self.counts
+                if tried or self.middle:
+                    entry = self._long_entry(s, b, known, group)
+                else:  # shared with the group's other histories: copied only to be changed
+                    entry = self._untried_entry(s, b, known, group)
+                if not entry:
+                    continue
+                bonus = (self.explore_tried if tried else self.explore) if rng is not None else 0.0
+                if bonus:  # a grasp stays possible in the draw
+                    grasp: Any = (self._bound()[0].task.grasp_reward, node, True)
+                    entry = dict(entry)
+                    entry[grasp] = entry.get(grasp, 0.0) + bonus
+                entries.append((node, b, entry))
         if rng is not None and entries:
             self._draw(entries, rng)
-        for node, b, entry in entries:
-            self._add(node, b, entry)
+        model, marked = judge.model, judge.tried
+        for node, b, entry in entries:  # ``_add``, inline: one pass over up to millions of pairs
+            model[(node, b)] = entry  # type: ignore[index]
+            acts = marked.get(node)  # type: ignore[call-overload]
+            if acts is None:
+                marked[node] = {b}  # type: ignore[index]
+            else:
+                acts.add(b)
         judge._plan()
         self._solved = True
         return judge
 
     @staticmethod
     def _draw(entries: list[tuple[Node, int, dict[Any, float]]], rng: np.random.Generator) -> None:
-        """Replace each entry's pseudo-counts ``c`` by a draw ``Gamma(c, 1)`` (plus 1e-300, so
-        that no outcome is drawn impossible), in place: normalised, the draws of one entry
-        are a ``Dirichlet(c)`` draw. One call to ``rng.gamma`` over all entries, in order,
-        draws the numbers successive scalar calls would."""
+        """Replace each entry (in the list; the entry itself, which may be shared, stays as it
+        is) by one with its pseudo-counts ``c`` drawn, ``Gamma(c, 1)`` (plus 1e-300, so that no
+        outcome is drawn impossible): normalised, the draws of one entry are a ``Dirichlet(c)``
+        draw. One call to ``rng.gamma`` over all entries, in order, draws the numbers successive
+        scalar calls would."""
         shapes = [c for _, _, entry in entries for c in entry.values()]
         draws = iter((rng.gamma(np.array(shapes, dtype=np.float64)) + 1e-300).tolist())
-        for _, _, entry in entries:
-            for o in entry:
-                entry[o] = next(draws)
+        for i, (node, b, entry) in enumerate(entries):
+            entries[i] = (node, b, dict(zip(entry, draws)))  # zip stops at the entry's end, before a draw
 
     def _add(self, node: Node, b: int, entry: dict[Any, float]) -> None:
         self.judge.model[(node, b)] = entry  # type: ignore[index]
@@ -414,12 +428,14 @@ class BackoffVI(TabularAgent):
             obs = self._seen[key] = self._bound()[1].outcome_observations(s1, b1, t2)
         return obs
 
-    def _long_entry(self, s: int, b: int, known: set[int]) -> dict[Any, float]:
+    def _long_entry(self, s: int, b: int, known: set[int], group: int | None = None) -> dict[Any, float]:
         """``n(h, b, .) + beta p_1(. | h_1, b)`` with outcomes routed to nodes (``p_1``
-        alone where ``h`` never tried ``b``; empty where neither level has data)."""
+        alone where ``h`` never tried ``b``; empty where neither level has data), a new dict;
+        ``group``: ``s``'s [`KOrderEncoder.kept`][crmgrasp.model.history.KOrderEncoder.kept]
+        value where the caller has it."""
         own = self.counts.get((s, b))
         if own is None and not self.middle:
-            return dict(self._untried_entry(s, b, known))
+            return dict(self._untried_entry(s, b, known, group))
         entry: dict[Any, float] = {}
         for (r, s2, t), c in (own or {}).items():
             o = (r, self._route(s2, known), t)
@@ -433,26 +449,40 @@ class BackoffVI(TabularAgent):
                 o = (r, self._route(self._next_state(s, b, obs), known), t)
                 entry[o] = entry.get(o, 0.0) + weight * p
             return entry
-        return self._add_short(entry, s, b, known, weight)
+        return self._add_short(entry, s, b, known, weight, group)
 
-    def _add_short(self, entry: dict[Any, float], s: int, b: int, known: set[int], weight: float) -> dict[Any, float]:
+    def _add_short(
+        self, entry: dict[Any, float], s: int, b: int, known: set[int], weight: float, group: int | None = None
+    ) -> dict[Any, float]:
         """``entry`` with ``weight p_1(. | h_1, b)`` added, routed from history ``s`` (in place)."""
-        for r, obs, t, p, n_seen in self._short_in_frame(s, b):
-            o = (r, self._route(self._next_state(s, b, obs), known), t)
+        for o, p, n_seen in self._short_routed(s, b, known, group):
             entry[o] = entry.get(o, 0.0) + weight * p / n_seen
         return entry
 
-    def _untried_entry(self, s: int, b: int, known: set[int]) -> dict[Any, float]:
+    def _short_routed(self, s: int, b: int, known: set[int], group: int | None) -> list[tuple[Any, float, int]]:
+        """The terms of ``p_1(. | h_1, b)`` routed from history ``s``: ``(outcome, p, n)`` per
+        observation of ``_short_in_frame``, its outcome ``(r, node, terminal)``. Made once per
+        plan for all the histories that share ``s``'s newest ``k - 1`` CRMs (``group``): they
+        have the same suffix ``h_1`` and the same next histories
+        ([`KOrderEncoder.kept`][crmgrasp.model.history.KOrderEncoder.kept])."""
+        key = (self._bound()[0].encoder.kept(s) if group is None else group, b)
+        terms = self._routed.get(key)
+        if terms is None:
+            terms = self._routed[key] = [
+                ((r, self._route(self._next_state(s, b, obs), known), t), p, n_seen)
+                for r, obs, t, p, n_seen in self._short_in_frame(s, b)
+            ]
+        return terms
+
+    def _untried_entry(self, s: int, b: int, known: set[int], group: int | None = None) -> dict[Any, float]:
         """``p_1(. | h_1, b)`` routed from history ``s``, which never tried ``b``, made once
-        per plan for all the histories that share ``s``'s newest ``k - 1`` CRMs: they have the
-        same suffix ``h_1`` and the same next histories
-        ([`KOrderEncoder.kept`][crmgrasp.model.history.KOrderEncoder.kept]), so the same
-        entry, summed in the same order. Shared, not to be changed: [`_long_entry`][] hands
-        out copies."""
-        key = (self._bound()[0].encoder.kept(s), b)
+        per plan for all the histories that share ``s``'s newest ``k - 1`` CRMs
+        (``_short_routed``), so the same entry, summed in the same order. Shared, not to be
+        changed: [`_rebuilt`][] copies it where it adds to it, [`_draw`][] makes new entries."""
+        key = (self._bound()[0].encoder.kept(s) if group is None else group, b)
         entry = self._untried.get(key)
         if entry is None:
-            entry = self._untried[key] = self._add_short({}, s, b, known, 1.0)
+            entry = self._untried[key] = self._add_short({}, s, b, known, 1.0, key[0])
         return entry
 
     def _short_in_frame(self, s: int, b: int) -> list[tuple[float, int, bool, float, int]]:

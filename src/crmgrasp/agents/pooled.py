@@ -258,7 +258,8 @@ class PooledVI(ModelVI):
 
     def _entry(self, h: int, b: int) -> dict[Outcome, float] | None:
         """``n(h, b, .) + beta m(b(h), b, .) / m(b(h), b)``, the pooled estimate alone
-        where ``h`` never tried ``b``, or None where neither level has data."""
+        where ``h`` never tried ``b`` (shared, ``_pooled_entry``), or None where neither level
+        has data."""
         frame = self.frame
         assert frame is not None  # bound before the first update
         own = self.model.get((h, b))
@@ -266,7 +267,7 @@ class PooledVI(ModelVI):
         if not pooled or (own and self.beta == 0.0):
             return dict(own) if own else None
         if not own:
-            return dict(self._pooled_entry(h, b, pooled))
+            return self._pooled_entry(h, b, pooled)  # shared: the greedy model only reads it
         return self._add_pooled(dict(own), h, b, pooled, self.beta)
 
     def _add_pooled(
@@ -285,7 +286,8 @@ class PooledVI(ModelVI):
         """The pooled estimate of CRM ``b`` routed from state ``h``, which never tried it, made
         once per solve for every state with the same pooling key and the same next states
         (the same [`KOrderEncoder.kept`][crmgrasp.model.history.KOrderEncoder.kept]; at k = 1,
-        every state). Shared, not to be changed: [`_entry`][] hands out copies."""
+        every state). Shared, not to be changed: the greedy model's pairs hold it as it is and
+        only read it."""
         frame = self.frame
         assert frame is not None
         key = (frame.key(h, b), b, frame.encoder.kept(h))

@@ -85,12 +85,12 @@ def _apply_preset(args: argparse.Namespace, task: Any) -> None:
             setattr(args, key, value)
 
 
-def _warn_if_ungraspable(task: Task, seed: int) -> None:
+def _warn_if_ungraspable(task: Task, seed: int, backend: str) -> None:
     """Say before training when a quick check finds no graspable start (the library's
     [`graspable_warning`][crmgrasp.planners.references.graspable_warning])."""
     from crmgrasp.planners.references import graspable_warning
 
-    warning = graspable_warning(task, seed=seed)
+    warning = graspable_warning(task, seed=seed, backend=backend)
     if warning:
         print(f"crmgrasp: warning: {warning}", file=sys.stderr)
 
@@ -158,7 +158,7 @@ def _check_learn(args: argparse.Namespace, task: Task, spec: LearnerSpec, deep: 
         check_deep(spec.agent, spec.params)
     else:
         build_agent(task, encoder_for(task, spec.k), spec.agent, spec.params)
-    _warn_if_ungraspable(task, args.seed)
+    _warn_if_ungraspable(task, args.seed, args.backend)
     prior = prior_settings(spec.params)
     if prior is not None:
         print(

@@ -110,12 +110,13 @@ def ungraspable_fraction(
     return int((~graspable_starts(task, starts, horizon, backend)).sum()) / len(starts)
 
 
-def graspable_warning(task: Task, n: int = 50, seed: int = 0) -> str | None:
+def graspable_warning(task: Task, n: int = 50, seed: int = 0, backend: str = "auto") -> str | None:
     """A warning when a quick check finds the task ungraspable: no sequence of at most
     ``max_steps`` CRMs grasps any of ``n`` sampled starts, even knowing the object (a
     learner cannot succeed there); ``None`` when some start can be grasped. Costs
-    milliseconds on the registered tasks (about 50 ms on polygon families)."""
-    if ungraspable_fraction(task, sample_starts(task, n, seed)) < 1.0:
+    milliseconds on the registered tasks (about 50 ms on polygon families), stepping on
+    ``backend``'s kernel."""
+    if ungraspable_fraction(task, sample_starts(task, n, seed), backend=backend) < 1.0:
         return None
     return (
         f"task {task.name!r}: none of {n} sampled starts can be grasped within {task.max_steps} CRMs by any CRM "
