@@ -441,18 +441,28 @@ def test_sequential_training_is_the_same_on_every_backend(task, noisy):
 
 
 @pytest.mark.parametrize(
-    ("name", "k", "params"),
-    [("paper-box", 1, {"symmetric": True}), ("paper-box", 2, {}), ("u-handle", 1, {}), ("box-3d", 1, {})],
+    ("name", "agent", "k", "params"),
+    [
+        ("paper-box", "model-vi", 1, {"symmetric": True}),
+        ("paper-box", "model-vi", 2, {}),
+        ("u-handle", "model-vi", 1, {}),
+        ("box-3d", "model-vi", 1, {}),
+        ("u-handle", "backoff-vi", 2, {"symmetric": True, "mean_after": 40}),
+        ("polygon-family", "pooled-vi", 1, {}),
+    ],
 )
-def test_compiled_value_iteration_equals_the_readable_sweeps(name, k, params):
-    """model-vi's compiled planning gives the readable sweeps' values bit for bit: the
-    same episodes, greedy evaluations and value tables."""
+def test_compiled_value_iteration_equals_the_readable_sweeps(name, agent, k, params):
+    """The model-based learners' compiled planning gives the readable sweeps' values bit for
+    bit: the same episodes, greedy evaluations and value tables. ``backoff-vi`` and
+    ``pooled-vi`` hand one entry object to many pairs (their untried CRMs), which the compiled
+    path flattens once (``kernels.planning._outcomes``); ``backoff-vi`` draws from the posterior
+    up to episode 40, then plans on the mean."""
     from crmgrasp.agents.training import train_trials
 
     task = make_task(name)
     kw = {"trials": 2, "episodes": 80, "seed": 2, "k": k, "eval_episodes": 30, "checkpoints": (40, 80)}
-    ref = train_trials(task, "model-vi", params={**params, "compiled": False}, **kw)
-    fast = train_trials(task, "model-vi", params={**params, "compiled": True}, **kw)
+    ref = train_trials(task, agent, params={**params, "compiled": False}, **kw)
+    fast = train_trials(task, agent, params={**params, "compiled": True}, **kw)
     assert np.array_equal(ref.steps, fast.steps) and np.array_equal(ref.greedy_steps, fast.greedy_steps)
     assert np.array_equal(ref.checkpoint_steps, fast.checkpoint_steps)
     for a, b in zip(ref.agents, fast.agents, strict=True):

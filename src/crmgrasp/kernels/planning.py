@@ -136,7 +136,7 @@ def _model_arrays(agent: Any, states: list[Any], row: dict[Any, int]) -> list[np
     kept = _KEPT.get(agent)
     if kept is None or changed is None or not kept.refresh(agent, states, row, changed):
         if not getattr(agent, "keeps_arrays", False):
-            return list(_outcomes(agent.model, row)[:-1])
+            return list(_outcomes(agent.model, row, nexts=False)[:-1])
         kept = _KEPT[agent] = _Outcomes(agent, states, row)
         agent.changed = set()
     agent.changed.clear()
@@ -148,28 +148,54 @@ def _table(rows: Any, size: int, n: int) -> np.ndarray:
     return np.fromiter(chain.from_iterable(rows), dtype=np.float64, count=size * n).reshape(size, n)
 
 
-def _outcomes(model: Any, row: dict[Any, int]) -> tuple[Any, ...]:
+def _outcomes(model: Any, row: dict[Any, int], nexts: bool = True) -> tuple[Any, ...]:
     """The model's pairs and outcomes as the sweeps' arrays (``_vi_jit``'s layout): each pair's
     row and action, the offsets of its outcomes, and per outcome ``p = count / total`` (the
     pair's total summed in insertion order, as the readable sweeps do), reward, the next
     state's row (-1 outside ``row``) and whether it is terminal; last, the next states
-    themselves. Built with whole-list operations, not a Python step per outcome."""
+    themselves (None with ``nexts=False``). Built with whole-list operations, not a Python step
+    per outcome. Pairs that hold one entry object (``backoff-vi``'s and ``pooled-vi``'s shared
+    entries for untried CRMs) have it flattened once and its outcomes gathered for each: the
+    same numbers, by the same divisions."""
     sources, tables = list(model), list(model.values())
-    totals = [sum(cs.values()) for cs in tables]
-    sizes = np.fromiter(map(len, tables), dtype=np.int64, count=len(tables))
-    first = np.zeros(len(tables) + 1, dtype=np.int64)
-    np.cumsum(sizes, out=first[1:])
-    keys = list(chain.from_iterable(tables))
-    counts = np.fromiter(chain.from_iterable(map(dict.values, tables)), dtype=np.float64, count=len(keys))
-    rewards, nexts, ends = zip(*keys, strict=True) if keys else ((), (), ())
-    p = counts / np.repeat(np.array(totals, dtype=np.float64), sizes)
-    return (
+    ids = list(map(id, tables))
+    by_id = dict(zip(ids, tables, strict=True))  # each distinct entry, in order of first use
+    pairs = (
         np.array([row[s] for s, _ in sources], dtype=np.int64),
         np.array([a for _, a in sources], dtype=np.int64),
-        first,
+    )
+    if len(by_id) == len(tables):
+        sizes, p, r, nxt, t, ahead = _flat(tables, row)
+        first = np.zeros(len(tables) + 1, dtype=np.int64)
+        np.cumsum(sizes, out=first[1:])
+        return (*pairs, first, p, r, nxt, t, list(ahead) if nexts else None)
+    position = dict(zip(by_id, range(len(by_id))))
+    which = np.fromiter(map(position.__getitem__, ids), dtype=np.int64, count=len(ids))
+    u_sizes, u_p, u_r, u_nxt, u_t, u_ahead = _flat(list(by_id.values()), row)
+    u_first = np.zeros(len(by_id) + 1, dtype=np.int64)
+    np.cumsum(u_sizes, out=u_first[1:])
+    sizes = u_sizes[which]
+    first = np.zeros(len(tables) + 1, dtype=np.int64)
+    np.cumsum(sizes, out=first[1:])
+    at = np.arange(first[-1], dtype=np.int64) + np.repeat(u_first[:-1][which] - first[:-1], sizes)
+    ahead = np.fromiter(u_ahead, dtype=object, count=len(u_ahead))[at].tolist() if nexts else None
+    return (*pairs, first, u_p[at], u_r[at], u_nxt[at], u_t[at], ahead)
+
+
+def _flat(tables: list[Any], row: dict[Any, int]) -> tuple[Any, ...]:
+    """Per entry of ``tables`` its number of outcomes; per outcome, in order, ``p``, reward,
+    next row (-1 outside ``row``), terminal flag, and the next states (a tuple)."""
+    totals = [sum(cs.values()) for cs in tables]
+    sizes = np.fromiter(map(len, tables), dtype=np.int64, count=len(tables))
+    keys = list(chain.from_iterable(tables))
+    counts = np.fromiter(chain.from_iterable(map(dict.values, tables)), dtype=np.float64, count=len(keys))
+    rewards, ahead, ends = zip(*keys, strict=True) if keys else ((), (), ())
+    p = counts / np.repeat(np.array(totals, dtype=np.float64), sizes)
+    return (
+        sizes,
         p,
         np.array(rewards, dtype=np.float64),
-        np.fromiter(map(row.get, nexts, repeat(-1)), dtype=np.int64, count=len(nexts)),
+        np.fromiter(map(row.get, ahead, repeat(-1)), dtype=np.int64, count=len(ahead)),
         np.array(ends, dtype=np.bool_),
-        nexts,
+        ahead,
     )
