@@ -243,4 +243,4 @@ def accept_start(d, n, planes, cyl, p, q, tol, edges, mu_goal, out):  # type: ig
 __all__ = ["accept_start", "begin_one", "step_one"]
 
 
-# compiled sources: a78b1798ed42b00d3c3012670c6ebfb1e10d5b1c1f6c8507d77f9621c39c6947
+# compiled sources: f4c22619c56b98912777f0f4f96fa9b093f9651f828c19d18b7041761264e88d

@@ -202,4 +202,4 @@ def _dinkelbach(rows, theta, tol, low):  # type: ignore[no-untyped-def]
     return theta
 
 
-# compiled sources: a78b1798ed42b00d3c3012670c6ebfb1e10d5b1c1f6c8507d77f9621c39c6947
+# compiled sources: f4c22619c56b98912777f0f4f96fa9b093f9651f828c19d18b7041761264e88d

@@ -119,6 +119,10 @@ def value_iteration(agent: Any, tol: float) -> int:
         float(agent.gamma),
         int(agent.sweeps),
         float(tol),
+        np.empty(len(states)),
+        np.empty(len(states), dtype=np.bool_),
+        np.empty(len(states)),
+        np.empty(len(states), dtype=np.bool_),
     )
     greedy = agent.q_greedy
     for (s, a), va, vg in zip(agent.model, qa[rows, cols].tolist(), qg[rows, cols].tolist(), strict=True):
