@@ -448,7 +448,7 @@ def test_sequential_training_is_the_same_on_every_backend(task, noisy):
         ("u-handle", "model-vi", 1, {}),
         ("box-3d", "model-vi", 1, {}),
         ("u-handle", "backoff-vi", 2, {"symmetric": True, "mean_after": 40}),
-        ("polygon-family", "pooled-vi", 1, {}),
+        ("u-handle", "pooled-vi", 1, {}),
     ],
 )
 def test_compiled_value_iteration_equals_the_readable_sweeps(name, agent, k, params):
