@@ -488,7 +488,12 @@ def test_bench_commits_times_a_command_on_two_trees_and_compares_their_files(cap
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     command = ["learn", "--task", "paper-box", "--agent", "sarsa", "--trials", "1", "--episodes", "5"]
-    res = mod.main("HEAD", [*command, "--backend", "reference", "--eval-episodes", "10"], rounds=1, warm_up=False)
+    try:
+        res = mod.main("HEAD", [*command, "--backend", "reference", "--eval-episodes", "10"], rounds=1, warm_up=False)
+    except SystemExit as e:  # a checkout git will not add a worktree to (read-only, another owner)
+        if "cannot check out" in str(e):
+            pytest.skip(str(e))
+        raise
     assert res["ref_s"] > 0 and res["tree_s"] > 0 and res["tree_over_ref"] > 0
     assert res["files"] >= 3 and res["files_differ"] == []  # the learned policy is the same on both trees
     assert "| files the same |" in capsys.readouterr().out

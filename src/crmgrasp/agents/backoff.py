@@ -430,12 +430,12 @@ class BackoffVI(TabularAgent):
 
     def _long_entry(self, s: int, b: int, known: set[int], group: int | None = None) -> dict[Any, float]:
         """``n(h, b, .) + beta p_1(. | h_1, b)`` with outcomes routed to nodes (``p_1``
-        alone where ``h`` never tried ``b``; empty where neither level has data), a new dict;
-        ``group``: ``s``'s [`KOrderEncoder.kept`][crmgrasp.model.history.KOrderEncoder.kept]
-        value where the caller has it."""
+        alone where ``h`` never tried ``b``, the values of `_untried_entry`; empty where neither
+        level has data), a new dict; ``group``: ``s``'s
+        [`KOrderEncoder.kept`][crmgrasp.model.history.KOrderEncoder.kept] value where the
+        caller has it. A plan takes it for the pairs a history tried, and for all with the
+        middle level."""
         own = self.counts.get((s, b))
-        if own is None and not self.middle:
-            return dict(self._untried_entry(s, b, known, group))
         entry: dict[Any, float] = {}
         for (r, s2, t), c in (own or {}).items():
             o = (r, self._route(s2, known), t)
