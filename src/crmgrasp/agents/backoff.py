@@ -54,6 +54,7 @@ value is the same at a history and at its mirror image, so an outcome may lead t
 from __future__ import annotations
 
 from collections.abc import Collection, Mapping
+from itertools import chain
 from typing import Any
 
 import numpy as np
@@ -72,6 +73,9 @@ __all__ = ["BackoffVI"]
 
 Node = tuple[str, int]
 """A planning node: ``("L", long history code)`` or ``("S", short state code)``."""
+
+Pair = tuple[Node, int, dict[Any, float]]
+"""A planning model's pair: its node, its CRM and its entry (outcome -> pseudo-count)."""
 
 
 class BackoffVI(TabularAgent):
@@ -348,31 +352,15 @@ class BackoffVI(TabularAgent):
         self._outcomes, self._untried, self._routed = {}, {}, {}
         if self.middle:
             self._pool.pool(self.counts, self._scale, self._bound()[0])
-        for (s1, b), entry in short.model.items():
-            self._add(("S", s1), b, {(r, ("S", t2), t): c for (r, t2, t), c in entry.items()})
-        known = set(longs)
-        entries: list[tuple[Node, int, dict[Any, float]]] = []
-        kept = self._bound()[0].encoder.kept
-        for s in longs:
-            node, group = ("L", s), kept(s)
-            for b in range(n):
-                tried = (s, b) in self.counts
-                if tried or self.middle:
-                    entry = self._long_entry(s, b, known, group)
-                else:  # shared with the group's other histories: copied only to be changed
-                    entry = self._untried_entry(s, b, known, group)
-                if not entry:
-                    continue
-                bonus = (self.explore_tried if tried else self.explore) if rng is not None else 0.0
-                if bonus:  # a grasp stays possible in the draw
-                    grasp: Any = (self._bound()[0].task.grasp_reward, node, True)
-                    entry = dict(entry)
-                    entry[grasp] = entry.get(grasp, 0.0) + bonus
-                entries.append((node, b, entry))
+        shorts = [
+            (("S", s1), b, {(r, ("S", t2), t): c for (r, t2, t), c in entry.items()})
+            for (s1, b), entry in short.model.items()
+        ]
+        entries = self._long_entries(longs, rng)
         if rng is not None and entries:
             self._draw(entries, rng)
         model, marked = judge.model, judge.tried
-        for node, b, entry in entries:  # ``_add``, inline: one pass over up to millions of pairs
+        for node, b, entry in chain(shorts, entries):  # one pass over up to millions of pairs
             model[(node, b)] = entry  # type: ignore[index]
             acts = marked.get(node)  # type: ignore[call-overload]
             if acts is None:
@@ -383,8 +371,33 @@ class BackoffVI(TabularAgent):
         self._solved = True
         return judge
 
+    def _long_entries(self, longs: list[int], rng: np.random.Generator | None) -> list[Pair]:
+        """The long histories' pairs with data and their entries, in order (history, then
+        CRM); a CRM a history never tried holds its group's shared entry, copied only where a
+        drawn plan (``rng``) adds the ``explore`` bonus to it."""
+        known = set(longs)
+        entries: list[Pair] = []
+        kept = self._bound()[0].encoder.kept
+        for s in longs:
+            node, group = ("L", s), kept(s)
+            for b in range(self.n_actions):
+                tried = (s, b) in self.counts
+                if tried or self.middle:
+                    entry = self._long_entry(s, b, known, group)
+                else:
+                    entry = self._untried_entry(s, b, known, group)
+                if not entry:
+                    continue
+                bonus = (self.explore_tried if tried else self.explore) if rng is not None else 0.0
+                if bonus:  # a grasp stays possible in the draw
+                    grasp: Any = (self._bound()[0].task.grasp_reward, node, True)
+                    entry = dict(entry)
+                    entry[grasp] = entry.get(grasp, 0.0) + bonus
+                entries.append((node, b, entry))
+        return entries
+
     @staticmethod
-    def _draw(entries: list[tuple[Node, int, dict[Any, float]]], rng: np.random.Generator) -> None:
+    def _draw(entries: list[Pair], rng: np.random.Generator) -> None:
         """Replace each entry (in the list; the entry itself, which may be shared, stays as it
         is) by one with its pseudo-counts ``c`` drawn, ``Gamma(c, 1)`` (plus 1e-300, so that no
         outcome is drawn impossible): normalised, the draws of one entry are a ``Dirichlet(c)``
@@ -394,10 +407,6 @@ class BackoffVI(TabularAgent):
         draws = iter((rng.gamma(np.array(shapes, dtype=np.float64)) + 1e-300).tolist())
         for i, (node, b, entry) in enumerate(entries):
             entries[i] = (node, b, dict(zip(entry, draws)))  # zip stops at the entry's end, before a draw
-
-    def _add(self, node: Node, b: int, entry: dict[Any, float]) -> None:
-        self.judge.model[(node, b)] = entry  # type: ignore[index]
-        self.judge._mark(node, b)  # type: ignore[arg-type]
 
     def _route(self, s2: int, known: set[int]) -> Node:
         """The node an outcome history leads to: its own if it has data, else its suffix's."""

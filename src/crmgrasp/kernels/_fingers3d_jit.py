@@ -243,4 +243,4 @@ def accept_start(d, n, planes, cyl, p, q, tol, edges, mu_goal, out):  # type: ig
 __all__ = ["accept_start", "begin_one", "step_one"]
 
 
-# compiled sources: f4c22619c56b98912777f0f4f96fa9b093f9651f828c19d18b7041761264e88d
+# compiled sources: 59e4d8a5630dc15cc7ba769c15f52a7a02a006e00a4e249e6bb9dcfaf1930b2a

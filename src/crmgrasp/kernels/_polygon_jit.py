@@ -404,4 +404,4 @@ def edge_rows(v, e):  # type: ignore[no-untyped-def]
     return True
 
 
-# compiled sources: f4c22619c56b98912777f0f4f96fa9b093f9651f828c19d18b7041761264e88d
+# compiled sources: 59e4d8a5630dc15cc7ba769c15f52a7a02a006e00a4e249e6bb9dcfaf1930b2a

@@ -44,7 +44,8 @@ def _values(v, has, q, tried, use_tried, empty):  # type: ignore[no-untyped-def]
 def _keep(v, has, q, tried, row, a, old, new, use_tried):  # type: ignore[no-untyped-def]
     """Keep ``v[row]`` the largest of its row after ``q[row, a]`` went from ``old`` to ``new``
     (already written): larger, it is the new largest; smaller and it was the largest, the row
-    is searched again. ``max`` is exact, so this is the value a search of the row gives."""
+    is searched again. ``max`` is exact, so this is the value a search of the row gives (up to
+    the sign of a zero, which ``new += p * (r + gamma * v)`` from 0.0 cannot show)."""
     if not has[row] or (use_tried and not tried[row, a]):
         return
     if new > v[row]:
@@ -112,4 +113,4 @@ def sweeps(  # type: ignore[no-untyped-def]
     return limit
 
 
-# compiled sources: f4c22619c56b98912777f0f4f96fa9b093f9651f828c19d18b7041761264e88d
+# compiled sources: 59e4d8a5630dc15cc7ba769c15f52a7a02a006e00a4e249e6bb9dcfaf1930b2a
