@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
+import sys
 
 import gymnasium as gym
 import numpy as np
@@ -15,6 +16,7 @@ from gymnasium.utils.env_checker import check_env
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.envs import ContinuousCRMEnv, CRMGraspEnv, FlatCRMAction
 from crmgrasp.envs.single import CONTINUOUS_ENVS
+from crmgrasp.envs.vector import CRMGraspVectorEnv, continuous_vector_env
 from crmgrasp.kernels import kernel_for
 from crmgrasp.model.actions import CRMRange, full_ranges, grid_points
 from crmgrasp.model.sensing import SensorNoise
@@ -113,6 +115,64 @@ def test_a_real_offset_steps_as_the_readable_rule(name):
             errors.add(int(want.error))
             state = want.state
     assert len(errors) >= 2, errors
+
+
+def _compiled_signatures() -> dict[str, int]:
+    """How many argument-type signatures each of the kernels' compiled functions holds in
+    this process (compiled here or loaded from numba's cache)."""
+    from numba.core.registry import CPUDispatcher
+
+    return {
+        f"{f.py_func.__module__}.{f.py_func.__name__}": len(f.signatures)
+        for name, mod in list(sys.modules.items())
+        if name.startswith("crmgrasp.kernels._") and name.endswith("_jit")
+        for f in vars(mod).values()
+        if isinstance(f, CPUDispatcher)
+    }
+
+
+@pytest.mark.parametrize(
+    ("name", "batched"), [("u-handle", True), ("triangles-3f", True), ("box-3d", False), ("box-3d-3f", False)]
+)
+def test_continuous_crms_and_other_objects_reuse_the_compiled_step(name, batched):
+    """The continuous action space (a CRM, the environment's row, the vector environment's
+    batch) and a family's next objects step through the machine code compiled for the task's
+    own CRMs on one object: no compiled function gains a second signature. numba compiles a
+    function once per argument types, and a writable table, or an object's read-only edges,
+    is another type (the polygon step compiled four times before every table was made
+    read-only and every kernel's edges its own). ``batched``: the kernel steps a vector
+    environment's rows in one compiled call (the spatial kernels run the readable rules
+    there, and their vector environments take seconds to reset)."""
+    task = make_task(name)
+    rng = np.random.default_rng(0)
+    inst = task.instance(rng)  # a task on one object: the kernel takes its own edges
+    one = kernel_for(inst, "numba")
+    state = one.begin(inst.sample_start(rng), rng).state
+    one.step_one(state, 0, rng)
+    if batched:
+        discrete = CRMGraspVectorEnv(2, inst, backend="numba")
+        discrete.reset(seed=0)
+        discrete.step(np.array([0, 1]))
+    before = _compiled_signatures()
+    rg = task.crm_ranges[-1]
+    one.step_one(state, task.model.range_crm(rg, tuple(rng.uniform(rg.low, rg.high))), rng)
+    env = ContinuousCRMEnv(inst, backend="numba")
+    env.action_space.seed(0)
+    env.reset(seed=0)
+    env.step(env.action_space.sample())
+    if batched:
+        vec = continuous_vector_env(2, inst, backend="numba")
+        vec.action_space.seed(0)
+        vec.reset(seed=0)
+        vec.step(vec.action_space.sample())
+    family = kernel_for(task, "numba")
+    for _ in range(3):
+        world = task.sample_world(rng)
+        family.use(world.task)
+        family.step_one(family.begin(world.config, rng).state, 1, rng)
+    after = _compiled_signatures()  # a function first called here (a rebind's) compiles once
+    grown = {f: n for f, n in after.items() if n > max(1, before.get(f, 0))}
+    assert not grown, grown
 
 
 @pytest.mark.parametrize("name", ["paper-box", "noisy-box", "triangles-3f"])

@@ -25,6 +25,13 @@ from crmgrasp.tasks import Task
 __all__ = ["ContinuousCRMEnv", "FlatCRMAction", "PairOffsetActions", "flat_action", "CONTINUOUS_ENVS"]
 
 
+def _read_only_view(buffer: np.ndarray) -> np.ndarray:
+    """A read-only view of ``buffer``: writes to the buffer show through it."""
+    view = buffer.view()
+    view.flags.writeable = False
+    return view
+
+
 class PairOffsetActions:
     """A task's continuous action space: the ``Dict`` space, and the one check (and clip) of
     an action, single and batched (see [`ContinuousCRMEnv`][] for the rule)."""
@@ -39,7 +46,8 @@ class PairOffsetActions:
         self.space = spaces.Dict({"pair": spaces.Discrete(len(self.ranges)), "r": r_space})
         self._low, self._high = low.tolist(), high.tolist()
         index = task.model.labels.index
-        self.rows = [np.array([[index(rg.c), index(rg.f), *rg.low]], dtype=np.float64) for rg in self.ranges]
+        self._buffers = [np.array([[index(rg.c), index(rg.f), *rg.low]], dtype=np.float64) for rg in self.ranges]
+        self.rows = [_read_only_view(b) for b in self._buffers]  # what the kernels take (`row`)
         self._table = np.concatenate(self.rows)  # per pair: c, f, low...
         self._range_low = np.array([rg.low for rg in self.ranges])
         self._range_high = np.array([rg.high for rg in self.ranges])
@@ -95,12 +103,12 @@ class PairOffsetActions:
     def row(self, pair: int, values: list[float]) -> np.ndarray:
         """The action-table row ``[[c, f, r...]]`` of a checked action, in a buffer of its pair
         that the next call overwrites."""
-        row = self.rows[pair]
+        buffer = self._buffers[pair]
         if self.dim == 1:
-            row[0, 2] = values[0]
+            buffer[0, 2] = values[0]
         else:
-            row[0, 2:] = values
-        return row
+            buffer[0, 2:] = values
+        return self.rows[pair]  # the buffer, read-only as the task's table (`Kernel.action_table`)
 
     def batch(self, actions: Any, n: int) -> np.ndarray:
         """The action table ``(n, 2 + d)`` of a batch ``{"pair": (n,), "r": (n, d)}``, checked
@@ -119,6 +127,7 @@ class PairOffsetActions:
             raise CrmgraspError(f"actions['r'] must be finite and within {self._low} to {self._high} m")
         table = self._table[pair]
         table[:, 2:] = r if self.uniform else np.clip(r, self._range_low[pair], self._range_high[pair])
+        table.flags.writeable = False  # as the task's table (`Kernel.action_table`)
         return table
 
     def crm(self, pair: int, values: Any) -> Any:

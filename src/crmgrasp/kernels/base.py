@@ -122,7 +122,12 @@ class Kernel(ABC):
     def action_table(task: Task) -> F64:
         """One row per action: ``(c, f, r)``, the moving and the frame contact's indices and
         the offset (``r_1, r_2`` for a spatial CRM; for two contacts the indices read as "is
-        b", which the compiled kernels take); one array per CRM set, not to be written to."""
+        b", which the compiled kernels take); one array per CRM set, not to be written to.
+
+        numba compiles a function once per argument types, and a read-only array is another
+        type than a writable one; so every table or row a compiled step takes is read-only
+        (this one, [`crm_row`][]'s, the continuous environments' rows and batches): one
+        machine code serves the task's CRMs and the continuous action space."""
         key = tuple((a.c, a.f, repr(a.r)) for a in task.actions)
         return _action_table(key, task.actions, task.model.labels)
 
@@ -175,7 +180,9 @@ class Kernel(ABC):
         task's model, checked against the hand (one-line errors)."""
         crm = self.task.crm(crm)
         index = self.model.labels.index
-        return np.array([[index(crm.c), index(crm.f), *np.atleast_1d(crm.r)]], dtype=np.float64)
+        row = np.array([[index(crm.c), index(crm.f), *np.atleast_1d(crm.r)]], dtype=np.float64)
+        row.flags.writeable = False  # read-only as the task's table: the same compiled step (`action_table`)
+        return row
 
     def successors(self, config: Any) -> list[Successor]:
         """Every action of the task from ``config``, in order, noise-free (the reading is the

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 import crmgrasp.kernels._fingers_jit as jit
 from crmgrasp.kernels.base import F64, I64, FusedSingleStep, Kernel, bin_thresholds
-from crmgrasp.kernels.polygon import params, rebound
+from crmgrasp.kernels.polygon import kernel_edges, params, rebound
 from crmgrasp.model import quality
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.model.hand import CRM, Error
@@ -82,7 +82,7 @@ class FingersKernel(Kernel):
         super().__init__(task)
         assert isinstance(task.obj, Polygon)
         self.n = self.model.n_contacts
-        self.e = np.ascontiguousarray(task.obj.edge_array)
+        self.e = kernel_edges(task.obj)
         self.p, self.q, _ = params(task)
         self.fp = _quality_params()
         d = task.discretizer

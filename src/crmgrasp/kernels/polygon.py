@@ -24,7 +24,7 @@ from crmgrasp.model.sensing import Observation
 from crmgrasp.sim import OneStep, SimState, episode_end, step_reward
 from crmgrasp.tasks import Task
 
-__all__ = ["PolygonKernel", "FusedPolygonKernel", "params", "rebound"]
+__all__ = ["PolygonKernel", "FusedPolygonKernel", "kernel_edges", "params", "rebound"]
 
 _ERRORS = tuple(Error)  # code -> Error, faster than Error(code)
 _new = tuple.__new__  # builds the step's NamedTuples without their Python-level __new__ (the hot path)
@@ -42,13 +42,19 @@ def rebound(kernel: K, instance: Task) -> K:
     obj = instance.obj
     assert isinstance(obj, Polygon)
     vertices = np.array(obj.vertices)
-    e = kernel.e  # type: ignore[attr-defined]
-    if len(vertices) != len(e) or not e.flags.writeable:  # a polygon's own edges are read-only
+    if len(vertices) != len(kernel.e):  # type: ignore[attr-defined]
         kernel.e = np.empty((len(vertices), 7))  # type: ignore[attr-defined]
     kernel.q[jit.CONVEX] = jit.edge_rows(vertices, kernel.e)  # type: ignore[attr-defined]
     kernel.task = instance
     kernel._fresh()  # type: ignore[attr-defined]
     return kernel
+
+
+def kernel_edges(obj: Polygon) -> F64:
+    """The polygon's edge rows as the kernel's own writable copy: [`rebound`][] writes the
+    next object's into it, and the compiled functions then always take a writable array (a
+    read-only one, the polygon's own, would have numba compile each of them a second time)."""
+    return np.array(obj.edge_array, dtype=np.float64, order="C")
 
 
 def params(task: Task) -> tuple[F64, NDArray[np.int64], F64]:
@@ -78,7 +84,7 @@ class PolygonKernel(Kernel):
     def __init__(self, task: Task) -> None:
         super().__init__(task)
         assert isinstance(task.obj, Polygon)
-        self.e = np.ascontiguousarray(task.obj.edge_array)
+        self.e = kernel_edges(task.obj)
         self.p, self.q, self.th = params(task)
         self.start_filter = self._accept
         self._fresh()
