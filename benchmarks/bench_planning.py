@@ -16,10 +16,12 @@ time, the share spent in the sweeps themselves; the share of compiled plans that
 outcome arrays from the plan before (``kernels.planning._Outcomes``) instead of copying the
 whole model.
 
-A second table times work that builds large acyclic structures with the cyclic garbage
-collector held off (`crmgrasp._collector.collector_paused`, what the code does) and left to
-itself, alternating, least of the rounds, and the seconds the collector's full passes took in
-each: whole ``--preset families`` runs (``backoff-vi``, k = 2, on the mirror quotient;
+A second table times work that builds large acyclic structures three ways, alternating, least
+of the rounds: with the cyclic garbage collector held off and what was built moved to its oldest
+generation at the end (`crmgrasp._collector.collector_paused`, what the code does), held off and
+what was built left in its youngest generation (the code before 2026-12-07), and left to itself;
+with the seconds its young and middle passes and its full passes took in each: whole
+``--preset families`` runs (``backoff-vi``, k = 2, on the mirror quotient;
 ``--families-episodes`` episodes, seed 0), which rebuild their planning model after new data,
 and the belief-space optimum over ``--optimum-starts`` sampled starts (seed 0), which memoises
 every belief it meets.
@@ -41,12 +43,15 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import functools
 import gc
 import importlib
 import json
 import time
 from collections.abc import Callable, Iterator
 from typing import Any
+
+from crmgrasp._collector import collector_paused
 
 CASES = (("paper-box", 1), ("u-handle", 1), ("u-handle", 2))
 """(task, history order) of each case."""
@@ -117,29 +122,35 @@ PAUSING = ("crmgrasp.agents.backoff", "crmgrasp.agents.pooled", "crmgrasp.planne
 """The modules that hold the collector off (each imports ``collector_paused``)."""
 
 
-def _timed(work: Callable[[], object], paused: bool) -> tuple[float, float]:
-    """Seconds of ``work()``, and of the collector's full passes in it; ``paused=False``
-    replaces the pause in every module of ``PAUSING`` by a null context."""
+MODES = ("paused", "resumed_young", "not_paused")
+"""How the collector is treated: held off and the build's objects moved to its oldest generation
+at the end (what the code does); held off, the build's objects left in its youngest generation
+(the code before 2026-12-07); left alone."""
+
+
+def _timed(work: Callable[[], object], mode: str) -> tuple[float, float, float]:
+    """Seconds of ``work()``, of the collector's young and middle passes in it, and of its full
+    passes; ``mode`` one of [`MODES`][] (the pause in every module of ``PAUSING`` replaced)."""
     modules = [importlib.import_module(name) for name in PAUSING]
     saved = [m.collector_paused for m in modules]
-    full, began = [0.0], [0.0]
+    spent, began = [0.0, 0.0], [0.0]
 
     def clock(phase: str, info: dict[str, int]) -> None:
-        if info["generation"] == 2:
-            if phase == "start":
-                began[0] = time.perf_counter()
-            else:
-                full[0] += time.perf_counter() - began[0]
+        if phase == "start":
+            began[0] = time.perf_counter()
+        else:
+            spent[info["generation"] == 2] += time.perf_counter() - began[0]
 
-    if not paused:
+    if mode != "paused":
         for m in modules:
-            m.collector_paused = contextlib.nullcontext  # type: ignore[attr-defined]
+            replaced = contextlib.nullcontext if mode == "not_paused" else functools.partial(collector_paused, False)
+            m.collector_paused = replaced  # type: ignore[attr-defined]
     gc.collect()
     gc.callbacks.append(clock)
     try:
         t0 = time.perf_counter()
         work()
-        return time.perf_counter() - t0, full[0]
+        return time.perf_counter() - t0, spent[0], spent[1]
     finally:
         gc.callbacks.remove(clock)
         for m, pause in zip(modules, saved, strict=True):
@@ -172,24 +183,24 @@ def _optimum_work(name: str, starts: int) -> Callable[[], object]:
 
 
 def _pause_table(cases: dict[str, Callable[[], object]], rounds: int) -> dict[str, dict[str, float]]:
-    """Each case with the collector held off and left alone, alternating, least of ``rounds``."""
+    """Each case in each of [`MODES`][], alternating, least of ``rounds``."""
     out: dict[str, dict[str, float]] = {}
-    print("| case | held off s | full collections s | left alone s | full collections s | ratio |")
-    print("| --- | --- | --- | --- | --- | --- |")
+    head = " | ".join(f"{m} s | young passes s | full passes s" for m in MODES)
+    print(f"| case | {head} | paused / resumed_young | paused / not_paused |")
+    print("| --- " * (3 + 3 * len(MODES)) + "|")
     for label, work in cases.items():
-        best: dict[bool, tuple[float, float]] = {}
+        best: dict[str, tuple[float, float, float]] = {}
         for _ in range(rounds):
-            for paused in (True, False):
-                got = _timed(work, paused)
-                if paused not in best or got[0] < best[paused][0]:
-                    best[paused] = got
-        row = {
-            "paused_s": round(best[True][0], 2),
-            "paused_full_collections_s": round(best[True][1], 2),
-            "not_paused_s": round(best[False][0], 2),
-            "not_paused_full_collections_s": round(best[False][1], 2),
-            "paused_over_not_paused": round(best[True][0] / best[False][0], 3),
-        }
+            for mode in MODES:
+                got = _timed(work, mode)
+                if mode not in best or got[0] < best[mode][0]:
+                    best[mode] = got
+        row: dict[str, float] = {}
+        for mode in MODES:
+            total, young, full = best[mode]
+            row |= {f"{mode}_s": round(total, 2), f"{mode}_young_s": round(young, 2), f"{mode}_full_s": round(full, 2)}
+        row["paused_over_resumed_young"] = round(best["paused"][0] / best["resumed_young"][0], 3)
+        row["paused_over_not_paused"] = round(best["paused"][0] / best["not_paused"][0], 3)
         out[label] = row
         print(f"| {label} | " + " | ".join(str(v) for v in row.values()) + " |")
     return out

@@ -101,7 +101,7 @@ def test_bench_planning_smoke(capsys):
         assert row["plans"] > 0 and row["compiled_us"] > 0 and row["readable_us"] > 0
         assert 0.0 < row["sweeps_share"] < 1.0 and 0.0 < row["kept_share"] < 1.0
     for label in timed:
-        assert res[label]["paused_s"] > 0 and res[label]["not_paused_s"] > 0
+        assert res[label]["paused_s"] > 0 and res[label]["resumed_young_s"] > 0 and res[label]["not_paused_s"] > 0
     for label in shared:
         assert 0 < res[label]["shared_rebuilds_s"] < res[label]["shared_s"]
         assert 0 < res[label]["afresh_rebuilds_s"] < res[label]["afresh_s"]
