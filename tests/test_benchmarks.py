@@ -103,8 +103,8 @@ def test_bench_planning_smoke(capsys):
     for label in timed:
         assert res[label]["paused_s"] > 0 and res[label]["resumed_young_s"] > 0 and res[label]["not_paused_s"] > 0
     for label in shared:
-        assert 0 < res[label]["shared_rebuilds_s"] < res[label]["shared_s"]
-        assert 0 < res[label]["afresh_rebuilds_s"] < res[label]["afresh_s"]
+        assert 0 < res[label]["shared_rebuilds_s"] <= res[label]["shared_s"]  # rounded to 0.01 s: may be equal
+        assert 0 < res[label]["afresh_rebuilds_s"] <= res[label]["afresh_s"]
     assert gc.isenabled()
     assert '"compiled_over_readable"' in capsys.readouterr().out
 
