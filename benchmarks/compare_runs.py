@@ -7,7 +7,8 @@ measures the run rather than its result: wall-clock fields (keys or columns whos
 holds ``seconds``, ``wall`` or ``time``; numbers of seconds written into a text, such
 as ``0.09 / 0.32 s``), and the provenance of ``run.json`` (start and end times, host,
 versions, commit). Prints one line per file (``same``,
-``differs: <first difference>``, ``only in A/B``) and exits 1 if any file differs.
+``differs: <first difference>``, ``only in A/B``) and exits 1 if any file differs (2, with
+one line, if either path is not a folder or neither holds such a file).
 Used to check that a refactoring left ``crmgrasp reproduce``'s results unchanged.
 """
 
@@ -98,9 +99,16 @@ def main(argv: list[str]) -> int:
         print(__doc__.strip().splitlines()[2])
         return 2
     a, b = (Path(p) for p in argv)
+    for root in (a, b):
+        if not root.is_dir():
+            print(f"compare_runs: {str(root)!r} is not a folder")
+            return 2
     names = sorted(
         {p.relative_to(root) for root in (a, b) for p in root.rglob("*") if p.suffix in {".csv", ".json", ".md"}}
     )
+    if not names:  # two empty folders would otherwise read as "0 of 0 files the same"
+        print("compare_runs: neither folder holds a CSV, JSON or Markdown file")
+        return 2
     bad = 0
     for name in names:
         pa, pb = a / name, b / name

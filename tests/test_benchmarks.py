@@ -503,3 +503,35 @@ def test_bench_commits_times_a_command_on_two_trees_and_compares_their_files(cap
         mod.main("HEAD", ["learn", "--task", "no-such-task"], rounds=1, warm_up=False)
     listed = subprocess.run(["git", "-C", str(root), "worktree", "list"], capture_output=True, text=True, check=True)
     assert "bench-commits-" not in listed.stdout  # every temporary worktree removed
+
+
+def test_compare_runs_drops_timings_and_finds_a_changed_result(tmp_path, capsys):
+    """``compare_runs.py``, which the notes' "the same files" claims rest on: two runs that differ
+    only in wall-clock fields and provenance are the same; a changed number, a missing file, a
+    path that is not a folder and two folders without results are not."""
+    spec = importlib.util.spec_from_file_location("compare_runs", BENCH.parent / "compare_runs.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    a, b = tmp_path / "a", tmp_path / "b"
+    for root, secs, host in ((a, "1.5", "x"), (b, "9.25", "y")):
+        (root / "fig").mkdir(parents=True)
+        (root / "fig" / "data.csv").write_text(f"episode,crms,seconds\n1,1.66,{secs}\n")
+        (root / "run.json").write_text(
+            json.dumps({"status": "completed", "host": host, "summary": {"crms": 1.66, "seconds": float(secs)}})
+        )
+        (root / "README.md").write_text(
+            f"| quantity | ours | seconds |\n| --- | --- | --- |\n| crms | 1.66 | {secs} |\nran in {secs} s\n"
+        )
+    assert mod.main([str(a), str(b)]) == 0
+    assert "3 of 3 files the same" in capsys.readouterr().out
+    (b / "fig" / "data.csv").write_text("episode,crms,seconds\n1,1.67,9.25\n")
+    assert mod.main([str(a), str(b)]) == 1
+    assert "fig/data.csv: differs" in capsys.readouterr().out
+    (b / "fig" / "data.csv").unlink()
+    assert mod.main([str(a), str(b)]) == 1
+    assert "fig/data.csv: only in A" in capsys.readouterr().out
+    assert mod.main([str(a), str(tmp_path / "nope")]) == 2
+    assert "is not a folder" in capsys.readouterr().out
+    (tmp_path / "e1").mkdir()
+    (tmp_path / "e2").mkdir()
+    assert mod.main([str(tmp_path / "e1"), str(tmp_path / "e2")]) == 2
