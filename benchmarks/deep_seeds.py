@@ -6,8 +6,10 @@ policy on the 20,000 fresh starts ``crmgrasp compare --seed 0`` uses, and prints
 JSON object: per seed the mean CRMs, its 95% interval and the training time.
 
 Usage: ``python benchmarks/deep_seeds.py [SEEDS]`` (default 3; about 70 s per seed on 2 cores).
+``main``'s ``total_steps`` and ``starts`` shrink it (the tests' smoke run).
 """
 
+import dataclasses
 import json
 import sys
 
@@ -19,12 +21,13 @@ from crmgrasp.experiments.compare import DEFAULT_DEEP
 from crmgrasp.planners.references import sample_starts
 
 
-def main(seeds: int = 3) -> dict:
+def main(seeds: int = 3, total_steps: int | None = None, starts: int = 20_000) -> dict:
     task = paper_box()
-    fresh = sample_starts(task, 20_000, 1)
-    out: dict = {"total_steps": DEFAULT_DEEP.total_steps, "starts": len(fresh), "seeds": {}}
+    fresh = sample_starts(task, starts, 1)
+    config = DEFAULT_DEEP if total_steps is None else dataclasses.replace(DEFAULT_DEEP, total_steps=total_steps)
+    out: dict = {"total_steps": config.total_steps, "starts": len(fresh), "seeds": {}}
     for seed in range(seeds):
-        run = train_recurrent_ppo(task, seed, DEFAULT_DEEP)
+        run = train_recurrent_ppo(task, seed, config)
         steps, ok = evaluate_recurrent(run.model, task, fresh, np.random.default_rng(1))
         half = 1.96 * steps.std(ddof=1) / np.sqrt(len(steps))
         out["seeds"][seed] = {

@@ -535,3 +535,33 @@ def test_compare_runs_drops_timings_and_finds_a_changed_result(tmp_path, capsys)
     (tmp_path / "e1").mkdir()
     (tmp_path / "e2").mkdir()
     assert mod.main([str(tmp_path / "e1"), str(tmp_path / "e2")]) == 2
+
+
+def _bench(name: str):
+    spec = importlib.util.spec_from_file_location(name, BENCH.parent / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_metric_noise_smoke(capsys):
+    res = _bench("metric_noise").main(train_episodes=20, lengths=(12, 15), seeds=2)
+    assert 1.0 <= res["fixed_policy_greedy_mean_steps"] <= 10.0
+    assert set(res) >= {"episodes_to_5pct_over_12", "mean_over_15", "episodes_to_5pct_over_12_seeds_0_1"}
+    assert len(res["episodes_to_5pct_over_12_seeds_0_1"]) == 2
+
+
+def test_bench_sweep_smoke():
+    res = _bench("bench_sweep").main(episodes=2, seeds=1, ray=False)
+    assert res["local_same_results"] is True and res["local_speedup"] > 0 and "ray_startup_seconds" not in res
+
+
+def test_deep_seeds_smoke():
+    from crmgrasp.agents.deep import deep_available
+
+    if not deep_available():
+        pytest.skip("needs the extra: pip install 'crmgrasp[deep]'")
+    res = _bench("deep_seeds").main(seeds=1, total_steps=128, starts=20)
+    row = res["seeds"][0]
+    assert res["total_steps"] == 128 and res["starts"] == 20
+    assert 1.0 <= row["mean_crms"] <= 10.0 and row["ci95"][0] <= row["mean_crms"] <= row["ci95"][1]
