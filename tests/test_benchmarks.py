@@ -551,11 +551,6 @@ def test_metric_noise_smoke(capsys):
     assert len(res["episodes_to_5pct_over_12_seeds_0_1"]) == 2
 
 
-def test_bench_sweep_smoke():
-    res = _bench("bench_sweep").main(episodes=2, seeds=1, ray=False)
-    assert res["local_same_results"] is True and res["local_speedup"] > 0 and "ray_startup_seconds" not in res
-
-
 def test_deep_seeds_smoke():
     from crmgrasp.agents.deep import deep_available
 
