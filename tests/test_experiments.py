@@ -106,10 +106,19 @@ def test_figures_8_and_9(tmp_path):
 
 
 @pytest.mark.slow
-def test_reproduce_index_and_cli(tmp_path, capsys):
+def test_reproduce_index_and_cli(tmp_path, capsys, monkeypatch):
+    """The README's main command as a default install runs it: without the extras, so the
+    MuJoCo experiments are skipped and listed so in the index, and the comparison has no deep
+    peer (each of those has tests of its own: tests/test_physics_mujoco*.py,
+    tests/test_mujoco_learning.py, tests/test_deep.py)."""
+    import crmgrasp.experiments.compare
+    import crmgrasp.hardware.mujoco
     from crmgrasp._validation import CrmgraspError
+    from crmgrasp.experiments.registry import NEEDS_MUJOCO
     from crmgrasp.experiments.reproduce import full_run_rows, record_full_run
 
+    monkeypatch.setattr(crmgrasp.hardware.mujoco, "mujoco_available", lambda: False)
+    monkeypatch.setattr(crmgrasp.experiments.compare, "deep_available", lambda: False)
     res = reproduce(tmp_path / "a", ["figure4"], quick=True)
     assert set(res) == {"figure4"}
     index = (tmp_path / "a" / "README.md").read_text()
@@ -125,6 +134,9 @@ def test_reproduce_index_and_cli(tmp_path, capsys):
     assert "Regenerate with `crmgrasp reproduce --quick --seed 0`." in index  # all of them
     assert "paper SARSA: greedy CRMs per episode | " in index and "(not converged at 5 trials x 300 episodes)" in index
     assert "None" not in index
+    for name in NEEDS_MUJOCO:
+        assert f"| {name} | skipped: needs `pip install 'crmgrasp[mujoco]'` |" in index
+        assert not (tmp_path / "b" / name).exists()
     full = full_run_rows()["figure7 | paper SARSA: greedy CRMs per episode"]
     assert f"| {full} |" in index.split("paper SARSA: greedy CRMs per episode", 1)[1].splitlines()[0]
     with pytest.raises(CrmgraspError, match="not a complete full-budget reproduce run"):

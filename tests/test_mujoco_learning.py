@@ -268,3 +268,30 @@ def test_a_longer_scoring_run_begins_with_the_shorter_ones_worlds():
     assert long["episode_crms"][:3] == short["episode_crms"] and all(
         1 <= n <= task.max_steps for n in long["episode_crms"]
     )
+
+
+def test_physics_learning_through_reproduce(tmp_path, monkeypatch):
+    """The physics-learning experiment end to end through ``reproduce`` (its files and index
+    rows), on a budget smaller than ``--quick``'s: one planar and one spatial task. The
+    reproduce test runs as a default install, without MuJoCo, so this is the experiment's
+    whole run in the suite."""
+    import importlib.util
+
+    from crmgrasp.experiments import physics_learning as pl
+    from crmgrasp.experiments.reproduce import reproduce
+
+    tiny = pl.PhysicsLearningConfig(
+        tasks=("paper-box", "cup-3d"), mujoco_episodes=(2, 2), kinematic_episodes=20, eval_episodes=2, seeds=1
+    )
+    monkeypatch.setattr(pl.PhysicsLearningConfig, "quick", classmethod(lambda cls, seed=0: tiny))
+    s = reproduce(tmp_path, ["physics-learning"], quick=True)["physics-learning"]
+    assert set(s["tasks"]) == {"paper-box", "cup-3d"}
+    for t in s["tasks"].values():
+        assert {"transferred", "scratch", "fine-tuned"} <= set(t) and t["scratch"]["mujoco_episodes"] == 2
+    out = tmp_path / "physics-learning"
+    for name in ("data.csv", "curves.csv", "summary.json", "physics_learning.png"):
+        assert (out / name).exists(), name
+    if importlib.util.find_spec("mcap") is not None:  # the records need the extra crmgrasp[mcap]
+        assert (out / "paper-box.mcap").exists() and (out / "cup-3d.mcap").exists()
+    rows = [line for line in (tmp_path / "README.md").read_text().splitlines() if line.startswith("| physics-learning")]
+    assert len(rows) == 3 and "cup-3d: true success on MuJoCo, 1 seeds" in rows[1]

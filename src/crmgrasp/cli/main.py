@@ -37,7 +37,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     with _run_folder(args, "paper-box", config) as run:
         results = reproduce(
             run.path,
-            names,
+            args.experiments,  # as asked: all by default, and then the index lists what was skipped
             seed=args.seed,
             quick=args.quick,
             backend=args.backend,
