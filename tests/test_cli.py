@@ -310,6 +310,16 @@ def test_learn_says_when_no_interval_is_given(tmp_path, capsys):
     assert "no interval: fewer than 5 trials" in out and "n/a" not in out
 
 
+def test_learn_without_evaluation_says_so(tmp_path, capsys):
+    """--eval-episodes 0: the greedy line says the policy was not evaluated (no 'nan%', no
+    'fewer than 5 trials' for 5 trials)."""
+    argv = ["learn", "--trials", "5", "--episodes", "5", "--eval-episodes", "0", "--quiet"]
+    assert main([*argv, "--out", str(tmp_path / "r")]) == 0
+    out = capsys.readouterr().out
+    assert "greedy policy: not evaluated (--eval-episodes 0)" in out
+    assert "nan" not in out and "fewer than" not in out
+
+
 HEXAGON = """name = "wide-hexagon"
 [object]
 polygon = [[0.2, 0.0], [0.1, 0.1732], [-0.1, 0.1732], [-0.2, 0.0], [-0.1, -0.1732], [0.1, -0.1732]]

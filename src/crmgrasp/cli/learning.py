@@ -184,10 +184,13 @@ def _print_learned(args: argparse.Namespace, task_name: str, s: dict[str, Any], 
     if prior is not None:
         print(f"  after a prior of {prior['episodes']:,} episodes on {prior['task']} (not {task_name})")
     print(f"  CRMs per episode, last 10 training episodes: {fmt(s['final_mean_steps'])}")
-    print(
-        f"  greedy policy: {fmt(s['greedy_mean_steps'])} CRMs ({ci_text(lo, hi)}, "
-        f"IQM {fmt(s['greedy_iqm_steps'])}), success {s['greedy_success_rate']:.1%}"
-    )
+    if s["eval_episodes"] == 0:
+        print("  greedy policy: not evaluated (--eval-episodes 0)")
+    else:
+        print(
+            f"  greedy policy: {fmt(s['greedy_mean_steps'])} CRMs ({ci_text(lo, hi)}, "
+            f"IQM {fmt(s['greedy_iqm_steps'])}), success {s['greedy_success_rate']:.1%}"
+        )
     if s["reference_mean_steps"]:
         print("\n".join(_to_5pct_lines(s)))
 
