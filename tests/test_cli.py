@@ -4,6 +4,7 @@ import json
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from crmgrasp.cli.main import main
@@ -210,6 +211,40 @@ def test_run_command(tmp_path, capsys):
     assert log.read_text() == "an earlier run"
     assert main([*again, "--overwrite"]) == 0 and log.read_text().startswith("step,ax,ay")
     assert main(["run", "--policy", str(tmp_path / "nope.json"), "--a", "0,0", "--b", "0,0", "--log", str(log)]) == 2
+
+
+def test_run_draws_its_readings(tmp_path, capsys):
+    """--figure: one panel per reading (the runner keeps each reading's sensed contacts and the
+    CRM after it); a bad or taken path is refused before the run, and nothing is written."""
+    from crmgrasp.agents.loading import load_policy
+    from crmgrasp.hardware.runner import KinematicHand, PolicyRunner
+
+    pol = tmp_path / "p"
+    learn = ["learn", "--preset", "fastest", "--trials", "1", "--episodes", "100", "--quiet"]
+    assert main([*learn, "--out", str(pol)]) == 0
+    policy = load_policy(pol / "policy.json")
+    task = policy.task
+    start = task.hand.contact(task.obj, a=(-0.15, -0.02), b=(-0.01, -0.05))
+    res = PolicyRunner(policy).run(KinematicHand(task, start, np.random.default_rng(0)), np.random.default_rng(0))
+    assert len(res.readings) == res.crms + 1 and res.readings[0][0] == start and res.readings[-1][1:] == ("", "")
+    assert [crm for _, crm, _ in res.readings[:-1]] == [row[-3] for row in res.rows[:-1]]  # the log's CRMs
+    capsys.readouterr()
+    log, figure = tmp_path / "run.csv", tmp_path / "run.png"
+    argv = ["run", "--policy", str(pol / "policy.json"), "--a", "-0.15,-0.02", "--b", "-0.01,-0.05", "--log", str(log)]
+    assert main([*argv, "--figure", str(figure)]) == 0
+    assert figure.read_bytes().startswith(b"\x89PNG") and f"wrote {figure.resolve()}" in capsys.readouterr().out
+    other = tmp_path / "other.csv"
+    bad = [
+        (["--figure", str(tmp_path / "x.gif")], "--figure must end in .png, .pdf or .svg"),
+        (["--figure", str(figure)], "exists; --overwrite replaces it"),
+    ]
+    for extra, message in bad:
+        assert main(["run", *argv[1:-1], str(other), *extra]) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1
+        assert not other.exists()  # refused before the run: no log either
+    same = ["run", *argv[1:-1], str(tmp_path / "s.png"), "--figure", str(tmp_path / "s.png")]
+    assert main(same) == 2 and "name the same file" in capsys.readouterr().err
 
 
 def test_learn_gives_the_same_curve_on_every_kernel_backend(tmp_path):

@@ -325,9 +325,11 @@ def test_the_command_line_on_spatial_tasks(tmp_path, capsys) -> None:  # type: i
     assert main(["evaluate", "--policy", str(run / "policy.json"), "--episodes", "20", "--json"]) == 0
     capsys.readouterr()
     hand_run = ["run", "--policy", str(run / "policy.json"), "--log", str(tmp_path / "l.csv")]
-    assert main([*hand_run, "--a=0.1,0,0.05", "--b=0,0.1,0.12"]) == 0  # the kinematic hand, in 3-D
+    figure = tmp_path / "run.png"
+    assert main([*hand_run, "--a=0.1,0,0.05", "--b=0,0.1,0.12", "--figure", str(figure)]) == 0  # kinematic, 3-D
     out = capsys.readouterr().out
     assert "after" in out and "true min_friction" in out
+    assert figure.read_bytes().startswith(b"\x89PNG") and f"wrote {figure.resolve()}" in out  # 3-D panels
     with open(tmp_path / "l.csv") as fh:
         assert fh.readline().startswith("step,ax,ay,az,anx,any,anz,bx")
     assert main([*hand_run, "--overwrite", "--a=0.1,0", "--b=0,0.1,0.12"]) == 2

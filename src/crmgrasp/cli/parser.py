@@ -352,7 +352,13 @@ def _parser_run(sub: Any) -> None:
         help="step log to write: CSV, or an MCAP record in Foxglove's schemas for a name ending in .mcap "
         "(extra crmgrasp[mcap]); an existing one is refused unless --overwrite",
     )
-    p.add_argument("--overwrite", action="store_true", help="replace an existing --log")
+    p.add_argument(
+        "--figure",
+        type=_path,
+        help="also draw the run to this image (.png, .pdf, .svg): one panel per reading, the sensed contacts "
+        "and the CRM that followed; an existing one is refused unless --overwrite",
+    )
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --log (and --figure)")
     _add_noise(p)
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
     _add_hand(p)

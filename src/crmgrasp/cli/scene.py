@@ -11,6 +11,7 @@ import os
 import subprocess
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -182,6 +183,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     check_output(args.log, "--log")
     if args.log.exists() and not args.overwrite:
         raise CrmgraspError(f"--log {str(args.log)!r} exists (the log of an earlier run); --overwrite replaces it")
+    if args.figure is not None:
+        _check_figure(args)
     policy = load_policy(args.policy)
     task = policy.task
     if task.family is not None:  # the family's nominal object
@@ -204,4 +207,30 @@ def _cmd_run(args: argparse.Namespace) -> int:
     mu = f"{task.quality(true):.4g}" if true is not None else "n/a (no contact)"
     print(f"{res.stopped} after {res.crms} CRMs ({crms}); true min_friction {mu}")
     print(f"wrote {args.log.resolve()}")
+    if args.figure is not None:
+        _run_figure(args.figure, task, res, f"{task.name}: {res.stopped} after {res.crms} CRMs; true min_friction {mu}")
+        print(f"wrote {args.figure.resolve()}")
     return 0
+
+
+def _check_figure(args: argparse.Namespace) -> None:
+    """``run --figure``'s path: an image format, writable, and new unless ``--overwrite``."""
+    if args.figure.suffix.lower() not in {".png", ".pdf", ".svg"}:
+        raise CrmgraspError(f"--figure must end in .png, .pdf or .svg, got {args.figure.name!r}")
+    check_output(args.figure, "--figure")
+    if args.figure.resolve() == args.log.resolve():
+        raise CrmgraspError("--figure and --log name the same file")
+    if args.figure.exists() and not args.overwrite:
+        raise CrmgraspError(f"--figure {str(args.figure)!r} exists; --overwrite replaces it")
+
+
+def _run_figure(path: Path, task: Any, res: Any, title: str) -> None:
+    """The run's readings drawn, one panel each ([`readings_figure`][crmgrasp.plotting.readings.readings_figure]):
+    the CRM that followed a reading and its error, or after the last one how the run stopped."""
+    from crmgrasp.plotting.readings import readings_figure
+
+    panels = [
+        (config, f"reading {i}: {crm} -> {error}" if crm else f"reading {i}: {res.stopped}")
+        for i, (config, crm, error) in enumerate(res.readings)
+    ]
+    save_figure(readings_figure(task.obj, task.hand, panels, title), path, dpi=100)

@@ -95,6 +95,9 @@ class RunResult:
     grasped: bool
     stopped: str
     rows: list[list[Any]] = field(default_factory=list)
+    readings: list[tuple[Any, str, str]] = field(default_factory=list)
+    """Per reading with contact, in order: the sensed configuration, the CRM taken after it (its
+    text as in the step log) and that CRM's error (both ``""`` after the last reading)."""
 
 
 class PolicyRunner:
@@ -132,6 +135,12 @@ class PolicyRunner:
         else:
             result = RunResult(last.state.steps, False, "step limit")
         result.rows = rows
+        result.readings = [
+            (tr.before.state.sensed, str(t.crm(tr.action)), tr.after.error.name.lower())  # type: ignore[arg-type]
+            for tr in episode.trace
+        ]
+        if steps.lost is None:
+            result.readings.append((last.state.sensed, "", ""))
         if log is not None and str(log).endswith(".mcap"):
             from crmgrasp.hardware.records import write_mcap
 

@@ -24,6 +24,7 @@ from crmgrasp.plotting.colors import COLORS
 __all__ = [
     "draw_object",
     "draw_scene",
+    "is_planar",
     "scene_figure",
     "friction_histogram",
     "learning_curve_figure",
@@ -116,12 +117,18 @@ def _draw_config(
         ax.plot(px, py, "s", color="0.3", ms=7, alpha=alpha, zorder=4)
 
 
+def is_planar(obj: Any) -> bool:
+    """Whether ``obj`` is a planar shape (drawn by [`draw_scene`][]), else a solid (drawn by
+    [`crmgrasp.plotting.spatial.draw_scene3d`][])."""
+    return isinstance(obj, (Polygon, Disc)) or hasattr(obj, "perimeter")
+
+
 def scene_figure(
     obj: Shape, hand: Hand, config: Config | Grip, outcome: Outcome | None = None, title: str | None = None
 ) -> Figure:
     """A one-panel figure of [`draw_scene`][] (of [`crmgrasp.plotting.spatial.scene_figure3d`][]
     for a solid: ``outcome`` then gives the configuration after the CRM)."""
-    if not isinstance(obj, (Polygon, Disc)) and not hasattr(obj, "perimeter"):
+    if not is_planar(obj):
         from crmgrasp.plotting.spatial import scene_figure3d
 
         after = outcome.config if outcome is not None and outcome.error == 0 else None
