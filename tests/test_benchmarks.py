@@ -560,3 +560,26 @@ def test_deep_seeds_smoke():
     row = res["seeds"][0]
     assert res["total_steps"] == 128 and res["starts"] == 20
     assert 1.0 <= row["mean_crms"] <= 10.0 and row["ci95"][0] <= row["mean_crms"] <= row["ci95"][1]
+
+
+def test_greedy_variants_smoke(capsys):
+    """Every variant scores; the recording stepper leaves training as it is (the same counts)."""
+    from crmgrasp.agents.training import train_trials
+    from crmgrasp.tasks import make_task
+
+    spec = importlib.util.spec_from_file_location("greedy_variants", BENCH.parent / "greedy_variants.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    out = mod.main(["--episodes", "40", "--seeds", "1", "--worlds", "20", "--pool", "20"])
+    assert json.loads(capsys.readouterr().out)["pool"] == 20
+    (value,) = out["trie_tree_value"]
+    assert value[1] >= value[0] and value[2] >= 0  # the search keeps only changes that raise the tree's value
+    for v in mod.VARIANTS:
+        (gap,) = out[v]["gap_graspable"]
+        assert gap >= -1.0 and len(out[v]["fails_graspable"]) == 1
+    task, made = make_task("u-handle"), []
+    params = {"symmetric": True, **mod.PRESET}
+    kw = {"trials": 1, "episodes": 40, "seed": 3, "k": 2, "eval_episodes": 0, "params": params}
+    plain = train_trials(task, "backoff-vi", **kw).agents[0]
+    recorded = train_trials(task, "backoff-vi", **kw, stepper=lambda t: made.append(mod.Recording(t)) or made[-1])
+    assert recorded.agents[0].inner.counts == plain.inner.counts and len(made[0].episodes) == 40

@@ -70,3 +70,19 @@ def test_runner_stops_without_contact(policy):
 
     res = PolicyRunner(policy).run(Lost(), np.random.default_rng(0))
     assert not res.grasped and res.crms == 0 and res.stopped.startswith("no contact")
+    assert res.readings == []  # nothing sensed: nothing for --figure to draw but the message
+
+
+def test_readings_figure_draws_every_reading_or_says_none_was_sensed(policy):
+    from crmgrasp.plotting.readings import readings_figure
+
+    task = policy.task
+    start = task.hand.contact(task.obj, a=(-0.15, -0.02), b=(-0.01, -0.05))
+    res = PolicyRunner(policy).run(KinematicHand(task, start, np.random.default_rng(0)), np.random.default_rng(0))
+    panels = [(config, f"{crm} -> {error}") for config, crm, error in res.readings]
+    fig = readings_figure(task.obj, task.hand, panels, "a run")
+    titles = [ax.get_title() for ax in fig.axes]
+    assert titles == [text for _, text in panels] and fig.get_suptitle() == "a run"
+    assert len({(ax.get_xlim(), ax.get_ylim()) for ax in fig.axes}) == 1  # one scale for every panel
+    empty = readings_figure(task.obj, task.hand, [], "lost")
+    assert [t.get_text() for t in empty.axes[0].texts] == ["no contact sensed"]
