@@ -31,7 +31,7 @@ def readings_figure(obj: Any, hand: Any, panels: Sequence[tuple[Any, str]], titl
     cols = min(COLUMNS, n)
     rows = math.ceil(n / cols)
     planar = is_planar(obj)
-    fig = Figure(figsize=(3.6 * cols, 3.0 * rows + 0.8), layout="constrained")
+    fig = Figure(figsize=(3.6 * cols, (3.0 if planar else 3.6) * rows + 0.8), layout="constrained")
     fig.suptitle(title, fontsize=10)
     if not panels:
         ax = fig.add_subplot()
