@@ -247,6 +247,32 @@ def test_run_draws_its_readings(tmp_path, capsys):
     assert main(same) == 2 and "name the same file" in capsys.readouterr().err
 
 
+def test_run_from_a_drawn_start(tmp_path, capsys):
+    """Without --a, --b: a start drawn from the task's own starts with --seed, printed, the same
+    for the same seed; some points but not all, or an infeasible start: one line, nothing written."""
+    pol = tmp_path / "p"
+    learn = ["learn", "--preset", "fastest", "--trials", "1", "--episodes", "50", "--quiet", "--out", str(pol)]
+    assert main(learn) == 0
+    capsys.readouterr()
+    runs = {}
+    for name, seed in (("a", "3"), ("b", "3"), ("c", "4")):
+        log = tmp_path / f"{name}.csv"
+        assert main(["run", "--policy", str(pol / "policy.json"), "--log", str(log), "--seed", seed]) == 0
+        first = capsys.readouterr().out.splitlines()[0]
+        assert first.startswith("start drawn from paper-box's starts (seed ") and ": a (" in first
+        runs[name] = (first, log.read_text())
+    assert runs["a"] == runs["b"] and runs["c"][0] != runs["a"][0]
+    base = ["run", "--policy", str(pol / "policy.json"), "--log", str(tmp_path / "x.csv")]
+    for extra, message in (
+        (["--a", "-0.15,-0.02"], "task 'paper-box' has 2 fingers: give --a --b (got --a)"),
+        (["--a", "-0.15,0.02", "--b", "0.1,0.05"], "the start configuration is infeasible: an aperture error"),
+    ):
+        assert main([*base, *extra]) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1
+    assert not (tmp_path / "x.csv").exists()
+
+
 def test_learn_gives_the_same_curve_on_every_kernel_backend(tmp_path):
     """--lockstep on each --backend, and sequential training, write the same curve."""
     base = ["learn", "--agent", "sarsa", "--trials", "3", "--episodes", "40", "--eval-episodes", "10", "--seed", "2"]

@@ -187,15 +187,17 @@ def _add_quiet(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress display")
 
 
-def _add_points(p: argparse.ArgumentParser, what: str) -> None:
-    """``--a``, ``--b`` (required) and ``--c``, ``--d`` (a hand with that many fingers): one
-    point per contact (the task's model says how many it takes)."""
+def _add_points(p: argparse.ArgumentParser, what: str, default: str = "") -> None:
+    """``--a``, ``--b`` (required unless ``default`` says what stands in for them) and ``--c``,
+    ``--d`` (a hand with that many fingers): one point per contact (the task's model says how
+    many it takes)."""
     for label in ALL_LABELS:
         more = "" if label in LABELS else "; a hand with that many fingers only"
+        more += f" (default: {default})" if default and label == "a" else ""
         p.add_argument(
             f"--{label}",
             type=_point,
-            required=label in LABELS,
+            required=label in LABELS and not default,
             metavar="X,Y[,Z]",
             help=f"{what} for contact {label} (m){more}",
         )

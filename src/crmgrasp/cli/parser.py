@@ -339,12 +339,13 @@ def _parser_run(sub: Any) -> None:
         help="run a saved policy on the kinematic hand, logging every step",
         description="Run a saved policy through the hand interface (the kinematic simulator, or with "
         "--hand mujoco the MuJoCo stand-in) from the configuration given by --a and --b (X,Y; on a spatial "
-        "task X,Y,Z, projected to the family's nominal object from its centre); write the step log to --log.",
+        "task X,Y,Z, projected to the family's nominal object from its centre), or without them from a start "
+        "drawn from the task's own starts; write the step log to --log.",
     )
     p.add_argument(
         "--policy", type=_path, required=True, help="a saved policy: policy.json or recurrent_ppo.zip (deep)"
     )
-    _add_points(p, "start point")
+    _add_points(p, "start point", default="every contact at a start drawn from the task's own starts with --seed")
     p.add_argument(
         "--log",
         type=_path,

@@ -189,9 +189,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
     task = policy.task
     if task.family is not None:  # the family's nominal object
         task = task.with_object(task.obj)
-    start = _place(task, args)
-    if task.feasible(start) is not Error.NONE:
-        raise CrmgraspError("the start configuration is infeasible")
+    start = _start(task, args)
+    if (error := task.feasible(start)) is not Error.NONE:
+        name = error.name.lower()
+        article = "an" if name[0] in "aeiou" else "a"
+        raise CrmgraspError(f"the start configuration is infeasible: {article} {name} error")
     rng = np.random.default_rng(args.seed)
     if args.hand == "mujoco":
         from crmgrasp.hardware.mujoco import hardware_task
@@ -211,6 +213,19 @@ def _cmd_run(args: argparse.Namespace) -> int:
         _run_figure(args.figure, task, res, f"{task.name}: {res.stopped} after {res.crms} CRMs; true min_friction {mu}")
         print(f"wrote {args.figure.resolve()}")
     return 0
+
+
+def _start(task: Task, args: argparse.Namespace) -> Any:
+    """``run``'s start: the configuration of --a, --b, ... ([`_place`][]) or, with none of them,
+    one drawn from ``task``'s own starts by a generator of --seed (printed)."""
+    if any(getattr(args, lab, None) is not None for lab in ALL_LABELS):
+        return _place(task, args)
+    start = task.sample_start(np.random.default_rng([args.seed, 1]))
+    nums, dim = task.model.numbers(start), task.model.dim
+    points = [nums[2 * dim * i : 2 * dim * i + dim] for i in range(len(task.model.labels))]
+    where = ", ".join(f"{lab} ({', '.join(f'{v:.4f}' for v in p)})" for lab, p in zip(task.model.labels, points))
+    print(f"start drawn from {task.name}'s starts (seed {args.seed}): {where}")
+    return start
 
 
 def _check_figure(args: argparse.Namespace) -> None:
