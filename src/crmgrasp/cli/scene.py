@@ -180,11 +180,13 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from crmgrasp.agents.loading import load_policy
     from crmgrasp.hardware.runner import KinematicHand, PolicyRunner
 
-    check_output(args.log, "--log")
-    if args.log.exists() and not args.overwrite:
-        raise CrmgraspError(f"--log {str(args.log)!r} exists (the log of an earlier run); --overwrite replaces it")
+    _new_output(args.log, "--log", args.overwrite, " (the log of an earlier run)")
     if args.figure is not None:
-        _check_figure(args)
+        if args.figure.suffix.lower() not in {".png", ".pdf", ".svg"}:
+            raise CrmgraspError(f"--figure must end in .png, .pdf or .svg, got {args.figure.name!r}")
+        if args.figure.resolve() == args.log.resolve():
+            raise CrmgraspError("--figure and --log name the same file")
+        _new_output(args.figure, "--figure", args.overwrite)
     policy = load_policy(args.policy)
     task = policy.task
     if task.family is not None:  # the family's nominal object
@@ -228,15 +230,12 @@ def _start(task: Task, args: argparse.Namespace) -> Any:
     return start
 
 
-def _check_figure(args: argparse.Namespace) -> None:
-    """``run --figure``'s path: an image format, writable, and new unless ``--overwrite``."""
-    if args.figure.suffix.lower() not in {".png", ".pdf", ".svg"}:
-        raise CrmgraspError(f"--figure must end in .png, .pdf or .svg, got {args.figure.name!r}")
-    check_output(args.figure, "--figure")
-    if args.figure.resolve() == args.log.resolve():
-        raise CrmgraspError("--figure and --log name the same file")
-    if args.figure.exists() and not args.overwrite:
-        raise CrmgraspError(f"--figure {str(args.figure)!r} exists; --overwrite replaces it")
+def _new_output(path: Path, flag: str, overwrite: bool, earlier: str = "") -> None:
+    """A file ``run`` writes: writable ([`check_output`][crmgrasp._io.check_output]), and new
+    unless ``overwrite`` (``earlier`` says what an existing one is)."""
+    check_output(path, flag)
+    if path.exists() and not overwrite:
+        raise CrmgraspError(f"{flag} {str(path)!r} exists{earlier}; --overwrite replaces it")
 
 
 def _run_figure(path: Path, task: Any, res: Any, title: str) -> None:
