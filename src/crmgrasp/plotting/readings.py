@@ -38,22 +38,20 @@ def readings_figure(obj: Any, hand: Any, panels: Sequence[tuple[Any, str]], titl
         ax.text(0.5, 0.5, "no contact sensed", ha="center", va="center", transform=ax.transAxes)
         ax.set_axis_off()
         return fig
-    if planar:
-        palms = [p for p in (hand.palm(config) for config, _ in panels) if all(map(math.isfinite, p))]
-        points = np.array([c.point for config, _ in panels for c in config] + palms)
-        view = _limits(obj, points)
-    for i, (config, text) in enumerate(panels):
-        if planar:
-            ax = fig.add_subplot(rows, cols, i + 1)
-            draw_scene(ax, obj, hand, config, title=text)
-            ax.set_xlim(view[0], view[1])
-            ax.set_ylim(view[2], view[3])
-        else:
-            from crmgrasp.plotting.spatial import draw_scene3d
+    if not planar:
+        from crmgrasp.plotting.spatial import draw_scene3d
 
+        for i, (config, text) in enumerate(panels):
             draw_scene3d(fig.add_subplot(rows, cols, i + 1, projection="3d"), obj, hand, config, title=text)
-    if planar:
-        handles, labels = scene_legend(len(panels[0][0]))
-        fig.legend(handles[: len(panels[0][0]) + 1], labels[: len(panels[0][0]) + 1], loc="outside lower center",
-                   ncols=3, fontsize=8, frameon=False)  # fmt: skip
+        return fig
+    palms = [p for p in (hand.palm(config) for config, _ in panels) if all(map(math.isfinite, p))]
+    view = _limits(obj, np.array([c.point for config, _ in panels for c in config] + palms))
+    for i, (config, text) in enumerate(panels):
+        ax = fig.add_subplot(rows, cols, i + 1)
+        draw_scene(ax, obj, hand, config, title=text)
+        ax.set_xlim(view[0], view[1])
+        ax.set_ylim(view[2], view[3])
+    marks = len(panels[0][0]) + 1  # the contacts and the palm: no goal line or path is drawn here
+    handles, labels = scene_legend(marks - 1)
+    fig.legend(handles[:marks], labels[:marks], loc="outside lower center", ncols=3, fontsize=8, frameon=False)
     return fig
