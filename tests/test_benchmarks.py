@@ -583,3 +583,38 @@ def test_greedy_variants_smoke(capsys):
     plain = train_trials(task, "backoff-vi", **kw).agents[0]
     recorded = train_trials(task, "backoff-vi", **kw, stepper=lambda t: made.append(mod.Recording(t)) or made[-1])
     assert recorded.agents[0].inner.counts == plain.inner.counts and len(made[0].episodes) == 40
+
+
+def _kernel_fuzz():  # type: ignore[no-untyped-def]
+    spec = importlib.util.spec_from_file_location("kernel_fuzz", BENCH.parent / "kernel_fuzz.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_kernel_fuzz_finds_the_paths_equal_and_names_the_kernels():
+    mod = _kernel_fuzz()
+    rows = mod.main(["--task", "paper-box", "--task", "triangles-3f", "--worlds", "4", "--steps", "5"])
+    rows += mod.main(["--task", "box-3d", "--worlds", "3", "--steps", "4", "--continuous"])
+    assert [(r["task"], r["noisy"]) for r in rows[:2]] == [("paper-box", False), ("paper-box", True)]
+    assert rows[0]["kernels"] == ["FusedPolygonKernel"] and rows[1]["kernels"] == ["PolygonKernel"]
+    assert rows[2]["kernels"] == ["FusedFingersKernel"] and rows[4]["continuous"]
+    assert all(r["mismatches"] == 0 and r["steps"] == r["worlds"] * (5 if r["task"] != "box-3d" else 4) for r in rows)
+
+
+def test_kernel_fuzz_reports_a_kernel_that_differs(monkeypatch):
+    """A kernel whose step is off in one field is caught, with the step that differs."""
+
+    from crmgrasp.kernels import kernel_for
+
+    mod = _kernel_fuzz()
+
+    def broken(task, backend):  # type: ignore[no-untyped-def]
+        k = kernel_for(task, backend)
+        real = k.step_one
+        monkeypatch.setattr(k, "step_one", lambda *a: real(*a)._replace(reward=-2.0))
+        return k
+
+    monkeypatch.setattr(mod, "kernel_for", broken)
+    row = mod.fuzz("paper-box", False, worlds=3, steps=4, seed=0, continuous=False)
+    assert row["mismatches"] == 3 and row["steps"] == 3 and "world 0, action" in row["first_mismatches"][0]
