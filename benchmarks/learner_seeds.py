@@ -25,7 +25,8 @@ without the quotient, ``model-vi`` (mirror quotient), Dyna-Q with value-iteratio
 the task: PSRL and UCBVI (``crmgrasp.agents.peers``, written from their papers: rlberry
 0.7.3 pins gymnasium < 0.30 and ships neither), SARSA and Q-learning (k = 1, the paper's
 alpha 0.3, Q0 = 0, greedy; the textbook updates MushroomRL implements: mushroom-rl 1.10.2
-pins numpy 1.24.4 and cannot share this environment).
+pins numpy 1.24.4 and cannot share this environment; ``benchmarks/mushroom_peer.py`` runs
+MushroomRL's own in a venv of their own, on this protocol).
 
 Usage: ``python benchmarks/learner_seeds.py [--episodes 200] [--seeds 10] [--first 0]
 [--trials 1] [--task paper-box --task box-family] [--only NAME ...]``. Prints one JSON
@@ -103,16 +104,25 @@ def run_learner(task_name: str, agent: str, params: dict, episodes: int, seeds: 
         curve5.append(episodes_to_within(res.curve, ref))
         curves.append(curve)
         to5.append(checkpoints_to_within(res.checkpoints, curve, ref))
-    seconds = time.perf_counter() - t0
-    at = np.array(curves)
     bound = 1.05 * ref + 1e-12
+    row = {} if not prior else {"within_at_0": sum(v <= bound for v in at0), "prior_episodes": 500}
+    return {
+        **row,
+        **summary(to5, curves, checks, episodes, ref, time.perf_counter() - t0),
+        "training_curve_to_5pct": curve5,
+    }
+
+
+def summary(to5: list, curves: list, checks: tuple[int, ...], episodes: int, ref: float, seconds: float) -> dict:
+    """The columns of one learner over the seeds: ``to5`` the seeds' first checkpoints within 5%
+    (None: not by ``episodes``), ``curves`` their greedy CRMs at each of ``checks`` (module
+    docstring); ``benchmarks/mushroom_peer.py`` reports the same."""
+    at, bound = np.array(curves), 1.05 * ref + 1e-12
 
     def within_at(c: int) -> int | None:
         return int((at[:, checks.index(c)] <= bound).sum()) if c in checks else None
 
-    row = {} if not prior else {"within_at_0": sum(v <= bound for v in at0), "prior_episodes": 500}
     return {
-        **row,
         "to_5pct": to5,
         "median_to_5pct": statistics.median(episodes + 1 if v is None else v for v in to5),
         "by_10": sum(v is not None and v <= 10 for v in to5),
@@ -120,7 +130,6 @@ def run_learner(task_name: str, agent: str, params: dict, episodes: int, seeds: 
         "by_budget": sum(v is not None for v in to5),
         "within_at_10": within_at(10),
         "within_at_20": within_at(20),
-        "training_curve_to_5pct": curve5,
         "mean_at": {c: round(float(v), 3) for c, v in zip(checks, at.mean(axis=0), strict=True)},
         "seconds": round(seconds, 1),
     }

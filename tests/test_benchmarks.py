@@ -585,15 +585,16 @@ def test_greedy_variants_smoke(capsys):
     assert recorded.agents[0].inner.counts == plain.inner.counts and len(made[0].episodes) == 40
 
 
-def _kernel_fuzz():  # type: ignore[no-untyped-def]
-    spec = importlib.util.spec_from_file_location("kernel_fuzz", BENCH.parent / "kernel_fuzz.py")
+def _bench(name: str):  # type: ignore[no-untyped-def]
+    """The benchmark script ``benchmarks/<name>.py`` as a module."""
+    spec = importlib.util.spec_from_file_location(name, BENCH.parent / f"{name}.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
 
 
 def test_kernel_fuzz_finds_the_paths_equal_and_names_the_kernels():
-    mod = _kernel_fuzz()
+    mod = _bench("kernel_fuzz")
     rows = mod.main(["--task", "paper-box", "--task", "triangles-3f", "--worlds", "4", "--steps", "5"])
     rows += mod.main(["--task", "box-3d", "--worlds", "3", "--steps", "4", "--continuous"])
     assert [(r["task"], r["noisy"]) for r in rows[:2]] == [("paper-box", False), ("paper-box", True)]
@@ -607,7 +608,7 @@ def test_kernel_fuzz_reports_a_kernel_that_differs(monkeypatch):
 
     from crmgrasp.kernels import kernel_for
 
-    mod = _kernel_fuzz()
+    mod = _bench("kernel_fuzz")
 
     def broken(task, backend):  # type: ignore[no-untyped-def]
         k = kernel_for(task, backend)
@@ -618,3 +619,28 @@ def test_kernel_fuzz_reports_a_kernel_that_differs(monkeypatch):
     monkeypatch.setattr(mod, "kernel_for", broken)
     row = mod.fuzz("paper-box", False, worlds=3, steps=4, seed=0, continuous=False)
     assert row["mismatches"] == 3 and row["steps"] == 3 and "world 0, action" in row["first_mismatches"][0]
+
+
+def test_mushroom_peer_needs_its_own_venv_and_says_so_in_one_line():
+    if importlib.util.find_spec("mushroom_rl") is not None:
+        pytest.skip("MushroomRL is installed here (its own venv): the message is for the other venvs")
+    with pytest.raises(SystemExit, match=r"^MushroomRL is not installed here: run `python benchmarks/mushroom_peer"):
+        _bench("mushroom_peer").main(["--seeds", "1", "--episodes", "5"])
+
+
+def test_mushroom_peer_scores_a_q_table_greedily_with_the_evaluations_ties():
+    mod = _bench("mushroom_peer")
+    table = np.array([[0.0, -1.0, 0.0], [-2.0, -0.5, -3.0]])
+    greedy = mod.GreedyTable(table)
+    picks = {greedy.greedy(0, np.random.default_rng(s)) for s in range(20)}
+    assert picks == {0, 2} and greedy.greedy(1, np.random.default_rng(0)) == 1 and greedy.n_actions == 3
+
+
+def test_mushroom_peer_smoke():
+    pytest.importorskip(
+        "mushroom_rl", reason="MushroomRL runs in .venv-mushroom (benchmarks/mushroom_peer.py --make-venv)"
+    )
+    res = _bench("mushroom_peer").main(["--seeds", "2", "--episodes", "10", "--task", "paper-box"])
+    rows = res["paper-box"]
+    assert set(rows) == {"MushroomRL sarsa", "MushroomRL q"}
+    assert all(len(r["to_5pct"]) == 2 and set(r["mean_at"]) == {5, 10} for r in rows.values())
