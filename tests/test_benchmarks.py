@@ -276,15 +276,17 @@ def test_mujoco_three_fingers_policy_search(capsys, monkeypatch):
     assert exc.value.code == 2 and "--search-worlds must be at least 1" in capsys.readouterr().err
 
 
-def test_pouct_peer_smoke(capsys, monkeypatch):
+@pytest.mark.parametrize("exported", [False, True])
+def test_pouct_peer_smoke(capsys, monkeypatch, exported):
     pytest.importorskip("pomdp_py", reason="needs the extra crmgrasp[pomdp]")
-    spec = importlib.util.spec_from_file_location("pouct_peer", BENCH.parent / "pouct_peer.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    monkeypatch.setattr("sys.argv", ["pouct_peer.py", "--task", "paper-box", "--sims", "10", "--episodes", "3"])
+    mod = _bench("pouct_peer")
+    argv = ["pouct_peer.py", "--task", "paper-box", "--sims", "10", "--episodes", "3"]
+    monkeypatch.setattr("sys.argv", argv + ["--exported"] * exported)
     mod.main()
     (row,) = json.loads(capsys.readouterr().out)["rows"]
     assert row["episodes"] == 3 and row["belief_policy_same_worlds"] >= 1.0
+    assert row["planner"] == ("POUCT on the exported POMDP" if exported else "POUCT on the simulator")
+    assert ("pbvi_same_worlds" in row) == exported and ("belief_refills" in row) != exported
 
 
 @pytest.mark.parametrize("learner", ["pooled-vi", "backoff-vi"])

@@ -63,3 +63,38 @@ def test_the_belief_keeps_only_worlds_that_explain_the_readings():
 
     episode = run_episode(task, Watch(), starts)
     assert episode.steps >= 1
+
+
+def test_pouct_on_the_exported_pomdp_grasps_and_repeats(tmp_path):
+    """POUCT on the sampled POMDP, its model read back from the Cassandra file: every start
+    grasped, near the optimum, the same run from the same seed, the belief a distribution."""
+    from crmgrasp.planners.pomdp import read_cassandra, write_cassandra
+    from crmgrasp.planners.pomdp_task import TaskPOMDP, build_task_pomdp
+    from crmgrasp.planners.pouct import ModelPOUCTPolicy
+
+    task = make_task("paper-box")
+    tp = build_task_pomdp(task, cell=0.02, n_starts=500, seed=0)
+    tp = TaskPOMDP(task, read_cassandra(write_cassandra(tp.model, tmp_path / "box.pomdp")), tp.cells, tp.z0, tp.bins)
+
+    def run(seed):  # type: ignore[no-untyped-def]
+        starts, _ = checkpoint_generators(0)
+        policy = ModelPOUCTPolicy(tp, np.random.default_rng(seed), POUCTSettings(num_sims=100))
+        eps = []
+        for _ in range(20):
+            eps.append(run_episode(task, policy, starts))
+            b = policy._b
+            assert np.isclose(b.sum(), 1.0) and (b >= 0).all() and not b[tp.model.goal].any()
+        return eps
+
+    first, again = run(1), run(1)
+    assert [e.steps for e in first] == [e.steps for e in again] and all(e.success for e in first)
+    assert np.mean([e.steps for e in first]) <= 1.25 * task.reference_mean_steps
+
+
+def test_the_model_draw_follows_the_running_sums():
+    from crmgrasp.planners.pouct import _draw
+
+    rng = np.random.default_rng(0)
+    counts = np.bincount([_draw(np.cumsum([0.2, 0.0, 0.8]), rng) for _ in range(5000)], minlength=3)
+    assert counts[1] == 0 and 900 < counts[0] < 1100 and counts.sum() == 5000
+    assert _draw(np.cumsum([0.0, 0.0, 3.0]), rng) == 2

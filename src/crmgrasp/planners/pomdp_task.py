@@ -30,7 +30,7 @@ from crmgrasp.planners.pomdp import POMDP, PBVIPolicy, belief_update, collect_be
 from crmgrasp.sim import Percept, run_episode
 from crmgrasp.tasks import Task, acceptable
 
-__all__ = ["TaskPOMDP", "build_task_pomdp", "POMDPAgent"]
+__all__ = ["TaskPOMDP", "build_task_pomdp", "BeliefTracker", "POMDPAgent"]
 
 Cell = tuple[int, int, int, int]
 
@@ -206,32 +206,22 @@ def _observations(z_counts: dict[tuple[int, int, int], int], n_actions: int, n: 
     return obs_p
 
 
-class POMDPAgent:
-    """Executes a PBVI policy of a [`TaskPOMDP`][] in the simulator."""
+class BeliefTracker:
+    """Acts in the simulator on a [`TaskPOMDP`][]'s belief, kept by Bayes' rule: the prior
+    conditioned on the first observation, then ``b'(s') = eta Z(o | s', a) sum_s T(s' | s, a) b(s)``
+    after each CRM. What chooses the CRM (``act``) is the subclass's: [`POMDPAgent`][]'s PBVI
+    policy, or pomdp_py's POUCT on the model ([`crmgrasp.planners.pouct.ModelPOUCTPolicy`][])."""
 
-    def __init__(self, tp: TaskPOMDP, n_beliefs: int = 300, seed: int = 0) -> None:
+    def __init__(self, tp: TaskPOMDP) -> None:
         self.tp = tp
-        h = tp.task.max_steps
-        pts = collect_beliefs(tp.model, n_beliefs, h, np.random.default_rng(seed))
-        extra = [self._initial(o) for o in range(tp.model.n_obs)]
-        pts = np.vstack([pts] + [b[None] for b in extra if b is not None])
-        self.policy: PBVIPolicy = solve_pbvi(tp.model, pts, h)
-        self._b, self._left, self._a = tp.model.b0, h, 0
-
-    def model_value(self) -> float:
-        """Expected CRMs predicted by the model: ``sum_o Pr(o_0) V(b0 | o_0)``."""
-        h = self.tp.task.max_steps
-        total = 0.0
-        for o in range(self.tp.model.n_obs):
-            p = float(self.tp.model.b0 @ self.tp.z0[:, o])
-            b = self._initial(o)
-            if p > 0 and b is not None:
-                total -= p * self.policy.value(b, h)
-        return total
+        self._b, self._left, self._a = tp.model.b0, tp.task.max_steps, 0
 
     def _initial(self, o: int) -> np.ndarray | None:
         b = self.tp.model.b0 * self.tp.z0[:, o]
         return None if b.sum() <= 0 else b / b.sum()
+
+    def act(self) -> int:
+        raise NotImplementedError
 
     # -- the Policy interface (crmgrasp.sim.run_episode)
     def begin(self, first: Percept) -> None:
@@ -239,11 +229,6 @@ class POMDPAgent:
         b = self._initial(first.obs_index)
         self._b = self.tp.model.b0 if b is None else b
         self._left = self.tp.task.max_steps
-
-    def act(self) -> int:
-        """The PBVI policy's action for the belief and the CRMs left."""
-        self._a = self.policy.action(self._b, self._left)
-        return self._a
 
     def tell(self, percept: Percept) -> None:
         """Bayes update of the belief on the observation (the prediction alone where
@@ -263,3 +248,32 @@ class POMDPAgent:
         (CRMs, success)."""
         ep = run_episode(self.tp.task, self, np.random.default_rng(0), start=config)
         return ep.steps, ep.success
+
+
+class POMDPAgent(BeliefTracker):
+    """Executes a PBVI policy of a [`TaskPOMDP`][] in the simulator."""
+
+    def __init__(self, tp: TaskPOMDP, n_beliefs: int = 300, seed: int = 0) -> None:
+        super().__init__(tp)
+        h = tp.task.max_steps
+        pts = collect_beliefs(tp.model, n_beliefs, h, np.random.default_rng(seed))
+        extra = [self._initial(o) for o in range(tp.model.n_obs)]
+        pts = np.vstack([pts] + [b[None] for b in extra if b is not None])
+        self.policy: PBVIPolicy = solve_pbvi(tp.model, pts, h)
+
+    def model_value(self) -> float:
+        """Expected CRMs predicted by the model: ``sum_o Pr(o_0) V(b0 | o_0)``."""
+        h = self.tp.task.max_steps
+        total = 0.0
+        for o in range(self.tp.model.n_obs):
+            p = float(self.tp.model.b0 @ self.tp.z0[:, o])
+            b = self._initial(o)
+            if p > 0 and b is not None:
+                total -= p * self.policy.value(b, h)
+        return total
+
+    # -- the Policy interface (crmgrasp.sim.run_episode)
+    def act(self) -> int:
+        """The PBVI policy's action for the belief and the CRMs left."""
+        self._a = self.policy.action(self._b, self._left)
+        return self._a

@@ -14,6 +14,14 @@ CRM every particle is stepped with it and kept if its observation equals the sen
 (rejection: exact for a noise-free task). Emptied, it is refilled by drawing worlds and
 replaying the episode's CRMs, up to ``refill_tries`` draws; then the last particles are kept.
 
+[`ModelPOUCTPolicy`][] plans with POUCT on an explicit POMDP of the task instead (the sampled
+POMDP that ``crmgrasp pomdp`` builds and exports, or that file read back by
+[`read_cassandra`][crmgrasp.planners.pomdp.read_cassandra]): its states are the model's cells, its
+transitions and observations drawn from the model's ``T`` and ``Z``, its belief the model's exact
+Bayes belief, kept in the real simulator as the PBVI agent keeps it
+([`BeliefTracker`][crmgrasp.planners.pomdp_task.BeliefTracker]). POUCT then plans on the model
+a user exports, the same model PBVI solves.
+
 Randomness: every draw comes from the policy's ``numpy.random.Generator``: the particles,
 the model's steps, the belief samples at the root of each simulation (the belief is a
 ``pomdp_py.GenerativeDistribution`` drawing from it) and the random rollouts. pomdp_py's own
@@ -29,10 +37,12 @@ from typing import Any
 import numpy as np
 
 from crmgrasp._validation import CrmgraspError, integer, require_extra
+from crmgrasp.planners.pomdp import POMDP
+from crmgrasp.planners.pomdp_task import BeliefTracker, TaskPOMDP
 from crmgrasp.sim import Percept, SimState, begin, step
 from crmgrasp.tasks import Task
 
-__all__ = ["POUCTPolicy", "POUCTSettings", "require_pomdp_py"]
+__all__ = ["POUCTPolicy", "ModelPOUCTPolicy", "POUCTSettings", "require_pomdp_py"]
 
 
 def require_pomdp_py() -> ModuleType:
@@ -73,6 +83,32 @@ class _World:
         return id(self)
 
 
+def _rollout(pomdp_py: ModuleType, actions: list[Any], rng: np.random.Generator) -> Any:
+    """POUCT's action set and rollout policy: every CRM, uniform rollouts through ``rng``."""
+
+    class Actions(pomdp_py.RolloutPolicy):  # type: ignore[misc,name-defined]
+        def get_all_actions(self, state: Any = None, history: Any = None) -> list[Any]:
+            return actions
+
+        def rollout(self, state: Any, history: Any = None) -> Any:
+            return actions[int(rng.integers(len(actions)))]
+
+    return Actions()
+
+
+def _plan(pomdp_py: ModuleType, settings: POUCTSettings, depth: int, belief: Any, models: list[Any]) -> int:
+    """One POUCT decision: the CRM index planned from ``belief`` over ``depth`` CRMs at most."""
+    transition, observe, reward, actions = models
+    planner = pomdp_py.POUCT(
+        max_depth=depth,
+        num_sims=settings.num_sims,
+        discount_factor=1.0,
+        exploration_const=settings.exploration_const,
+        rollout_policy=actions,
+    )
+    return int(planner.plan(pomdp_py.Agent(belief, actions, transition, observe, reward)).name)
+
+
 def _models(pomdp_py: ModuleType, task: Task, rng: np.random.Generator) -> tuple[Any, ...]:
     """The transition, observation, reward and policy models over [`_World`][] states."""
     n = len(task.actions)
@@ -108,13 +144,6 @@ def _models(pomdp_py: ModuleType, task: Task, rng: np.random.Generator) -> tuple
                 return 0.0
             return float(task.grasp_reward if next_state.world.obs < 0 else -1.0)
 
-    class Actions(pomdp_py.RolloutPolicy):  # type: ignore[misc,name-defined]
-        def get_all_actions(self, state: Any = None, history: Any = None) -> list[Any]:
-            return actions
-
-        def rollout(self, state: Any, history: Any = None) -> Any:
-            return actions[int(rng.integers(n))]
-
     class Belief(pomdp_py.GenerativeDistribution):  # type: ignore[misc,name-defined]
         """The particle belief, sampled uniformly through the policy's generator."""
 
@@ -124,7 +153,7 @@ def _models(pomdp_py: ModuleType, task: Task, rng: np.random.Generator) -> tuple
         def random(self) -> Any:
             return self.states[int(rng.integers(len(self.states)))]
 
-    return State, Belief, Transition(), Observe(), Reward(), Actions()
+    return State, Belief, Transition(), Observe(), Reward(), _rollout(pomdp_py, actions, rng)
 
 
 class POUCTPolicy:
@@ -194,20 +223,10 @@ class POUCTPolicy:
                     break
 
     def act(self) -> int:
-        pp, s = self.pomdp_py, self.settings
         if not self._worlds:
             return int(self.rng.integers(len(self.task.actions)))  # no world explains what was sensed
-        transition, observe, reward, actions = self._models
         belief = self._belief_cls([self._state_cls(w) for w in self._worlds])
-        agent = pp.Agent(belief, actions, transition, observe, reward)
-        planner = pp.POUCT(
-            max_depth=self.task.max_steps - len(self._taken),
-            num_sims=s.num_sims,
-            discount_factor=1.0,
-            exploration_const=s.exploration_const,
-            rollout_policy=actions,
-        )
-        action = int(planner.plan(agent).name)
+        action = _plan(self.pomdp_py, self.settings, self.task.max_steps - len(self._taken), belief, self._models)
         self._taken.append(action)
         return action
 
@@ -222,3 +241,82 @@ class POUCTPolicy:
             if out.obs_index == percept.obs_index and not out.terminated:
                 kept.append(_World(w.task, out.state, out.obs_index))
         self._worlds = kept or self._refill()
+
+
+def _draw(cumulative: np.ndarray, rng: np.random.Generator) -> int:
+    """An index drawn with the probabilities whose running sums are ``cumulative`` (one uniform)."""
+    return min(int(np.searchsorted(cumulative, rng.random() * cumulative[-1], side="right")), len(cumulative) - 1)
+
+
+def _model_models(pomdp_py: ModuleType, m: POMDP, grasp_reward: float, rng: np.random.Generator) -> tuple[Any, ...]:
+    """The transition, observation, reward and policy models of POUCT over an explicit POMDP's
+    states (cell indices): ``s' ~ T[a](s, .)``, ``o ~ Z[a, s', .]``; a goal state is absorbing,
+    observed as ``-1``, and reached with the task's grasp reward (-1 per CRM otherwise)."""
+    n = m.n_actions
+    actions = [pomdp_py.SimpleAction(str(i)) for i in range(n)]
+    grasped = pomdp_py.SimpleObservation(-1)
+    rows = [[np.cumsum(t.getrow(s).toarray().ravel()) for s in range(m.n_states)] for t in m.T]
+    seen = np.cumsum(m.Z, axis=2)
+    goal = m.goal
+
+    class State(pomdp_py.State):  # type: ignore[misc,name-defined]
+        def __init__(self, s: int) -> None:
+            self.s = s
+
+        def __hash__(self) -> int:
+            return self.s
+
+        def __eq__(self, other: object) -> bool:
+            return isinstance(other, State) and other.s == self.s
+
+    class Transition(pomdp_py.TransitionModel):  # type: ignore[misc,name-defined]
+        def sample(self, state: Any, action: Any) -> Any:
+            row = rows[int(action.name)][state.s]
+            return state if goal[state.s] or row[-1] <= 0 else State(_draw(row, rng))
+
+    class Observe(pomdp_py.ObservationModel):  # type: ignore[misc,name-defined]
+        def sample(self, next_state: Any, action: Any) -> Any:
+            s2 = next_state.s
+            return grasped if goal[s2] else pomdp_py.SimpleObservation(_draw(seen[int(action.name), s2], rng))
+
+    class Reward(pomdp_py.RewardModel):  # type: ignore[misc,name-defined]
+        def sample(self, state: Any, action: Any, next_state: Any) -> float:
+            return 0.0 if goal[state.s] else float(grasp_reward if goal[next_state.s] else -1.0)
+
+    class Belief(pomdp_py.GenerativeDistribution):  # type: ignore[misc,name-defined]
+        """The model's exact belief (a vector over its states), sampled through the policy's generator."""
+
+        def __init__(self, b: np.ndarray) -> None:
+            self.cumulative = np.cumsum(b)
+
+        def random(self) -> Any:
+            return State(_draw(self.cumulative, rng))
+
+    return Belief, Transition(), Observe(), Reward(), _rollout(pomdp_py, actions, rng)
+
+
+class ModelPOUCTPolicy(BeliefTracker):
+    """pomdp_py's POUCT on an explicit POMDP of the task, acting in the simulator on the model's
+    exact belief (see the module docstring).
+
+    Parameters
+    ----------
+    tp
+        The sampled POMDP ([`build_task_pomdp`][crmgrasp.planners.pomdp_task.build_task_pomdp]);
+        ``tp.model`` may be replaced by the same model read back from its Cassandra file.
+    rng
+        Source of the belief samples, the model's draws and the rollouts.
+    settings
+        Simulations per decision (``particles`` and ``refill_tries`` are not used: the belief is exact).
+    """
+
+    def __init__(self, tp: TaskPOMDP, rng: np.random.Generator, settings: POUCTSettings | None = None) -> None:
+        super().__init__(tp)
+        self.pomdp_py = require_pomdp_py()
+        self.rng, self.settings = rng, POUCTSettings() if settings is None else settings
+        self._belief_cls, *self._models = _model_models(self.pomdp_py, tp.model, tp.task.grasp_reward, rng)
+
+    def act(self) -> int:
+        """POUCT's CRM from the current belief, over the CRMs left."""
+        self._a = _plan(self.pomdp_py, self.settings, self._left, self._belief_cls(self._b), self._models)
+        return self._a
