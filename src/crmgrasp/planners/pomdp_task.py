@@ -221,6 +221,8 @@ class BeliefTracker:
         return None if b.sum() <= 0 else b / b.sum()
 
     def act(self) -> int:
+        """The CRM to take from the current belief (``self._b``, with ``self._left`` CRMs left),
+        recorded in ``self._a`` for the belief update: the subclass's."""
         raise NotImplementedError
 
     # -- the Policy interface (crmgrasp.sim.run_episode)

@@ -248,6 +248,13 @@ def _draw(cumulative: np.ndarray, rng: np.random.Generator) -> int:
     return min(int(np.searchsorted(cumulative, rng.random() * cumulative[-1], side="right")), len(cumulative) - 1)
 
 
+def _sparse_rows(t: Any) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Per state of a CSR transition matrix: its successors and the running sums of their
+    probabilities (what [`_draw`][] takes; zero entries are never drawn either way)."""
+    ptr = t.indptr
+    return [(t.indices[ptr[s] : ptr[s + 1]], np.cumsum(t.data[ptr[s] : ptr[s + 1]])) for s in range(t.shape[0])]
+
+
 def _model_models(pomdp_py: ModuleType, m: POMDP, grasp_reward: float, rng: np.random.Generator) -> tuple[Any, ...]:
     """The transition, observation, reward and policy models of POUCT over an explicit POMDP's
     states (cell indices): ``s' ~ T[a](s, .)``, ``o ~ Z[a, s', .]``; a goal state is absorbing,
@@ -255,7 +262,7 @@ def _model_models(pomdp_py: ModuleType, m: POMDP, grasp_reward: float, rng: np.r
     n = m.n_actions
     actions = [pomdp_py.SimpleAction(str(i)) for i in range(n)]
     grasped = pomdp_py.SimpleObservation(-1)
-    rows = [[np.cumsum(t.getrow(s).toarray().ravel()) for s in range(m.n_states)] for t in m.T]
+    rows = [_sparse_rows(t.tocsr()) for t in m.T]
     seen = np.cumsum(m.Z, axis=2)
     goal = m.goal
 
@@ -271,8 +278,10 @@ def _model_models(pomdp_py: ModuleType, m: POMDP, grasp_reward: float, rng: np.r
 
     class Transition(pomdp_py.TransitionModel):  # type: ignore[misc,name-defined]
         def sample(self, state: Any, action: Any) -> Any:
-            row = rows[int(action.name)][state.s]
-            return state if goal[state.s] or row[-1] <= 0 else State(_draw(row, rng))
+            successors, cumulative = rows[int(action.name)][state.s]
+            if goal[state.s] or not len(cumulative) or cumulative[-1] <= 0:
+                return state
+            return State(int(successors[_draw(cumulative, rng)]))
 
     class Observe(pomdp_py.ObservationModel):  # type: ignore[misc,name-defined]
         def sample(self, next_state: Any, action: Any) -> Any:
