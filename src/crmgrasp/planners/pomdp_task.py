@@ -17,6 +17,7 @@ back to the prediction without that observation.
 from __future__ import annotations
 
 import math
+from abc import ABC, abstractmethod
 
 import numpy as np
 from scipy import sparse
@@ -206,7 +207,7 @@ def _observations(z_counts: dict[tuple[int, int, int], int], n_actions: int, n: 
     return obs_p
 
 
-class BeliefTracker:
+class BeliefTracker(ABC):
     """Acts in the simulator on a [`TaskPOMDP`][]'s belief, kept by Bayes' rule: the prior
     conditioned on the first observation, then ``b'(s') = eta Z(o | s', a) sum_s T(s' | s, a) b(s)``
     after each CRM. What chooses the CRM (``act``) is the subclass's: [`POMDPAgent`][]'s PBVI
@@ -220,10 +221,10 @@ class BeliefTracker:
         b = self.tp.model.b0 * self.tp.z0[:, o]
         return None if b.sum() <= 0 else b / b.sum()
 
+    @abstractmethod
     def act(self) -> int:
         """The CRM to take from the current belief (``self._b``, with ``self._left`` CRMs left),
         recorded in ``self._a`` for the belief update: the subclass's."""
-        raise NotImplementedError
 
     # -- the Policy interface (crmgrasp.sim.run_episode)
     def begin(self, first: Percept) -> None:
