@@ -6,14 +6,19 @@ import pytest
 from crmgrasp import make_task
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents.training import checkpoint_generators
+from crmgrasp.cli.main import main
 from crmgrasp.planners.pouct import POUCTSettings, require_pomdp_py
 from crmgrasp.sim import run_episode
 
 
-def test_missing_extra_is_one_line(hide_module):
+def test_missing_extra_is_one_line(hide_module, tmp_path, capsys):
     hide_module("pomdp_py")
     with pytest.raises(CrmgraspError, match=r"pip install 'crmgrasp\[pomdp\]'"):
         require_pomdp_py()
+    out = tmp_path / "box.pomdp"
+    assert main(["pomdp", "--cell", "0.02", "--pouct", "10", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "crmgrasp[pomdp]" in err and len(err.splitlines()) == 1 and not out.exists()
 
 
 def test_settings_are_checked():
@@ -98,3 +103,12 @@ def test_the_model_draw_follows_the_running_sums():
     counts = np.bincount([_draw(np.cumsum([0.2, 0.0, 0.8]), rng) for _ in range(5000)], minlength=3)
     assert counts[1] == 0 and 900 < counts[0] < 1100 and counts.sum() == 5000
     assert _draw(np.cumsum([0.0, 0.0, 3.0]), rng) == 2
+
+
+def test_the_pomdp_command_runs_pouct_on_its_model(tmp_path, capsys):
+    out = tmp_path / "box.pomdp"
+    argv = ["pomdp", "--cell", "0.02", "--samples", "5", "--starts", "300", "--episodes", "20", "--out", str(out)]
+    assert main([*argv, "--pouct", "30", "--quiet"]) == 0
+    text = capsys.readouterr().out
+    line = next(x for x in text.splitlines() if x.startswith("pomdp_py's POUCT on the same model, 30 simulations"))
+    assert line.endswith("success 100.0%") and out.read_text().startswith("# crmgrasp POMDP")

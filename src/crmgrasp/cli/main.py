@@ -213,17 +213,30 @@ def _cmd_pomdp(args: argparse.Namespace) -> int:
         raise CrmgraspError(
             f"pomdp: task {task.name!r} draws an object per episode; the sampled POMDP needs one object"
         )
+    if args.pouct is not None:
+        from crmgrasp.planners.pouct import ModelPOUCTPolicy, POUCTSettings, require_pomdp_py
+
+        require_pomdp_py()  # before the work: a one-line error where the extra is missing
     with _progress(args).stage(f"pomdp of {task.name}: sample, solve, execute", 0):
         tp = build_task_pomdp(task, cell=args.cell, samples=args.samples, n_starts=args.starts, seed=args.seed)
         path = write_cassandra(tp.model, args.out)
         agent = POMDPAgent(tp, seed=args.seed)
-        runs = [agent.run(c) for c in sample_starts(task, args.episodes, args.seed + 1)]  # type: ignore[arg-type]
+        starts = sample_starts(task, args.episodes, args.seed + 1)
+        runs = [agent.run(c) for c in starts]  # type: ignore[arg-type]
     counts = ", ".join(f"{k} {v}" for k, v in tp.model.counts.items())
     print(
         f"{task.name}: sampled POMDP ({counts}); model value {agent.model_value():.4f} CRMs; executed on "
         f"{args.episodes} fresh starts: {np.mean([n for n, _ in runs]):.4f} CRMs, "
         f"success {np.mean([ok for _, ok in runs]):.1%}"
     )
+    if args.pouct is not None:
+        pouct = ModelPOUCTPolicy(tp, np.random.default_rng(args.seed), POUCTSettings(num_sims=args.pouct))
+        with _progress(args).stage(f"POUCT on the model, {args.pouct} simulations per CRM", 0):
+            planned = [pouct.run(c) for c in starts]  # type: ignore[arg-type]
+        print(
+            f"pomdp_py's POUCT on the same model, {args.pouct} simulations per CRM, the same starts: "
+            f"{np.mean([n for n, _ in planned]):.4f} CRMs, success {np.mean([ok for _, ok in planned]):.1%}"
+        )
     print(f"wrote {path.resolve()}")
     return 0
 

@@ -327,6 +327,14 @@ def _parser_pomdp(sub: Any) -> None:
         default=1000,
         help="fresh starts to execute the policy on (default 1000; 1 to 1,000,000)",
     )
+    p.add_argument(
+        "--pouct",
+        type=_int(1, 100_000),
+        default=None,
+        metavar="SIMS",
+        help="also run pomdp_py's POUCT on the same model, SIMS simulations per CRM, on the same starts "
+        "(extra crmgrasp[pomdp]; 1 to 100,000)",
+    )
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
     p.add_argument("--out", type=_path, required=True, help="the .pomdp file to write")
     _add_quiet(p)
