@@ -43,6 +43,8 @@ from crmgrasp.tasks import make_task
 
 def exported(task: Any) -> TaskPOMDP:
     """The task's sampled POMDP as ``crmgrasp pomdp`` exports it, its model read back from the file."""
+    if task.family is not None:
+        raise SystemExit(f"--exported: task {task.name!r} draws an object per episode; the sampled POMDP needs one")
     tp = build_task_pomdp(task, cell=0.01, n_starts=4000, seed=0)
     with tempfile.TemporaryDirectory() as tmp:
         model = read_cassandra(write_cassandra(tp.model, Path(tmp) / "task.pomdp"))
@@ -56,13 +58,13 @@ def one(name: str, sims: int, episodes: int, particles: int, model: TaskPOMDP | 
     task = make_task(name)
     worlds = sample_starts(task, episodes, 1)
     settings = POUCTSettings(num_sims=sims, particles=particles)
-    rows: dict[str, Any] = {}
+    extra: dict[str, Any] = {}
     if model is None:
         policy: Any = POUCTPolicy(task, np.random.default_rng(1), settings)
     else:
         policy = ModelPOUCTPolicy(model, np.random.default_rng(1), settings)
         pbvi = POMDPAgent(model, n_beliefs=300, seed=0)
-        rows["pbvi_same_worlds"] = round(float(np.mean([pbvi.run(w)[0] for w in worlds])), 3)
+        extra["pbvi_same_worlds"] = round(float(np.mean([pbvi.run(w)[0] for w in worlds])), 3)
     t0 = time.perf_counter()
     rng = np.random.default_rng(2)
     runs = [run_episode(task, policy, rng, start=w) for w in worlds]
@@ -80,7 +82,7 @@ def one(name: str, sims: int, episodes: int, particles: int, model: TaskPOMDP | 
         "belief_policy_same_worlds": round(optimum, 3),
         "gap_to_belief_policy": round(mean / optimum - 1.0, 4),
         "seconds_per_decision": round(seconds / max(1, sum(steps)), 4),
-        **({"belief_refills": policy.refills} if model is None else rows),
+        **({"belief_refills": policy.refills} if model is None else extra),
     }
     print(row, file=sys.stderr)
     return row
