@@ -79,6 +79,12 @@ def test_show_writes_image(tmp_path, capsys):
     assert main(["show", *NEAR, "--crm", "C1", "--out", str(out)]) == 0
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert main(["show", *NEAR, "--out", str(tmp_path / "s.svg")]) == 0
+    capsys.readouterr()
+    before = out.read_bytes()
+    assert main(["show", *NEAR, "--out", str(out)]) == 2  # an existing image is the user's: kept
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "exists; --overwrite replaces it" in err and out.read_bytes() == before
+    assert main(["show", *NEAR, "--out", str(out), "--overwrite"]) == 0 and out.read_bytes() != before
 
 
 def test_installed_entry_point_help():
@@ -190,6 +196,10 @@ def test_pomdp_command(tmp_path, capsys):
     )
     assert "model value" in capsys.readouterr().out and out.read_text().startswith("# crmgrasp POMDP")
     assert main(["pomdp", "--cell", "-1", "--out", str(out)]) == 2
+    text, again = out.read_text(), ["pomdp", "--cell", "0.02", "--samples", "5", "--starts", "300", "--out", str(out)]
+    assert main([*again, "--episodes", "10"]) == 2 and out.read_text() == text  # refused before any work
+    assert "exists; --overwrite replaces it" in capsys.readouterr().err
+    assert main([*again, "--episodes", "10", "--seed", "1", "--overwrite"]) == 0 and out.read_text() != text
 
 
 def test_run_command(tmp_path, capsys):

@@ -26,6 +26,7 @@ from crmgrasp._validation import CrmgraspError
 
 __all__ = [
     "check_output",
+    "check_new_output",
     "check_folder",
     "read_bounded",
     "atomic_path",
@@ -70,6 +71,16 @@ def check_output(path: str | os.PathLike[str], what: str = "output file") -> Pat
         probe = probe.parent
     if not probe.is_dir() or not os.access(probe, os.W_OK | os.X_OK):
         raise CrmgraspError(f"{what} {str(target)!r} cannot be written: folder {str(probe)!r} is not writable")
+    return target
+
+
+def check_new_output(path: str | os.PathLike[str], what: str, overwrite: bool, earlier: str = "") -> Path:
+    """``path`` as [`check_output`][] gives it, and refused if a file is already there
+    unless ``overwrite``: a command never replaces a user's file silently. ``earlier``
+    says what an existing file is (e.g. ``" (the log of an earlier run)"``)."""
+    target = check_output(path, what)
+    if target.exists() and not overwrite:
+        raise CrmgraspError(f"{what} {str(target)!r} exists{earlier}; --overwrite replaces it")
     return target
 
 

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from crmgrasp import _progress as interrupt  # the Ctrl-C a finaliser would swallow
-from crmgrasp._io import check_output
+from crmgrasp._io import check_new_output
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.cli.common import _print_result, _progress, _run_folder, _task
 from crmgrasp.cli.learning import _cmd_evaluate, _cmd_learn
@@ -207,7 +207,7 @@ def _cmd_pomdp(args: argparse.Namespace) -> int:
 
     if args.cell <= 0 or args.samples < 1 or args.episodes < 1:
         raise CrmgraspError("--cell must be > 0, and --samples and --episodes >= 1")
-    check_output(args.out, "--out")
+    check_new_output(args.out, "--out", args.overwrite)
     task = _task(args)
     if task.family is not None:
         raise CrmgraspError(

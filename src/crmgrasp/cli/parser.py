@@ -59,7 +59,7 @@ def _parser_show(sub: Any) -> None:
         description="Draw object, contacts with normals, palm point and, with --crm, the goal line and path.",
     )
     _add_scene_args(p, crm_required=False)
-    p.add_argument("--out", type=_path, required=True, help="image file (.png, .pdf, .svg; mujoco: .png or .gif)")
+    _add_out_file(p, "image file (.png, .pdf, .svg; mujoco: .png or .gif)")
     _add_hand(p)
 
 
@@ -336,8 +336,14 @@ def _parser_pomdp(sub: Any) -> None:
         "(extra crmgrasp[pomdp]; 1 to 100,000)",
     )
     p.add_argument("--seed", type=_SEED, default=0, help="seed (default 0; 0 to 2**63-1)")
-    p.add_argument("--out", type=_path, required=True, help="the .pomdp file to write")
+    _add_out_file(p, "the .pomdp file to write")
     _add_quiet(p)
+
+
+def _add_out_file(p: argparse.ArgumentParser, what: str) -> None:
+    """``--out FILE`` (``what``) and ``--overwrite``: an existing file is refused without it."""
+    p.add_argument("--out", type=_path, required=True, help=f"{what}; an existing one is refused unless --overwrite")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
 
 
 def _parser_run(sub: Any) -> None:

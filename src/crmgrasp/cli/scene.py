@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from crmgrasp._io import check_output, dumps_json, save_figure
+from crmgrasp._io import check_new_output, dumps_json, save_figure
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.cli.common import _task
 from crmgrasp.cli.options import _resolve_crm
@@ -148,7 +148,7 @@ def _cmd_show(args: argparse.Namespace) -> int:
         return _show_mujoco(args)
     if args.out.suffix.lower() not in {".png", ".pdf", ".svg"}:
         raise CrmgraspError(f"--out must end in .png, .pdf or .svg, got {args.out.name!r}")
-    check_output(args.out, "--out")
+    check_new_output(args.out, "--out", args.overwrite)
     task, config, crm, noise, rng = _scene(args)
     t = _sensing(task, noise)
     outcome = t.execute(config, crm, t.read(config, rng)) if crm else None
@@ -163,7 +163,7 @@ def _show_mujoco(args: argparse.Namespace) -> int:
     from crmgrasp.hardware.mujoco.render import show
 
     user_gl = os.environ.get("MUJOCO_GL")
-    check_output(args.out, "--out")
+    check_new_output(args.out, "--out", args.overwrite)
     task, config, crm, _, rng = _scene(args)
     try:
         print(show(hardware_task(task), config, crm, args.out, rng))
@@ -180,13 +180,13 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from crmgrasp.agents.loading import load_policy
     from crmgrasp.hardware.runner import KinematicHand, PolicyRunner
 
-    _new_output(args.log, "--log", args.overwrite, " (the log of an earlier run)")
+    check_new_output(args.log, "--log", args.overwrite, " (the log of an earlier run)")
     if args.figure is not None:
         if args.figure.suffix.lower() not in {".png", ".pdf", ".svg"}:
             raise CrmgraspError(f"--figure must end in .png, .pdf or .svg, got {args.figure.name!r}")
         if args.figure.resolve() == args.log.resolve():
             raise CrmgraspError("--figure and --log name the same file")
-        _new_output(args.figure, "--figure", args.overwrite)
+        check_new_output(args.figure, "--figure", args.overwrite)
     policy = load_policy(args.policy)
     task = policy.task
     if task.family is not None:  # the family's nominal object
@@ -228,14 +228,6 @@ def _start(task: Task, args: argparse.Namespace) -> Any:
     where = ", ".join(f"{lab} ({', '.join(f'{v:.4f}' for v in p)})" for lab, p in zip(task.model.labels, points))
     print(f"start drawn from {task.name}'s starts (seed {args.seed}): {where}")
     return start
-
-
-def _new_output(path: Path, flag: str, overwrite: bool, earlier: str = "") -> None:
-    """A file ``run`` writes: writable ([`check_output`][crmgrasp._io.check_output]), and new
-    unless ``overwrite`` (``earlier`` says what an existing one is)."""
-    check_output(path, flag)
-    if path.exists() and not overwrite:
-        raise CrmgraspError(f"{flag} {str(path)!r} exists{earlier}; --overwrite replaces it")
 
 
 def _run_figure(path: Path, task: Any, res: Any, title: str) -> None:
