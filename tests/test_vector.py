@@ -103,3 +103,17 @@ def test_bad_vector_input():
         env.step(np.full(4, 9))
     with pytest.raises(CrmgraspError, match="takes no reset options"):
         env.reset(options={"config": None})
+
+
+def test_the_class_is_picked_by_the_task_and_a_family_is_refused_at_construction() -> None:
+    from crmgrasp.envs.vector import FamilyVectorEnv, vector_env
+
+    assert type(vector_env(2, "paper-box")) is CRMGraspVectorEnv
+    assert type(vector_env(2, "box-family")) is FamilyVectorEnv
+    # the registered id takes any task, and builds the class that task needs
+    vec = gym.make_vec("crmgrasp/PaperBox-v0", num_envs=2, vectorization_mode="vector_entry_point", task="box-3d")
+    assert type(vec.unwrapped) is FamilyVectorEnv
+    obs, _ = vec.reset(seed=0)
+    assert obs["error"].shape == (2,)
+    with pytest.raises(CrmgraspError, match="'box-3d' draws an object per episode: use CRMGraspVectorEnv's family"):
+        CRMGraspVectorEnv(2, "box-3d")

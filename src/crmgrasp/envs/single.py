@@ -363,8 +363,7 @@ def register() -> None:
     [`CONTINUOUS_ENVS`][] and the [`MUJOCO_ENVS`][] (idempotent). Every registered task cuts episodes at 10 CRMs (its
     ``max_steps``: the env cuts them there itself)."""
     kinds = (
-        ({ENV_ID: "paper-box"}, "single:CRMGraspEnv", "vector:CRMGraspVectorEnv"),
-        ({**FAMILY_ENVS, **SPATIAL_ENVS}, "single:CRMGraspEnv", "vector:FamilyVectorEnv"),
+        ({ENV_ID: "paper-box", **FAMILY_ENVS, **SPATIAL_ENVS}, "single:CRMGraspEnv", "vector:vector_env"),
         (CONTINUOUS_ENVS, "continuous:ContinuousCRMEnv", "vector:continuous_vector_env"),
     )
     for table, entry, vector in kinds:

@@ -39,6 +39,7 @@ __all__ = [
     "FamilyVectorEnv",
     "ContinuousVectorEnv",
     "ContinuousFamilyVectorEnv",
+    "vector_env",
     "continuous_vector_env",
     "MAX_ENVS",
 ]
@@ -59,6 +60,8 @@ class CRMGraspVectorEnv(VectorEnv):
     """``num_envs`` independent episodes of a task, batched (see the module docstring)."""
 
     metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}  # noqa: RUF012 - Gymnasium's convention
+    _per_row_objects = False
+    """Whether the rows may each hold their own object (a family task): [`FamilyVectorEnv`][]."""
 
     def __init__(
         self,
@@ -78,6 +81,11 @@ class CRMGraspVectorEnv(VectorEnv):
         if render_mode is not None:
             raise CrmgraspError("the vector environment does not render; use CRMGraspEnv")
         self.task = make_task(task) if isinstance(task, str) else task
+        if self.task.family is not None and not self._per_row_objects:
+            raise CrmgraspError(
+                f"task {self.task.name!r} draws an object per episode: use {type(self).__name__}'s family "
+                "version (vector_env, continuous_vector_env and gymnasium.make_vec pick it)"
+            )
         if max_episode_steps is not None and max_episode_steps != self.task.max_steps:
             self.task = dataclasses.replace(self.task, max_steps=max_episode_steps)
         self._backend = backend
@@ -176,6 +184,8 @@ class FamilyVectorEnv(CRMGraspVectorEnv):
     draws the object of every episode, so rows cannot share a batched kernel). The
     interface, spaces and autoreset are those of [`CRMGraspVectorEnv`][]; all draws
     come from ``self.np_random``, row by row."""
+
+    _per_row_objects = True
 
     def __init__(self, num_envs: int = 1, task: Task | str = "box-family", **kwargs: Any) -> None:
         super().__init__(num_envs, task, **kwargs)
@@ -277,10 +287,24 @@ class ContinuousFamilyVectorEnv(_PairOffsets, FamilyVectorEnv):
         return self._rows[j].step_row(self._states[j], actions[j : j + 1], self.np_random)
 
 
+def _pick(task: Task | str, single: type[CRMGraspVectorEnv], family: type[CRMGraspVectorEnv]) -> tuple[Task, type]:
+    """``task`` as a [`Task`][crmgrasp.tasks.Task], and ``family`` if it draws an object per
+    episode, else ``single``: the one place that picks a vector environment's class."""
+    t = make_task(task) if isinstance(task, str) else task
+    return t, single if t.family is None else family
+
+
+def vector_env(num_envs: int = 1, task: Task | str = "paper-box", **kwargs: Any) -> CRMGraspVectorEnv:
+    """The vector environment of ``task``: [`FamilyVectorEnv`][] for a family task, else
+    [`CRMGraspVectorEnv`][] (the registered discrete ids' vector entry point, so
+    ``gymnasium.make_vec(id, task=...)`` takes any task)."""
+    t, cls = _pick(task, CRMGraspVectorEnv, FamilyVectorEnv)
+    return cls(num_envs, t, **kwargs)  # type: ignore[no-any-return]
+
+
 def continuous_vector_env(num_envs: int = 1, task: Task | str = "paper-box", **kwargs: Any) -> CRMGraspVectorEnv:
     """The continuous-action vector environment of ``task``: [`ContinuousFamilyVectorEnv`][]
     for a family task, else [`ContinuousVectorEnv`][] (the registered ``...Continuous-v0``
     ids' vector entry point)."""
-    t = make_task(task) if isinstance(task, str) else task
-    cls = ContinuousVectorEnv if t.family is None else ContinuousFamilyVectorEnv
-    return cls(num_envs, t, **kwargs)
+    t, cls = _pick(task, ContinuousVectorEnv, ContinuousFamilyVectorEnv)
+    return cls(num_envs, t, **kwargs)  # type: ignore[no-any-return]
