@@ -128,7 +128,7 @@ def test_cli_run_and_show_on_mujoco(cup_policy, tmp_path, capsys):
     argv = ["run", "--hand", "mujoco", "--policy", str(path), "--a=0.1,0,0.05", "--b=0,0.1,0.12"]
     assert main([*argv, "--log", str(tmp_path / "run.csv")]) == 0
     out = capsys.readouterr().out
-    assert "grasp sensed after 1 CRMs" in out and "true min_friction 0.0" in out
+    assert "grasp sensed after 1 CRM (" in out and "true min_friction 0.0" in out
     show = ["show", "--task", "cup-3d", "--hand", "mujoco", "--a=0.1,0,0.05", "--b=0,0.1,0.12", "--crm", "C1"]
     code = main([*show, "--out", str(tmp_path / "s.png")])
     got = capsys.readouterr()

@@ -209,10 +209,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
     crms = " ".join(r[-3] for r in res.rows if r[-3])
     true = hand.config if args.hand == "kinematic" else hand.true_config()
     mu = f"{task.quality(true):.4g}" if true is not None else "n/a (no contact)"
-    print(f"{res.stopped} after {res.crms} CRMs ({crms}); true min_friction {mu}")
+    after = f"{res.stopped} after {res.crms} CRM{'' if res.crms == 1 else 's'}"
+    print(f"{after} ({crms}); true min_friction {mu}")
     print(f"wrote {args.log.resolve()}")
     if args.figure is not None:
-        _run_figure(args.figure, task, res, f"{task.name}: {res.stopped} after {res.crms} CRMs; true min_friction {mu}")
+        _run_figure(args.figure, task, res, f"{task.name}: {after}; true min_friction {mu}")
         print(f"wrote {args.figure.resolve()}")
     return 0
 

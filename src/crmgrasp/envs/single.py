@@ -266,7 +266,8 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
 
         from crmgrasp.plotting import scene_figure
 
-        title = f"{self.task.name}: after {self._state.steps} CRMs"
+        n = self._state.steps
+        title = f"{self.task.name}: after {n} CRM{'' if n == 1 else 's'}"
         t = self.scene_task
         if self._last is None:
             fig = scene_figure(t.obj, t.hand, self._state.config, None, title)

@@ -91,7 +91,7 @@ palm_depth = 0.12                  # palm point behind the contacts' midpoint (c
 backoff = 0.01                     # optional: retreat along the normal before a CRM
 # r_max = 0.2                      # optional: largest |r| of a CRM
 # min_separation = 0.0             # optional: contacts closer than this collide
-# contacts = 2                    # optional: fingers a, b, c, ... (2 to 4); CRMs may name
+# contacts = 2                     # optional: fingers a, b, c, ... (2 to 4); CRMs may name
                                    # any of them and the bins take m_c, ... for more than two
 
 [[crm]]    # one table per action: contact c moves onto the line through contact f's
