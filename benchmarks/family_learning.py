@@ -79,7 +79,7 @@ every learner and the optimum spend the step limit) nor, by default, the three-f
 THREE_FINGERS = ("triangles-3f", "odd-polygons-3f", "box-family-3f", "cup-family-3f", "box-3d-3f", "cup-3d-3f")
 """Three-finger twins a run may name with ``--task`` (not run by default)."""
 MESHES = ("open-cup-3d",)
-"""Tasks on meshes (readable rules only, slower) a run may name with ``--task`` (not run by default)."""
+"""Tasks on meshes a run may name with ``--task`` (not run by default: added after the first table)."""
 LEARNERS = ("backoff-vi", "pooled-vi", "model-vi")
 ORDERS = {"backoff-vi": 2}
 """History order per learner (1 where not listed): ``backoff-vi`` runs with k = 2, as ``--preset

@@ -68,6 +68,7 @@ def test_bench_spatial_smoke():
     spec.loader.exec_module(mod)
     res = mod.main(steps=200, rounds=1, reference=True)
     assert res["box3d_step_over_cartpole"] > 0 and res["cup3d_reference_step_us"] > res["cup3d_step_us"]
+    assert res["opencup3d_reference_step_us"] > res["opencup3d_step_us"] > 0
 
 
 def test_journal_benchmark_smoke():

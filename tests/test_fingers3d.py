@@ -132,6 +132,16 @@ def test_fused_tripod_continuous_crms_and_no_table(name: str) -> None:
     _same_episodes(bare, np.random.default_rng(2).integers(len(task.actions), size=100).tolist(), 5)
 
 
+def test_fused_tripod_on_a_mesh() -> None:
+    """Three fingers on an open cup (a non-convex mesh): the compiled steps are the readable
+    rules' too."""
+    from crmgrasp.model.mesh import open_cup
+
+    task = dataclasses.replace(make_task("cup-3d-3f").instance(np.random.default_rng(0)), obj=open_cup(0.05, 0.12))
+    assert kernel_for(task).name == "numba-spatial-fingers-fused"
+    _same_episodes(task, np.random.default_rng(3).integers(len(task.actions), size=120).tolist(), 6)
+
+
 def test_fused_tripod_step_row_and_the_seam() -> None:
     """`step_row` equals `step_one` of the same CRM; noise keeps the readable CRMs with the
     compiled least friction, and ``"numba"`` with noise is a one-line error."""

@@ -104,6 +104,7 @@ _JIT_MODULES = (
     "_tripod_jit",
     "_closure_jit",
     "_fingers3d_jit",
+    "_mesh_jit",
 )
 
 
@@ -111,7 +112,11 @@ _JIT_MODULES = (
     ("module", "allowed"),
     [
         ("_polygon_jit", {"__future__", "numpy", _COMPILE}),
-        ("_spatial_jit", {"__future__", "math", _COMPILE, "crmgrasp.kernels._polygon_jit"}),
+        (
+            "_spatial_jit",
+            {"__future__", "math", _COMPILE, "crmgrasp.kernels._polygon_jit", "crmgrasp.kernels._mesh_jit"},
+        ),
+        ("_mesh_jit", {"__future__", "math", _COMPILE}),
         ("_vi_jit", {"__future__", _COMPILE}),
         ("_fingers_jit", {"__future__", "numpy", "numba", _COMPILE, "crmgrasp.kernels._polygon_jit"}),
         ("_lp_jit", {"__future__", "math", "numpy", "numba"}),

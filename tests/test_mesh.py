@@ -83,15 +83,65 @@ def test_bad_meshes_get_one_line_errors(build, message: str) -> None:  # type: i
     assert "\n" not in str(err.value)
 
 
-def test_a_task_on_a_mesh_runs_on_the_reference_rules() -> None:
+def test_a_task_on_a_mesh_runs_compiled_and_equals_the_readable_rules() -> None:
+    """A non-convex prism: the compiled kernel (the default) steps it as the readable rules
+    do, bit for bit, and training is the same on both backends."""
     from crmgrasp.agents.training import train_trials
+    from crmgrasp.kernels.spatial import FusedSpatialKernel
+    from crmgrasp.sim import TaskSteps
 
     task = SpatialTask(name="l-prism", obj=L_SHAPE, hand=HAND, actions=spatial_crms())  # type: ignore[arg-type]
-    assert type(kernel_for(task)) is SpatialKernel
-    with pytest.raises(CrmgraspError, match="mesh runs on 'reference'"):
-        kernel_for(task, "numba")
-    res = train_trials(task, "sarsa", trials=1, episodes=20, seed=0, k=1, eval_episodes=10)
+    assert type(kernel_for(task)) is FusedSpatialKernel and type(kernel_for(task, "numba")) is FusedSpatialKernel
+    assert type(kernel_for(task, "reference")) is SpatialKernel
+    fast, ref = FusedSpatialKernel(task), TaskSteps(task)
+    seen = set()
+    for w in range(30):
+        r1, r2, acts = np.random.default_rng(w), np.random.default_rng(w), np.random.default_rng(w + 50)
+        start = task.sample_start(r1)
+        assert task.sample_start(r2, fast.start_filter) == start  # the same decisions from the same draws
+        a, b = ref.begin(start, r1), fast.begin(start, r2)
+        for _ in range(8):
+            assert a == b
+            act = int(acts.integers(len(task.actions)))
+            a, b = ref.step_one(a.state, act, r1), fast.step_one(b.state, act, r2)
+            seen.add(a.error)
+    assert a == b and seen == {Error.NONE, Error.APERTURE, Error.PALM}
+    kw = {"trials": 1, "episodes": 20, "seed": 0, "k": 1, "eval_episodes": 10}
+    res = train_trials(task, "sarsa", **kw)
     assert res.steps.shape == (1, 20) and (res.steps >= 1).all()
+    assert np.array_equal(res.steps, train_trials(task, "sarsa", backend="reference", **kw).steps)
+
+
+def test_the_compiled_inside_test_and_entry_equal_the_meshs_own() -> None:
+    """`_mesh_jit.contains` and `entry` against `TriangleMesh.contains` and `ray_entry` on
+    random points and rays around the L prism and an open cup (the cavity, the opening,
+    the wall), and on the surface itself."""
+    from crmgrasp.kernels import _mesh_jit
+    from crmgrasp.kernels.spatial import solid_params
+    from crmgrasp.model.mesh import open_cup
+    from crmgrasp.model.solids import SURFACE, TIE
+
+    rng = np.random.default_rng(3)
+    for mesh in (L_SHAPE, open_cup(0.04, 0.10, wall=0.005, segments=16)):
+        tri, ray = solid_params(mesh, np.zeros(32), np.zeros(8, dtype=np.int64))
+        lo, hi = np.min(mesh.corner_array, axis=0) - 0.02, np.max(mesh.corner_array, axis=0) + 0.02
+        inside = entered = 0
+        for _ in range(400):
+            x = rng.uniform(lo, hi)
+            if rng.random() < 0.2:  # a point on the surface: a corner's neighbourhood
+                x = mesh.corner_array[rng.integers(len(mesh.vertices))] + rng.normal(0.0, 1e-9, 3)
+            got = _mesh_jit.contains(tri, ray, *x, SURFACE)
+            assert got == mesh.contains(x)
+            inside += got
+            d = rng.standard_normal(3)
+            d /= np.linalg.norm(d)
+            hit = mesh.ray_entry(x, d, 0.3)
+            out = _mesh_jit.entry(x, d, 0.3, tri, SURFACE, TIE)
+            assert out[0] == (hit is not None)
+            if hit is not None:
+                assert out[1:] == (*hit[0].tolist(), *hit[1].tolist())
+                entered += 1
+        assert inside > 20 and entered > 50
 
 
 def test_an_open_cup_has_an_opening_and_an_inner_wall() -> None:

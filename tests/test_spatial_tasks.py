@@ -252,7 +252,7 @@ def test_run_episode_on_a_spatial_world() -> None:
     assert 1 <= ep.steps <= task.max_steps and len(ep.trace) == ep.steps
 
 
-@pytest.mark.parametrize("name", ["box-3d", "cup-3d"])
+@pytest.mark.parametrize("name", ["box-3d", "cup-3d", "open-cup-3d"])
 def test_the_compiled_spatial_kernel_equals_the_reference_bit_for_bit(name: str) -> None:
     from crmgrasp.kernels.spatial import FusedSpatialKernel
 

@@ -15,14 +15,14 @@ backend                      object                      kernel
 ``"reference"``              a solid (spatial task)      ``SpatialKernel``
 ``"auto"``, ``"numba"``      a solid, noise-free         ``FusedSpatialKernel``
 ``"auto"``                   a solid, sensing noise      ``SpatialKernel``
-``"auto"``, ``"reference"``  a triangle mesh             ``SpatialKernel``
 ``"reference"``              a solid, three+ contacts    ``SpatialKernel``
 ``"auto"``, ``"numba"``      a solid, three+, noise-free ``FusedFingersSpatialKernel``
-``"auto"``                   a solid, three+, noise/mesh ``FingersSpatialKernel``
+``"auto"``                   a solid, three+, noise      ``FingersSpatialKernel``
 any                          a family (one per episode)  ``FamilyKernel`` over the above
 ===========================  ==========================  ===============================
 
-A family task (`crmgrasp.tasks.Task.family`) gets a
+A solid is a convex polyhedron, a cylinder or a closed triangle mesh (the compiled
+spatial kernels take all three). A family task (`crmgrasp.tasks.Task.family`) gets a
 [`FamilyKernel`][crmgrasp.kernels.family.FamilyKernel], which builds the kernel of each
 episode's object by this same rule (``"numba"`` with a disc family is an error on
 the first disc).
@@ -48,7 +48,6 @@ from crmgrasp.model.contact_model import ContactModel
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.geometry import Polygon, Shape
 from crmgrasp.model.hand import CRM, Hand
-from crmgrasp.model.mesh import TriangleMesh
 from crmgrasp.sim import OneStep
 from crmgrasp.tasks import Task
 
@@ -122,20 +121,17 @@ def _planar(task: Task, backend: str, friction: str) -> Kernel:
 
 
 def _spatial(task: Task, backend: str, friction: str) -> Kernel:
-    """Spatial model on a polyhedron or a cylinder without noise: compiled and fused (two
-    contacts, or three and more, which alone take ``friction`` = ``"decided"``: the least
-    friction is exact elsewhere); with noise or on a mesh the reference rules, for three and
-    more contacts with their least friction compiled."""
+    """Spatial model on a polyhedron, a cylinder or a mesh without noise: compiled and fused
+    (two contacts, or three and more, which alone take ``friction`` = ``"decided"``: the
+    least friction is exact elsewhere); with noise the reference rules, for three and more
+    contacts with their least friction compiled."""
     from crmgrasp.kernels.spatial import FusedSpatialKernel, SpatialKernel
 
     if backend == "numba" and task.noise.active:
         raise CrmgraspError("the compiled spatial kernel is noise-free; use backend 'auto' or 'reference'")
-    mesh = isinstance(task.obj, TriangleMesh)
-    if backend == "numba" and mesh:
-        raise CrmgraspError("the compiled spatial kernel takes polyhedra and cylinders; a mesh runs on 'reference'")
     if backend == "reference":
         return SpatialKernel(task)
-    slow = task.noise.active or mesh
+    slow = task.noise.active
     if task.model.n_contacts > 2:
         from crmgrasp.kernels.closure import FingersSpatialKernel
         from crmgrasp.kernels.fingers3d import FusedFingersSpatialKernel

@@ -243,4 +243,4 @@ def accept_start(d, n, planes, cyl, p, q, tol, edges, mu_goal, out):  # type: ig
 __all__ = ["accept_start", "begin_one", "step_one"]
 
 
-# compiled sources: 59e4d8a5630dc15cc7ba769c15f52a7a02a006e00a4e249e6bb9dcfaf1930b2a
+# compiled sources: 558933e4e9fd694b1d93f83c8874066d0040613a9f2d6aa5735db199130e247f

@@ -154,4 +154,4 @@ def max_least_weight(w, tol):  # type: ignore[no-untyped-def]
     return cost[rhs]
 
 
-# compiled sources: 59e4d8a5630dc15cc7ba769c15f52a7a02a006e00a4e249e6bb9dcfaf1930b2a
+# compiled sources: 558933e4e9fd694b1d93f83c8874066d0040613a9f2d6aa5735db199130e247f

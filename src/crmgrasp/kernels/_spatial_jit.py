@@ -1,5 +1,5 @@
-"""Compiled (numba) steps of the spatial model on one solid: a convex polyhedron or a
-closed cylinder on a table.
+"""Compiled (numba) steps of the spatial model on one solid: a convex polyhedron, a
+closed cylinder or a closed triangle mesh, on a table.
 
 Each function evaluates exactly the floating-point expressions of the reference rules in
 the same order: [`crmgrasp.model.solids`][] (inside test, first entry, radial
@@ -13,7 +13,9 @@ the results equal the reference bit for bit (the tests check it). Python's ``min
 No constant of the model is written here: tolerances and parameters arrive in ``p``
 and ``q`` (built by [`crmgrasp.kernels.spatial.spatial_params`][]). Layouts: a state
 ``v`` is one row ``[x_a, n_a, x_b, n_b]`` (12 columns); ``planes`` the polyhedron's
-``(m, 4)`` faces ``(a, b)``; ``cyl`` the cylinder's ``[o, e, R, H]`` (8); ``acts`` the
+``(m, 4)`` faces ``(a, b)`` (kind 0), or the mesh's ``(m, 12)`` triangles (kind 2,
+`crmgrasp.kernels._mesh_jit`); ``cyl`` the cylinder's ``[o, e, R, H]`` (8; kind 1), or
+for a mesh its inside test's ray direction in the first three; ``acts`` the
 ``(A, 4)`` CRMs ``(c is b, f is b, r_1, r_2)``; ``th`` the padded bin thresholds.
 """
 
@@ -22,6 +24,8 @@ from __future__ import annotations
 import math
 
 from crmgrasp.kernels._compile import compiled
+from crmgrasp.kernels._mesh_jit import contains as mesh_contains
+from crmgrasp.kernels._mesh_jit import entry as mesh_entry
 from crmgrasp.kernels._polygon_jit import bin_index
 
 # indices into p
@@ -31,6 +35,7 @@ N_P = 21
 # indices into q
 KIND, HAS_TABLE, NA, NB, ABS_M = range(5)
 N_Q = 5
+POLYHEDRON, CYLINDER, MESH = range(3)  # the values of q[KIND]
 INF = math.inf
 
 
@@ -69,7 +74,9 @@ def _local(x, y, z, cyl):  # type: ignore[no-untyped-def]
 
 @compiled
 def _contains(x, y, z, planes, cyl, kind, surf):  # type: ignore[no-untyped-def]
-    if kind == 0:
+    if kind == MESH:
+        return mesh_contains(planes, cyl, x, y, z, surf)
+    if kind == POLYHEDRON:
         for k in range(planes.shape[0]):
             if not (planes[k, 0] * x + planes[k, 1] * y + planes[k, 2] * z - planes[k, 3] < -surf):
                 return False
@@ -152,7 +159,9 @@ def _entry_cyl(o, d, umax, cyl, surf, tie):  # type: ignore[no-untyped-def]
 
 @compiled
 def _entry(o, d, umax, planes, cyl, kind, surf, tie):  # type: ignore[no-untyped-def]
-    if kind == 0:
+    if kind == MESH:
+        return mesh_entry(o, d, umax, planes, surf, tie)
+    if kind == POLYHEDRON:
         return _entry_poly(o, d, umax, planes, surf, tie)
     return _entry_cyl(o, d, umax, cyl, surf, tie)
 
@@ -351,4 +360,4 @@ def accept_start(d, planes, cyl, p, q, out):  # type: ignore[no-untyped-def]
     return not (_mu(out, p[ANTIPODAL_TOL]) <= p[MU_GOAL])
 
 
-# compiled sources: 59e4d8a5630dc15cc7ba769c15f52a7a02a006e00a4e249e6bb9dcfaf1930b2a
+# compiled sources: 558933e4e9fd694b1d93f83c8874066d0040613a9f2d6aa5735db199130e247f

@@ -1,13 +1,12 @@
 """The compiled single step of a spatial hand with three or more contacts (a tripod).
 
-[`FusedFingersSpatialKernel`][] steps a noise-free tripod task on a polyhedron or a
-cylinder: a CRM, its observation, bin and least friction are one compiled call
+[`FusedFingersSpatialKernel`][] steps a noise-free tripod task on a polyhedron, a
+cylinder or a mesh: a CRM, its observation, bin and least friction are one compiled call
 (`crmgrasp.kernels._fingers3d_jit`), and so is the decision on each start try. The results
 equal the readable rules bit for bit (the tests check it). Made with ``decided=True``
 ([`crmgrasp.kernels.kernel_for`][]'s ``friction="decided"``), a step's least friction is one
 that decides the grasp, from the search stopped once it is decided; everything else is the
-same. Batched rows, sensing noise and
-meshes go through [`FingersSpatialKernel`][crmgrasp.kernels.closure.FingersSpatialKernel]
+same. Batched rows and sensing noise go through [`FingersSpatialKernel`][crmgrasp.kernels.closure.FingersSpatialKernel]
 (the readable rules with the least friction compiled).
 """
 

@@ -19,6 +19,7 @@ from crmgrasp._validation import CrmgraspError
 from crmgrasp.kernels.base import F64, Successor, bin_thresholds, stepwise_successors
 from crmgrasp.kernels.reference import ReferenceKernel
 from crmgrasp.model.hand import Error
+from crmgrasp.model.mesh import PARITY_RAY, TriangleMesh
 from crmgrasp.model.sensing import Observation
 from crmgrasp.model.solids import Cylinder
 from crmgrasp.model.spatial import CRM3D, Config3D
@@ -64,15 +65,23 @@ def spatial_params(task: Any) -> tuple[F64, NDArray[np.int64], F64, F64, F64]:
 
 def solid_params(solid: Any, p: F64, q: NDArray[np.int64]) -> tuple[F64, F64]:
     """The solid's entries of ``p`` (its centre, and the distance beyond which every point
-    is outside) and of ``q`` (its kind), written in place, and its ``(planes, cyl)`` arrays."""
+    is outside) and of ``q`` (its kind), written in place, and its ``(planes, cyl)`` arrays:
+    a polyhedron's faces, a cylinder's axis and size, or a mesh's triangles ``[a, b, c, n]``
+    and its inside test's ray (the layouts of `crmgrasp.kernels._spatial_jit`)."""
     import crmgrasp.kernels._spatial_jit as jit
 
     centre = solid.centre
     p[jit.CX : jit.CZ + 1] = centre
     p[jit.FAR] = 1.0 + max(map(abs, centre.tolist()))
-    q[jit.KIND] = isinstance(solid, Cylinder)
+    if isinstance(solid, TriangleMesh):
+        q[jit.KIND] = jit.MESH
+        v, f = solid.corner_array, solid.face_array
+        triangles = np.hstack([v[f[:, 0]], v[f[:, 1]], v[f[:, 2]], solid.unit_normals])
+        return np.ascontiguousarray(triangles), np.array([*PARITY_RAY, 0.0, 0.0, 0.0, 0.0, 0.0])
     if isinstance(solid, Cylinder):
+        q[jit.KIND] = jit.CYLINDER
         return np.zeros((1, 4)), np.array([*solid.origin, *solid.axis, solid.radius, solid.height])
+    q[jit.KIND] = jit.POLYHEDRON
     return np.ascontiguousarray(solid.planes, dtype=np.float64), np.zeros(8)
 
 

@@ -12,12 +12,13 @@ It answers what the spatial CRM transition asks of any solid: strictly inside
 with the inward normal there (`ray_entry`: the nearest triangle the ray crosses
 while entering, lowest index among those within [`TIE`][crmgrasp.model.solids.TIE]), and
 for placing and drawing it, its centre (of volume), support, ``gap`` and rigid motion.
-Meshes run on the readable rules only (the compiled spatial kernel takes polyhedra and
-cylinders).
+The compiled spatial kernel repeats these rules (`crmgrasp.kernels._mesh_jit`) with the
+same results bit for bit.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -28,10 +29,10 @@ from numpy.typing import ArrayLike, NDArray
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.solids import SURFACE, TIE, _rotation, cross, dot, norm
 
-__all__ = ["TriangleMesh", "open_cup"]
+__all__ = ["PARITY_RAY", "TriangleMesh", "open_cup"]
 
 F64 = NDArray[np.float64]
-_PARITY_RAY = np.array([0.5773502691896258, 0.5773502691896257, 0.5773502691896259]) + np.array([1e-3, -2e-3, 0.0])
+PARITY_RAY = np.array([0.5773502691896258, 0.5773502691896257, 0.5773502691896259]) + np.array([1e-3, -2e-3, 0.0])
 """The direction of the inside test's ray: off every axis and diagonal, so that it rarely
 grazes an edge of a mesh built on a grid."""
 
@@ -63,6 +64,36 @@ def _closest_on_triangle(p: F64, a: F64, b: F64, c: F64) -> F64:
     return a + ab * (vb * denom) + ac * (vc * denom)
 
 
+def _cross_rows(u: F64, v: F64) -> F64:
+    """Row-wise ``u x v`` of two ``(m, 3)`` arrays, written out: the same products and
+    differences as ``np.cross`` (so the same bits), without its axis handling, which costs
+    more than the products on a mesh's few hundred rows."""
+    out = np.empty_like(u)
+    out[:, 0] = u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1]
+    out[:, 1] = u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2]
+    out[:, 2] = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    return out
+
+
+@functools.lru_cache(maxsize=64)
+def _check_closed(faces: tuple[tuple[int, int, int], ...]) -> None:
+    """Every edge in exactly two triangles, once in each direction. It depends on the faces
+    alone, so a family's meshes (one topology, many sizes and poses) check it once
+    (cached; a mesh that fails raises each time)."""
+    directed: dict[tuple[int, int], int] = {}
+    for i, tri in enumerate(faces):
+        for a, b in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])):
+            if (a, b) in directed:
+                raise CrmgraspError(
+                    f"mesh edge ({a}, {b}) is used twice in one direction (triangles {directed[(a, b)]} "
+                    f"and {i}): faces are inconsistently oriented or the mesh is not manifold"
+                )
+            directed[(a, b)] = i
+    for a, b in directed:
+        if (b, a) not in directed:
+            raise CrmgraspError(f"the mesh is open: edge ({a}, {b}) belongs to one triangle only")
+
+
 @dataclass(frozen=True)
 class TriangleMesh:
     """A closed, manifold, outward-oriented triangle mesh (metres)."""
@@ -70,7 +101,9 @@ class TriangleMesh:
     vertices: tuple[tuple[float, float, float], ...]
     faces: tuple[tuple[int, int, int], ...]
     _v: F64 = field(init=False, repr=False, compare=False)
+    _f: NDArray[np.int64] = field(init=False, repr=False, compare=False)
     _n: F64 = field(init=False, repr=False, compare=False)
+    _centre: F64 = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         v = np.asarray(self.vertices, dtype=np.float64)
@@ -84,37 +117,41 @@ class TriangleMesh:
             raise CrmgraspError(f"a mesh needs 4 or more triangles (i, j, k), got shape {f.shape}")
         if f.min() < 0 or f.max() >= len(v):
             raise CrmgraspError(f"a mesh face refers to a corner outside 0..{len(v) - 1}")
-        normals = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+        a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
+        normals = _cross_rows(b - a, c - a)
         area2 = np.linalg.norm(normals, axis=1)
         if (area2 <= 1e-12).any():
             raise CrmgraspError(f"mesh triangle {int(np.argmax(area2 <= 1e-12))} is degenerate (zero area)")
-        self._check_closed(f)
-        volume = float(np.einsum("ij,ij->i", v[f[:, 0]], np.cross(v[f[:, 1]], v[f[:, 2]])).sum()) / 6.0
+        faces = tuple(map(tuple, f.tolist()))
+        _check_closed(faces)
+        signed = np.einsum("ij,ij->i", a, _cross_rows(b, c))  # six times each tetrahedron's volume
+        volume = float(signed.sum()) / 6.0
         if volume <= 0.0:
             raise CrmgraspError(
                 f"the mesh's faces point inward (enclosed volume {volume:.3g} m^3): list each triangle's corners "
                 "counter-clockwise seen from outside"
             )
         object.__setattr__(self, "vertices", tuple(map(tuple, v.tolist())))
-        object.__setattr__(self, "faces", tuple(map(tuple, f.tolist())))
+        object.__setattr__(self, "faces", faces)
         object.__setattr__(self, "_v", v)
+        object.__setattr__(self, "_f", f)
         object.__setattr__(self, "_n", normals / area2[:, None])
+        object.__setattr__(self, "_centre", (signed[:, None] * (a + b + c)).sum(axis=0) / (4.0 * signed.sum()))
 
-    @staticmethod
-    def _check_closed(f: NDArray[np.int64]) -> None:
-        """Every edge in exactly two triangles, once in each direction."""
-        directed: dict[tuple[int, int], int] = {}
-        for i, tri in enumerate(f.tolist()):
-            for a, b in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])):
-                if (a, b) in directed:
-                    raise CrmgraspError(
-                        f"mesh edge ({a}, {b}) is used twice in one direction (triangles {directed[(a, b)]} "
-                        f"and {i}): faces are inconsistently oriented or the mesh is not manifold"
-                    )
-                directed[(a, b)] = i
-        for a, b in directed:
-            if (b, a) not in directed:
-                raise CrmgraspError(f"the mesh is open: edge ({a}, {b}) belongs to one triangle only")
+    @property
+    def corner_array(self) -> F64:
+        """The corners, ``(n, 3)`` (metres; a copy)."""
+        return self._v.copy()
+
+    @property
+    def face_array(self) -> NDArray[np.int64]:
+        """The triangles' corner indices, ``(m, 3)`` (a copy)."""
+        return self._f.copy()
+
+    @property
+    def unit_normals(self) -> F64:
+        """The triangles' unit outward normals, ``(m, 3)`` (a copy)."""
+        return self._n.copy()
 
     # ---------------------------------------------------------------- queries
     def _triangle(self, k: int) -> tuple[F64, F64, F64]:
@@ -153,7 +190,7 @@ class TriangleMesh:
 
     def _odd(self, x: F64) -> bool:
         """An odd number of triangles crossed by the inside test's ray from ``x``."""
-        hits = (self._hit(k, x, _PARITY_RAY) for k in range(len(self.faces)))
+        hits = (self._hit(k, x, PARITY_RAY) for k in range(len(self.faces)))
         return sum(1 for t in hits if t is not None and t > 0.0) % 2 == 1
 
     def gap(self, p: ArrayLike) -> float:
@@ -183,11 +220,9 @@ class TriangleMesh:
     @property
     def centre(self) -> F64:
         """The centre of volume (inside for the usual shapes; the spatial starts cast rays
-        toward it)."""
-        v, f = self._v, np.asarray(self.faces)
-        a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
-        vol = np.einsum("ij,ij->i", a, np.cross(b, c))
-        return (vol[:, None] * (a + b + c)).sum(axis=0) / (4.0 * vol.sum())
+        toward it): the tetrahedra from the origin to each triangle, their centres weighted by
+        their signed volumes (computed once, on construction; a copy)."""
+        return self._centre.copy()
 
     def support(self, d: ArrayLike) -> float:
         """``min_x d . x`` over the solid (attained at a corner)."""

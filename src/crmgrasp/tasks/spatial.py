@@ -279,8 +279,8 @@ def open_cup_3d() -> SpatialTask:
     """``open-cup-3d``: open cups ([`OpenCupOnTable`][crmgrasp.model.solid_families.OpenCupOnTable])
     of radius 0.03-0.07 m and height 0.06-0.20 m, walls 5 mm thick, upright or lying (even
     odds), any yaw: ``cup-3d`` with the top open, so that a goal line through the opening
-    reaches the inner wall and two contacts may pinch the wall. A mesh: the readable rules
-    step it (no compiled kernel)."""
+    reaches the inner wall and two contacts may pinch the wall. A mesh (the compiled
+    spatial kernel steps it, as it steps ``cup-3d``)."""
     text = "open cups r 0.03-0.07 m, h 0.06-0.20 m, wall 5 mm, upright or lying, any yaw (a mesh)"
     return _spatial_task("open-cup-3d", OpenCupOnTable(), text, None)
 
