@@ -540,7 +540,8 @@ def test_compare_runs_drops_timings_and_finds_a_changed_result(tmp_path, capsys)
     assert mod.main([str(tmp_path / "e1"), str(tmp_path / "e2")]) == 2
 
 
-def _bench(name: str):
+def _bench(name: str):  # type: ignore[no-untyped-def]
+    """The benchmark script ``benchmarks/<name>.py`` as a module."""
     spec = importlib.util.spec_from_file_location(name, BENCH.parent / f"{name}.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
@@ -586,14 +587,6 @@ def test_greedy_variants_smoke(capsys):
     plain = train_trials(task, "backoff-vi", **kw).agents[0]
     recorded = train_trials(task, "backoff-vi", **kw, stepper=lambda t: made.append(mod.Recording(t)) or made[-1])
     assert recorded.agents[0].inner.counts == plain.inner.counts and len(made[0].episodes) == 40
-
-
-def _bench(name: str):  # type: ignore[no-untyped-def]
-    """The benchmark script ``benchmarks/<name>.py`` as a module."""
-    spec = importlib.util.spec_from_file_location(name, BENCH.parent / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
 
 
 def test_kernel_fuzz_finds_the_paths_equal_and_names_the_kernels():
@@ -647,3 +640,18 @@ def test_mushroom_peer_smoke():
     rows = res["paper-box"]
     assert set(rows) == {"MushroomRL sarsa", "MushroomRL q"}
     assert all(len(r["to_5pct"]) == 2 and set(r["mean_at"]) == {5, 10} for r in rows.values())
+
+
+def test_mujoco_mesh_seams_smoke():
+    """Open cups as their convex pieces against one hull: both bodies measured on the same worlds,
+    and ``--extra`` applies to that run only."""
+    pytest.importorskip("mujoco", reason="needs the extra crmgrasp[mujoco]")
+    import crmgrasp.hardware.mujoco.spatial as stand_in
+
+    mod, before = _bench("mujoco_mesh_seams"), stand_in._geom
+    res = mod.main(worlds=2, extra='solref="0.004 1"')
+    assert res["worlds"] == 2 and res["worlds_drawn"] >= 2 and 0 <= res["c1_grasps_kinematic"] <= 2
+    for body in ("pieces", "one hull"):
+        median, p90, most = res[body]["sensed_normal_error_deg_median_p90_max"]
+        assert 0.0 <= median <= p90 <= most < 90.0 and 0 <= res[body]["c1_grasps"] <= 2
+    assert stand_in._geom is before

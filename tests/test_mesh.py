@@ -178,3 +178,70 @@ def test_degenerate_solids_and_far_offsets_get_one_line_errors(build, message: s
     with pytest.raises(CrmgraspError, match=message) as err:
         build()
     assert "\n" not in str(err.value)
+
+
+def test_an_open_cups_convex_pieces_make_up_the_solid() -> None:
+    """The union of the pieces' convex hulls is the cup: every point strictly inside the cup is in
+    some hull, and every point in a hull is not outside the cup (random points, and points
+    near the rim, the inner bottom and the cavity; a point within 1e-6 m of the surface is
+    left out); posed, the cup keeps its pieces."""
+    from scipy.spatial import Delaunay
+
+    from crmgrasp.model.mesh import open_cup
+
+    cup = open_cup(0.04, 0.10, wall=0.005, segments=12)
+    corners = cup.corner_array
+    hulls = [Delaunay(corners[list(p)]) for p in cup.pieces]
+    rng = np.random.default_rng(2)
+    points = np.vstack(
+        [
+            rng.uniform((-0.045, -0.045, -0.005), (0.045, 0.045, 0.105), (3000, 3)),
+            rng.normal((0.0, 0.036, 0.004), 0.004, (1000, 3)),
+        ]
+    )
+    inside = 0
+    for x in points:
+        gap = cup.gap(x)
+        if abs(gap) < 1e-6:
+            continue
+        in_hull = any(h.find_simplex(x) >= 0 for h in hulls)
+        assert in_hull == (gap < 0), (x, gap)
+        inside += gap < 0
+    assert inside > 300
+    moved = cup.moved(np.eye(3), (0.1, 0.0, 0.0))
+    assert moved.pieces == cup.pieces and len(cup.pieces) == 13
+
+
+def test_mesh_pieces_are_checked_and_written_to_task_files(tmp_path) -> None:
+    from crmgrasp.model.mesh import open_cup
+    from crmgrasp.tasks.files import load_task_file
+
+    for pieces, message in (
+        (((0, 1, 2),), "piece 0 must be 4 or more distinct"),
+        (((0, 1, 2, 2),), "piece 0 must be 4 or more distinct"),
+        (((0, 1, 2, 99),), "outside 0..7"),
+        ("0123", "list of corner-index lists"),
+    ):
+        with pytest.raises(CrmgraspError, match=message):
+            TriangleMesh(CUBE.vertices, CUBE.faces, pieces)  # type: ignore[arg-type]
+    cube = TriangleMesh(CUBE.vertices, CUBE.faces, (tuple(range(8)),))
+    text = "\n".join(
+        [
+            'name = "cube"',
+            'model = "spatial"',
+            "[hand]",
+            "aperture = 0.16",
+            "palm_depth = 0.12",
+            "[[crm]]",
+            'c = "a"',
+            'f = "b"',
+            "[solid]",
+            f"mesh = {{ vertices = {[list(v) for v in cube.vertices]}, faces = {[list(f) for f in cube.faces]}, "
+            f"pieces = {[list(p) for p in cube.pieces]} }}",
+        ]
+    )
+    path = tmp_path / "cube.toml"
+    path.write_text(text)
+    task = load_task_file(path)
+    assert task.obj == cube and task.obj.describe()["pieces"] == [list(range(8))]
+    assert open_cup(0.04, 0.1).describe()["pieces"][0][:3] == [0, 1, 2]

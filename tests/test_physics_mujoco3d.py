@@ -16,7 +16,7 @@ from crmgrasp.experiments.mujoco_spatial import SpatialMujocoConfig, spatial_muj
 from crmgrasp.hardware.mujoco import hardware_task
 from crmgrasp.hardware.mujoco.spatial import MujocoHand3D, spatial_mjcf
 from crmgrasp.hardware.runner import HandInterface, KinematicHand, PolicyRunner
-from crmgrasp.model.mesh import open_cup
+from crmgrasp.model.mesh import TriangleMesh, open_cup
 from crmgrasp.model.sensing import Error
 from crmgrasp.model.solids import box3d
 from crmgrasp.model.spatial import CRM3D, Config3D, Contact3D
@@ -90,8 +90,10 @@ def test_bad_input_is_one_line(task):
         MujocoHand3D(family, START, np.random.default_rng(0))
     with pytest.raises(CrmgraspError, match="spatial task"):
         MujocoHand3D(make_task("paper-box"), START, np.random.default_rng(0))  # type: ignore[arg-type]
-    with pytest.raises(CrmgraspError, match="convex polyhedra and cylinders"):
-        spatial_mjcf(task.with_object(open_cup(0.04, 0.1, 0.005)))  # type: ignore[arg-type]
+    cup = open_cup(0.04, 0.1, 0.005)
+    bare = TriangleMesh(cup.vertices, cup.faces)  # no convex pieces
+    with pytest.raises(CrmgraspError, match="meshes with convex pieces, not a TriangleMesh without convex pieces"):
+        spatial_mjcf(task.with_object(bare))  # type: ignore[arg-type]
     with pytest.raises(CrmgraspError, match="off the object"):
         MujocoHand3D(task, Config3D(START.a, Contact3D((0.0, 0.0, 0.3), (0.0, 0.0, -1.0))), np.random.default_rng(0))
     with pytest.raises(CrmgraspError, match="r_max"):
@@ -168,3 +170,30 @@ def test_rolling_friction_keeps_lying_cups_in_place():
 
     assert lost(PhysicsParams().rolling_friction) == 0
     assert lost(1e-4) >= 5  # docs/hardware.md: 14 of these 40 cups roll out of the placed grasp
+
+
+def test_an_open_cup_is_its_convex_pieces_and_its_wall_can_be_pinched():
+    """An open cup (a non-convex mesh) in MuJoCo is its convex pieces, the object's mass shared
+    by their volumes; two fingertips pinching its wall, one outside and one inside the
+    opening, sense what MuJoCo's contacts say, and the pinch needs no friction."""
+    from crmgrasp.hardware.mujoco.model import PhysicsParams
+
+    cup = open_cup(0.05, 0.10, 0.005)
+    task = hardware_task(make_task("open-cup-3d").with_object(cup))
+    half, side = math.radians(7.5), (1.0 + math.cos(math.radians(15.0))) / 2.0
+
+    def on_facet(r: float, inward: float) -> Contact3D:  # the middle of the first side's facet, at 6 cm
+        point = (r * side, r * math.sin(2.0 * half) / 2.0, 0.06)
+        return Contact3D(point, (inward * math.cos(half), inward * math.sin(half), 0.0))
+
+    start = Config3D(on_facet(0.05, -1.0), on_facet(0.045, 1.0))  # outer wall, inner wall
+    assert task.feasible(start) is Error.NONE and task.quality(start) < 1e-9
+    hand = MujocoHand3D(task, start, np.random.default_rng(0))
+    m = hand.model
+    assert len(hand._objects) == len(cup.pieces) == 25
+    assert float(m.body_mass[m.geom_bodyid[hand._objects[0]]]) == pytest.approx(PhysicsParams().object_mass)
+    sensed, true = hand.sense(), hand.true_config()
+    assert isinstance(sensed, Config3D) and true is not None
+    for s, t, k in zip(sensed, true, start):
+        assert math.dist(s.x, t.x) < 1e-3 and math.dist(t.x, k.x) < 1e-3
+    assert true.b.n[0] > 0.99 and task.quality(true) < task.mu_goal  # b presses the inner wall outward

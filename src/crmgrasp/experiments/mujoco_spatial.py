@@ -31,6 +31,7 @@ from crmgrasp.hardware.mujoco import hardware_task
 from crmgrasp.hardware.mujoco.model import PhysicsParams
 from crmgrasp.hardware.mujoco.spatial import MujocoHand3D
 from crmgrasp.hardware.runner import KinematicHand, PolicyRunner, log_columns
+from crmgrasp.model.mesh import TriangleMesh
 from crmgrasp.model.solids import Cylinder
 from crmgrasp.tasks import Task, make_task
 
@@ -81,6 +82,9 @@ def _kind(task: Task) -> str:
     if isinstance(obj, Cylinder):
         upright = abs(obj.axis[2]) > 0.99
         return f"{'upright' if upright else 'lying'} cylinder r {obj.radius:.3f} h {obj.height:.3f}"
+    if isinstance(obj, TriangleMesh):
+        lo, hi = obj.corner_array.min(axis=0), obj.corner_array.max(axis=0)
+        return f"mesh of {len(obj.faces)} triangles, {hi[2] - lo[2]:.3f} m tall"
     corners = obj.vertices  # type: ignore[attr-defined]
     lo, hi = corners.min(axis=0), corners.max(axis=0)
     return f"box, {hi[2] - lo[2]:.3f} m tall"

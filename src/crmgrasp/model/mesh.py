@@ -94,12 +94,32 @@ def _check_closed(faces: tuple[tuple[int, int, int], ...]) -> None:
             raise CrmgraspError(f"the mesh is open: edge ({a}, {b}) belongs to one triangle only")
 
 
+def _checked_pieces(pieces: Any, corners: int) -> tuple[tuple[int, ...], ...]:
+    """``pieces`` as tuples of corner indices: each four or more distinct indices in
+    ``0..corners - 1`` (one line naming the first bad piece otherwise)."""
+    if not isinstance(pieces, (tuple, list)):
+        raise CrmgraspError(f"mesh pieces must be a list of corner-index lists, got {type(pieces).__name__}")
+    out = []
+    for i, piece in enumerate(pieces):
+        ok = isinstance(piece, (tuple, list)) and all(isinstance(k, int) and not isinstance(k, bool) for k in piece)
+        if not ok or len(set(piece)) < 4 or len(set(piece)) != len(piece):
+            raise CrmgraspError(f"mesh piece {i} must be 4 or more distinct corner indices")
+        if min(piece) < 0 or max(piece) >= corners:
+            raise CrmgraspError(f"mesh piece {i} refers to a corner outside 0..{corners - 1}")
+        out.append(tuple(piece))
+    return tuple(out)
+
+
 @dataclass(frozen=True)
 class TriangleMesh:
     """A closed, manifold, outward-oriented triangle mesh (metres)."""
 
     vertices: tuple[tuple[float, float, float], ...]
     faces: tuple[tuple[int, int, int], ...]
+    pieces: tuple[tuple[int, ...], ...] = ()
+    """Optional: convex pieces, each a tuple of corner indices, whose convex hulls together
+    make up the solid (for simulators that collide convex shapes only, as MuJoCo does); not
+    part of the model's rules, which use the triangles. [`open_cup`][] gives its own."""
     _v: F64 = field(init=False, repr=False, compare=False)
     _f: NDArray[np.int64] = field(init=False, repr=False, compare=False)
     _n: F64 = field(init=False, repr=False, compare=False)
@@ -124,6 +144,7 @@ class TriangleMesh:
             raise CrmgraspError(f"mesh triangle {int(np.argmax(area2 <= 1e-12))} is degenerate (zero area)")
         faces = tuple(map(tuple, f.tolist()))
         _check_closed(faces)
+        object.__setattr__(self, "pieces", _checked_pieces(self.pieces, len(v)))
         signed = np.einsum("ij,ij->i", a, _cross_rows(b, c))  # six times each tetrahedron's volume
         volume = float(signed.sum()) / 6.0
         if volume <= 0.0:
@@ -231,7 +252,7 @@ class TriangleMesh:
     def moved(self, rotation: ArrayLike, translation: ArrayLike) -> TriangleMesh:
         """The mesh after ``x -> R x + t``."""
         r, t = _rotation(rotation), np.asarray(translation, dtype=np.float64)
-        return TriangleMesh(tuple(map(tuple, (self._v @ r.T + t).tolist())), self.faces)
+        return TriangleMesh(tuple(map(tuple, (self._v @ r.T + t).tolist())), self.faces, self.pieces)
 
     @classmethod
     def from_arrays(cls, vertices: ArrayLike, faces: ArrayLike) -> TriangleMesh:
@@ -241,8 +262,15 @@ class TriangleMesh:
         )
 
     def describe(self) -> dict[str, Any]:
-        """Corners and triangles as plain data."""
-        return {"kind": "mesh", "vertices": [list(v) for v in self.vertices], "faces": [list(f) for f in self.faces]}
+        """Corners and triangles (and convex pieces, if any) as plain data."""
+        out: dict[str, Any] = {
+            "kind": "mesh",
+            "vertices": [list(v) for v in self.vertices],
+            "faces": [list(f) for f in self.faces],
+        }
+        if self.pieces:
+            out["pieces"] = [list(p) for p in self.pieces]
+        return out
 
 
 def open_cup(radius: float, height: float, wall: float = 0.005, segments: int = 24) -> TriangleMesh:
@@ -273,4 +301,11 @@ def open_cup(radius: float, height: float, wall: float = 0.005, segments: int = 
         j = (k + 1) % n
         faces.append((out_c, j, k))  # outer bottom, facing down
         faces.append((in_c, 3 * n + k, 3 * n + j))  # inner bottom, facing up into the cup
-    return TriangleMesh(tuple(v), tuple(faces))
+    # convex pieces: the bottom (the outer bottom ring and the inner bottom ring), and one
+    # block of the wall per side, from the outer bottom edge to the rim and the inner bottom
+    # edge; in a section (r, z) the bottom is the trapezoid (0, 0), (R, 0), (R - w, w), (0, w)
+    # and a block the quadrilateral (R, 0), (R, H), (R - w, H), (R - w, w): their union is the
+    # section of the cup (tests/test_mesh.py checks it by sampling)
+    bottom = (*range(n), *range(3 * n, 4 * n))
+    blocks = [tuple(ring * n + i for ring in range(4) for i in (k, (k + 1) % n)) for k in range(n)]
+    return TriangleMesh(tuple(v), tuple(faces), (bottom, *blocks))

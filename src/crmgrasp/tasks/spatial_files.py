@@ -16,7 +16,8 @@ The schema follows the planar one ([`crmgrasp.tasks.files`][]) with spatial part
     [solid]                          # exactly one of [solid] and [family]:
     cylinder = { origin = [0, 0, 0], axis = [0, 0, 1], radius = 0.04, height = 0.1 }
     # box = { lo = [..], hi = [..] }, polyhedron = { planes = [[ax, ay, az, b], ..] },
-    # mesh = { vertices = [[x, y, z], ..], faces = [[i, j, k], ..] },
+    # mesh = { vertices = [[x, y, z], ..], faces = [[i, j, k], ..], pieces = [[i, j, k, l, ..], ..] },
+    #   (pieces optional: convex pieces, corner indices, making up the solid, for MuJoCo)
     # open_cup = { radius = .., height = .., wall = .., segments = .. }
     # [family]  kind = "box3d" (length, width, height), "cylinder" (radius, height,
     #           upright) or "open_cup" (radius, height, wall, upright, segments),
@@ -100,7 +101,7 @@ def _solid(table: Any) -> Any:
         axis = _vector(v.get("axis", [0.0, 0.0, 1.0]), f"{where}.axis", 3)
         return Cylinder(origin, axis, number(v["radius"], f"{where}.radius"), number(v["height"], f"{where}.height"))  # type: ignore[arg-type]
     if kind == "mesh":
-        v = table_keys(value, where, {"vertices", "faces"}, {"vertices", "faces"})
+        v = table_keys(value, where, {"vertices", "faces", "pieces"}, {"vertices", "faces"})
         if not isinstance(v["vertices"], list) or not isinstance(v["faces"], list):
             raise CrmgraspError(f"{where} needs vertices = [[x, y, z], ..] and faces = [[i, j, k], ..]")
         verts = tuple(_vector(p, f"{where}.vertices[{i}]", 3) for i, p in enumerate(v["vertices"]))
@@ -111,7 +112,10 @@ def _solid(table: Any) -> Any:
                 or not all(isinstance(k, int) and not isinstance(k, bool) for k in tri)
             ):
                 raise CrmgraspError(f"{where}.faces[{i}] must be three corner indices, got {shown(tri)}")
-        return TriangleMesh(verts, tuple(tuple(tri) for tri in v["faces"]))  # type: ignore[arg-type]
+        pieces = v.get("pieces", [])
+        if not isinstance(pieces, list) or not all(isinstance(p, list) for p in pieces):
+            raise CrmgraspError(f"{where}.pieces must be a list of corner-index lists, got {shown(pieces)}")
+        return TriangleMesh(verts, tuple(tuple(tri) for tri in v["faces"]), tuple(map(tuple, pieces)))  # type: ignore[arg-type]
     v = table_keys(value, where, {"radius", "height", "wall", "segments"}, {"radius", "height"})
     kw: dict[str, Any] = {k: number(x, f"{where}.{k}") for k, x in v.items() if k != "segments"}
     if "segments" in v:
@@ -175,7 +179,9 @@ def _solid_dict(obj: Any) -> dict[str, Any]:
             "cylinder": {"origin": list(obj.origin), "axis": list(obj.axis), "radius": obj.radius, "height": obj.height}
         }
     if isinstance(obj, TriangleMesh):
-        return {"mesh": {"vertices": [list(v) for v in obj.vertices], "faces": [list(t) for t in obj.faces]}}
+        mesh = obj.describe()
+        del mesh["kind"]
+        return {"mesh": mesh}
     return {"polyhedron": {"planes": [list(p) for p in obj.planes]}}
 
 

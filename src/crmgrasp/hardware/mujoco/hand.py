@@ -98,7 +98,9 @@ class MujocoHand:
         m = self.model
         self._tip_geom = [self.mj.mj_name2id(m, self.mj.mjtObj.mjOBJ_GEOM, f"tip_{x}") for x in self.labels]
         self._site = [self.mj.mj_name2id(m, self.mj.mjtObj.mjOBJ_SITE, f"tip_{x}") for x in self.labels]
-        self._object = self.mj.mj_name2id(m, self.mj.mjtObj.mjOBJ_GEOM, "object")
+        body = self.mj.mj_name2id(m, self.mj.mjtObj.mjOBJ_BODY, "object")
+        self._objects = [g for g in range(m.ngeom) if int(m.geom_bodyid[g]) == body]
+        """The object's geoms (one, or a mesh's convex pieces)."""
         self._palm = self.mj.mj_name2id(m, self.mj.mjtObj.mjOBJ_GEOM, "palm")
         sd = np.array([params.force_noise] * 3 + [params.torque_noise] * 3)
         bias = np.array([params.force_bias] * 3 + [params.torque_bias] * 3)
@@ -136,7 +138,7 @@ class MujocoHand:
 
     def _palm_obstacles(self) -> list[int]:
         """Geoms the palm must not overlap when it is switched on."""
-        return [self._object]
+        return list(self._objects)
 
     def _config(self, contacts: list[Contact]) -> Config | Grip:
         """The configuration of one contact per fingertip, in label order."""
@@ -302,7 +304,7 @@ class MujocoHand:
             con = d.contact[k]
             pair = (int(con.geom1), int(con.geom2))
             for i, g in enumerate(self._tip_geom):
-                if pair == (g, self._object) or pair == (self._object, g):
+                if g in pair and (pair[0] in self._objects or pair[1] in self._objects):
                     n = np.array(con.frame[:2]) * (1.0 if pair[0] == g else -1.0)
                     n /= np.linalg.norm(n)
                     found[i] = Contact(float(con.pos[0]), float(con.pos[1]), float(n[0]), float(n[1]))

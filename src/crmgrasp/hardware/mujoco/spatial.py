@@ -57,6 +57,7 @@ from crmgrasp.hardware.contact_sensing import NoContact, Sphere, contact_from_wr
 from crmgrasp.hardware.mujoco.hand import MujocoHand
 from crmgrasp.hardware.mujoco.model import PhysicsParams, hand_mjcf, preamble
 from crmgrasp.model.hand import Error
+from crmgrasp.model.mesh import TriangleMesh
 from crmgrasp.model.solids import ConvexPolyhedron, Cylinder
 from crmgrasp.model.spatial import (
     Config3D,
@@ -82,21 +83,43 @@ def _vec(v: Any) -> str:
     return " ".join(repr(float(x)) for x in v)
 
 
-def _solid_geom(task: SpatialTask, p: PhysicsParams) -> tuple[str, str]:
-    """(asset XML, geom XML) of the task's solid, in world coordinates."""
-    obj = task.obj
-    common = (
-        f'name="object" mass="{p.object_mass!r}" friction="{p.floor_friction!r} 0.005 0.0001" '
-        'contype="1" conaffinity="3" rgba=".2 .35 .7 1"'
+def _geom(name: str, mass: float, p: PhysicsParams, shape: str) -> str:
+    """One geom of the object: ``shape`` (its type and size attributes) with the object's
+    friction and collision classes and its share ``mass`` of the object's mass."""
+    return (
+        f'<geom name="{name}" mass="{mass!r}" friction="{p.floor_friction!r} 0.005 0.0001" '
+        f'contype="1" conaffinity="3" rgba=".2 .35 .7 1" {shape}/>'
     )
+
+
+def _solid_geoms(task: SpatialTask, p: PhysicsParams) -> tuple[str, dict[str, str]]:
+    """(asset XML, geom name -> geom XML) of the task's solid, in world coordinates: a
+    cylinder, a convex polyhedron as a MuJoCo mesh, or a triangle mesh as its convex pieces
+    (one MuJoCo mesh each, the object's mass shared by their volumes). MuJoCo collides a mesh
+    as its convex hull, so a non-convex solid needs its pieces
+    ([`TriangleMesh.pieces`][crmgrasp.model.mesh.TriangleMesh.pieces])."""
+    obj, mass = task.obj, p.object_mass
     if isinstance(obj, Cylinder):
-        centre = obj.centre
         size = f"{obj.radius!r} {obj.height / 2!r}"
-        return "", f'<geom {common} type="cylinder" size="{size}" pos="{_vec(centre)}" zaxis="{_vec(obj.axis)}"/>'
+        shape = f'type="cylinder" size="{size}" pos="{_vec(obj.centre)}" zaxis="{_vec(obj.axis)}"'
+        return "", {"object": _geom("object", mass, p, shape)}
     if isinstance(obj, ConvexPolyhedron):
         verts = " ".join(_vec(v) for v in obj.vertices)
-        return f'<mesh name="object" vertex="{verts}"/>', f'<geom {common} type="mesh" mesh="object"/>'
-    raise CrmgraspError(f"the spatial MuJoCo stand-in takes convex polyhedra and cylinders, not {type(obj).__name__}")
+        geom = _geom("object", mass, p, 'type="mesh" mesh="object"')
+        return f'<mesh name="object" vertex="{verts}"/>', {"object": geom}
+    if isinstance(obj, TriangleMesh) and obj.pieces:
+        from scipy.spatial import ConvexHull
+
+        hulls = [obj.corner_array[list(piece)] for piece in obj.pieces]
+        volumes = np.array([ConvexHull(h).volume for h in hulls])
+        names = [f"object_{i}" for i in range(len(hulls))]
+        assets = "".join(f'<mesh name="{n}" vertex="{" ".join(map(_vec, h))}"/>' for n, h in zip(names, hulls))
+        shares = (mass * volumes / volumes.sum()).tolist()
+        return assets, {n: _geom(n, m, p, f'type="mesh" mesh="{n}"') for n, m in zip(names, shares)}
+    what = type(obj).__name__ + (" without convex pieces" if isinstance(obj, TriangleMesh) else "")
+    raise CrmgraspError(
+        f"the spatial MuJoCo stand-in takes convex polyhedra, cylinders and meshes with convex pieces, not a {what}"
+    )
 
 
 def spatial_mjcf(task: SpatialTask, params: PhysicsParams | None = None) -> str:
@@ -106,7 +129,10 @@ def spatial_mjcf(task: SpatialTask, params: PhysicsParams | None = None) -> str:
     if task.model.kind != "spatial":
         raise CrmgraspError(f"the spatial MuJoCo stand-in needs a spatial task, got {task.name!r}")
     p = PhysicsParams() if params is None else params
-    asset, geom = _solid_geom(task, p)
+    asset, geoms = _solid_geoms(task, p)
+    friction = f"{p.floor_friction!r} {p.floor_friction!r} 0.005 {p.rolling_friction!r} {p.rolling_friction!r}"
+    pairs = "\n    ".join(f'<pair geom1="{n}" geom2="floor" condim="6" friction="{friction}"/>' for n in geoms)
+    geom = "\n      ".join(geoms.values())
     table = 0.0 if task.table is None else float(task.table)
     fingers, drives = hand_mjcf(p, 0.0, tuple(task.model.labels))
     return f"""{preamble(f"crmgrasp-{task.name}-3d", p, asset)}
@@ -122,8 +148,7 @@ def spatial_mjcf(task: SpatialTask, params: PhysicsParams | None = None) -> str:
     </body>
   </worldbody>
   <contact>
-    <pair geom1="object" geom2="floor" condim="6"
-      friction="{p.floor_friction!r} {p.floor_friction!r} 0.005 {p.rolling_friction!r} {p.rolling_friction!r}"/>
+    {pairs}
   </contact>
   {drives}
 </mujoco>
@@ -181,7 +206,7 @@ class MujocoHand3D(MujocoHand):
 
     def _palm_obstacles(self) -> list[int]:
         floor = self.mj.mj_name2id(self.model, self.mj.mjtObj.mjOBJ_GEOM, "floor")
-        return [self._object, floor]
+        return [*self._objects, floor]
 
     def _palm_target(self) -> np.ndarray | None:
         tips = [Contact3D(tuple(self._centre(i)), _UP) for i in range(len(self.labels))]  # type: ignore[arg-type]
@@ -197,7 +222,7 @@ class MujocoHand3D(MujocoHand):
         m = self.model
         g = self._tip_geom[i]
         m.geom_contype[g], m.geom_conaffinity[g] = (4, 1) if on else (0, 0)
-        return not on or self.mj.mj_geomDistance(m, self.data, g, self._object, 0.01, None) > 0.0
+        return not on or all(self.mj.mj_geomDistance(m, self.data, g, o, 0.01, None) > 0.0 for o in self._objects)
 
     def _transit(self, i: int, centre: np.ndarray) -> bool:
         """Move fingertip ``i``'s centre to ``centre`` with its collisions off; True if it
@@ -256,7 +281,7 @@ class MujocoHand3D(MujocoHand):
             con = d.contact[k]
             pair = (int(con.geom1), int(con.geom2))
             for i, g in enumerate(self._tip_geom):
-                if pair in ((g, self._object), (self._object, g)):
+                if g in pair and (pair[0] in self._objects or pair[1] in self._objects):
                     n = np.array(con.frame[:3]) * (1.0 if pair[0] == g else -1.0)
                     c = Contact3D(tuple(float(v) for v in con.pos), tuple((n / np.linalg.norm(n)).tolist()))  # type: ignore[arg-type]
                     if found[i] is None or con.dist < found[i][0]:  # type: ignore[index]
