@@ -245,3 +245,17 @@ def test_mesh_pieces_are_checked_and_written_to_task_files(tmp_path) -> None:
     task = load_task_file(path)
     assert task.obj == cube and task.obj.describe()["pieces"] == [list(range(8))]
     assert open_cup(0.04, 0.1).describe()["pieces"][0][:3] == [0, 1, 2]
+
+
+def test_a_posed_open_cup_is_the_moved_one() -> None:
+    """`open_cup(..., rotation, translation)` builds the mesh `open_cup(...).moved(...)` gives,
+    corner for corner (the families pose their cups this way, building each once)."""
+    from crmgrasp.model.mesh import open_cup
+    from crmgrasp.model.solid_families import rotation_z
+
+    for rot, t in (
+        (rotation_z(0.7), (0.01, -0.02, 0.0)),
+        (rotation_z(2.0) @ [[0, 0, 1], [0, 1, 0], [-1, 0, 0]], (0.0, 0.0, 0.05)),
+    ):
+        posed = open_cup(0.05, 0.12, 0.004, 16, rot, t)
+        assert posed == open_cup(0.05, 0.12, 0.004, 16).moved(rot, t) and posed.pieces

@@ -273,11 +273,20 @@ class TriangleMesh:
         return out
 
 
-def open_cup(radius: float, height: float, wall: float = 0.005, segments: int = 24) -> TriangleMesh:
+def open_cup(
+    radius: float,
+    height: float,
+    wall: float = 0.005,
+    segments: int = 24,
+    rotation: ArrayLike | None = None,
+    translation: ArrayLike = (0.0, 0.0, 0.0),
+) -> TriangleMesh:
     """An open cup standing on the table: a cylinder of outer ``radius`` and ``height``
     (metres) with a ``wall`` thick side and bottom and no top, its circles as regular
     ``segments``-gons. Closed as a solid (outer wall, rim, inner wall, inner bottom, outer
-    bottom), so a line through the opening enters the inner wall or the inner bottom."""
+    bottom), so a line through the opening enters the inner wall or the inner bottom. With a
+    ``rotation``, the cup posed by ``x -> R x + t`` (``t`` the ``translation``): the mesh
+    ``open_cup(...).moved(R, t)`` gives, built once."""
     if not (isinstance(segments, int) and not isinstance(segments, bool) and 8 <= segments <= 256):
         raise CrmgraspError(f"segments must be an integer in [8, 256], got {segments!r}")
     for name, value in (("radius", radius), ("height", height), ("wall", wall)):
@@ -288,8 +297,18 @@ def open_cup(radius: float, height: float, wall: float = 0.005, segments: int = 
     n, inner = segments, radius - wall
     ang = [2.0 * math.pi * k / n for k in range(n)]
     rings = [(radius, 0.0), (radius, height), (inner, height), (inner, wall)]  # outer bottom .. inner bottom
-    v = [(r * math.cos(a), r * math.sin(a), z) for r, z in rings for a in ang]
+    v: list[Any] = [(r * math.cos(a), r * math.sin(a), z) for r, z in rings for a in ang]
     v += [(0.0, 0.0, 0.0), (0.0, 0.0, wall)]  # the centres of the outer and the inner bottom
+    if rotation is not None:
+        rot, t = _rotation(rotation), np.asarray(translation, dtype=np.float64)
+        v = (np.asarray(v, dtype=np.float64) @ rot.T + t).tolist()  # as `TriangleMesh.moved` poses it
+    return TriangleMesh(tuple(map(tuple, v)), *_cup_topology(n))
+
+
+@functools.lru_cache(maxsize=16)
+def _cup_topology(n: int) -> tuple[tuple[tuple[int, int, int], ...], tuple[tuple[int, ...], ...]]:
+    """The faces and convex pieces of an open cup of ``n``-gon circles (its corners: the outer
+    bottom, outer top, inner top and inner bottom rings, then the two bottom centres)."""
     faces: list[tuple[int, int, int]] = []
     for ring in range(3):  # outer wall, rim, inner wall: quads between consecutive rings
         lo, hi = ring * n, (ring + 1) * n
@@ -308,4 +327,4 @@ def open_cup(radius: float, height: float, wall: float = 0.005, segments: int = 
     # section of the cup (tests/test_mesh.py checks it by sampling)
     bottom = (*range(n), *range(3 * n, 4 * n))
     blocks = [tuple(ring * n + i for ring in range(4) for i in (k, (k + 1) % n)) for k in range(n)]
-    return TriangleMesh(tuple(v), tuple(faces), (bottom, *blocks))
+    return tuple(faces), (bottom, *blocks)

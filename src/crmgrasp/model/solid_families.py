@@ -178,11 +178,11 @@ class OpenCupOnTable:
         open_cup(self.radius[0], self.height[0], self.wall, self.segments)  # the segments' one-line error, early
 
     def _cup(self, radius: float, height: float, upright: bool, angle: float, dx: float, dy: float) -> TriangleMesh:
-        cup, yaw = open_cup(radius, height, self.wall, self.segments), rotation_z(angle)
+        yaw = rotation_z(angle)
         if upright:
-            return cup.moved(yaw, (dx, dy, 0.0))
+            return open_cup(radius, height, self.wall, self.segments, yaw, (dx, dy, 0.0))
         lift = yaw @ np.array([-height / 2, 0.0, radius]) + np.array([dx, dy, 0.0])
-        return cup.moved(yaw @ _LYING, lift)
+        return open_cup(radius, height, self.wall, self.segments, yaw @ _LYING, lift)
 
     def sample(self, rng: np.random.Generator) -> TriangleMesh:
         radius, height = _uniform(rng, self.radius), _uniform(rng, self.height)
