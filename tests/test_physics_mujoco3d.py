@@ -94,6 +94,9 @@ def test_bad_input_is_one_line(task):
     bare = TriangleMesh(cup.vertices, cup.faces)  # no convex pieces
     with pytest.raises(CrmgraspError, match="meshes with convex pieces, not a TriangleMesh without convex pieces"):
         spatial_mjcf(task.with_object(bare))  # type: ignore[arg-type]
+    short = TriangleMesh(cup.vertices, cup.faces, cup.pieces[:-1])  # one block of the wall missing
+    with pytest.raises(CrmgraspError, match=r"convex pieces hold .* m\^3 of its .* m\^3: they miss part of it"):
+        spatial_mjcf(task.with_object(short))  # type: ignore[arg-type]
     with pytest.raises(CrmgraspError, match="off the object"):
         MujocoHand3D(task, Config3D(START.a, Contact3D((0.0, 0.0, 0.3), (0.0, 0.0, -1.0))), np.random.default_rng(0))
     with pytest.raises(CrmgraspError, match="r_max"):

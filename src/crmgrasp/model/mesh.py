@@ -124,6 +124,8 @@ class TriangleMesh:
     _f: NDArray[np.int64] = field(init=False, repr=False, compare=False)
     _n: F64 = field(init=False, repr=False, compare=False)
     _centre: F64 = field(init=False, repr=False, compare=False)
+    volume: float = field(init=False, repr=False, compare=False)
+    """The enclosed volume, m^3."""
 
     def __post_init__(self) -> None:
         v = np.asarray(self.vertices, dtype=np.float64)
@@ -158,6 +160,7 @@ class TriangleMesh:
         object.__setattr__(self, "_f", f)
         object.__setattr__(self, "_n", normals / area2[:, None])
         object.__setattr__(self, "_centre", (signed[:, None] * (a + b + c)).sum(axis=0) / (4.0 * signed.sum()))
+        object.__setattr__(self, "volume", volume)
 
     @property
     def corner_array(self) -> F64:

@@ -112,6 +112,9 @@ def _solid_geoms(task: SpatialTask, p: PhysicsParams) -> tuple[str, dict[str, st
 
         hulls = [obj.corner_array[list(piece)] for piece in obj.pieces]
         volumes = np.array([ConvexHull(h).volume for h in hulls])
+        if volumes.sum() < obj.volume * (1.0 - 1e-9):  # pieces may overlap, never fall short
+            held = f"{volumes.sum():.4g} m^3 of its {obj.volume:.4g} m^3"
+            raise CrmgraspError(f"the mesh's convex pieces hold {held}: they miss part of it")
         names = [f"object_{i}" for i in range(len(hulls))]
         assets = "".join(f'<mesh name="{n}" vertex="{" ".join(map(_vec, h))}"/>' for n, h in zip(names, hulls))
         shares = (mass * volumes / volumes.sum()).tolist()
