@@ -195,8 +195,8 @@ def test_an_open_cups_convex_pieces_make_up_the_solid() -> None:
     rng = np.random.default_rng(2)
     points = np.vstack(
         [
-            rng.uniform((-0.045, -0.045, -0.005), (0.045, 0.045, 0.105), (3000, 3)),
-            rng.normal((0.0, 0.036, 0.004), 0.004, (1000, 3)),
+            rng.uniform((-0.045, -0.045, -0.005), (0.045, 0.045, 0.105), (1200, 3)),
+            rng.normal((0.0, 0.036, 0.004), 0.004, (400, 3)),
         ]
     )
     inside = 0
@@ -207,7 +207,7 @@ def test_an_open_cups_convex_pieces_make_up_the_solid() -> None:
         in_hull = any(h.find_simplex(x) >= 0 for h in hulls)
         assert in_hull == (gap < 0), (x, gap)
         inside += gap < 0
-    assert inside > 300
+    assert inside > 120
     moved = cup.moved(np.eye(3), (0.1, 0.0, 0.0))
     assert moved.pieces == cup.pieces and len(cup.pieces) == 13
 
