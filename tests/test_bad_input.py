@@ -290,6 +290,45 @@ def test_noise_and_coordinates_have_stated_ranges():
         Polygon([(0, 0), (1e200, 0), (0, 1e200)])
 
 
+def test_every_object_and_pose_is_within_reach(tmp_path, capsys, monkeypatch):
+    """Discs, solids, meshes and family poses beyond +-MAX_COORD are one-line errors: a cup
+    placed 1e7 m out once gave NaN normals (a RuntimeWarning, then garbage) instead."""
+    from crmgrasp import Disc
+    from crmgrasp.model.family_base import Pose
+    from crmgrasp.model.mesh import TriangleMesh
+    from crmgrasp.model.shape import MAX_COORD
+    from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, box3d
+
+    far = 10 * MAX_COORD
+    cases = [
+        (lambda: Disc(0.1, (far, 0.0)), "a disc's radius or center"),
+        (lambda: Disc(far), "a disc's radius or center"),
+        (lambda: Cylinder((0.0, far, 0.0), (0.0, 0.0, 1.0), 0.05, 0.1), "a cylinder's origin"),
+        (lambda: Cylinder((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), 0.05, far), "a cylinder's origin"),
+        (lambda: box3d((far, 0.0, 0.0), (far + 1.0, 1.0, 1.0)), "a box's corner"),
+        (lambda: ConvexPolyhedron([(1, 0, 0, far), (-1, 0, 0, 0), (0, 1, 0, 1), (0, -1, 0, 0)]), "a polyhedron's"),
+        (
+            lambda: TriangleMesh(
+                [(0, 0, 0), (far, 0, 0), (0, 1, 0), (0, 0, 1)], [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)]
+            ),
+            "a mesh's corner",
+        ),
+        (lambda: Pose(offset=(-far, 0.0)), "pose offset"),
+    ]
+    for make, what in cases:
+        with pytest.raises(CrmgraspError, match=re.escape(what)):
+            make()
+    Disc(0.1, (MAX_COORD - 0.1, 0.0))  # within reach: fine
+    box3d((0.0, 0.0, 0.0), (MAX_COORD, 1.0, 1.0))
+    path = tmp_path / "far-cups.toml"
+    path.write_text(
+        'name = "far-cups"\nmodel = "spatial"\n[hand]\naperture = 0.16\npalm_depth = 0.12\n[[crm]]\nc = "a"\n'
+        'f = "b"\n[family]\nkind = "cylinder"\npose = { offset = [1e7, 1e7] }\n'
+    )
+    err = _one_line_exit_2(["references", "--task", str(path), "--starts", "5"], capsys, tmp_path, monkeypatch)
+    assert "pose offset is beyond +-1e+06 m" in err
+
+
 _json_values = st.recursive(
     st.none() | st.booleans() | st.integers() | st.floats(allow_nan=False) | st.text(max_size=8),
     lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=6), inner, max_size=4),

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from numpy.typing import ArrayLike
 
 from crmgrasp._validation import CrmgraspError, as_point, finite, positive
-from crmgrasp.model.shape import EPS, BoundaryPoint, Entry
+from crmgrasp.model.shape import EPS, BoundaryPoint, Entry, check_reach
 
 __all__ = ["Disc"]
 
@@ -39,6 +39,7 @@ class Disc:
     def __post_init__(self) -> None:
         object.__setattr__(self, "radius", positive(self.radius, "disc radius"))
         object.__setattr__(self, "center", as_point(self.center, "disc center"))
+        check_reach((self.radius, *self.center), "a disc's radius or center")
 
     @property
     def perimeter(self) -> float:

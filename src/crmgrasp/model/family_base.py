@@ -14,7 +14,7 @@ import numpy as np
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.disc import Disc
 from crmgrasp.model.polygon import Polygon
-from crmgrasp.model.shape import Shape
+from crmgrasp.model.shape import Shape, check_reach
 
 __all__ = ["MAX_TRIES", "Range", "ShapeFamily", "Pose", "place", "width", "family_dict"]
 
@@ -98,6 +98,7 @@ class Pose:
         for name in ("angle", "offset"):
             lo, hi = _range(getattr(self, name), f"pose {name}", low=-math.inf)
             object.__setattr__(self, name, (lo, hi))
+        check_reach(self.offset, "pose offset")
 
     def draw(self, rng: np.random.Generator) -> tuple[float, float, float]:
         """``(angle, dx, dy)``: three draws."""

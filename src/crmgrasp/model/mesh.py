@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from crmgrasp._validation import CrmgraspError
+from crmgrasp.model.shape import check_reach
 from crmgrasp.model.solids import SURFACE, TIE, _rotation, cross, dot, norm
 
 __all__ = ["PARITY_RAY", "TriangleMesh", "open_cup"]
@@ -131,6 +132,7 @@ class TriangleMesh:
         v = np.asarray(self.vertices, dtype=np.float64)
         if v.ndim != 2 or v.shape[1] != 3 or len(v) < 4 or not np.isfinite(v).all():
             raise CrmgraspError(f"a mesh needs 4 or more finite corners (x, y, z), got shape {v.shape}")
+        check_reach(v, "a mesh's corner")
         try:
             f = np.asarray(self.faces, dtype=np.int64)
         except (TypeError, ValueError):

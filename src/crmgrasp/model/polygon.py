@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from crmgrasp._validation import CrmgraspError, as_point, finite, shown
-from crmgrasp.model.shape import EPS, LINE_TOL, S_TOL, Array, BoundaryPoint, Entry
+from crmgrasp.model.shape import EPS, LINE_TOL, MAX_COORD, S_TOL, Array, BoundaryPoint, Entry
 
 __all__ = [
     "Polygon",
@@ -27,13 +27,9 @@ __all__ = [
     "convex_entry",
 ]
 
-MAX_COORD = 1e6
-
 MAX_VERTICES = 512
 """The most vertices a polygon may have (the self-intersection test grows with their
 square; object families draw within it)."""
-"""Largest vertex coordinate, metres: far beyond any hand, and far from where products of
-coordinates overflow."""
 
 Edges = tuple[tuple[float, float, float, float, float, float, float], ...]
 """Per edge ``(ax, ay, ex, ey, l2, nx, ny)``: start, edge vector, squared length,
@@ -42,7 +38,7 @@ inward unit normal ([`Polygon.edges`][])."""
 
 def _bounded(pts: Sequence[tuple[float, float]]) -> float:
     """The largest ``|coordinate|`` of ``pts``; a one-line error if one is not finite
-    (NaN included) or beyond [`MAX_COORD`][crmgrasp.model.polygon.MAX_COORD]."""
+    (NaN included) or beyond [`MAX_COORD`][crmgrasp.model.shape.MAX_COORD]."""
     flat = [abs(c) for p in pts for c in p]
     largest = max(flat)
     if not (largest <= MAX_COORD and math.isfinite(sum(flat))):  # the sum catches a NaN anywhere

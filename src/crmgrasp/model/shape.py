@@ -8,12 +8,15 @@ meet stale compiled code.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["EPS", "S_TOL", "LINE_TOL", "BoundaryPoint", "Entry", "Shape"]
+from crmgrasp._validation import CrmgraspError
+
+__all__ = ["EPS", "S_TOL", "LINE_TOL", "MAX_COORD", "BoundaryPoint", "Entry", "Shape", "check_reach"]
 
 EPS = 1e-9
 """Boundary tolerance in metres: points closer than this to the boundary are on it;
@@ -26,7 +29,23 @@ LINE_TOL = 1e-12
 """A polygon vertex closer than this (metres per unit of direction) to a line counts as
 on it, when the entry edge of a convex polygon is decided by the vertices' sides."""
 
+MAX_COORD = 1e6
+"""Largest ``|coordinate|`` of an object, and largest size, metres: far beyond any hand, and
+far from where products of coordinates overflow or where a metre-scale difference of two
+coordinates loses the digits [`EPS`][] needs (a cup placed 1e7 m out gives NaN normals)."""
+
 Array = NDArray[np.float64]
+
+
+def check_reach(values: Array | Iterable[float], name: str) -> None:
+    """A one-line error if a value of ``values`` (finite numbers) is beyond
+    +-[`MAX_COORD`][] metres."""
+    if isinstance(values, np.ndarray):
+        largest = float(np.abs(values).max())
+    else:  # a few numbers: cheaper in Python (family draws check every object)
+        largest = max(abs(float(v)) for v in values)
+    if largest > MAX_COORD:
+        raise CrmgraspError(f"{name} is beyond +-{MAX_COORD:g} m (largest |value| {largest:g})")
 
 
 class BoundaryPoint(NamedTuple):

@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from crmgrasp._validation import CrmgraspError, positive
-from crmgrasp.model.shape import EPS
+from crmgrasp.model.shape import EPS, check_reach
 
 __all__ = [
     "TIE",
@@ -124,6 +124,7 @@ class ConvexPolyhedron:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "planes", _unit_planes(np.asarray(self.planes, dtype=np.float64)))
+        check_reach([b for *_, b in self.planes], "a polyhedron's face (its distance from the origin)")
 
     def contains(self, p: ArrayLike) -> bool:
         """Strictly inside: more than [`SURFACE`][] inside every face."""
@@ -221,6 +222,7 @@ def box3d(lo: ArrayLike, hi: ArrayLike) -> ConvexPolyhedron:
     sides = (x1 - x0, y1 - y0, z1 - z0)
     if not all(d > 0.0 and math.isfinite(d) for d in sides):  # NaN fails the first test
         raise CrmgraspError(f"a box needs finite lo < hi in every coordinate, got {lo!r} and {hi!r}")
+    check_reach((x0, y0, z0, x1, y1, z1), "a box's corner")
     box = object.__new__(ConvexPolyhedron)  # the planes are unit already: the constructor would divide by 1.0
     planes = (
         (-1.0, 0.0, 0.0, -x0),
@@ -254,6 +256,7 @@ class Cylinder:
         object.__setattr__(self, "axis", tuple(_unit(self.axis, "cylinder axis").tolist()))
         object.__setattr__(self, "radius", positive(self.radius, "cylinder radius"))
         object.__setattr__(self, "height", positive(self.height, "cylinder height"))
+        check_reach((*self.origin, self.radius, self.height), "a cylinder's origin, radius or height")
 
     def _local(self, p: F64) -> tuple[float, F64]:
         """``(axial coordinate, radial vector)`` of ``p``."""
