@@ -617,6 +617,39 @@ def test_kernel_fuzz_reports_a_kernel_that_differs(monkeypatch):
     assert row["mismatches"] == 3 and row["steps"] == 3 and "world 0, action" in row["first_mismatches"][0]
 
 
+def test_task_file_fuzz_passes_the_far_cup_and_reports_what_is_not_one_line(monkeypatch):
+    """The cup family posed 1e9 m out (NaN normals before every object was bounded) now fails in
+    one line; an exception that is not a CrmgraspError, a warning and a long message are each
+    reported with the leaf and value."""
+    mod = _bench("task_file_fuzz")
+    assert list(mod.leaves({"a": [1, {"b": 2}]})) == [("a",), ("a", 0), ("a", 1), ("a", 1, "b")]
+    doc = mod.task_to_dict(mod.make_task("cup-3d"))
+    far = mod.mutated(doc, ("family", "pose", "offset", 1), 1e9)
+    assert doc["family"]["pose"]["offset"][1] == 0.02 and far["family"]["pose"]["offset"][1] == 1e9
+    rng = np.random.default_rng(0)
+    assert mod.run_variant(far, rng) is None and mod.run_variant(doc, rng) is None
+    monkeypatch.setattr(mod, "HOSTILE", (float("nan"),))
+    monkeypatch.setattr(mod, "leaves", lambda d: iter([("mu_goal",), ("max_steps",)]))
+    row = mod.fuzz("paper-box", 0)
+    assert row == {"task": "paper-box", "variants": 4, "failed": 0, "failures": []}
+
+    def warns(d):  # type: ignore[no-untyped-def]
+        import warnings
+
+        warnings.warn("invalid value encountered in divide", RuntimeWarning, stacklevel=1)
+
+    for planted, problem in (
+        (lambda d: 1 / 0, "ZeroDivisionError: division by zero"),
+        (warns, "RuntimeWarning: invalid value encountered in divide"),
+        (lambda d: (_ for _ in ()).throw(mod.CrmgraspError("two\nlines")), "CrmgraspError of 9 chars"),
+    ):
+        monkeypatch.setattr(mod, "task_from_dict", planted)
+        row = mod.fuzz("paper-box", 0)
+        assert row["failed"] == 4 and row["failures"][0]["leaf"] == "mu_goal", row
+        assert row["failures"][0]["value"] == "nan" and row["failures"][1]["value"] == "delete"
+        assert row["failures"][0]["problem"].startswith(problem), row
+
+
 def test_mushroom_peer_needs_its_own_venv_and_says_so_in_one_line():
     if importlib.util.find_spec("mushroom_rl") is not None:
         pytest.skip("MushroomRL is installed here (its own venv): the message is for the other venvs")
