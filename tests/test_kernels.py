@@ -578,3 +578,28 @@ def test_compiled_edges_equal_the_polygon_edges(name):
         e = np.empty((len(poly.vertices), 7))
         convex = jit.edge_rows(np.array(poly.vertices), e)
         assert e.tolist() == [list(row) for row in poly.edges] and convex == poly.convex
+
+
+def test_the_numba_warm_up_meets_every_compiled_kernel():
+    """tests/numba_warmup.py (run by tests/conftest.py before a parallel run) steps a task of
+    every compiled kernel class a registered task uses, noise-free and noisy, so a new kind of
+    kernel cannot be left for both workers to compile."""
+    import dataclasses
+
+    from crmgrasp.model.sensing import SensorNoise
+    from crmgrasp.tasks import task_names
+
+    from . import numba_warmup
+
+    def classes(names):  # type: ignore[no-untyped-def]
+        out = set()
+        for name in names:
+            base = make_task(name)
+            for task in (base, dataclasses.replace(base, noise=SensorNoise(sigma_n=0.05, sigma_p=0.003))):
+                k = kernel_for(task, "auto")
+                out.add(type(getattr(k, "current", k)).__name__)
+        return out - {"ReferenceKernel"}
+
+    warmed = classes(name for half in numba_warmup.HALVES for name in half)
+    assert classes(task_names()) <= warmed
+    assert {"FusedPolygonKernel", "FusedFingersKernel", "FusedSpatialKernel", "FusedFingersSpatialKernel"} <= warmed
