@@ -32,7 +32,7 @@ on it, when the entry edge of a convex polygon is decided by the vertices' sides
 MAX_COORD = 1e6
 """Largest ``|coordinate|`` of an object, and largest size, metres: far beyond any hand, and
 far from where products of coordinates overflow or where a metre-scale difference of two
-coordinates loses the digits [`EPS`][] needs (a cup placed 1e7 m out gives NaN normals)."""
+coordinates loses the digits [`EPS`][] needs (a cup placed 1e7 m out had NaN normals)."""
 
 Array = NDArray[np.float64]
 
