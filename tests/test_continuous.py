@@ -140,7 +140,8 @@ def test_continuous_crms_and_other_objects_reuse_the_compiled_step(name, batched
     own CRMs on one object: no compiled function gains a second signature. numba compiles a
     function once per argument types, and a writable table, or an object's read-only edges,
     is another type (the polygon step compiled four times before every table was made
-    read-only and every kernel's edges its own). ``batched``: the kernel steps a vector
+    read-only and every kernel's edges its own; a caller's writable table is taken read-only by
+    the batched step, which compiled a second time for one before 2026-12-07). ``batched``: the kernel steps a vector
     environment's rows in one compiled call (the spatial kernels run the readable rules
     there, and their vector environments take seconds to reset)."""
     task = make_task(name)
@@ -165,6 +166,9 @@ def test_continuous_crms_and_other_objects_reuse_the_compiled_step(name, batched
         vec.action_space.seed(0)
         vec.reset(seed=0)
         vec.step(vec.action_space.sample())
+        cfg = inst.sample_starts(rng, 2)  # a caller's own writable table: the same compiled step
+        writable = np.array(one.action_table(inst)[:2])
+        one.step_table(cfg, cfg, writable, np.zeros(2, dtype=bool), cfg[:0], rng)
     family = kernel_for(task, "numba")
     for _ in range(3):
         world = task.sample_world(rng)

@@ -206,7 +206,9 @@ class FusedPolygonKernel(PolygonKernel):
         self, cfg: F64, sen: F64, table: F64, resets: NDArray[np.bool_], starts: F64, rng: np.random.Generator
     ) -> BatchStep:
         rows = np.arange(len(cfg), dtype=np.int64)
-        return self._rows(cfg, rows, np.ascontiguousarray(table, dtype=np.float64), resets, starts)
+        table = np.ascontiguousarray(table, dtype=np.float64).view()
+        table.flags.writeable = False  # read-only as the task's own table: one compiled step_rows for both
+        return self._rows(cfg, rows, table, resets, starts)
 
     def _rows(self, cfg: F64, actions: I64, table: F64, resets: NDArray[np.bool_], starts: F64) -> BatchStep:
         """The CRMs ``table[actions]`` of a batch, one compiled call."""
