@@ -584,9 +584,6 @@ def test_the_numba_warm_up_meets_every_compiled_kernel():
     """tests/numba_warmup.py (run by tests/conftest.py before a parallel run) steps a task of
     every compiled kernel class a registered task uses, noise-free and noisy, so a new kind of
     kernel cannot be left for both workers to compile."""
-    import dataclasses
-
-    from crmgrasp.model.sensing import SensorNoise
     from crmgrasp.tasks import task_names
 
     from . import numba_warmup
@@ -595,7 +592,7 @@ def test_the_numba_warm_up_meets_every_compiled_kernel():
         out = set()
         for name in names:
             base = make_task(name)
-            for task in (base, dataclasses.replace(base, noise=SensorNoise(sigma_n=0.05, sigma_p=0.003))):
+            for task in (base, numba_warmup.noisy(base)):
                 k = kernel_for(task, "auto")
                 out.add(type(getattr(k, "current", k)).__name__)
         return out - {"ReferenceKernel"}
