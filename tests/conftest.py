@@ -57,6 +57,18 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     items.sort(key=lambda item: item.get_closest_marker("slow") is None)
 
 
+@pytest.fixture(autouse=True)
+def _no_compile_notice(monkeypatch):
+    """What a command prints on standard error must not depend on whether numba's cache was
+    warm: the notice while numba compiles (crmgrasp.kernels.compiling) is off, except where a
+    test turns it on (tests/test_compile_notice.py). Commands run in a subprocess keep it."""
+    import math
+
+    import crmgrasp.kernels.compiling
+
+    monkeypatch.setattr(crmgrasp.kernels.compiling, "AFTER", math.inf)
+
+
 @pytest.fixture
 def task():
     return paper_box()

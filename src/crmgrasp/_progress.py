@@ -124,6 +124,12 @@ class Progress:
         if self.live and self._stack:
             self._show(force=True)
 
+    def interject(self, text: str) -> None:
+        """Print one line from outside this display (another thread, another display of the
+        same command): on a terminal it first erases the line a live display may be drawing
+        there (ANSI "erase line"), which that display redraws on its next step."""
+        self._write(("\r\x1b[2K" if self.live else "") + text + "\n")
+
     def line(self) -> str:
         """The current text of the innermost stage."""
         if not self._stack:

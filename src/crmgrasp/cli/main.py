@@ -7,6 +7,7 @@ Every failure caused by the user's input prints one line,
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import os
 import signal
@@ -306,6 +307,24 @@ def _cmd_status(args: argparse.Namespace) -> int:
     return 0 if status == "complete" else 1
 
 
+_STEPS_KERNELS = frozenset(
+    {"reproduce", "sweep", "learn", "evaluate", "bench", "references", "plan", "compare", "pomdp", "run"}
+)
+"""The commands that step the compiled kernels (the others import no numba)."""
+
+
+def _compile_notice(args: argparse.Namespace) -> Any:
+    """A one-line notice on standard error while numba compiles for more than 2 s
+    ([`crmgrasp.kernels.compiling`][]; nothing with ``--quiet``), for the commands that step
+    kernels."""
+    if args.command not in _STEPS_KERNELS or getattr(args, "quiet", False):
+        return contextlib.nullcontext()
+    from crmgrasp._progress import Progress
+    from crmgrasp.kernels.compiling import compile_notice
+
+    return compile_notice(Progress().interject)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the exit status."""
     parser = build_parser()
@@ -333,7 +352,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     previous_int = None if inherited_ignore else _on_signal(signal.SIGINT, interrupt.on_sigint)
     interrupt.clear()
     try:
-        result = handlers[args.command](args)
+        with _compile_notice(args):
+            result = handlers[args.command](args)
         interrupt.check()  # a Ctrl-C that Python swallowed (in a finaliser, a callback) still stops
         return result
     except Terminated:  # SIGTERM (kill, a scheduler's stop): as Ctrl-C, with the shell's status for it
