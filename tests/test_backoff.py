@@ -93,6 +93,24 @@ def test_decay_weighs_a_count_by_its_age_in_episodes(box, gap):
     assert (agent._base > 0) == (gap == 400) and agent.params()["decay"] == 0.5  # rescaled or not
 
 
+def test_a_decay_that_forgets_within_an_episode_rescales_before_it_overflows(box):
+    """``decay`` = 1e-320 (a count one episode old weighs less than the smallest float): the
+    stored counts are rescaled at each episode before ``decay ** -1`` would overflow (it did:
+    OverflowError at the second episode), and the old count weighs nothing."""
+    enc, d, rng = encoder_for(box, 2), box.discretizer, np.random.default_rng(0)
+    o, o2 = d.compose((1, 0, 0), Error.NONE), d.compose((0, 0, 0), Error.NONE)
+    agent = _agent(box, beta=0.0, decay=1e-320)
+    h = enc.encode(enc.push(enc.start(o2), 0, o))
+    agent.begin_episode()
+    agent.update(h, 1, -1.0, enc.encode(enc.push(enc.decode(h), 1, o2)), 0, False, rng)
+    for _ in range(3):
+        agent.begin_episode()
+    agent.update(h, 1, -1.0, h, None, True, rng)
+    entry = agent._planned().model[(("L", h), 1)]
+    assert sum(c for (_, _, t), c in entry.items() if t) == 1.0 and agent._base == 4
+    assert sum(c for (_, _, t), c in entry.items() if not t) == 0.0
+
+
 def test_mean_after_stops_the_draws_after_its_episode(box, monkeypatch):
     """With ``mean_after`` = 3 and ``plan_every`` = 1, the acting plan draws from the posterior
     in episodes 1-3 and is the mean model from episode 4 on; ``mean_after`` = 0 draws to the end."""

@@ -52,6 +52,23 @@ SEEDED = [
 ]
 
 
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["crm", "--start-preset", HUGE, *NEAR, "--crm", "C1"],  # argparse's "invalid choice"
+        ["crm", "--a", HUGE, "--b", "-0.10,-0.05", "--crm", "C1"],  # a point option's message
+        ["references", "--task", HUGE],  # the system's "File name too long"
+        ["status", HUGE],
+    ],
+    ids=["choice", "point", "file-name", "run-folder"],
+)
+def test_an_error_echoing_a_huge_value_stays_one_short_line(argv, capsys, tmp_path, monkeypatch):
+    """Each of these echoed all 5,000 digits (found by benchmarks/cli_fuzz.py); the echo is cut
+    to its ends around a count (`crmgrasp.cli.options.fit_line`)."""
+    err = _one_line_exit_2(argv, capsys, tmp_path, monkeypatch)
+    assert " characters)..." in err  # the run of digits, with whatever quotes or path it sits in
+
+
 @pytest.mark.parametrize("argv", SEEDED, ids=[a[0] for a in SEEDED])
 @pytest.mark.parametrize("seed", ["-1", str(2**63), HUGE, "1.5", "1e3", "٣"])
 def test_every_seed_is_checked_before_any_work(argv, seed, capsys, tmp_path, monkeypatch):

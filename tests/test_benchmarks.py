@@ -650,6 +650,43 @@ def test_task_file_fuzz_passes_the_far_cup_and_reports_what_is_not_one_line(monk
         assert row["failures"][0]["problem"].startswith(problem), row
 
 
+def test_cli_fuzz_passes_what_it_found_and_reports_what_is_not_one_line(monkeypatch):
+    """The command lines the fuzz found (a cell of 1e-320 m: an OverflowError; a 5,000-digit
+    choice echoed whole) pass now; a handler that raises, one that writes two lines, one that
+    exits 1 and one that outlives the time limit are each told apart."""
+    import time
+
+    from crmgrasp._validation import CrmgraspError
+
+    mod = _bench("cli_fuzz")
+    cli = importlib.import_module("crmgrasp.cli.main")
+    monkeypatch.setattr(mod, "HOSTILE", ("1e-320", "9" * 5000))
+    monkeypatch.setattr(mod, "options", lambda command: [("--cell", "cell"), ("--start-preset", "start_preset")])
+    out = mod.fuzz(["pomdp"], 30.0)
+    assert (out["cases"], out["failed"], out["ran"], out["refused"]) == (4, 0, 0, 4), out
+    assert mod.command_line("status", None, "run", "X", {"run": "R"}) == ["status", "X"]
+
+    def boom(args):  # type: ignore[no-untyped-def]
+        raise ZeroDivisionError("deep inside")
+
+    def two_lines(args):  # type: ignore[no-untyped-def]
+        raise CrmgraspError("two\nlines")
+
+    def slow(args):  # type: ignore[no-untyped-def]
+        time.sleep(10)
+        return 0
+
+    for planted, outcome, problem in (
+        (boom, "failed", "status 1, 1 lines on stderr: 'crmgrasp pomdp: internal error (ZeroDivisionError"),
+        (two_lines, "failed", "status 2, 2 lines on stderr"),
+        (slow, "time limit", None),
+        (lambda args: 0, "ran", None),
+    ):
+        monkeypatch.setattr(cli, "_cmd_pomdp", planted)
+        got, found = mod.run_case(["pomdp", "--out", "x.pomdp"], 0.5)
+        assert got == outcome and ((found is None) if problem is None else found.startswith(problem)), found
+
+
 def test_mushroom_peer_needs_its_own_venv_and_says_so_in_one_line():
     if importlib.util.find_spec("mushroom_rl") is not None:
         pytest.skip("MushroomRL is installed here (its own venv): the message is for the other venvs")

@@ -55,6 +55,15 @@ def test_cassandra_roundtrip(tmp_path):
         read_cassandra(tmp_path / "bad.pomdp")
 
 
+@pytest.mark.parametrize("cell", [0.0, -0.01, float("nan"), float("inf"), 1e-320, 1e-9])
+def test_a_cell_size_that_is_not_a_size_is_one_line(task, cell):
+    """A cell below the POMDP's state bound per edge (1e-320 m overflowed the cell count to
+    infinity: OverflowError), zero, negative or not finite: refused before any sampling."""
+    with pytest.raises(CrmgraspError, match="cell") as info:
+        build_task_pomdp(task, cell=cell, samples=10, n_starts=50, seed=0)
+    assert "\n" not in str(info.value)
+
+
 def test_sampled_paper_box_pomdp(task, tmp_path):
     tp = build_task_pomdp(task, cell=0.02, samples=10, n_starts=500, seed=0)
     m = tp.model

@@ -53,6 +53,7 @@ value is the same at a history and at its mirror image, so an outcome may lead t
 
 from __future__ import annotations
 
+import math
 from collections.abc import Collection, Mapping
 from itertools import chain
 from typing import Any
@@ -70,6 +71,8 @@ from crmgrasp.agents.tabular import TabularAgent
 from crmgrasp.model.history import KOrderEncoder
 
 __all__ = ["BackoffVI"]
+
+_LOG_1E100 = math.log(1e100)
 
 Node = tuple[str, int]
 """A planning node: ``("L", long history code)`` or ``("S", short state code)``."""
@@ -274,11 +277,11 @@ class BackoffVI(TabularAgent):
         e = self.episodes
         self._replan = e <= self.plan_every or e % self.plan_every == 0
         if self.decay < 1.0:
-            self._unit = self.decay ** (self._base - e)
-            if self._unit > 1e100:  # store the counts at today's weights, far from overflow
-                scale = self.decay ** (e - self._base)
+            if (e - self._base) * -math.log(self.decay) > _LOG_1E100:  # decay ** (base - e) > 1e100
+                scale = self.decay ** (e - self._base)  # store the counts at today's weights, far from overflow
                 self.counts = {key: {o: c * scale for o, c in row.items()} for key, row in self.counts.items()}
-                self._base, self._unit = e, 1.0
+                self._base = e
+            self._unit = self.decay ** (self._base - e)
 
     def act(self, state: int, rng: np.random.Generator, banned: Collection[int] = ()) -> int:
         """The best action by the planned acting values (uniform where there is no node), outside

@@ -22,6 +22,7 @@ from crmgrasp._io import check_new_output
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.cli.common import _print_result, _progress, _run_folder, _task
 from crmgrasp.cli.learning import _cmd_evaluate, _cmd_learn
+from crmgrasp.cli.options import fit_line
 from crmgrasp.cli.parser import build_parser
 from crmgrasp.cli.scene import _cmd_crm, _cmd_run, _cmd_show
 from crmgrasp.tasks import TEMPLATE, Task, make_task, task_names, task_to_dict
@@ -360,7 +361,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"crmgrasp {args.command}: terminated", file=sys.stderr)
         return 143
     except CrmgraspError as exc:
-        print(f"crmgrasp {args.command}: error: {exc}", file=sys.stderr)
+        print(f"crmgrasp {args.command}: error: {fit_line(str(exc))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:  # Ctrl-C: one line and the shell's status for SIGINT
         print(f"crmgrasp {args.command}: interrupted", file=sys.stderr)
@@ -370,7 +371,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     except OSError as exc:
         print(
-            f"crmgrasp {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), file=sys.stderr
+            fit_line(f"crmgrasp {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": ")),
+            file=sys.stderr,
         )
         return 2
     except Exception as exc:  # a bug: one line for the user, the traceback with CRMGRASP_DEBUG=1

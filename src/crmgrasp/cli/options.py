@@ -36,6 +36,16 @@ class _Help(argparse.HelpFormatter):
         return f"{text} (default: %(default)s)"
 
 
+_LONG = re.compile(r"\S{161,}")
+
+
+def fit_line(text: str) -> str:
+    """``text`` with every run of over 160 non-blank characters (a pasted number of 5,000
+    digits, a path someone's script built wrong) cut to its first 60 and last 20 characters
+    around a count, so that an error echoing a user's value stays a line a terminal shows."""
+    return _LONG.sub(lambda m: f"{m[0][:60]}...({len(m[0]):,} characters)...{m[0][-20:]}", text)
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse with one-line errors, defaults in the help, and values such as
     ``-0.15,-0.02``."""
@@ -46,7 +56,7 @@ class _Parser(argparse.ArgumentParser):
         self._negative_number_matcher = _NUMBERISH
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+        self.exit(2, f"{self.prog}: error: {fit_line(message)} (see --help)\n")
 
 
 def _point(text: str) -> tuple[float, ...]:

@@ -22,7 +22,7 @@ from abc import ABC, abstractmethod
 import numpy as np
 from scipy import sparse
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, positive
 from crmgrasp.model.contacts import Config, Contact, Grip
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.model.hand import Error, execute_crm
@@ -89,8 +89,16 @@ def build_task_pomdp(
         raise CrmgraspError(f"the sampled POMDP needs a polygonal object, got {type(obj).__name__}")
     if task.model.n_contacts != 2:
         raise CrmgraspError(f"the sampled POMDP grids two contacts; {task.name!r} has {task.model.n_contacts}")
+    cell = positive(cell, "cell")
+    lengths = [math.sqrt(e[4]) for e in obj.edges]
+    per_edge = [length / cell for length in lengths]  # cells along each edge
+    if max(per_edge) > max_states:
+        raise CrmgraspError(
+            f"cell {cell:g} m cuts an edge of {max(lengths):.3g} m into more than {max_states:,} cells, "
+            "the most states the POMDP may have; use a larger cell size"
+        )
     rng = np.random.default_rng(seed)
-    grid = _CellIndex(obj, [max(1, math.ceil(math.sqrt(e[4]) / cell)) for e in obj.edges], max_states)
+    grid = _CellIndex(obj, [max(1, math.ceil(n)) for n in per_edge], max_states)
     start_counts: dict[int, int] = {}
     z0_counts: dict[tuple[int, int], int] = {}
     for _ in range(n_starts):
