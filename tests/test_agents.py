@@ -169,8 +169,10 @@ def test_policy_file_roundtrip_and_errors(learned, tmp_path):
     check(lambda d: d.update(agent={"name": 5}), '"agent" must be the learner')
     check(lambda d: d.update(k=-1), "k must be")
     check(lambda d: d.update(k=1000000), r"k must be an integer in \[0, 10\]")
-    check(lambda d: d["actions"][0].__setitem__(2, 0.1), "CRM set")
-    check(lambda d: d["bins"].update(rho=[2.0]), "bins")
+    check(lambda d: d["actions"][0].__setitem__(2, 0.1), r"CRM set differs from the task's at CRM 1: \['a', 'b', 0.1\]")
+    check(lambda d: d.update(actions=d["actions"] * 40), "CRM set has 160 CRMs, the task's 4$")  # not all 160 shown
+    check(lambda d: d.update(actions=5), "CRM set is 5, not a list of the task's 4 CRMs")
+    check(lambda d: d["bins"].update(rho=[2.0]), r"bins differ from the task's \(in rho\[0\]\)")
     check(lambda d: d["greedy"].update({"99999999": [0]}), "outside")
     check(lambda d: d["greedy"].update({"x": [0]}), "not a canonical non-negative integer")
     check(lambda d: d["greedy"].update({"0": [7]}), "actions must be")

@@ -687,6 +687,54 @@ def test_cli_fuzz_passes_what_it_found_and_reports_what_is_not_one_line(monkeypa
         assert got == outcome and ((found is None) if problem is None else found.startswith(problem)), found
 
 
+def test_policy_file_fuzz_passes_a_long_crm_set_and_reports_what_is_not_one_line(monkeypatch, tmp_path):
+    """A refine-vi policy's 36 CRMs with one changed: its message echoed both whole sets (900
+    characters) before it named the first CRM that differs; a variant that runs passes, and one
+    that ends in status 1 or two lines is reported."""
+    import sys
+
+    import crmgrasp.cli
+
+    mod = _bench("policy_file_fuzz")
+    tree = {"a": list(range(10)), "b": {"c": 1}}
+    assert list(mod.leaves(tree)) == [("a",), ("a", 0), ("a", 1), ("a", 2), ("b",), ("b", "c")]
+    doc = mod.make_policy("refine-vi", tmp_path)
+    assert len(doc["actions"]) == 36 and mod.run_variant(doc, tmp_path / "p.json") is None
+    variants = {(leaf, shown): v for leaf, shown, v in mod.variants(doc) if leaf == "actions.0"}
+    assert mod.run_variant(variants[("actions.0", "-1")], tmp_path / "p.json") is None  # one short line
+
+    def two_lines(argv):  # type: ignore[no-untyped-def]
+        print("a\nb", file=sys.stderr)
+        return 2
+
+    for planted, problem in ((lambda argv: 1, "status 1"), (two_lines, "status 2, 2 lines")):
+        monkeypatch.setattr(crmgrasp.cli, "main", planted)
+        assert mod.run_variant(doc, tmp_path / "p.json").startswith(problem)
+
+
+def test_env_fuzz_passes_hostile_batches_and_reports_what_is_not_one_line(monkeypatch):
+    """Hostile batches on paper-box's vector environments are refused in one line; an exception
+    that is not a CrmgraspError, a warning and a long message are each reported."""
+    import warnings
+
+    from crmgrasp._validation import CrmgraspError
+
+    mod = _bench("env_fuzz")
+    monkeypatch.setattr(mod, "VECTOR_TASKS", ("paper-box",))
+    assert mod.fuzz_vectors() == (2 * len(mod.BATCHES), [])
+
+    def warns():  # type: ignore[no-untyped-def]
+        warnings.warn("invalid value encountered in divide", RuntimeWarning, stacklevel=1)
+
+    def long():  # type: ignore[no-untyped-def]
+        raise CrmgraspError("x" * 400)
+
+    assert mod.attempt(lambda: 1 / 0) == "ZeroDivisionError: division by zero"
+    assert mod.attempt(warns) == "RuntimeWarning: invalid value encountered in divide"
+    assert mod.attempt(long).startswith("CrmgraspError of 400 chars")
+    assert mod.attempt(lambda: None) is None
+
+
 def test_mushroom_peer_needs_its_own_venv_and_says_so_in_one_line():
     if importlib.util.find_spec("mushroom_rl") is not None:
         pytest.skip("MushroomRL is installed here (its own venv): the message is for the other venvs")

@@ -158,6 +158,17 @@ def first_difference(a: Any, b: Any, where: str = "") -> str | None:
     return None if a == b else (where or "the task")
 
 
+def _crm_difference(got: Any, expected: list[Any]) -> str:
+    """How a policy's CRM set ``got`` differs from the task's ``expected``, in a few words: its
+    type, its count, or its first CRM that differs (a grid's set has hundreds)."""
+    if not isinstance(got, list):
+        return f"is {shown(got)}, not a list of the task's {len(expected)} CRMs"
+    if len(got) != len(expected):
+        return f"has {len(got)} CRMs, the task's {len(expected)}"
+    i = next(i for i, (x, y) in enumerate(zip(got, expected, strict=True)) if x != y)
+    return f"differs from the task's at CRM {i + 1}: {shown(got[i])} in the policy, {shown(expected[i])} in the task"
+
+
 def policy_task(doc: Any, source: str = "policy") -> Task:
     """The task a policy document carries (``task_spec``) or names (a registered task)."""
     if not isinstance(doc, dict):
@@ -386,11 +397,12 @@ class GreedyPolicy:
         k = doc["k"]
         if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k <= MAX_K:
             raise bad(f"k must be an integer in [0, {MAX_K}], got {shown(k)}")
-        expected = crm_rows(task)
+        expected, bins = crm_rows(task), task.discretizer.to_dict()
         if doc["actions"] != expected:
-            raise bad(f"policy's CRM set {doc['actions']} differs from the task's {expected}")
-        if doc["bins"] != task.discretizer.to_dict():
-            raise bad(f"policy's observation bins {doc['bins']} differ from the task's")
+            raise bad(f"policy's CRM set {_crm_difference(doc['actions'], expected)}")
+        if doc["bins"] != bins:
+            where = first_difference(doc["bins"], bins)
+            raise bad(f"policy's observation bins differ from the task's (in {where}): {shown(doc['bins'])}")
         encoder = KOrderEncoder(task.discretizer.size, len(task.actions), k)
         table = _read_table(doc["greedy"], encoder, bad)
         if (doc["version"] == 4) != (doc.get("skip_errored") is True and "ranked" in doc):
