@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib
 import io
+import multiprocessing
 import threading
 
 import pytest
@@ -51,6 +52,27 @@ def test_short_compilations_loaded_functions_and_other_threads_say_nothing():
         other.start()  # compiles in another thread: not this command's wait
         other.join()
     assert notes == []
+
+
+@pytest.mark.skipif("fork" not in multiprocessing.get_all_start_methods(), reason="needs fork")
+def test_forked_workers_show_the_notice_once_for_them_all(tmp_path):
+    """Two workers forked inside the context compile for themselves: one notice in all (they
+    share the flag), and no total, which only the command's own process adds."""
+    log = tmp_path / "notes"
+
+    def note(text: str) -> None:
+        with open(log, "a") as fh:
+            fh.write(text + "\n")
+
+    fork = multiprocessing.get_context("fork")
+    with compile_notice(note, after=0.0):
+        workers = [fork.Process(target=lambda: _fresh()(1.0)) for _ in range(2)]
+        for w in workers:
+            w.start()
+        for w in workers:
+            w.join()
+    assert [w.exitcode for w in workers] == [0, 0]
+    assert log.read_text().splitlines() == [NOTICE]
 
 
 def test_interject_erases_a_live_line_first():

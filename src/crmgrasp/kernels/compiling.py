@@ -10,13 +10,19 @@ events (its event API, ``numba.core.event``, kind ``"numba:compile"``: sent only
 function is compiled, never when it is loaded from the cache) and, once compilation has
 taken ``after`` seconds in all, says so in one line; when the context ends it says how
 long compiling took. Compiling for less than ``after`` seconds shows nothing. The
-command line wraps every command that steps a kernel in it
-(`crmgrasp.cli.main`); a worker process compiles silently.
+command line wraps every command that steps a kernel in it (`crmgrasp.cli.main`).
+
+Worker processes forked from the command (``--jobs``, where the start method is fork, as on
+Linux before torch is loaded) inherit the listener and compile for themselves: the first
+process to compile for ``after`` seconds shows the notice, once for them all (a flag in
+shared memory), and only the command's own process, if it showed it, adds the total.
+Workers started by spawn compile silently.
 """
 
 from __future__ import annotations
 
 import math
+import multiprocessing
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -43,10 +49,11 @@ class _Clock:
 
     def __init__(self, notify: Callable[[str], None], after: float) -> None:
         self.notify, self.after = notify, after
-        self.depth, self.seconds, self.told = 0, 0.0, False
+        self.depth, self.seconds, self.told, self.shown = 0, 0.0, False, False
         self._t0 = 0.0
         self._timer: threading.Timer | None = None
         self._lock = threading.Lock()
+        self._anyone = multiprocessing.Value("b", 0)  # shown by this process or a forked worker
 
     def start(self) -> None:
         self.depth += 1
@@ -77,24 +84,27 @@ class _Clock:
             if self.told:
                 return
             self.told = True
-        self.notify(NOTICE)
+        with self._anyone.get_lock():
+            self.shown, self._anyone.value = not self._anyone.value, 1
+        if self.shown:
+            self.notify(NOTICE)
 
     def stop(self) -> None:
-        """Cancel a pending notice; if one was shown, say how long compiling took."""
+        """Cancel a pending notice; if this process showed one, say how long compiling took."""
         if self._timer is not None:
             self._timer.cancel()
         with self._lock:
-            told, self.told = self.told, True  # a timer firing now shows nothing
-        if told:
+            self.told = True  # a timer firing now shows nothing
+        if self.shown:
             self.notify(f"compiling took {self.seconds:.0f} s of this run")
 
 
 @contextmanager
 def compile_notice(notify: Callable[[str], None], after: float | None = None) -> Iterator[None]:
     """Within the context, call ``notify`` with [`NOTICE`][] once numba has compiled for
-    ``after`` seconds ([`AFTER`][] by default) in all (compilations in the thread that entered the context; those of
-    other threads are not counted), and on exit, if it did, with the seconds
-    compiling took (see the module docstring). ``notify`` may be called from a timer
+    ``after`` seconds ([`AFTER`][] by default) in all, counting the compilations of the thread
+    that entered the context (not those of other threads), and on exit, if it did, with the
+    seconds compiling took (see the module docstring). ``notify`` may be called from a timer
     thread while the compiling thread waits in numba."""
     from numba.core import event
 
