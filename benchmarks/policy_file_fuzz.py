@@ -11,9 +11,9 @@ past any index, action lists, 21-digit codes) or deletes it; a table entry's key
 [`KEYS`][]. The checksum is then recomputed, as a user who edits a file by hand and fixes its
 checksum would, so that the variant reaches the loader's checks of every field, and ``crmgrasp
 evaluate --policy FILE --episodes 3`` runs it in this process with Python's warnings raised as
-errors. A variant passes if it exits 0, or exits 2 with one line on standard error of under 400
-characters; anything else is reported with the leaf and value. It prints one JSON object and
-exits 1 if a variant failed.
+errors (``benchmarks/cli_fuzz.py``'s ``run_case``). A variant passes if it exits 0, or exits 2
+with one line on standard error of under 400 characters; anything else is reported with the
+leaf and value. It prints one JSON object and exits 1 if a variant failed.
 
 The tests of saved policies check each field once; this runs every field of every kind.
 Measured 2026-12-07 on the 2-core machine beside other work: 11,396 variants of the 7 kinds in
@@ -37,15 +37,21 @@ import os
 import sys
 import tempfile
 import time
-import warnings
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-_spec = importlib.util.spec_from_file_location("task_file_fuzz", Path(__file__).with_name("task_file_fuzz.py"))
-assert _spec is not None and _spec.loader is not None
-task_file_fuzz = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(task_file_fuzz)
+
+def _sibling(name: str) -> Any:
+    """The benchmark script ``benchmarks/<name>.py`` beside this one, as a module."""
+    spec = importlib.util.spec_from_file_location(name, Path(__file__).with_name(f"{name}.py"))
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+task_file_fuzz, cli_fuzz = _sibling("task_file_fuzz"), _sibling("cli_fuzz")
 
 MORE: tuple[Any, ...] = (2**40, -(2**40), [[0], [1]], [0, 0], "0", 10**21, [9999])
 """Values beyond the task-file list that a policy's fields invite."""
@@ -105,21 +111,10 @@ def variants(doc: dict[str, Any]) -> Iterator[tuple[str, str, dict[str, Any]]]:
 
 
 def run_variant(doc: dict[str, Any], path: Path) -> str | None:
-    """Write ``doc`` to ``path`` and evaluate it; ``None`` if that runs or fails in one line."""
-    from crmgrasp.cli import main
-
+    """Write ``doc`` to ``path`` and evaluate it (``benchmarks/cli_fuzz.py``'s ``run_case``, 60 s
+    at most); ``None`` if that runs or fails in one line, else what went wrong."""
     path.write_text(json.dumps(doc))
-    err = io.StringIO()
-    try:
-        with warnings.catch_warnings(), contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-            warnings.simplefilter("error")
-            status = main(["evaluate", "--policy", str(path), "--episodes", "3", "--quiet"])
-    except Exception as exc:  # what this script looks for
-        return f"{type(exc).__name__} escaped main: {str(exc)[:200]}"
-    text = err.getvalue()
-    if status == 0 or (status == 2 and text.count("\n") == 1 and text.endswith("\n") and len(text) < 400):
-        return None
-    return f"status {status}, {text.count(chr(10))} lines, {len(text)} characters on stderr: {text[:300]!r}"
+    return cli_fuzz.run_case(["evaluate", "--policy", str(path), "--episodes", "3", "--quiet"], 60.0)[1]
 
 
 def make_policy(kind: str, root: Path) -> dict[str, Any]:
