@@ -23,11 +23,14 @@ from __future__ import annotations
 import json
 import sys
 import time
-import warnings
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import task_file_fuzz
 
 ACTIONS: tuple[Any, ...] = (
     -1,
@@ -79,19 +82,8 @@ BATCHES: tuple[Any, ...] = (
 
 def attempt(call: Callable[[], Any]) -> str | None:
     """``None`` if ``call()`` works or raises a one-line ``CrmgraspError`` under 300 characters,
-    else what went wrong."""
-    from crmgrasp._validation import CrmgraspError
-
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error")
-            call()
-    except CrmgraspError as exc:
-        text = str(exc)
-        return None if "\n" not in text and len(text) < 300 else f"CrmgraspError of {len(text)} chars: {text[:200]!r}"
-    except Exception as exc:  # what this script looks for
-        return f"{type(exc).__name__}: {str(exc)[:200]}"
-    return None
+    else what went wrong (``benchmarks/task_file_fuzz.py``'s rule, warnings raised as errors)."""
+    return task_file_fuzz.attempt(call, limit=300)
 
 
 def _stepped(env: Any, action: Any) -> Callable[[], Any]:

@@ -29,7 +29,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import copy
-import importlib.util
 import io
 import json
 import math
@@ -41,17 +40,9 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-
-def _sibling(name: str) -> Any:
-    """The benchmark script ``benchmarks/<name>.py`` beside this one, as a module."""
-    spec = importlib.util.spec_from_file_location(name, Path(__file__).with_name(f"{name}.py"))
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-task_file_fuzz, cli_fuzz = _sibling("task_file_fuzz"), _sibling("cli_fuzz")
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import cli_fuzz
+import task_file_fuzz
 
 MORE: tuple[Any, ...] = (2**40, -(2**40), [[0], [1]], [0, 0], "0", 10**21, [9999])
 """Values beyond the task-file list that a policy's fields invite."""

@@ -30,7 +30,7 @@ import json
 import sys
 import time
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import numpy as np
@@ -95,26 +95,37 @@ def mutated(doc: Any, path: tuple[Any, ...], value: Any) -> Any:
     return out
 
 
-def run_variant(doc: Any, rng: np.random.Generator) -> str | None:
-    """Build the task of ``doc`` and run three short episodes of random CRMs; ``None`` if that
-    runs or fails in one line, else what went wrong."""
+def attempt(call: Callable[[], Any], limit: int = 400) -> str | None:
+    """Run ``call()`` with Python's warnings raised as errors: ``None`` if it works or raises a
+    ``CrmgraspError`` of one line under ``limit`` characters (the message a user sees), else
+    what went wrong (also ``benchmarks/env_fuzz.py``'s rule)."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")
-            task = task_from_dict(doc)
-            sample_starts(task, 5, int(rng.integers(2**31)))  # the references' starts
-            for _ in range(3):
-                now = sim.reset(task, rng)
-                for _ in range(4):
-                    now = sim.step(task, now.state, int(rng.integers(len(task.actions))), rng)
-                    if now.terminated or now.truncated:
-                        break
+            call()
     except CrmgraspError as exc:
         text = str(exc)
-        return None if "\n" not in text and len(text) < 400 else f"CrmgraspError of {len(text)} chars: {text[:200]!r}"
+        return None if "\n" not in text and len(text) < limit else f"CrmgraspError of {len(text)} chars: {text[:200]!r}"
     except Exception as exc:  # what this script looks for
         return f"{type(exc).__name__}: {str(exc)[:200]}"
     return None
+
+
+def run_variant(doc: Any, rng: np.random.Generator) -> str | None:
+    """Build the task of ``doc`` and run three short episodes of random CRMs; ``None`` if that
+    runs or fails in one line, else what went wrong ([`attempt`][])."""
+    return attempt(lambda: _exercise(doc, rng))
+
+
+def _exercise(doc: Any, rng: np.random.Generator) -> None:
+    task = task_from_dict(doc)
+    sample_starts(task, 5, int(rng.integers(2**31)))  # the references' starts
+    for _ in range(3):
+        now = sim.reset(task, rng)
+        for _ in range(4):
+            now = sim.step(task, now.state, int(rng.integers(len(task.actions))), rng)
+            if now.terminated or now.truncated:
+                break
 
 
 def fuzz(name: str, seed: int) -> dict[str, Any]:
