@@ -19,14 +19,16 @@ every learner and every checkpoint) and averaged over the seed's trials. Per lea
   moving average of the training curve (mean over the seed's trials) stays within 5%;
 * ``seconds``: wall time of all its seeds.
 
-Learners: ``pooled-vi`` (``--preset fastest``: k = 1, mirror quotient), ``pooled-vi``
-without the quotient, ``model-vi`` (mirror quotient), Dyna-Q with value-iteration sweeps
-(with and without the quotient), and the peers without the quotient, as a generic tabular learner sees
-the task: PSRL and UCBVI (``crmgrasp.agents.peers``, written from their papers: rlberry
-0.7.3 pins gymnasium < 0.30 and ships neither), SARSA and Q-learning (k = 1, the paper's
-alpha 0.3, Q0 = 0, greedy; the textbook updates MushroomRL implements: mushroom-rl 1.10.2
-pins numpy 1.24.4 and cannot share this environment; ``benchmarks/mushroom_peer.py`` runs
-MushroomRL's own in a venv of their own, on this protocol).
+Learners: ``pooled-vi`` (``--preset fastest``: k = 1, mirror quotient, a greedy policy that
+never repeats a CRM that erred since the contacts last moved), the same greedy policy without
+that rule, ``pooled-vi`` without the quotient (nor the rule), ``model-vi`` (mirror quotient),
+Dyna-Q with value-iteration sweeps (with and without the quotient), and the peers without the
+quotient, as a generic tabular learner sees the task: PSRL and UCBVI
+(``crmgrasp.agents.peers``, written from their papers: rlberry 0.7.3 pins gymnasium < 0.30 and
+ships neither), SARSA and Q-learning (k = 1, the paper's alpha 0.3, Q0 = 0, greedy; the
+textbook updates MushroomRL implements: mushroom-rl 1.10.2 pins numpy 1.24.4 and cannot share
+this environment; ``benchmarks/mushroom_peer.py`` runs MushroomRL's own in a venv of their own,
+on this protocol).
 
 Usage: ``python benchmarks/learner_seeds.py [--episodes 200] [--seeds 10] [--first 0]
 [--trials 1] [--task paper-box --task box-family] [--only NAME ...]``. Prints one JSON
@@ -43,6 +45,7 @@ import time
 
 import numpy as np
 
+from crmgrasp.agents.presets import PRESETS
 from crmgrasp.agents.training import (
     DEFAULT_CHECKPOINTS,
     build_agent,
@@ -56,7 +59,8 @@ from crmgrasp.agents.training import (
 from crmgrasp.tasks import make_task
 
 LEARNERS: dict[str, tuple[str, dict]] = {
-    "pooled-vi (fastest)": ("pooled-vi", {"symmetric": True}),
+    "pooled-vi (fastest)": ("pooled-vi", {"symmetric": True, **dict(PRESETS["fastest"].params)}),
+    "pooled-vi, no skip_errored": ("pooled-vi", {"symmetric": True}),
     "pooled-vi, no quotient": ("pooled-vi", {}),
     "model-vi": ("model-vi", {"symmetric": True}),
     "dyna-q sweeps": ("dyna-q", {"planning": "sweep", "n_planning": 50, "symmetric": True}),

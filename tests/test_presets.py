@@ -119,10 +119,11 @@ def test_learner_presets_fill_what_the_user_left_out():
 
     box, cup = make_task("paper-box"), make_task("cup-3d")
     assert apply_preset("paper", box) == LearnerChoice("sarsa", 2, False, None)
-    assert apply_preset("fastest", box) == LearnerChoice("pooled-vi", 1, True, None)  # from scratch
+    skip = (("skip_errored", True),)
+    assert apply_preset("fastest", box) == LearnerChoice("pooled-vi", 1, True, None, skip)  # from scratch
     families = LearnerChoice("backoff-vi", 2, True, None, (("skip_errored", True), ("mean_after", 2000)))
     assert apply_preset("families", box) == families
-    assert apply_preset("fastest", cup) == LearnerChoice("pooled-vi", 1, False, None)  # no symmetry declared
+    assert apply_preset("fastest", cup) == LearnerChoice("pooled-vi", 1, False, None, skip)  # no symmetry declared
     assert apply_preset("fastest", box, agent="dyna-q", k=2) == LearnerChoice("dyna-q", 2, True, None)
     assert apply_preset("fastest", box, prior_task="mixed").prior_task == "mixed"
     assert apply_preset("fastest", box, agent="random").symmetric is False  # not tabular
@@ -164,3 +165,32 @@ def test_a_preset_sets_its_agent_parameters_where_the_user_gave_none(tmp_path):
     assert json.loads((tmp_path / "g" / "run.json").read_text())["config"]["params"]["decay"] == 0.999
     assert main([*base, "--preset", "families", "--mean-after", "20", "--out", str(tmp_path / "h")]) == 0
     assert json.loads((tmp_path / "h" / "run.json").read_text())["config"]["params"]["mean_after"] == 20
+
+
+def test_the_fastest_presets_greedy_policy_does_not_cycle_on_an_error():
+    """Paper-box seed 49 after 20 episodes: pooled-vi's greedy policy without ``skip_errored``
+    alternates two CRMs that both err at the same contacts until the step limit (3.05 CRMs per
+    episode on the 1,000 checkpoint starts); the preset's, which never repeats a CRM that erred
+    since the contacts last moved, moves them instead (1.93)."""
+    from crmgrasp.agents.presets import apply_preset
+    from crmgrasp.agents.training import checkpoint_generators, encoder_for, evaluate
+    from crmgrasp.tasks import make_task
+
+    task = make_task("paper-box")
+    choice = apply_preset("fastest", task)
+    params = {"symmetric": choice.symmetric, **dict(choice.params)}
+    steps = {}
+    for skip in (False, True):
+        res = train_trials(
+            task,
+            choice.agent,
+            trials=1,
+            episodes=20,
+            seed=49,
+            k=choice.k,
+            eval_episodes=0,
+            params={**params, "skip_errored": skip},
+        )
+        steps[skip] = evaluate(task, res.agents[0], encoder_for(task, choice.k), 1000, *checkpoint_generators(49))[0]
+    assert (steps[False] == task.max_steps).sum() > 150 and steps[False].mean() > 2.9
+    assert (steps[True] == task.max_steps).sum() < 10 and steps[True].mean() < 2.0

@@ -54,7 +54,9 @@ PRESETS: dict[str, LearnerPreset] = {
         "pooled-vi",
         1,
         symmetric=True,
-        description="pooled-vi, k = 1, on the mirror quotient where the task declares one; from scratch",
+        params=(("skip_errored", True),),
+        description="pooled-vi, k = 1, on the mirror quotient where the task declares one, its greedy policy never "
+        "repeating a CRM that erred since the contacts last moved (skip_errored); from scratch",
     ),
     "families": LearnerPreset(
         "backoff-vi",
