@@ -773,3 +773,35 @@ def test_mujoco_mesh_seams_smoke():
         median, p90, most = res[body]["sensed_normal_error_deg_median_p90_max"]
         assert 0.0 <= median <= p90 <= most < 90.0 and 0 <= res[body]["c1_grasps"] <= 2
     assert stand_in._geom is before
+
+
+def test_study_file_fuzz_passes_what_it_found_and_reports_what_is_not_one_line(monkeypatch, tmp_path):
+    """The study variants the fuzz found (``eval_episodes = 0``: a report that raised TypeError;
+    a ``[[cell]]`` that is not a table: a 410-character message about a key ``'?'``) pass now;
+    every hostile value survives the script's TOML; a variant past the time limit, a report that
+    raises and a unit that fails in two lines are each reported."""
+    import math
+    import tomllib
+
+    mod = _bench("study_file_fuzz")
+    task_file_fuzz = mod.task_file_fuzz  # the module the script uses
+    for value in task_file_fuzz.HOSTILE:
+        back = tomllib.loads(f"v = {mod.toml_value(value)}")["v"]
+        assert back == value or (isinstance(value, float) and math.isnan(value) and math.isnan(back)), value
+    doc = mod.study_document("random")
+    assert doc["cell"] == [{"task": "paper-box", "agent": "random", "k": 1}]
+    for found in (task_file_fuzz.mutated(doc, ("eval_episodes",), 0), task_file_fuzz.mutated(doc, ("cell", 0), 3)):
+        assert mod.run_variant(found, tmp_path) is None
+    monkeypatch.setattr(task_file_fuzz, "HOSTILE", (0,))
+    monkeypatch.setattr(task_file_fuzz, "leaves", lambda d: iter([("eval_episodes",)]))
+    assert mod.fuzz("random", tmp_path) == {"agent": "random", "variants": 2, "failed": 0, "failures": []}
+
+    monkeypatch.setattr(mod, "SECONDS", 0.001)
+    assert mod.run_variant(doc, tmp_path) == "TimeLimitError: still running after 0.001 s"
+    monkeypatch.setattr(mod, "SECONDS", 20.0)
+    sweep = importlib.import_module("crmgrasp.experiments.sweep")
+    monkeypatch.setattr(sweep, "report", lambda folder: float(None))
+    assert mod.run_variant(doc, tmp_path).startswith("TypeError: float() argument")
+    monkeypatch.setattr(sweep._Unit, "__call__", lambda self: {"status": "failed", "error": "two\nlines"})
+    problem = mod.run_variant(doc, tmp_path)
+    assert problem.startswith("AssertionError: random-k1-") and problem.endswith(r"seed 0: 'two\nlines'"), problem

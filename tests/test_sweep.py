@@ -50,7 +50,13 @@ def test_grid_and_cells_are_expanded(tmp_path):
     ("doc", "message"),
     [
         ({"grid": {"agent": ["sarsa"]}, "foo": 1}, "unknown key 'foo'"),
-        ({"grid": {"alpah": [0.1]}}, "unknown key 'alpah'"),
+        ({"grid": {"alpah": [0.1]}}, r"unknown key 'alpah' \(did you mean 'alpha'\?\); every cell takes task, "),
+        (
+            {"cell": [{"agent": "pooled-vi", "bata": 1}]},
+            r"'bata' \(did you mean 'beta'\?\); .* agent 'pooled-vi' takes beta",
+        ),
+        ({"cell": [3]}, "[[cell]] number 1 must be a table of cell keys, got 3"),
+        ({"cell": [{"agent": "sarsa"}], "eval_episodes": 0}, "eval_episodes must be an integer in [1, "),
         ({"grid": {"agent": []}}, "must be a non-empty list"),
         ({}, "needs a [grid]"),
         ({"grid": {"agent": ["sarsa"]}, "seeds": [1, 1]}, "must not repeat"),

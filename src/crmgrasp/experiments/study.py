@@ -26,6 +26,7 @@ one line naming the file, the cell and the key.
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import hashlib
 import itertools
 import json
@@ -152,7 +153,7 @@ def _cell(raw: dict[str, Any], where: str) -> dict[str, Any]:
     keys = cell_keys()
     for key in raw:
         if key not in keys:
-            raise CrmgraspError(f"{where}: unknown key {key!r}; cell keys: {', '.join(keys)}")
+            raise CrmgraspError(f"{where}: {_unknown(key, raw.get('agent', _DEFAULT_CELL['agent']))}")
     cell = {**_DEFAULT_CELL, **{k: _scalar(k, v, where) for k, v in raw.items()}}
     agent = _typed("agent", cell["agent"], str, where)
     if agent not in AGENTS:
@@ -168,6 +169,19 @@ def _cell(raw: dict[str, Any], where: str) -> dict[str, Any]:
     return cell
 
 
+def _unknown(key: str, agent: Any) -> str:
+    """The message for an unknown cell key: the nearest key, the keys every cell takes and
+    those of the cell's agent (where it names a registered one), not every agent's."""
+    from crmgrasp.agents.training import AGENTS, agent_parameters
+
+    near = difflib.get_close_matches(str(key), cell_keys(), n=1)
+    hint = f" (did you mean {near[0]!r}?)" if near else ""
+    scalar = set(agent_params())
+    own = [p for p in agent_parameters(agent) if p in scalar] if isinstance(agent, str) and agent in AGENTS else []
+    takes = f"; agent {agent!r} takes {', '.join(own)}" if own else ""
+    return f"unknown key {shown(key)}{hint}; every cell takes {', '.join(BASE_KEYS)}{takes}"
+
+
 def study_from_dict(doc: Any) -> Study:
     """The [`Study`][] a parsed study file states (one-line errors naming the key)."""
     if not isinstance(doc, dict):
@@ -179,7 +193,7 @@ def study_from_dict(doc: Any) -> Study:
     name = checked_name(doc.get("name", "study"))  # it names the run folder: a task name's rule
     trials = integer(doc.get("trials", 20), "trials", 1, 100_000)
     episodes = integer(doc.get("episodes", 500), "episodes", 1, 10_000_000)
-    eval_episodes = integer(doc.get("eval_episodes", 200), "eval_episodes", 0, 10_000_000)
+    eval_episodes = integer(doc.get("eval_episodes", 200), "eval_episodes", 1, 10_000_000)  # what its tables compare
     seeds = doc.get("seeds", [0])
     if not isinstance(seeds, list) or not seeds or any(isinstance(s, bool) or not isinstance(s, int) for s in seeds):
         raise CrmgraspError(f"seeds must be a non-empty list of integers, got {shown(seeds)}")
@@ -202,7 +216,10 @@ def study_from_dict(doc: Any) -> Study:
     listed = doc.get("cell", [])
     if not isinstance(listed, list):
         raise CrmgraspError("[[cell]] must be an array of tables")
-    cells += [_cell(c if isinstance(c, dict) else {"?": c}, f"[[cell]] number {i + 1}") for i, c in enumerate(listed)]
+    for i, c in enumerate(listed):
+        if not isinstance(c, dict):
+            raise CrmgraspError(f"[[cell]] number {i + 1} must be a table of cell keys, got {shown(c)}")
+        cells.append(_cell(c, f"[[cell]] number {i + 1}"))
     if not cells:
         raise CrmgraspError("a study needs a [grid] or at least one [[cell]]")
     if len(cells) * len(seeds) > 100_000:
