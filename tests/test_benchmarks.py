@@ -805,3 +805,22 @@ def test_study_file_fuzz_passes_what_it_found_and_reports_what_is_not_one_line(m
     monkeypatch.setattr(sweep._Unit, "__call__", lambda self: {"status": "failed", "error": "two\nlines"})
     problem = mod.run_variant(doc, tmp_path)
     assert problem.startswith("AssertionError: random-k1-") and problem.endswith(r"seed 0: 'two\nlines'"), problem
+
+
+def test_run_record_fuzz_passes_what_it_found_and_tells_meaningful_status_1_apart(monkeypatch, tmp_path):
+    """A damaged unit ``score`` in a complete learn run (an internal error, after a notice that
+    the run was complete) is refused in one line now; status 1 passes only where it means
+    something (``status``: not complete; a sweep: a cell failed) and only silently."""
+    mod = _bench("run_record_fuzz")
+    quiet = "status 1, 0 lines on stderr: ''"
+    assert mod.passes(["status", "d"], "failed", quiet) and mod.passes(["sweep", "s.toml"], "failed", quiet)
+    assert not mod.passes(["sweep", "report", "d"], "failed", quiet)
+    assert not mod.passes(["learn", "--out", "d"], "failed", quiet)
+    assert not mod.passes(["status", "d"], "failed", "status 1, 1 lines on stderr: 'internal error'")
+    assert not mod.passes(["status", "d"], "time limit", None) and mod.passes(["learn"], "refused", None)
+    monkeypatch.setattr(mod.task_file_fuzz, "HOSTILE", ("x", None))
+    monkeypatch.setattr(
+        mod.task_file_fuzz, "leaves", lambda d: iter([("completed", next(iter(d["completed"])), "score")])
+    )
+    row = mod.fuzz("learn", tmp_path)
+    assert row == {"kind": "learn", "commands": 6, "failed": 0, "failures": []}, row

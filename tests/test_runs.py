@@ -56,7 +56,7 @@ def test_existing_folder_is_refused_then_overwritten_or_resumed(tmp_path, capsys
     assert "already holds a complete learn run" in capsys.readouterr().err
     assert (out / "curve.csv").read_bytes() == before
     assert main([*LEARN, "--out", str(out), "--resume"]) == 0
-    assert "is already complete; --resume reruns nothing" in capsys.readouterr().err
+    assert "was already complete; --resume reran nothing" in capsys.readouterr().err
     assert (out / "curve.csv").read_bytes() == before
     (out / "stray.txt").write_text("x")
     assert main([*LEARN, "--out", str(out), "--overwrite"]) == 0
@@ -83,6 +83,23 @@ def test_resume_refuses_other_settings_and_damaged_records(tmp_path, capsys):
     assert main([*LEARN, "--out", str(out), "--resume"]) == 2
     assert "damaged" in capsys.readouterr().err
     assert main([*LEARN, "--out", str(tmp_path / "empty"), "--resume"]) == 2
+
+
+@pytest.mark.parametrize("score", ["x", None, [], True, 1e309])
+def test_a_complete_run_with_a_damaged_unit_is_refused_in_one_line(tmp_path, capsys, score):
+    """A resumed run that was complete says so only once it has ended well: a damaged unit
+    found after the record was claimed (a ``score`` that is not a finite number: an internal
+    error before) is one line, with no notice before it."""
+    out = tmp_path / "r"
+    assert main([*LEARN, "--out", str(out)]) == 0
+    record = json.loads((out / "run.json").read_text())
+    unit = next(iter(record["completed"]))
+    record["completed"][unit]["score"] = score
+    (out / "run.json").write_text(json.dumps(record))
+    capsys.readouterr()
+    assert main([*LEARN, "--out", str(out), "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"is damaged ({unit}: score)" in err, err
 
 
 def test_interrupted_run_resumes_to_identical_results(tmp_path, monkeypatch):

@@ -297,6 +297,7 @@ def test_report_on_a_damaged_study_folder_is_one_line_and_reads_only_inside(tmp_
     (out / "units" / f"{unit.replace(' ', '_')}.json").write_text('{"trials": 3}')
     assert "is damaged" in damaged(lambda r: None)
     (out / "units" / f"{unit.replace(' ', '_')}.json").write_text(good)
+    assert "holds no readable study" in damaged(lambda r: r.pop("config"))  # a KeyError before
     record["status"], record["pid"] = "running", 2**22 + 12345  # a study whose process is gone
     (out / "run.json").write_text(json.dumps(record))
     assert main(["sweep", "report", str(out)]) == 0
@@ -338,3 +339,30 @@ def test_a_ray_address_that_accepts_but_speaks_no_ray_is_bounded(tmp_path):
         conn.close()
     assert res.returncode != 0 and time.monotonic() - t0 < 60
     assert f"Ray at 127.0.0.1:{port} did not answer within 3 s" in res.stderr
+
+
+@pytest.mark.parametrize("info", [-1, "x", [], {"status": []}, {"status": "ok", "error": 3}, {}])
+def test_a_resumed_study_with_a_damaged_unit_is_refused_in_one_line(tmp_path, capsys, info):
+    """A unit of the record that is not what the sweep records (an internal error before: an
+    AttributeError or an unhashable status) is one line, before any run; the report of a
+    study none of whose units has an evaluation draws no legend (a warning before)."""
+    import warnings
+
+    tiny = 'name = "tiny"\ntrials = 1\nepisodes = 5\neval_episodes = 2\nseeds = [0]\n[[cell]]\nagent = "sarsa"\n'
+    study, out = _write(tmp_path, tiny), tmp_path / "s"
+    assert main(["sweep", str(study), "--quiet", "--out", str(out)]) == 0
+    record = json.loads((out / "run.json").read_text())
+    (unit,) = record["completed"]
+    for name in (unit, "another unit"):
+        rec = json.loads(json.dumps(record))
+        rec["completed"][name] = info
+        (out / "run.json").write_text(json.dumps(rec))
+        capsys.readouterr()
+        assert main(["sweep", str(study), "--quiet", "--out", str(out), "--resume"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and f"is damaged (unit '{name}')" in err, err
+    record["completed"][unit]["status"] = "failed"
+    (out / "run.json").write_text(json.dumps(record))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert main(["sweep", "report", str(out)]) == 0

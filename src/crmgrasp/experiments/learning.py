@@ -27,6 +27,7 @@ Used by ``crmgrasp learn`` and by Figure 7. Files written to the output folder:
 
 from __future__ import annotations
 
+import math
 import time
 from collections import Counter
 from dataclasses import dataclass, field
@@ -151,10 +152,12 @@ def _load_part(task: Task, store: RunFolder, unit: str, info: Any, trials: int, 
     if arrays[0].shape != (trials, episodes):
         raise CrmgraspError(f"cannot resume: {unit} of {str(store.path)!r} has the wrong shape")
     policy = _load_policy(task, stem)
-    faults = info.get("faults", {})
+    faults, score = info.get("faults", {}), info["score"]
     if not isinstance(faults, dict) or not all(isinstance(v, int) for v in faults.values()):
         raise CrmgraspError(f"run record of {str(store.path)!r} is damaged ({unit}: faults)")
-    return _Part(*arrays, policy, float(info["score"]), faults)  # type: ignore[misc,call-arg]
+    if isinstance(score, bool) or not isinstance(score, (int, float)) or not math.isfinite(score):
+        raise CrmgraspError(f"run record of {str(store.path)!r} is damaged ({unit}: score)")
+    return _Part(*arrays, policy, float(score), faults)  # type: ignore[misc,call-arg]
 
 
 def _policy_file(stem: Path, file_name: str) -> Path:

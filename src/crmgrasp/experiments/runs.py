@@ -233,7 +233,7 @@ class RunFolder:
             raise CrmgraspError("--overwrite and --resume exclude each other")
         self.path = default_run_dir(command, task) if path is None else check_folder(path, "--out")
         self.config = json.loads(json.dumps(config))  # plain JSON data, as it will be read back
-        self.resumed = False
+        self.resumed = self._was_complete = False
         made = not self.path.exists()
         self.path.mkdir(parents=True, exist_ok=True)
         self._lock_fd = _lock(self.path)
@@ -300,8 +300,6 @@ class RunFolder:
                 f"--out {str(p)!r} already holds a {doc['status']} {doc.get('command')} run; "
                 "use --resume to continue it, --overwrite to replace it, or another --out"
             )
-        if doc["status"] == "complete":
-            print(f"crmgrasp: the run in {str(p)!r} is already complete; --resume reruns nothing", file=sys.stderr)
         if doc.get("command") != command:
             raise CrmgraspError(f"--resume: {str(p)!r} holds a {shown(doc.get('command'))} run, not {command}")
         old = doc.get("config", {})
@@ -311,6 +309,7 @@ class RunFolder:
                     f"--resume: the run in {str(p)!r} has {key} = {shown(old.get(key))}, "
                     f"this command {shown(self.config.get(key))}; resume with the same settings"
                 )
+        self._was_complete = doc["status"] == "complete"  # said when the resumed run ends well
         for tmp in temporaries(p):  # writes a kill cut short: their files were never renamed into place
             tmp.unlink()
         self.resumed = True
@@ -349,6 +348,11 @@ class RunFolder:
     def __exit__(self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
         if kind is None:
             self.finish("complete")
+            if self._was_complete:  # after the run, so that a record found damaged later says only that
+                print(
+                    f"crmgrasp: the run in {str(self.path)!r} was already complete; --resume reran nothing",
+                    file=sys.stderr,
+                )
         elif issubclass(kind, KeyboardInterrupt):
             self.finish("interrupted")
         else:

@@ -104,6 +104,7 @@ def run_study(
         for c in study.cells
         for s in study.seeds
     ]
+    checked_units(store.record["completed"], store.path)  # a resumed record, before any run
     todo = [(name, unit) for name, unit in units if store.done(name) is None]
     stage = progress.stage(f"sweep {study.name}", len(units), "runs") if progress else None
     if stage:
@@ -133,9 +134,20 @@ def run_study(
 _CELL_COLUMNS = ("greedy_mean_steps", "ci95_low", "ci95_high", "greedy_iqm_steps", "episodes_to_5pct", "seconds")
 
 
+def checked_units(completed: dict[str, Any], out: Path) -> dict[str, Any]:
+    """``completed``, the units a study folder's record holds, if each is what [`run_study`][]
+    records (``status`` ``ok`` or ``failed``, ``error`` text or null); else a one-line error
+    naming the first that is not."""
+    for name, info in completed.items():
+        status, error = (info.get("status"), info.get("error")) if isinstance(info, dict) else (None, None)
+        if status not in ("ok", "failed") or not isinstance(error, (str, type(None))):
+            raise CrmgraspError(f"run record of {str(out)!r} is damaged (unit {shown(name)})")
+    return completed
+
+
 def write_tables(study: Study, out: Path, completed: dict[str, Any]) -> dict[str, int]:
     """``results.csv`` (cell x seed x trial), ``cells.csv`` (cell x seed) and Parquet copies."""
-    keys = table_keys(study)
+    keys, completed = table_keys(study), checked_units(completed, out)
     rows, cells, counts = [], [], {"ok": 0, "failed": 0}
     for c in study.cells:
         for s in study.seeds:
@@ -212,7 +224,7 @@ _TRIAL_KEYS = ("greedy_mean_steps", "greedy_success_rate", "final_mean_steps")
 
 def _recorded_study(rec: dict[str, Any], out: Path) -> Study:
     """The study a sweep's run record holds, checked as a study file is."""
-    doc = rec["config"].get("study")
+    doc = rec.get("config", {}).get("study")  # a record may lack its config (a one-line error below)
     try:
         keys = ("name", "trials", "episodes", "eval_episodes", "seeds")
         top = {k: doc[k] for k in keys}  # type: ignore[index]
@@ -329,7 +341,7 @@ def _figures(out: Path, study: Study, per_cell: dict[str, np.ndarray], swept: li
     note = f" (tasks differ: {', '.join(tasks)}; see report.md by task)" if len(tasks) > 1 else f" on {tasks[0]}"
     ax.set_title("\n".join(textwrap.wrap(f"Performance profile, study {study.name}{note}", 80)), fontsize=9)
     ax.grid(alpha=0.3)
-    if len(study.cells) <= 12:
+    if scores and len(study.cells) <= 12:  # no curve, no legend: no cell has an evaluation
         ax.legend(fontsize=6)
     save_figure(fig, out / "profile.png", dpi=110)
     for key in swept:
