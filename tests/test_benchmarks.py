@@ -824,3 +824,6 @@ def test_run_record_fuzz_passes_what_it_found_and_tells_meaningful_status_1_apar
     )
     row = mod.fuzz("learn", tmp_path)
     assert row == {"kind": "learn", "commands": 6, "failed": 0, "failures": []}, row
+    monkeypatch.setattr(mod.task_file_fuzz, "leaves", lambda d: iter([("summary", "greedy_ci95_over_trials")]))
+    row = mod.fuzz("sweep-unit", tmp_path)  # the study's first unit result: report and resume
+    assert row == {"kind": "sweep-unit", "commands": 6, "failed": 0, "failures": []}, row

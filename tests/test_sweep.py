@@ -296,6 +296,12 @@ def test_report_on_a_damaged_study_folder_is_one_line_and_reads_only_inside(tmp_
     assert "unit result" in damaged(lambda r: r["completed"][unit].update(file=str(outside)))
     (out / "units" / f"{unit.replace(' ', '_')}.json").write_text('{"trials": 3}')
     assert "is damaged" in damaged(lambda r: None)
+    for field, value in (("summary.greedy_ci95_over_trials", 3), ("trials.greedy_mean_steps", ["x"])):
+        part, key = field.split(".")
+        doc = json.loads(good)
+        doc[part][key] = value  # an internal error before (a TypeError, a ValueError)
+        (out / "units" / f"{unit.replace(' ', '_')}.json").write_text(json.dumps(doc))
+        assert f"is damaged ({field})" in damaged(lambda r: None)
     (out / "units" / f"{unit.replace(' ', '_')}.json").write_text(good)
     assert "holds no readable study" in damaged(lambda r: r.pop("config"))  # a KeyError before
     record["status"], record["pid"] = "running", 2**22 + 12345  # a study whose process is gone

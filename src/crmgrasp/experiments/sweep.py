@@ -211,15 +211,48 @@ def _unit_doc(out: Path, name: str) -> dict[str, Any]:
     path = out / _unit_file(name)
     try:
         doc = json.loads(read_bounded(path, 64 * 2**20, "unit result").decode("utf-8"))
-        trials, summary = doc["trials"], doc["summary"]
-        if not isinstance(summary, dict) or not all(isinstance(trials[k], list) for k in _TRIAL_KEYS):
-            raise TypeError("trials or summary of the wrong type")
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError, KeyError, TypeError) as exc:
+        _check_unit(doc)
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
         raise CrmgraspError(f"unit result {str(path)!r} is damaged ({type(exc).__name__})") from None
+    except (KeyError, TypeError, ValueError) as exc:
+        raise CrmgraspError(f"unit result {str(path)!r} is damaged ({str(exc).strip(chr(39))})") from None
     return doc  # type: ignore[no-any-return]
 
 
 _TRIAL_KEYS = ("greedy_mean_steps", "greedy_success_rate", "final_mean_steps")
+_SUMMARY_NUMBERS = ("greedy_mean_steps", "greedy_iqm_steps", "seconds")
+
+
+def _finite(value: Any, none: bool = False) -> bool:
+    """Whether ``value`` is a finite real number (not a boolean), or None where ``none``."""
+    real = isinstance(value, (int, float)) and not isinstance(value, bool)
+    return (value is None and none) or (real and math.isfinite(value))
+
+
+def _check_unit(doc: Any) -> None:
+    """What the tables and the report read of a unit's result, as ``_Unit`` writes it: equal,
+    non-empty lists of finite numbers per trial; the summary's mean, interquartile mean and
+    time finite, its interval two numbers or nulls, its episodes to 5% a count or null. Raises
+    ``ValueError`` naming the first field that is not (``KeyError`` for a missing one)."""
+    if not isinstance(doc, dict):
+        raise ValueError("not a table")
+    trials, summary = doc["trials"], doc["summary"]
+    if not isinstance(trials, dict) or not isinstance(summary, dict):
+        raise ValueError("trials or summary not a table")
+    for key in _TRIAL_KEYS:
+        values = trials[key]
+        if not isinstance(values, list) or len(values) != len(trials[_TRIAL_KEYS[0]]) or not values:
+            raise ValueError(f"trials.{key}")
+        if not all(_finite(v) for v in values):
+            raise ValueError(f"trials.{key}")
+    for key in _SUMMARY_NUMBERS:
+        if not _finite(summary[key]):
+            raise ValueError(f"summary.{key}")
+    ci, to5 = summary["greedy_ci95_over_trials"], summary["episodes_to_5pct"]
+    if not (isinstance(ci, list) and len(ci) == 2 and all(_finite(v, none=True) for v in ci)):
+        raise ValueError("summary.greedy_ci95_over_trials")
+    if not (to5 is None or (isinstance(to5, int) and not isinstance(to5, bool) and to5 >= 0)):
+        raise ValueError("summary.episodes_to_5pct")
 
 
 def _recorded_study(rec: dict[str, Any], out: Path) -> Study:
