@@ -822,8 +822,11 @@ def test_run_record_fuzz_passes_what_it_found_and_tells_meaningful_status_1_apar
     monkeypatch.setattr(
         mod.task_file_fuzz, "leaves", lambda d: iter([("completed", next(iter(d["completed"])), "score")])
     )
-    row = mod.fuzz("learn", tmp_path)
-    assert row == {"kind": "learn", "commands": 6, "failed": 0, "failures": []}, row
+    row = mod.fuzz("learn", tmp_path)  # status runs (it reads the status only), resume is refused
+    assert row == {"kind": "learn", "commands": 6, "ran": 3, "failed": 0, "failures": []}, row
     monkeypatch.setattr(mod.task_file_fuzz, "leaves", lambda d: iter([("summary", "greedy_ci95_over_trials")]))
     row = mod.fuzz("sweep-unit", tmp_path)  # the study's first unit result: report and resume
-    assert row == {"kind": "sweep-unit", "commands": 6, "failed": 0, "failures": []}, row
+    assert row == {"kind": "sweep-unit", "commands": 6, "ran": 0, "failed": 0, "failures": []}, row
+    monkeypatch.setattr(mod, "ARRAY_CHANGES", {"negative": mod.ARRAY_CHANGES["negative"]})
+    row = mod.fuzz("learn-trials", tmp_path)  # resumed from negative CRM counts before, without a word
+    assert row == {"kind": "learn-trials", "commands": 6, "ran": 0, "failed": 0, "failures": []}, row

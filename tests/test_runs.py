@@ -8,6 +8,7 @@ import os
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from crmgrasp._progress import Progress, Quiet
@@ -100,6 +101,35 @@ def test_a_complete_run_with_a_damaged_unit_is_refused_in_one_line(tmp_path, cap
     assert main([*LEARN, "--out", str(out), "--resume"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and f"is damaged ({unit}: score)" in err, err
+
+
+@pytest.mark.parametrize(
+    ("array", "change"),
+    [
+        ("steps", lambda a: a.astype(str)),
+        ("success", lambda a: np.array(3)),
+        ("greedy_steps", lambda a: a[:, :0]),
+        ("greedy_success", lambda a: a[..., None]),
+        ("checkpoints", lambda a: a * np.nan),
+        ("checkpoint_steps", lambda a: a[..., None]),
+        ("steps", lambda a: -a),
+    ],
+)
+def test_a_damaged_trials_file_is_refused_in_one_line(tmp_path, capsys, array, change):
+    """An array of a saved group of trials that training would not write (an internal error
+    before, or, for negative CRM counts, results resumed from garbage) is one line naming it."""
+    out = tmp_path / "r"
+    assert main([*LEARN, "--out", str(out)]) == 0
+    path = sorted((out / "trials").glob("*.npz"))[0]
+    with np.load(path) as z:
+        arrays = {k: z[k] for k in z.files}
+    arrays[array] = change(arrays[array])
+    with open(path, "wb") as fh:
+        np.savez(fh, **arrays)
+    capsys.readouterr()
+    assert main([*LEARN, "--out", str(out), "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"is damaged ({array})" in err, err
 
 
 def test_interrupted_run_resumes_to_identical_results(tmp_path, monkeypatch):

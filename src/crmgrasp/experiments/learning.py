@@ -140,7 +140,32 @@ def _save_part(store: RunFolder, unit: str, part: _Part) -> None:
     store.complete(unit, {"file": str(stem.relative_to(store.path)), "score": part.score, "faults": part.faults})
 
 
-def _load_part(task: Task, store: RunFolder, unit: str, info: Any, trials: int, episodes: int) -> _Part:
+def _bad_array(arrays: list[np.ndarray], n: int, episodes: int, evals: int, max_steps: int) -> str | None:
+    """The name of the first of a saved group's arrays (``_ARRAYS``' order) that is not what
+    training writes for ``n`` trials of ``episodes`` episodes and ``evals`` evaluation
+    episodes (shapes, kinds, CRM counts and checkpoint means in ``[0, max_steps]``, checkpoints
+    increasing within the episodes); None if all are."""
+    steps, success, gsteps, gsucc, ckpts, csteps = arrays
+
+    def counts(a: np.ndarray, shape: tuple[int, ...]) -> bool:
+        return a.shape == shape and a.dtype.kind in "iu" and bool(((a >= 0) & (a <= max_steps)).all())
+
+    checks = (
+        counts(steps, (n, episodes)),
+        success.shape == (n, episodes) and success.dtype == bool,
+        counts(gsteps, (n, evals)),
+        gsucc.shape == (n, evals) and gsucc.dtype == bool,
+        ckpts.ndim == 1
+        and ckpts.dtype.kind in "iu"
+        and bool(((ckpts >= 1) & (ckpts <= episodes)).all() and (np.diff(ckpts) > 0).all()),
+        csteps.shape == (n, ckpts.size)
+        and csteps.dtype.kind == "f"
+        and bool(((csteps >= 0) & (csteps <= max_steps)).all()),
+    )
+    return next((name for name, ok in zip(_ARRAYS, checks, strict=True) if not ok), None)
+
+
+def _load_part(task: Task, store: RunFolder, unit: str, info: Any, trials: int, episodes: int, evals: int) -> _Part:
     if not isinstance(info, dict) or not isinstance(info.get("file"), str) or "score" not in info:
         raise CrmgraspError(f"run record of {str(store.path)!r} is damaged ({unit})")
     stem = store.path / info["file"]
@@ -149,8 +174,9 @@ def _load_part(task: Task, store: RunFolder, unit: str, info: Any, trials: int, 
             arrays = [z[a] for a in _ARRAYS]
     except (OSError, ValueError, KeyError) as exc:
         raise CrmgraspError(f"cannot resume: {unit} of {str(store.path)!r} is damaged ({exc})") from None
-    if arrays[0].shape != (trials, episodes):
-        raise CrmgraspError(f"cannot resume: {unit} of {str(store.path)!r} has the wrong shape")
+    bad = _bad_array(arrays, trials, episodes, evals, task.max_steps)
+    if bad is not None:
+        raise CrmgraspError(f"cannot resume: {unit} of {str(store.path)!r} is damaged ({bad})")
     policy = _load_policy(task, stem)
     faults, score = info.get("faults", {}), info["score"]
     if not isinstance(faults, dict) or not all(isinstance(v, int) for v in faults.values()):
@@ -266,7 +292,7 @@ def learn(
     t0 = time.perf_counter()
     job = _GroupJob(task, spec, lockstep, episodes, seed, eval_episodes, checkpoint_episodes, backend, hand)
     stage = progress.stage(f"{spec.name} on {task.name}", trials * episodes, "episodes") if progress else None
-    parts, pending = _recorded_parts(task, store, _groups(trials, lockstep), episodes, stage)
+    parts, pending = _recorded_parts(task, store, _groups(trials, lockstep), (episodes, eval_episodes), stage)
 
     def finished(first: int, unit: str, part: _Part) -> None:
         parts[first] = part
@@ -285,6 +311,9 @@ def learn(
     parts_list = [parts[f] for f in sorted(parts)]
     if stage:
         stage.end()
+    if any(not np.array_equal(p.checkpoints, parts_list[0].checkpoints) for p in parts_list):
+        where = str(store.path) if store is not None else "the run"
+        raise CrmgraspError(f"cannot resume: the groups of trials of {where!r} differ in their checkpoints (damaged)")
     joined = {a: np.concatenate([getattr(p, a) for p in parts_list]) for a in _ARRAYS if a != "checkpoints"}
     res = TrialResult(agents=[], checkpoints=parts_list[0].checkpoints, **joined)  # type: ignore[arg-type]
     best = min(range(len(parts_list)), key=lambda i: (parts_list[i].score, i))
@@ -296,17 +325,23 @@ def learn(
 
 
 def _recorded_parts(
-    task: Task, store: RunFolder | None, groups: list[tuple[int, int]], episodes: int, stage: Progress | None
+    task: Task,
+    store: RunFolder | None,
+    groups: list[tuple[int, int]],
+    budget: tuple[int, int],
+    stage: Progress | None,
 ) -> tuple[dict[int, _Part], list[tuple[int, int, str]]]:
     """The groups of trials (first trial, count) that ``store`` records as done, loaded, by
-    their first trial; and the others, still to train, with their unit names."""
+    their first trial; and the others, still to train, with their unit names. ``budget``:
+    training and evaluation episodes per trial."""
+    episodes, evals = budget
     parts: dict[int, _Part] = {}
     pending = []
     for first, n in groups:
         unit = f"trials {first:05d}-{first + n - 1:05d}"
         info = store.done(unit) if store is not None else None
         if info is not None:
-            parts[first] = _load_part(task, store, unit, info, n, episodes)  # type: ignore[arg-type]
+            parts[first] = _load_part(task, store, unit, info, n, episodes, evals)  # type: ignore[arg-type]
             if stage:
                 stage.advance(n * episodes)
         else:
