@@ -104,7 +104,7 @@ def run_study(
         for c in study.cells
         for s in study.seeds
     ]
-    checked_units(store.record["completed"], store.path)  # a resumed record, before any run
+    _checked_units(store.record["completed"], store.path)  # a resumed record, before any run
     todo = [(name, unit) for name, unit in units if store.done(name) is None]
     stage = progress.stage(f"sweep {study.name}", len(units), "runs") if progress else None
     if stage:
@@ -134,7 +134,7 @@ def run_study(
 _CELL_COLUMNS = ("greedy_mean_steps", "ci95_low", "ci95_high", "greedy_iqm_steps", "episodes_to_5pct", "seconds")
 
 
-def checked_units(completed: dict[str, Any], out: Path) -> dict[str, Any]:
+def _checked_units(completed: dict[str, Any], out: Path) -> dict[str, Any]:
     """``completed``, the units a study folder's record holds, if each is what [`run_study`][]
     records (``status`` ``ok`` or ``failed``, ``error`` text or null); else a one-line error
     naming the first that is not."""
@@ -147,7 +147,7 @@ def checked_units(completed: dict[str, Any], out: Path) -> dict[str, Any]:
 
 def write_tables(study: Study, out: Path, completed: dict[str, Any]) -> dict[str, int]:
     """``results.csv`` (cell x seed x trial), ``cells.csv`` (cell x seed) and Parquet copies."""
-    keys, completed = table_keys(study), checked_units(completed, out)
+    keys, completed = table_keys(study), _checked_units(completed, out)
     rows, cells, counts = [], [], {"ok": 0, "failed": 0}
     for c in study.cells:
         for s in study.seeds:
