@@ -63,6 +63,18 @@ def finite(value: object, name: str) -> float:
     return x
 
 
+def is_finite_number(value: object) -> bool:
+    """Whether ``value`` is a finite real number as JSON data holds one: an ``int`` or ``float``,
+    not a ``bool``, not text (what a saved record's numbers must be; [`finite`][] reads text too).
+
+    Examples
+    --------
+    >>> is_finite_number(2.5), is_finite_number(True), is_finite_number("1"), is_finite_number(float("nan"))
+    (True, False, False, False)
+    """
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
 def positive(value: object, name: str) -> float:
     """Return ``value`` as a finite float > 0, or raise `CrmgraspError`."""
     x = finite(value, name)

@@ -27,7 +27,6 @@ Used by ``crmgrasp learn`` and by Figure 7. Files written to the output folder:
 
 from __future__ import annotations
 
-import math
 import time
 from collections import Counter
 from dataclasses import dataclass, field
@@ -39,7 +38,7 @@ import numpy as np
 
 from crmgrasp._io import atomic_path, save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, is_finite_number
 from crmgrasp.agents import GreedyPolicy, TabularAgent, episodes_to_within, train_trials, train_trials_lockstep
 from crmgrasp.agents.deep import DEEP_AGENTS
 from crmgrasp.agents.deep_trials import SavedDeepPolicy, deep_settings, train_deep_trials
@@ -181,7 +180,7 @@ def _load_part(task: Task, store: RunFolder, unit: str, info: Any, trials: int, 
     faults, score = info.get("faults", {}), info["score"]
     if not isinstance(faults, dict) or not all(isinstance(v, int) for v in faults.values()):
         raise CrmgraspError(f"run record of {str(store.path)!r} is damaged ({unit}: faults)")
-    if isinstance(score, bool) or not isinstance(score, (int, float)) or not math.isfinite(score):
+    if not is_finite_number(score):
         raise CrmgraspError(f"run record of {str(store.path)!r} is damaged ({unit}: score)")
     return _Part(*arrays, policy, float(score), faults)  # type: ignore[misc,call-arg]
 

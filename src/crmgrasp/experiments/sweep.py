@@ -29,7 +29,7 @@ import numpy as np
 
 from crmgrasp._io import atomic_write_text, read_bounded, save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
-from crmgrasp._validation import CrmgraspError, shown
+from crmgrasp._validation import CrmgraspError, is_finite_number, shown
 from crmgrasp.experiments.learning import LearnerSpec, learn
 from crmgrasp.experiments.parallel import run_parallel
 from crmgrasp.experiments.runs import RunFolder
@@ -147,7 +147,7 @@ def _checked_units(completed: dict[str, Any], out: Path) -> dict[str, Any]:
 
 def write_tables(study: Study, out: Path, completed: dict[str, Any]) -> dict[str, int]:
     """``results.csv`` (cell x seed x trial), ``cells.csv`` (cell x seed) and Parquet copies."""
-    keys, completed = table_keys(study), _checked_units(completed, out)
+    keys = table_keys(study)
     rows, cells, counts = [], [], {"ok": 0, "failed": 0}
     for c in study.cells:
         for s in study.seeds:
@@ -223,12 +223,6 @@ _TRIAL_KEYS = ("greedy_mean_steps", "greedy_success_rate", "final_mean_steps")
 _SUMMARY_NUMBERS = ("greedy_mean_steps", "greedy_iqm_steps", "seconds")
 
 
-def _finite(value: Any, none: bool = False) -> bool:
-    """Whether ``value`` is a finite real number (not a boolean), or None where ``none``."""
-    real = isinstance(value, (int, float)) and not isinstance(value, bool)
-    return (value is None and none) or (real and math.isfinite(value))
-
-
 def _check_unit(doc: Any) -> None:
     """What the tables and the report read of a unit's result, as ``_Unit`` writes it: equal,
     non-empty lists of finite numbers per trial; the summary's mean, interquartile mean and
@@ -241,15 +235,14 @@ def _check_unit(doc: Any) -> None:
         raise ValueError("trials or summary not a table")
     for key in _TRIAL_KEYS:
         values = trials[key]
-        if not isinstance(values, list) or len(values) != len(trials[_TRIAL_KEYS[0]]) or not values:
-            raise ValueError(f"trials.{key}")
-        if not all(_finite(v) for v in values):
+        same = isinstance(values, list) and len(values) == len(trials[_TRIAL_KEYS[0]]) and values
+        if not same or not all(is_finite_number(v) for v in values):
             raise ValueError(f"trials.{key}")
     for key in _SUMMARY_NUMBERS:
-        if not _finite(summary[key]):
+        if not is_finite_number(summary[key]):
             raise ValueError(f"summary.{key}")
     ci, to5 = summary["greedy_ci95_over_trials"], summary["episodes_to_5pct"]
-    if not (isinstance(ci, list) and len(ci) == 2 and all(_finite(v, none=True) for v in ci)):
+    if not (isinstance(ci, list) and len(ci) == 2 and all(v is None or is_finite_number(v) for v in ci)):
         raise ValueError("summary.greedy_ci95_over_trials")
     if not (to5 is None or (isinstance(to5, int) and not isinstance(to5, bool) and to5 >= 0)):
         raise ValueError("summary.episodes_to_5pct")
