@@ -830,3 +830,24 @@ def test_run_record_fuzz_passes_what_it_found_and_tells_meaningful_status_1_apar
     monkeypatch.setattr(mod, "ARRAY_CHANGES", {"negative": mod.ARRAY_CHANGES["negative"]})
     row = mod.fuzz("learn-trials", tmp_path)  # resumed from negative CRM counts before, without a word
     assert row == {"kind": "learn-trials", "commands": 6, "ran": 0, "failed": 0, "failures": []}, row
+
+
+def test_first_crm_misses_swaps_only_the_start_choices_and_counts_blocks(capsys):
+    """Paper-box seed 1 after 20 episodes opposes at once from the far start, where the
+    converged preset moves the far contact first: 1.709 CRMs, 1.659 with that choice swapped
+    (docs/results.md); the swap changes the start histories only; blocks of ten are counted."""
+    mod = _bench("first_crm_misses")
+    out = mod.main(["--seeds", "2", "--first", "0"])
+    assert json.loads(capsys.readouterr().out)["seeds"] == [0, 1]
+    assert out["within_5pct"] == 2 and out["differ"]["seeds"] == 1 and out["blocks_of_ten"]["of"] == 0
+    (row,) = out["differ_seeds"]
+    assert row["seed"] == 1 and row["crms"] == 1.709 and row["swapped"] == 1.659
+    assert row["counts"].startswith("history 79: ") and "CRM 1: error 1, grasp 1" in row["counts"]
+    task = mod.make_task("paper-box")
+    policy, reference = mod.learn(task, 20, 1), mod.learn(task, 40, 2)
+    starts = sorted(mod.met_starts(task, reference))
+    both = mod.swapped(policy, reference, starts)
+    assert all(both.table[s] == reference.table[s] for s in starts)
+    assert all(both.table[s] == a for s, a in policy.table.items() if s not in starts)
+    rows = [{"crms": 1.0 + (i % 7 == 0)} for i in range(20)] + [{"crms": 2.0, "swapped": 1.0}]
+    assert mod.summary(rows, 1.5)["blocks_of_ten"] == {"with_9_within": 1, "with_5_within": 2, "of": 2}
