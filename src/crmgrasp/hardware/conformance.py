@@ -5,16 +5,19 @@
 
 1. ``sense``: returns [`NoContact`][crmgrasp.hardware.contact_sensing.NoContact] or a
    configuration of the task's contact model: one finite row of the model's layout
-   (``task.model.columns``) whose observation (``task.observe``) is finite;
+   (``task.model.columns``), taken by the model as a reading, whose observation
+   (``task.observe``) is finite;
 2. ``execute``: each of the task's CRMs returns an [`Error`][crmgrasp.model.hand.Error]
    member, and the hand senses again afterwards;
 3. ``refuse``: a CRM naming a contact the hand does not have is refused with a one-line
    `CrmgraspError` (the model's ``check_crm``), not an exception from deep inside;
-4. ``raw_reading`` (optional): a dict that serialises to JSON;
+4. ``raw_reading`` (optional): a dict with string keys that serialises to JSON;
 5. ``runner``: [`PolicyRunner`][crmgrasp.hardware.runner.PolicyRunner] runs an episode on it
    and writes a step log with one row per reading.
 
-The kinematic hand ([`KinematicHand`][crmgrasp.hardware.runner.KinematicHand]) and both
+Checks 1, 2 and 4 are those the runner makes of every answer while it runs
+([`crmgrasp.hardware.answers`][]). The kinematic hand
+([`KinematicHand`][crmgrasp.hardware.runner.KinematicHand]) and both
 MuJoCo hands pass it (``tests/test_conformance.py``); ``docs/hardware.md`` walks through the
 methods.
 """
@@ -22,7 +25,6 @@ methods.
 from __future__ import annotations
 
 import csv
-import math
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
@@ -30,12 +32,10 @@ from typing import Any
 
 import numpy as np
 
-from crmgrasp._io import dumps_json
 from crmgrasp._validation import CrmgraspError
-from crmgrasp.hardware.contact_sensing import NoContact
+from crmgrasp.hardware.answers import checked_error, checked_raw, checked_reading
 from crmgrasp.hardware.runner import HandInterface, PolicyRunner
 from crmgrasp.model.contacts import ALL_LABELS
-from crmgrasp.model.hand import Error
 from crmgrasp.tasks import Task
 
 __all__ = ["check_hand", "CHECKS"]
@@ -60,18 +60,13 @@ def _fail(check: str, what: str) -> CrmgraspError:
     return CrmgraspError(f"hand conformance: {check}: {what}")
 
 
-def _check_reading(task: Task, reading: Any, where: str) -> None:
-    if isinstance(reading, NoContact):
-        return
+def _checked(check: str, answer_check: Callable[..., Any], *args: Any) -> Any:
+    """``answer_check(*args)`` (a check of [`crmgrasp.hardware.answers`][]), its one-line
+    error named by the conformance check that failed."""
     try:
-        row = [float(v) for v in task.model.numbers(reading)]
-        obs = task.observe(reading)
-    except Exception as exc:  # a wrong type from sense() fails here, named
-        raise _fail("sense", f"{where}: not a configuration of the {task.model.kind} model ({exc})") from None
-    if len(row) != len(task.model.columns) or not all(map(math.isfinite, row)):
-        raise _fail("sense", f"{where}: expected {len(task.model.columns)} finite numbers, got {row}")
-    if not all(map(math.isfinite, obs)):
-        raise _fail("sense", f"{where}: the observation {obs} is not finite")
+        return answer_check(*args)
+    except CrmgraspError as exc:
+        raise _fail(check, str(exc)) from None
 
 
 def _refuses(task: Task, hand: HandInterface) -> None:
@@ -103,19 +98,14 @@ def check_hand(make_hand: MakeHand, task: Task, seed: int = 0, worlds: int = 2) 
     for w in range(worlds):
         world = task.sample_world(rng)
         for i, _ in enumerate(task.actions):
-            hand = make_hand(world.task, world.config, rng)
-            _check_reading(task, hand.sense(), f"world {w}, before CRM {i}")
-            error = hand.execute(task.actions[i])
-            if not isinstance(error, Error):
-                raise _fail("execute", f"CRM {task.actions[i]} returned {error!r}, not an Error")
-            _check_reading(task, hand.sense(), f"world {w}, after CRM {i}")
+            hand, crm = make_hand(world.task, world.config, rng), task.actions[i]
+            _checked("sense", checked_reading, task, hand.sense(), f"in world {w} before CRM {i}")
+            _checked("execute", checked_error, hand.execute(crm), crm)
+            _checked("sense", checked_reading, task, hand.sense(), f"in world {w} after CRM {i}")
             raw = getattr(hand, "raw_reading", None)
             if raw is not None:
                 has_raw = True
-                try:
-                    dumps_json(raw(), indent=None)
-                except (TypeError, ValueError) as exc:
-                    raise _fail("raw_reading", f"not a JSON-serialisable dict ({exc})") from None
+                _checked("raw_reading", checked_raw, raw())
     passed += ["sense", "execute"]
     _refuses(task, make_hand(world.task, world.config, rng))
     passed.append("refuse")

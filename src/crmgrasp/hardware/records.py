@@ -11,7 +11,10 @@ hand's clock (MuJoCo's simulated time; the kinematic hand: one second per CRM):
 * ``/object`` (``foxglove.PoseInFrame``): the object's pose (a hand that reports it: the
   MuJoCo stand-in);
 * ``/wrench/<contact>`` (``crmgrasp.Wrench``, JSON): the tared fingertip wrench behind the
-  reading, ``force`` (N) and ``torque`` (N m);
+  reading, ``force`` (N) and ``torque`` (N m): each entry of the hand's ``raw_reading()`` named
+  by a contact label whose value is 3 (planar) or 6 (spatial) numbers;
+* ``/raw`` (``crmgrasp.RawReading``, JSON): the rest of the hand's ``raw_reading()`` (the
+  entries that are not a contact's wrench), if any;
 * ``/crm`` (``crmgrasp.CRMStep``, JSON): the step, the model's observation, its bin and
   label; the CRM taken after the reading, its action index and the error flag it returned;
 * ``/log`` (``foxglove.Log``): the same step as one line of text.
@@ -26,11 +29,12 @@ import json
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from numbers import Real
 from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from crmgrasp._io import atomic_path
+from crmgrasp._io import atomic_path, json_safe
 from crmgrasp._validation import require_extra
 
 __all__ = ["StepRecord", "write_mcap", "require_mcap", "contact_frames", "TOPICS"]
@@ -45,6 +49,7 @@ _WRENCH = {
         name: {"type": "object", "properties": {k: {"type": "number"} for k in "xyz"}} for name in ("force", "torque")
     },
 }
+_RAW = {"type": "object", "title": "crmgrasp.RawReading"}
 _STEP = {
     "type": "object",
     "title": "crmgrasp.CRMStep",
@@ -97,6 +102,15 @@ def contact_frames(model: Any, config: Any) -> dict[str, tuple[tuple[float, ...]
 def require_mcap() -> ModuleType:
     """Import and return the Foxglove SDK, or raise a one-line error naming the extra."""
     return require_extra("mcap", "an MCAP record", "mcap", "foxglove")[1]  # type: ignore[no-any-return]
+
+
+def _is_wrench(values: object) -> bool:
+    """A planar ``f_x, f_y, m_z`` or a spatial ``f, m`` reading: 3 or 6 finite real numbers."""
+    return (
+        isinstance(values, (list, tuple))
+        and len(values) in (3, 6)
+        and all(isinstance(v, Real) and not isinstance(v, bool) and math.isfinite(v) for v in values)
+    )
 
 
 def _wrench(values: Sequence[float]) -> dict[str, dict[str, float]]:
@@ -194,16 +208,24 @@ def _log_all(fg: Any, ctx: Any, records: Sequence[StepRecord], task_name: str) -
     log = ch.LogChannel("/log", context=ctx)
     step = _json_channel(fg, ctx, "/crm", _STEP)
     wrenches: dict[str, Any] = {}
+    raw = None
     for rec in records:
         ns = round(rec.time * 1e9)
         stamp = msgs.Timestamp(sec=ns // 1_000_000_000, nsec=ns % 1_000_000_000)
         scene.log(_scene(fg, rec, stamp), log_time=ns)
         if rec.pose is not None:
             pose.log(msgs.PoseInFrame(timestamp=stamp, frame_id="world", pose=_pose(fg, rec.pose)), log_time=ns)
+        other = {}
         for label, values in rec.raw.items():
+            if label not in rec.contacts or not _is_wrench(values):
+                other[label] = values
+                continue
             if label not in wrenches:
                 wrenches[label] = _json_channel(fg, ctx, f"/wrench/{label}", _WRENCH)
             wrenches[label].log(_wrench(values), log_time=ns)
+        if other:
+            raw = raw or _json_channel(fg, ctx, "/raw", _RAW)
+            raw.log(json_safe(other), log_time=ns)
         body = {
             "step": rec.step,
             "observation": rec.observation,

@@ -24,6 +24,7 @@ import numpy as np
 from crmgrasp._io import dumps_json, write_csv
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents.policy import GreedyPolicy
+from crmgrasp.hardware.answers import checked_error, checked_pose, checked_raw, checked_reading, checked_time
 from crmgrasp.hardware.contact_sensing import NoContact
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import CRM, Error
@@ -163,7 +164,9 @@ class HandSteps:
     """A hand as the episode loop's stepper: each step executes the CRM on the hand, then
     senses once. The episode ends when the *sensed* configuration is a grasp (all a real
     robot can check), when contact is lost, or after ``max_steps`` CRMs. It keeps what the
-    step log needs beside the steps: the raw sensor values of every reading.
+    step log needs beside the steps: the raw sensor values of every reading. Each answer of
+    the hand is checked as it arrives ([`crmgrasp.hardware.answers`][]): a malformed one is a
+    one-line error naming the method, before anything is logged.
 
     ``min_friction`` of a step is that of the sensed configuration ([`score`][] may
     override it: a simulated hand can report the truth)."""
@@ -182,15 +185,17 @@ class HandSteps:
         return sensed
 
     def _sense(self, steps: int, error: Error) -> OneStep:
-        t, reading = self.task, self.hand.sense()
+        when = "before the first CRM" if steps == 0 else f"after CRM {steps}"
+        t, reading = self.task, checked_reading(self.task, self.hand.sense(), when)
         if isinstance(reading, NoContact):
-            self.lost = reading.reason
+            self.lost = str(reading.reason)
             nan = float("nan")
             lost = (nan,) * len(t.model.observation_names)
             return OneStep(SimState(None, None, steps), lost, error, -1, nan, -1.0, False, True)  # type: ignore[arg-type]
-        self.raws.append(getattr(self.hand, "raw_reading", dict)())
+        self.raws.append(checked_raw(getattr(self.hand, "raw_reading", dict)()))
         pose = getattr(self.hand, "object_pose", None)
-        self.clock.append((float(getattr(self.hand, "time", steps)), None if pose is None else pose()))
+        clock = checked_time(getattr(self.hand, "time", steps))
+        self.clock.append((clock, None if pose is None else checked_pose(t, pose())))
         obs = t.observe(reading)
         mu = float(t.quality(reading))
         grasped = bool(t.grasped(mu))
@@ -206,7 +211,8 @@ class HandSteps:
         return self.first
 
     def step_one(self, state: SimState, action: Any, rng: np.random.Generator) -> OneStep:
-        return self._sense(state.steps + 1, self.hand.execute(self.task.crm(action)))
+        crm = self.task.crm(action)
+        return self._sense(state.steps + 1, checked_error(self.hand.execute(crm), crm))
 
     def sample_start(self, rng: np.random.Generator) -> Any:
         return _HERE

@@ -238,6 +238,12 @@ class ContactModel(Protocol):
         """``config`` if it is a valid configuration on ``obj``, else a one-line error."""
         ...
 
+    def check_reading(self, config: object, name: str = "reading") -> Any:
+        """``config`` if it is a configuration of this model (its type, one contact per finger,
+        finite numbers, unit normals) wherever it lies (a sensed one: the object is unknown),
+        else a one-line error: ``check_config`` without the test against the object."""
+        ...
+
     def place(self, obj: Any, points: Sequence[ArrayLike]) -> Any:
         """The configuration a user's points name on ``obj`` (one point per contact)."""
         ...

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.contact_model import LabelledContacts
-from crmgrasp.model.contacts import LABELS, Config, Grip, contacts_from_row
+from crmgrasp.model.contacts import LABELS, Config, Grip, check_contacts, contacts_from_row
 from crmgrasp.model.hand import CRM, Error, Hand, Outcome, check_config, execute_crm, feasible
 from crmgrasp.model.quality import min_friction
 from crmgrasp.model.sensing import SensorNoise, observe
@@ -133,6 +133,13 @@ class PlanarModel(LabelledContacts):
     def check_config(self, obj: Any, config: object, name: str = "configuration") -> Config | Grip:
         """[`check_config`][crmgrasp.model.hand.check_config], with one contact per finger."""
         return check_config(obj, config, name, contacts=self.n_contacts)
+
+    def check_reading(self, config: object, name: str = "reading") -> Config | Grip:
+        """[`check_contacts`][crmgrasp.model.contacts.check_contacts], with one contact per finger."""
+        config = check_contacts(config, name)
+        if len(config) != self.n_contacts:
+            raise CrmgraspError(f"{name} has {len(config)} contacts; the hand has {self.n_contacts}")
+        return config
 
     def place(self, obj: Any, points: Sequence[ArrayLike]) -> Config | Grip:
         """Each contact at the boundary point nearest its point (finite ``(x, y)``, metres;

@@ -171,19 +171,30 @@ class SpatialModel(LabelledContacts):
         """``config`` if it is a [`Config3D`][] (two contacts) or a [`Grip3D`][] (more) of
         one finite contact per finger with unit normals on the solid's surface (within
         [`SURFACE_TOL`][]), else a one-line error."""
+        config = self.check_reading(config, name)
+        for label, c in zip(self.labels, config):
+            off = abs(obj.gap(np.asarray(c.x, dtype=float)))
+            if off > SURFACE_TOL:
+                raise CrmgraspError(f"{name}: contact {label} at {c.x} is {off:.3g} m off the object")
+        return config
+
+    def check_reading(self, config: object, name: str = "reading") -> Contacts3D:
+        """``config`` if it is a [`Config3D`][] (two contacts) or a [`Grip3D`][] (more) of
+        one finite contact per finger with unit normals (within [`SURFACE_TOL`][]), wherever it
+        lies; else a one-line error."""
         count = self.n_contacts
         kind = Config3D if count == 2 else Grip3D
         if not isinstance(config, kind) or len(config) != count or not all(isinstance(c, Contact3D) for c in config):
             raise CrmgraspError(f"{name} must be a {kind.__name__} of {count} Contact3D, got {config!r:.200}")
         for label, c in zip(self.labels, config):
-            x, n = np.asarray(c.x, dtype=float), np.asarray(c.n, dtype=float)
+            try:
+                x, n = np.asarray(c.x, dtype=float), np.asarray(c.n, dtype=float)
+            except (TypeError, ValueError):
+                x = n = np.full(1, np.nan)
             if x.shape != (3,) or n.shape != (3,) or not (np.all(np.isfinite(x)) and np.all(np.isfinite(n))):
                 raise CrmgraspError(f"{name}: contact {label} must be finite 3-vectors, got {tuple(c)}")
             if abs(float(np.linalg.norm(n)) - 1.0) > SURFACE_TOL:
                 raise CrmgraspError(f"{name}: contact {label}'s normal must be a unit vector, got {c.n}")
-            off = abs(obj.gap(x))
-            if off > SURFACE_TOL:
-                raise CrmgraspError(f"{name}: contact {label} at {c.x} is {off:.3g} m off the object")
         return config
 
     def place(self, obj: Any, points: Sequence[ArrayLike]) -> Contacts3D:
