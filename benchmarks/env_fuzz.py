@@ -6,14 +6,23 @@ environment, and for each of [`ACTIONS`][] (out-of-range and negative indices, N
 infinities, wrong types, shapes and dtypes, a dict, a string, ``None``) resets it and steps
 it once; then it resets it with each of [`OPTIONS`][] (a start that is not one, an unknown
 key). For the discrete and continuous vector environments of [`VECTOR_TASKS`][] (2 rows) it
-does the same with [`BATCHES`][]. Everything runs with Python's warnings raised as errors. A
-step or reset passes if it works or raises a ``CrmgraspError`` of one line under 300
-characters (Gymnasium's ``check_env`` accepts a documented error for an invalid action);
-another exception, a warning or a longer message is reported. It prints one JSON object and
-exits 1 if one failed.
+does the same with [`BATCHES`][]. Then the one episode loop itself
+([`crmgrasp.sim.run_episode`][], the agent interface of learners, planners and a user's own
+policy), with a policy that acts each of [`ACTIONS`][] and a CRM beyond the hand's reach, on
+each task of [`VECTOR_TASKS`][] through the readable steps and through the task's kernel, and
+its batched form ([`crmgrasp.sim.run_batch`][] over the kernel's rows) on the single-object
+ones. Everything runs with Python's warnings raised as errors. A step, reset or episode passes
+if it works or raises a ``CrmgraspError`` of one line under 300 characters (Gymnasium's
+``check_env`` accepts a documented error for an invalid action); another exception, a warning
+or a longer message is reported, and so is an episode that runs with an action that is no
+index of the task's CRMs (this script's own oracle: an integer, or a 0-d integer array, not a
+bool, in range). It prints one JSON object and exits 1 if one failed.
 
-Measured 2026-12-07 on the 2-core machine: 27 ids x 25 cases and 6 tasks x 2 vector
-environments x 14 batches, 843 cases in 5 s, none failed.
+Measured 2026-12-07 on the 2-core machine: 27 ids x 25 cases, 6 tasks x 2 vector environments
+x 14 batches and 273 episode-loop cases, 1,116 cases in 2.3 s, none failed. Before the episode
+loop took its indices through ``Task.action_index`` (at 7e2c3a2), 214 of the 273 failed: an
+``IndexError``, ``TypeError`` or numba ``TypingError`` from deep inside, and episodes that ran
+with ``-1`` (Python's last CRM) or ``True``.
 
 Usage: ``python benchmarks/env_fuzz.py``.
 """
@@ -24,6 +33,7 @@ import json
 import sys
 import time
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -133,15 +143,107 @@ def fuzz_vectors() -> tuple[int, list[dict[str, str]]]:
     return count, failures
 
 
+class _Acting:
+    """A policy of the one episode loop ([`crmgrasp.sim.run_episode`][]) that acts ``action``."""
+
+    def __init__(self, action: Any) -> None:
+        self.action = action
+
+    def begin(self, first: Any) -> None:
+        pass
+
+    def act(self) -> Any:
+        return self.action
+
+    def tell(self, percept: Any) -> None:
+        pass
+
+
+class _BatchActing(_Acting):
+    """The same for [`crmgrasp.sim.run_batch`][]: ``action`` for every row."""
+
+    def begin(self, row: int, first: Any) -> None:  # type: ignore[override]
+        pass
+
+    def act(self, rows: list[int]) -> Any:  # type: ignore[override]
+        return [self.action] * len(rows)
+
+    def tell(self, row: int, percept: Any) -> None:  # type: ignore[override]
+        pass
+
+
+def _episode(task: Any, action: Any, kernel: Any) -> Any:
+    """One episode of a policy that acts ``action``, through ``kernel`` (None: the readable steps)."""
+    from crmgrasp.sim import run_episode
+
+    return run_episode(task, _Acting(action), np.random.default_rng(0), kernel=kernel)
+
+
+def _batch(task: Any, action: Any) -> None:
+    """Two rows of episodes through the task's kernel, every row acting ``action``."""
+    from crmgrasp.kernels import kernel_for
+    from crmgrasp.kernels.rows import KernelRows
+    from crmgrasp.sim import run_batch
+
+    rows = KernelRows(task, kernel_for(task), [np.random.default_rng(0)] * 2)
+    run_batch(rows, _BatchActing(action), 2, lambda r, last: last is None)
+
+
+def fuzz_episode_loop() -> tuple[int, list[dict[str, str]]]:
+    """The episode loop with a policy acting each of ``ACTIONS`` (and a CRM beyond the hand's
+    reach), through the readable steps and the task's kernel, and the batched loop through
+    [`KernelRows`][crmgrasp.kernels.rows.KernelRows] (single-object tasks): the count and the
+    failures."""
+    from crmgrasp.kernels import kernel_for
+    from crmgrasp.model.hand import CRM
+    from crmgrasp.tasks import make_task
+
+    count, failures = 0, []
+    for name in VECTOR_TASKS:
+        task = make_task(name)
+        for action in (*ACTIONS, CRM("a", "b", 99.0)):
+            cases = [("readable steps", partial(_episode, task, action, None))]
+            cases.append(("kernel", partial(_episode, task, action, kernel_for(task))))
+            if task.family is None:
+                cases.append(("batched", partial(_batch, task, action)))
+            for where, call in cases:
+                count += 1
+                ran: list[bool] = []
+                problem = attempt(partial(_noting, call, ran))
+                if problem is None and ran and not _an_index(action, len(task.actions)):
+                    problem = "ran with an action that is no index of the task's CRMs"
+                if problem is not None:
+                    failures.append({"env": f"{where}({name})", "case": repr(action)[:40], "problem": problem})
+    return count, failures
+
+
+def _noting(call: Callable[[], Any], ran: list[bool]) -> None:
+    """``call()``, then a note in ``ran`` that it returned."""
+    call()
+    ran.append(True)
+
+
+def _an_index(action: Any, n: int) -> bool:
+    """Whether ``action`` is an index of ``n`` CRMs (this script's own oracle: a Python or
+    NumPy integer, or a 0-d integer array, not a bool, in ``[0, n)``)."""
+    if isinstance(action, np.ndarray):
+        if action.ndim != 0 or action.dtype.kind not in "iu":
+            return False
+        action = action.item()
+    return isinstance(action, (int, np.integer)) and not isinstance(action, (bool, np.bool_)) and 0 <= action < n
+
+
 def main() -> dict[str, Any]:
     t0 = time.perf_counter()
     n_ids, bad_ids = fuzz_ids()
     print(f"registered ids: {n_ids} cases, {len(bad_ids)} failed", file=sys.stderr, flush=True)
     n_vec, bad_vec = fuzz_vectors()
     print(f"vector environments: {n_vec} cases, {len(bad_vec)} failed", file=sys.stderr, flush=True)
-    failures = bad_ids + bad_vec
+    n_loop, bad_loop = fuzz_episode_loop()
+    print(f"episode loop: {n_loop} cases, {len(bad_loop)} failed", file=sys.stderr, flush=True)
+    failures = bad_ids + bad_vec + bad_loop
     out = {
-        "cases": n_ids + n_vec,
+        "cases": n_ids + n_vec + n_loop,
         "failed": len(failures),
         "seconds": round(time.perf_counter() - t0, 1),
         "failures": failures[:40],

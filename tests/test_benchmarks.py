@@ -851,3 +851,18 @@ def test_first_crm_misses_swaps_only_the_start_choices_and_counts_blocks(capsys)
     assert all(both.table[s] == a for s, a in policy.table.items() if s not in starts)
     rows = [{"crms": 1.0 + (i % 7 == 0)} for i in range(20)] + [{"crms": 2.0, "swapped": 1.0}]
     assert mod.summary(rows, 1.5)["blocks_of_ten"] == {"with_9_within": 1, "with_5_within": 2, "of": 2}
+
+
+def test_env_fuzz_episode_loop_passes_and_catches_a_wrapped_index(monkeypatch):
+    """The episode loop refuses every hostile action of paper-box in one line; a step that let a
+    negative index through (Python's last CRM) would be reported by the script's own oracle."""
+    from crmgrasp.tasks.core import Task
+
+    mod = _bench("env_fuzz")
+    monkeypatch.setattr(mod, "VECTOR_TASKS", ("paper-box",))
+    assert mod.fuzz_episode_loop() == (3 * (len(mod.ACTIONS) + 1), [])
+    assert mod._an_index(np.array(2), 4) and mod._an_index(np.int64(3), 4)
+    assert not mod._an_index(True, 4) and not mod._an_index(-1, 4) and not mod._an_index(np.array([1]), 4)
+    monkeypatch.setattr(Task, "action_index", lambda self, a: a if a == -1 else Task.action_indices(self, [a], 1)[0])
+    _, failures = mod.fuzz_episode_loop()
+    assert [f["case"] for f in failures if "no index" in f["problem"]] == ["-1", "-1"]

@@ -90,3 +90,28 @@ def test_batched_corner_starts_match_the_scalar_distribution(task, backend, whic
     assert chi2_contingency(np.stack([kinds[0][1], kinds[1][1]])).pvalue > 1e-3  # equally often
     _, c_in, c_out = corner_boxes(t.obj, t.hand.aperture)
     assert (c_in < 1).any() and (c_out < 1).any()  # the tighter proposal is in use
+
+
+def test_an_action_index_is_an_integer_in_range_and_every_step_takes_it_so():
+    """Task.action_index is the one rule: the readable step and every kernel refuse the same
+    values in one line, and take NumPy integers as Python ones."""
+    from crmgrasp.kernels import kernel_for
+    from crmgrasp.sim import reset, step
+
+    for name in ("paper-box", "triangles-3f", "cup-3d"):
+        task = make_task(name)
+        world, n = task.instance(np.random.default_rng(0)), len(task.actions)
+        assert task.action_index(np.int64(n - 1)) == n - 1 and task.action_index(np.array(0)) == 0
+        now, kernel = reset(world, np.random.default_rng(0)), kernel_for(task)
+        if task.family is not None:
+            kernel.use(world)
+        message = rf"^action must be an integer in \[0, {n}\), got "
+        for bad in (-1, n, True, 1.0, None, "0", np.array([0]), np.float64(0.0)):
+            with pytest.raises(CrmgraspError, match=message):
+                step(world, now.state, bad, np.random.default_rng(0))
+            with pytest.raises(CrmgraspError, match=message):
+                kernel.step_one(now.state, bad, np.random.default_rng(0))
+        assert task.action_indices([0, n - 1], 2).tolist() == [0, n - 1]
+        for bad, text in (([0, n], rf"in \[0, {n}\)"), ([0.0, 1.0], "2 integers"), ([0], "2 integers")):
+            with pytest.raises(CrmgraspError, match=text):
+                task.action_indices(bad, 2)

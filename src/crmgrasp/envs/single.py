@@ -222,12 +222,8 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         the kernel's form of [`crmgrasp.sim.step`][])."""
         if self._state is None:
             raise CrmgraspError("call reset() before step()")
-        if type(action) is not int:
-            if not isinstance(action, (np.integer, np.ndarray)) or np.ndim(action) != 0:
-                raise CrmgraspError(f"action must be an integer in [0, {self._n_actions}), got {action!r}")
-            action = int(action)
-        if not 0 <= action < self._n_actions:
-            raise CrmgraspError(f"action must be an integer in [0, {self._n_actions}), got {action!r}")
+        if type(action) is not int or not 0 <= action < self._n_actions:
+            action = self.task.action_index(action)
         self._last = (self._state, action)
         res = self.kernel.step_one(self._state, action, self.np_random)
         obs, info = self._emit(res)

@@ -122,13 +122,7 @@ class CRMGraspVectorEnv(VectorEnv):
         """``actions`` as checked integers (one line naming the problem otherwise)."""
         if not self._ready:
             raise CrmgraspError("call reset() before step()")
-        a = np.asarray(actions)
-        n_actions = len(self.task.actions)
-        if a.shape != (self.num_envs,) or a.dtype.kind not in "iu":
-            raise CrmgraspError(f"actions must be {self.num_envs} integers, got shape {a.shape} dtype {a.dtype}")
-        if a.min() < 0 or a.max() >= n_actions:
-            raise CrmgraspError(f"actions must be in [0, {n_actions})")
-        return a
+        return self.task.action_indices(actions, self.num_envs)
 
     def _batch(self, actions: np.ndarray, done: np.ndarray, starts: np.ndarray) -> Any:
         """The kernel's batched step of checked ``actions`` (indices into the task's CRMs)."""

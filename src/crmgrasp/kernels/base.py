@@ -301,8 +301,8 @@ class FusedSingleStep(Kernel):
     def step_one(self, state: SimState, action: Any, rng: np.random.Generator) -> OneStep:
         if self.model.is_crm(action):  # a CRM of the hand's continuous action space
             return self._step(state, 0, self.crm_row(action))
-        if not 0 <= action < len(self.acts):  # as the readable step treats it
-            return Kernel.step_one(self, state, action, rng)
+        if type(action) is not int or not 0 <= action < len(self.acts):  # compiled code does not check indices
+            action = self.task.action_index(action)
         return self._step(state, action, self.acts)
 
     def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:

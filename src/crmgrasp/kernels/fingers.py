@@ -143,8 +143,8 @@ class FingersKernel(Kernel):
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
         if isinstance(action, CRM):  # a CRM of the hand's continuous action space
             return self.step_row(state, self.crm_row(action), rng)
-        if not 0 <= action < len(self.acts):  # as the readable step treats it
-            return super().step_one(state, action, rng)
+        if type(action) is not int or not 0 <= action < len(self.acts):  # compiled code does not check indices
+            action = self.task.action_index(action)
         return self.step_row(state, self.acts[action : action + 1], rng)
 
     def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:

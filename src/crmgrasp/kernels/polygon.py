@@ -14,7 +14,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 import crmgrasp.kernels._polygon_jit as jit
-from crmgrasp._validation import CrmgraspError
 from crmgrasp.kernels.base import F64, I64, BatchStep, Kernel, bin_thresholds
 from crmgrasp.model import quality, shape
 from crmgrasp.model.contacts import Config, Grip, config_from_row
@@ -172,8 +171,8 @@ class FusedPolygonKernel(PolygonKernel):
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
         if isinstance(action, CRM):  # a CRM of the hand's continuous action space
             return self._step(state, 0, self.crm_row(action))
-        if not 0 <= action < len(self.acts):  # compiled code does not check indices
-            raise CrmgraspError(f"action must be an integer in [0, {len(self.acts)}), got {action!r}")
+        if type(action) is not int or not 0 <= action < len(self.acts):  # compiled code does not check indices
+            action = self.task.action_index(action)
         return self._step(state, action, self.acts)
 
     def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:

@@ -46,7 +46,7 @@ class KernelRows:
         """The task's actions (indices) in ``rows``, batched; the percepts come one at a time
         (each is told and dropped before the next is built)."""
         task, model, active = self.task, self.model, np.array(rows, dtype=np.int64)
-        new, errors = self.kernel.execute(self.cfg[active], self.sen[active], np.array(actions))
+        new, errors = self.kernel.execute(self.cfg[active], self.sen[active], task.action_indices(actions, len(rows)))
         self.cfg[active] = new
         if model.noise.active:  # one reading per row, from the row's own generator, in row order
             for i, r in enumerate(rows):

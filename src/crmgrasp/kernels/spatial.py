@@ -15,7 +15,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from crmgrasp._validation import CrmgraspError
 from crmgrasp.kernels.base import F64, Successor, bin_thresholds, stepwise_successors
 from crmgrasp.kernels.reference import ReferenceKernel
 from crmgrasp.model.hand import Error
@@ -129,8 +128,8 @@ class FusedSpatialKernel(SpatialKernel):
     def step_one(self, state: SimState, action: Any, rng: np.random.Generator) -> OneStep:
         if isinstance(action, CRM3D):  # a CRM of the hand's continuous action space
             return self._step(state, 0, self.crm_row(action))
-        if not 0 <= action < len(self.acts):  # compiled code does not check indices
-            raise CrmgraspError(f"action must be an integer in [0, {len(self.acts)}), got {action!r}")
+        if type(action) is not int or not 0 <= action < len(self.acts):  # compiled code does not check indices
+            action = self.task.action_index(action)
         return self._step(state, action, self.acts4)
 
     def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:

@@ -16,7 +16,7 @@ from typing import Any, NamedTuple, overload
 import numpy as np
 from numpy.typing import NDArray
 
-from crmgrasp._validation import CrmgraspError, finite, non_negative
+from crmgrasp._validation import CrmgraspError, finite, non_negative, shown
 from crmgrasp.model.actions import CRMRange
 from crmgrasp.model.contact_model import ContactModel
 from crmgrasp.model.contacts import Config, Grip
@@ -262,7 +262,35 @@ class Task:
 
     def crm(self, action: Any) -> Any:
         """The CRM of action index ``action``, or ``action`` itself checked against the hand."""
-        return self.model.check_crm(action) if self.model.is_crm(action) else self.actions[action]
+        return self.model.check_crm(action) if self.model.is_crm(action) else self.actions[self.action_index(action)]
+
+    def action_index(self, action: Any) -> int:
+        """``action`` as an index of ``actions``: an integer (a Python or NumPy one, or a 0-d
+        integer array; not a bool) in ``[0, len(actions))``; else a one-line error. Every step that takes an index
+        (the readable step, the kernels, the environments) takes it through here.
+
+        >>> paper_box().action_index(np.int64(3))
+        3
+        """
+        n = len(self.actions)
+        if type(action) is int and 0 <= action < n:
+            return action
+        value = action.item() if isinstance(action, np.ndarray) and action.ndim == 0 else action
+        if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) and 0 <= value < n:
+            return int(value)
+        raise CrmgraspError(f"action must be an integer in [0, {n}), got {shown(action)}")
+
+    def action_indices(self, actions: Any, rows: int) -> NDArray[np.int64]:
+        """``actions`` as ``rows`` indices of ``actions`` at once (a batch's
+        [`action_index`][]): an integer array of shape ``(rows,)`` with every entry in
+        ``[0, len(actions))``, as int64; else a one-line error. The batched steps (the vector
+        environments, [`crmgrasp.kernels.rows.KernelRows`][]) take their indices through here."""
+        a, n = np.asarray(actions), len(self.actions)
+        if a.shape != (rows,) or a.dtype.kind not in "iu":
+            raise CrmgraspError(f"actions must be {rows} integers, got shape {a.shape} dtype {a.dtype}")
+        if rows and (a.min() < 0 or a.max() >= n):
+            raise CrmgraspError(f"actions must be in [0, {n})")
+        return a.astype(np.int64, copy=False)
 
     def execute(self, config: Any, crm: Any, sensed: Any) -> Any:
         """The CRM transition (the model's ``execute``), goal line from ``sensed``."""
