@@ -866,3 +866,19 @@ def test_env_fuzz_episode_loop_passes_and_catches_a_wrapped_index(monkeypatch):
     monkeypatch.setattr(Task, "action_index", lambda self, a: a if a == -1 else Task.action_indices(self, [a], 1)[0])
     _, failures = mod.fuzz_episode_loop()
     assert [f["case"] for f in failures if "no index" in f["problem"]] == ["-1", "-1"]
+
+
+def test_api_fuzz_passes_and_reports_what_escapes(monkeypatch, capsys):
+    """Every hostile argument of the public API is refused in one line (or accepted); a check
+    taken away is reported with the call and the argument."""
+    mod = _bench("api_fuzz")
+    out = mod.main([])
+    assert out["failed"] == 0 and out["calls"] == sum(
+        len(mod.HOSTILE) * (len(c.args) + len(c.kwargs)) for c in mod.examples()
+    )
+    import crmgrasp.model.hand as hand
+
+    monkeypatch.setattr(hand, "check_shape", lambda obj, name="object": obj)
+    out = mod.main([])
+    assert out["failed"] == 40 and {f["call"] for f in out["failures"]} == {"Hand.contact", "Hand.execute"}
+    assert all(f["argument"] == "argument 0" for f in out["failures"])

@@ -145,8 +145,10 @@ def test_a_rectangle_built_posed_is_the_rectangle_moved(length, width, angle, dx
 def test_a_rectangle_posed_beyond_the_bound_or_by_nan_is_refused() -> None:
     with pytest.raises(CrmgraspError, match="not finite or beyond"):
         Rectangle(0.3, 0.1, (0.0, 2e6, 0.0))
-    with pytest.raises(CrmgraspError, match="not finite or beyond"):
+    with pytest.raises(CrmgraspError, match=r"^rectangle pose\[0\] must be finite, got nan$"):
         Rectangle(0.3, 0.1, (math.nan, 0.0, 0.0))
+    with pytest.raises(CrmgraspError, match=r"^rectangle pose must be \(angle, dx, dy\), got 0.5$"):
+        Rectangle(0.3, 0.1, 0.5)  # type: ignore[arg-type]
 
 
 def _move(c: Contact, angle: float, dx: float, dy: float) -> Contact:

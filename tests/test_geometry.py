@@ -58,7 +58,7 @@ def test_bad_disc_and_rectangle(bad):
 def test_regular_polygon_validation():
     assert len(regular_polygon(6, 0.1).vertices) == 6
     for n in (2, 3.5, True):
-        with pytest.raises(CrmgraspError, match="n >= 3"):
+        with pytest.raises(CrmgraspError, match=r"n in \[3, 512\]"):
             regular_polygon(n, 0.1)
 
 

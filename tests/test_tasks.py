@@ -115,3 +115,31 @@ def test_an_action_index_is_an_integer_in_range_and_every_step_takes_it_so():
         for bad, text in (([0, n], rf"in \[0, {n}\)"), ([0.0, 1.0], "2 integers"), ([0], "2 integers")):
             with pytest.raises(CrmgraspError, match=text):
                 task.action_indices(bad, 2)
+
+
+def test_a_registered_task_is_named_by_the_task_name_rule_and_made_by_a_callable(monkeypatch):
+    from crmgrasp.tasks import core
+
+    monkeypatch.setattr(core, "_TASKS", dict(core._TASKS))
+    for bad in ("", "my task", "../x", "-x", "x" * 65, 3):
+        with pytest.raises(CrmgraspError, match=r"^name must be 1-64 letters, digits"):
+            register_task(bad, core.paper_box)
+    with pytest.raises(CrmgraspError, match=r"^a task factory must be callable with no arguments, got 3$"):
+        register_task("three", 3)
+    register_task("five", lambda: 5)
+    with pytest.raises(CrmgraspError, match=r"^the factory registered as task 'five' returned 5, not a Task$"):
+        make_task("five")
+    with pytest.raises(CrmgraspError, match=r"^name must be"):
+        Task(name="my task", obj=core.paper_box().obj, hand=core.paper_box().hand, actions=core.paper_box().actions)
+
+
+def test_a_regular_polygon_has_at_most_max_vertices():
+    from crmgrasp import regular_polygon
+    from crmgrasp.model.polygon import MAX_VERTICES
+
+    assert len(regular_polygon(MAX_VERTICES, 0.1).vertices) == MAX_VERTICES
+    for n in (2, MAX_VERTICES + 1, 10**9, 5.0, True):
+        with pytest.raises(
+            CrmgraspError, match=rf"^a regular polygon needs an integer n in \[3, {MAX_VERTICES}\], got "
+        ):
+            regular_polygon(n, 0.1)

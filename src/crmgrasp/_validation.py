@@ -8,6 +8,7 @@ from typing import Any
 
 __all__ = [
     "CrmgraspError",
+    "as_numbers",
     "as_point",
     "finite",
     "positive",
@@ -99,17 +100,28 @@ def boolean(value: object, name: str) -> bool:
     return value
 
 
-def as_point(value: object, name: str) -> tuple[float, float]:
-    """Return ``value`` as a finite 2-tuple of floats, or raise `CrmgraspError`."""
+def as_numbers(value: object, name: str, count: int, what: str = "") -> tuple[float, ...]:
+    """Return ``value`` (a sequence) as ``count`` finite floats, or raise `CrmgraspError`
+    (``what`` names the expected form in the message; default ``"<count> numbers"``).
+
+    >>> as_numbers((0, 1.5, "2"), "pose", 3)
+    (0.0, 1.5, 2.0)
+    """
+    what = what or f"{count} numbers"
     if isinstance(value, (str, bytes)):
-        raise CrmgraspError(f"{name} must be a pair (x, y), got {shown(value)}")
+        raise CrmgraspError(f"{name} must be {what}, got {shown(value)}")
     try:
         items = list(value)  # type: ignore[call-overload]
     except TypeError:
-        raise CrmgraspError(f"{name} must be a pair (x, y), got {shown(value)}") from None
-    if len(items) != 2:
-        raise CrmgraspError(f"{name} must have 2 coordinates, got {len(items)}")
-    return (finite(items[0], f"{name}[0]"), finite(items[1], f"{name}[1]"))
+        raise CrmgraspError(f"{name} must be {what}, got {shown(value)}") from None
+    if len(items) != count:
+        raise CrmgraspError(f"{name} must have {count} coordinates, got {len(items)}")
+    return tuple(finite(v, f"{name}[{i}]") for i, v in enumerate(items))
+
+
+def as_point(value: object, name: str) -> tuple[float, float]:
+    """Return ``value`` as a finite 2-tuple of floats, or raise `CrmgraspError`."""
+    return as_numbers(value, name, 2, "a pair (x, y)")  # type: ignore[return-value]
 
 
 def integer(value: object, name: str, low: int, high: int) -> int:

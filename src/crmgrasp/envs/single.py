@@ -287,6 +287,8 @@ class KOrderHistory(gym.Wrapper[int, np.int64, dict[str, Any], np.int64], gym.ut
     """
 
     def __init__(self, env: gym.Env, k: int = 2) -> None:
+        if not isinstance(env, gym.Env) or not isinstance(getattr(env.unwrapped, "task", None), Task):
+            raise CrmgraspError(f"KOrderHistory wraps a crmgrasp environment, got {shown(env)}")
         gym.utils.RecordConstructorArgs.__init__(self, k=k)
         gym.Wrapper.__init__(self, env)
         task = env.unwrapped.task  # type: ignore[attr-defined]

@@ -38,7 +38,8 @@ from typing import Any
 
 from crmgrasp._io import read_bounded
 from crmgrasp._validation import SEED_MAX, CrmgraspError, integer, shown
-from crmgrasp.tasks.schema import checked_name, typed
+from crmgrasp.tasks.core import checked_name
+from crmgrasp.tasks.schema import typed
 
 __all__ = [
     "Study",

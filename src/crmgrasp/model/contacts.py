@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from numbers import Real
 from typing import NamedTuple, Self, TypeVar, cast
 
 import numpy as np
@@ -273,16 +274,25 @@ def check_contacts(config: object, name: str = "configuration") -> Config | Grip
             _check_each(config, name)
             return config
     (ax, ay, anx, any_), (bx, by, bnx, bny) = config
-    if not math.isfinite(ax + ay + anx + any_ + bx + by + bnx + bny) or (  # a NaN or inf (or an overflow)
-        abs(anx * anx + any_ * any_ - 1.0) > _NORM2_TOL or abs(bnx * bnx + bny * bny - 1.0) > _NORM2_TOL
-    ):
+    try:
+        fine = math.isfinite(ax + ay + anx + any_ + bx + by + bnx + bny) and (  # a NaN or inf (or an overflow)
+            abs(anx * anx + any_ * any_ - 1.0) <= _NORM2_TOL and abs(bnx * bnx + bny * bny - 1.0) <= _NORM2_TOL
+        )
+    except TypeError:  # a value that is no number: named below
+        fine = False
+    if not fine:
         _check_each(config, name)
     return config
 
 
 def _check_each(config: Config | Grip, name: str) -> None:
-    """The one-line error of the first contact that is not finite, else of the first whose
-    normal is not a unit vector (within [`UNIT_TOL`][])."""
+    """The one-line error of the first contact with a value that is not a real number, else of
+    the first that is not finite, else of the first whose normal is not a unit vector (within
+    [`UNIT_TOL`][])."""
+    for label, c in zip(ALL_LABELS, config):
+        if not all(isinstance(v, Real) for v in c):
+            got = shown(tuple(c), 120)
+            raise CrmgraspError(f"{name}: contact {label} must be four numbers (x, y, nx, ny), got {got}")
     for label, c in zip(ALL_LABELS, config):
         if not all(math.isfinite(v) for v in c):
             raise CrmgraspError(f"{name}: contact {label} must be finite, got {tuple(c)}")

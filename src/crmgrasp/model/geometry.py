@@ -24,9 +24,9 @@ import math
 
 import numpy as np
 
-from crmgrasp._validation import CrmgraspError, as_point, finite, positive
+from crmgrasp._validation import CrmgraspError, as_numbers, as_point, finite, positive, shown
 from crmgrasp.model.disc import Disc
-from crmgrasp.model.polygon import Polygon, rigid_motion
+from crmgrasp.model.polygon import MAX_VERTICES, Polygon, rigid_motion
 from crmgrasp.model.shape import EPS, LINE_TOL, S_TOL, BoundaryPoint, Entry, Shape
 
 __all__ = [
@@ -68,7 +68,9 @@ def Rectangle(  # noqa: N802 - reads as a type
     hx = positive(length, "rectangle length") / 2.0
     hy = positive(width, "rectangle width") / 2.0
     corners = [(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)]
-    return Polygon(corners if pose is None else rigid_motion(corners, *pose), _simple=True)
+    if pose is None:
+        return Polygon(corners, _simple=True)
+    return Polygon(rigid_motion(corners, *as_numbers(pose, "rectangle pose", 3, "(angle, dx, dy)")), _simple=True)
 
 
 def regular_polygon(
@@ -81,8 +83,8 @@ def regular_polygon(
     >>> len(regular_polygon(6, 0.1).vertices)
     6
     """
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 3:
-        raise CrmgraspError(f"a regular polygon needs an integer n >= 3, got {n!r}")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 3 <= n <= MAX_VERTICES:
+        raise CrmgraspError(f"a regular polygon needs an integer n in [3, {MAX_VERTICES}], got {shown(n)}")
     r = positive(circumradius, "circumradius")
     cx, cy = as_point(center, "center")
     rot = finite(rotation, "rotation")

@@ -64,6 +64,7 @@ from crmgrasp.model.contacts import (
 )
 from crmgrasp.model.geometry import Shape
 from crmgrasp.model.palm import crossed, outer_faces, palm_at, palm_axis, palm_point, spread
+from crmgrasp.model.shape import check_shape
 
 
 class Sensor(Protocol):
@@ -277,6 +278,7 @@ class Hand:
             points = tuple(labelled[lab] for lab in self.labels)
         if len(points) != self.contacts:
             raise CrmgraspError(f"the hand has {self.contacts} contacts; got {len(points)} points")
+        check_shape(obj)
         near = [obj.project(as_point(p, f"contact {lab}")) for p, lab in zip(points, ALL_LABELS)]
         return make_config([Contact(*q.point, *q.normal) for q in near])
 
@@ -330,6 +332,7 @@ def check_config(
     [`Grip`][crmgrasp.model.contacts.Grip]) of ``contacts`` contacts (any number when
     ``None``) with finite coordinates, unit normals and points on the boundary of ``obj``
     (both within [`CONTACT_TOL`][]); else a one-line `CrmgraspError`."""
+    check_shape(obj)
     if not isinstance(config, (Config, Grip)) or not all(isinstance(c, Contact) for c in config):
         kind = "a Config of two Contacts" if contacts in (2, None) else f"a Grip of {contacts} Contacts"
         raise CrmgraspError(f"{name} must be {kind}, got {shown(config)}")

@@ -46,7 +46,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-from crmgrasp._validation import CrmgraspError, non_negative
+from crmgrasp._validation import CrmgraspError, non_negative, shown
 from crmgrasp.model.contacts import Config, Grip, check_contacts
 from crmgrasp.model.lp import max_least_weight
 
@@ -250,8 +250,13 @@ def force_closure(points: ArrayLike, normals: ArrayLike, mu: float) -> bool:
     >>> force_closure([(0, 0.05), (0, -0.05)], [(0, -1), (0, 1)], 0.0)
     False
     """
-    p = np.asarray(points, dtype=np.float64)
-    n = np.asarray(normals, dtype=np.float64)
+    try:
+        p = np.asarray(points, dtype=np.float64)
+        n = np.asarray(normals, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise CrmgraspError(
+            f"points and normals must be arrays of numbers, got {shown(points)} and {shown(normals)}"
+        ) from None
     if p.ndim != 2 or p.shape[1] != 2 or n.shape != p.shape or len(p) == 0:
         raise CrmgraspError(f"points and normals must both have shape (n, 2), got {p.shape} and {n.shape}")
     if not (np.all(np.isfinite(p)) and np.all(np.isfinite(n))):

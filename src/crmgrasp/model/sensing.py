@@ -24,7 +24,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from crmgrasp._validation import CrmgraspError, boolean, finite, non_negative
+from crmgrasp._validation import CrmgraspError, boolean, finite, non_negative, shown
 from crmgrasp.model.contacts import Config, Contact, Grip, check_contacts, make_config
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import MAX_SYMBOLS
@@ -227,8 +227,10 @@ class Discretizer:
     def __init__(
         self, *, names: Sequence[str] = Observation._fields, abs_moments: bool = True, **thresholds: object
     ) -> None:
+        if isinstance(names, (str, bytes)) or not isinstance(names, Sequence):
+            raise CrmgraspError(f"bins need a sequence of observation names, got {shown(names)}")
         names = tuple(names)
-        if len(names) < 1 or len(set(names)) != len(names) or not all(isinstance(n, str) for n in names):
+        if len(names) < 1 or not all(isinstance(n, str) for n in names) or len(set(names)) != len(names):
             raise CrmgraspError(f"bins need distinct observation names, got {names!r}")
         for key in thresholds:
             if key not in names:

@@ -14,9 +14,9 @@ from typing import NamedTuple, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, shown
 
-__all__ = ["EPS", "S_TOL", "LINE_TOL", "MAX_COORD", "BoundaryPoint", "Entry", "Shape", "check_reach"]
+__all__ = ["EPS", "S_TOL", "LINE_TOL", "MAX_COORD", "BoundaryPoint", "Entry", "Shape", "check_reach", "check_shape"]
 
 EPS = 1e-9
 """Boundary tolerance in metres: points closer than this to the boundary are on it;
@@ -86,3 +86,10 @@ class Shape(Protocol):
     def ray_entry(self, origin: tuple[float, float], direction: tuple[float, float], u_max: float) -> Entry | None: ...
 
     def bounds(self) -> tuple[float, float, float, float]: ...
+
+
+def check_shape(obj: object, name: str = "object") -> Shape:
+    """``obj`` if it is a [`Shape`][] (a `Polygon`, a `Disc`, ...), else a one-line error."""
+    if not isinstance(obj, Shape):
+        raise CrmgraspError(f"{name} must be a Shape (Polygon, Disc, ...), got {shown(obj)}")
+    return obj

@@ -17,7 +17,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from crmgrasp._validation import CrmgraspError, finite
+from crmgrasp._validation import CrmgraspError, finite, shown
 from crmgrasp.model.contact_model import LabelledContacts
 from crmgrasp.model.hand import Error
 from crmgrasp.model.quality3d import least_friction_3d, min_friction_3d
@@ -204,9 +204,12 @@ class SpatialModel(LabelledContacts):
             raise CrmgraspError(f"the spatial model takes {self.n_contacts} points, got {len(points)}")
         out = []
         for label, p in zip(self.labels, points):
-            v = np.asarray(p, dtype=np.float64)
+            try:
+                v = np.asarray(p, dtype=np.float64)
+            except (TypeError, ValueError):
+                v = np.full(1, np.nan)
             if v.shape != (3,) or not np.all(np.isfinite(v)):
-                raise CrmgraspError(f"contact {label} on a spatial task takes a finite X,Y,Z, got {p!r}")
+                raise CrmgraspError(f"contact {label} on a spatial task takes a finite X,Y,Z, got {shown(p)}")
             if np.allclose(v, obj.centre, atol=1e-12):
                 raise CrmgraspError(f"contact {label}'s point is the object's centre: it gives no direction")
             hit = surface_point(obj, v - obj.centre)

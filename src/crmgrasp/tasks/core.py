@@ -8,7 +8,7 @@ factory under a new name with [`register_task`][].
 
 from __future__ import annotations
 
-import math
+import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple, overload
@@ -16,7 +16,7 @@ from typing import Any, NamedTuple, overload
 import numpy as np
 from numpy.typing import NDArray
 
-from crmgrasp._validation import CrmgraspError, finite, non_negative, shown
+from crmgrasp._validation import CrmgraspError, finite, is_finite_number, non_negative, shown
 from crmgrasp.model.actions import CRMRange
 from crmgrasp.model.contact_model import ContactModel
 from crmgrasp.model.contacts import Config, Grip
@@ -25,6 +25,7 @@ from crmgrasp.model.geometry import Rectangle, Shape
 from crmgrasp.model.hand import CRM, Error, Hand
 from crmgrasp.model.planar_model import PlanarModel
 from crmgrasp.model.sensing import Discretizer, SensorNoise
+from crmgrasp.model.shape import check_shape
 from crmgrasp.tasks.starts import CornerStarts, StartFilter, StartSampler, accept_corner_candidates
 
 __all__ = [
@@ -36,6 +37,7 @@ __all__ = [
     "make_task",
     "register_task",
     "task_names",
+    "checked_name",
 ]
 
 
@@ -171,8 +173,7 @@ class Task:
     model: ContactModel = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.obj, Shape):
-            raise CrmgraspError(f"task object must be a Shape (Polygon, Disc, ...), got {self.obj!r}")
+        check_shape(self.obj, "task object")
         if not isinstance(self.hand, Hand):
             raise CrmgraspError(f"task hand must be a Hand, got {self.hand!r}")
         self._set_model(PlanarModel(self.hand, self.noise))
@@ -209,6 +210,9 @@ class Task:
     def _check_common(self) -> None:
         """The checks every task takes, planar or spatial: actions (through the hand's
         ``check_crm``), goal, length, symmetry, rewards, reference."""
+        checked_name(self.name)
+        if isinstance(self.actions, (str, bytes)) or not isinstance(self.actions, Sequence):
+            raise CrmgraspError(f"task actions must be a sequence of CRMs, got {shown(self.actions)}")
         actions = tuple(self.actions)
         if not actions:
             raise CrmgraspError("a task needs at least one CRM action")
@@ -244,7 +248,7 @@ class Task:
         object.__setattr__(self, "grasp_reward", finite(self.grasp_reward, "grasp_reward"))
         object.__setattr__(self, "error_cost", non_negative(self.error_cost, "error_cost"))
         if self.reference_mean_steps is not None and not (
-            math.isfinite(self.reference_mean_steps) and self.reference_mean_steps > 0
+            is_finite_number(self.reference_mean_steps) and self.reference_mean_steps > 0
         ):
             raise CrmgraspError(f"reference_mean_steps must be > 0, got {self.reference_mean_steps!r}")
 
@@ -447,10 +451,30 @@ def paper_box() -> Task:
 _TASKS: dict[str, Callable[[], Task]] = {"paper-box": paper_box}
 
 
+_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
+"""A task's name (it names run folders and is typed after ``--task``)."""
+
+
+def checked_name(name: Any) -> str:
+    """``name`` if it is a valid task name: 1-64 letters, digits, ``.``, ``_`` or ``-``, the
+    first a letter or digit (one-line error otherwise).
+
+    >>> checked_name("paper-box")
+    'paper-box'
+    """
+    if not isinstance(name, str) or not _NAME.fullmatch(name):
+        raise CrmgraspError(
+            f"name must be 1-64 letters, digits, '.', '_' or '-' (first a letter or digit), got {shown(name)}"
+        )
+    return name
+
+
 def register_task(name: str, factory: Callable[[], Task], *, overwrite: bool = False) -> None:
-    """Make ``make_task(name)`` return ``factory()``."""
-    if not isinstance(name, str) or not name:
-        raise CrmgraspError(f"task name must be a non-empty string, got {name!r}")
+    """Make ``make_task(name)`` return ``factory()`` (``name``: [`checked_name`][]; ``factory``
+    callable with no arguments, returning a [`Task`][])."""
+    checked_name(name)
+    if not callable(factory):
+        raise CrmgraspError(f"a task factory must be callable with no arguments, got {shown(factory)}")
     if name in _TASKS and not overwrite:
         raise CrmgraspError(f"task {name!r} is already registered")
     _TASKS[name] = factory
@@ -467,4 +491,7 @@ def make_task(name: str) -> Task:
         factory = _TASKS[name]
     except (KeyError, TypeError):
         raise CrmgraspError(f"unknown task {name!r}; known tasks: {', '.join(task_names())}") from None
-    return factory()
+    task = factory()
+    if not isinstance(task, Task):
+        raise CrmgraspError(f"the factory registered as task {name!r} returned {shown(task)}, not a Task")
+    return task

@@ -26,7 +26,7 @@ from crmgrasp.model import families as fam
 from crmgrasp.model.geometry import Disc, Polygon
 from crmgrasp.model.hand import Hand
 from crmgrasp.model.sensing import Discretizer, SensorNoise
-from crmgrasp.tasks.core import Task, make_task, task_names
+from crmgrasp.tasks.core import Task, checked_name, make_task, task_names
 from crmgrasp.tasks.families import BoundaryStarts
 from crmgrasp.tasks.presets import LongSideStarts, MixtureStarts, NearCornerStarts, VertexStarts, with_reading
 from crmgrasp.tasks.schema import (
@@ -34,7 +34,6 @@ from crmgrasp.tasks.schema import (
     DEFAULT_GRID,
     SCALAR_KEYS,
     check_top_level,
-    checked_name,
     common_dict,
     common_keys,
     crm_tables,

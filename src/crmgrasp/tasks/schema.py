@@ -14,7 +14,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import re
 import types
 import typing
 from collections.abc import Callable, Collection, Sequence
@@ -47,11 +46,8 @@ __all__ = [
     "DEFAULT_GRID",
     "bins_table",
     "section",
-    "checked_name",
     "common_keys",
 ]
-
-_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
 
 
 def init_keys(cls: type) -> tuple[set[str], set[str]]:
@@ -260,15 +256,6 @@ def section(key: str, build: Callable[[Any], Any], value: Any) -> Any:
         raise CrmgraspError(text if key in text else f"{key}: {text}") from None
     except (TypeError, ValueError) as exc:
         raise CrmgraspError(f"{key}: {exc}") from None
-
-
-def checked_name(name: Any) -> str:
-    """``name`` if it is a valid task name (one-line error otherwise)."""
-    if not isinstance(name, str) or not _NAME.fullmatch(name):
-        raise CrmgraspError(
-            f"name must be 1-64 letters, digits, '.', '_' or '-' (first a letter or digit), got {shown(name)}"
-        )
-    return name
 
 
 SCALAR_KEYS = ("description", "mu_goal", "max_steps", "grasp_reward", "error_cost", "reference_mean_steps")

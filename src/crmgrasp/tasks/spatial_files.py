@@ -40,9 +40,9 @@ from crmgrasp.model.mesh import TriangleMesh, open_cup
 from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable, OpenCupOnTable
 from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, box3d
 from crmgrasp.model.spatial import CRM3D, Hand3D
+from crmgrasp.tasks.core import checked_name
 from crmgrasp.tasks.schema import (
     COMMON_SECTIONS,
-    checked_name,
     common_dict,
     common_keys,
     crm_tables,
