@@ -143,3 +143,15 @@ def test_a_regular_polygon_has_at_most_max_vertices():
             CrmgraspError, match=rf"^a regular polygon needs an integer n in \[3, {MAX_VERTICES}\], got "
         ):
             regular_polygon(n, 0.1)
+
+
+def test_a_task_made_from_a_task_with_the_longest_name_keeps_a_valid_name():
+    """A user's name has at most 64 characters; a task made from it (an offset grid) adds a suffix."""
+    import dataclasses
+
+    from crmgrasp.tasks.offsets import offset_grid
+
+    task = dataclasses.replace(make_task("paper-box"), name="n" * 64)
+    assert offset_grid(task, 9).name == "n" * 64 + "-grid9"
+    with pytest.raises(CrmgraspError, match=r"^name must be 1-128 letters"):
+        dataclasses.replace(task, name="n" * 129)

@@ -210,7 +210,7 @@ class Task:
     def _check_common(self) -> None:
         """The checks every task takes, planar or spatial: actions (through the hand's
         ``check_crm``), goal, length, symmetry, rewards, reference."""
-        checked_name(self.name)
+        checked_name(self.name, 2 * NAME_LENGTH)
         if isinstance(self.actions, (str, bytes)) or not isinstance(self.actions, Sequence):
             raise CrmgraspError(f"task actions must be a sequence of CRMs, got {shown(self.actions)}")
         actions = tuple(self.actions)
@@ -451,20 +451,24 @@ def paper_box() -> Task:
 _TASKS: dict[str, Callable[[], Task]] = {"paper-box": paper_box}
 
 
-_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
+_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 """A task's name (it names run folders and is typed after ``--task``)."""
 
+NAME_LENGTH = 64
+"""The longest name a user gives a task (a file, a registration, a study); a task made from
+another (``<name>-grid<n>``, ``<name>-train<n>``) may add up to as many characters again."""
 
-def checked_name(name: Any) -> str:
-    """``name`` if it is a valid task name: 1-64 letters, digits, ``.``, ``_`` or ``-``, the
-    first a letter or digit (one-line error otherwise).
+
+def checked_name(name: Any, longest: int = NAME_LENGTH) -> str:
+    """``name`` if it is a valid task name: 1 to ``longest`` letters, digits, ``.``, ``_`` or
+    ``-``, the first a letter or digit (one-line error otherwise).
 
     >>> checked_name("paper-box")
     'paper-box'
     """
-    if not isinstance(name, str) or not _NAME.fullmatch(name):
+    if not isinstance(name, str) or not _NAME.fullmatch(name) or len(name) > longest:
         raise CrmgraspError(
-            f"name must be 1-64 letters, digits, '.', '_' or '-' (first a letter or digit), got {shown(name)}"
+            f"name must be 1-{longest} letters, digits, '.', '_' or '-' (first a letter or digit), got {shown(name)}"
         )
     return name
 
