@@ -88,7 +88,7 @@ def test_a_reading_off_the_model_object_runs_but_not_one_of_another_kind():
     count, finiteness and normals are checked."""
     task = make_task("paper-box")
     far = Config(Contact(5.0, 5.0, 1.0, 0.0), Contact(5.2, 5.0, -1.0, 0.0))
-    assert checked_reading(task, far) is far and task.model.check_reading(far) is far
+    assert checked_reading(task, far) == (far, task.observe(far)) and task.model.check_reading(far) is far
     with pytest.raises(CrmgraspError, match="off the object"):
         task.check_config(far)
     spatial = Config3D(Contact3D((0.0, 0.0, 0.0), (1.0, 0.0, 0.0)), Contact3D((0.1, 0.0, 0.0), (-1.0, 0.0, 0.0)))
@@ -101,7 +101,7 @@ def test_a_reading_off_the_model_object_runs_but_not_one_of_another_kind():
     tripod = make_task("box-3d-3f")
     with pytest.raises(CrmgraspError, match=r"not a spatial configuration of 3 contacts \(18 finite numbers\)$"):
         checked_reading(tripod, spatial)
-    assert checked_reading(task, NoContact("tip a is free")) == NoContact("tip a is free")
+    assert checked_reading(task, NoContact("tip a is free")) == (NoContact("tip a is free"), None)
     huge = Config3D(Contact3D((1e308, 0.0, 0.0), (1.0, 0.0, 0.0)), Contact3D((-1e308, 0.0, 0.0), (0.0, 1.0, 0.0)))
     with pytest.raises(CrmgraspError, match=r"the observation .* is not finite$"):
         checked_reading(cup, huge)  # no overflow warning on the way (the suite raises warnings as errors)

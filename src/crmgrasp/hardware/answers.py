@@ -60,12 +60,12 @@ def _real(value: object) -> bool:
     return isinstance(value, Real) and not isinstance(value, bool)
 
 
-def checked_reading(task: Task, reading: Any, where: str = "") -> Any:
-    """``reading`` (what ``sense()`` returned, ``where`` says when) if it is ``NoContact`` or
-    a configuration of ``task``'s contact model with finite numbers and a finite observation;
-    else a one-line error."""
+def checked_reading(task: Task, reading: Any, where: str = "") -> tuple[Any, tuple[float, ...] | None]:
+    """``(reading, its observation)`` if ``reading`` (what ``sense()`` returned, ``where`` says
+    when) is a configuration of ``task``'s contact model with finite numbers and a finite
+    observation, ``(reading, None)`` if it is ``NoContact``; else a one-line error."""
     if isinstance(reading, NoContact):
-        return reading
+        return reading, None
     model, at = task.model, f" {where}" if where else ""
     width = len(model.columns)
     what = f"a {model.kind} configuration of {model.n_contacts} contacts ({width} finite numbers)"
@@ -82,7 +82,7 @@ def checked_reading(task: Task, reading: Any, where: str = "") -> Any:
         obs = task.observe(reading)
     if not all(math.isfinite(v) for v in obs):
         raise CrmgraspError(f"the hand's sense(){at}: the observation {obs} is not finite")
-    return reading
+    return reading, obs
 
 
 def checked_error(value: Any, crm: Any) -> Error:

@@ -39,7 +39,7 @@ from crmgrasp._validation import require_extra
 
 __all__ = ["StepRecord", "write_mcap", "require_mcap", "contact_frames", "TOPICS"]
 
-TOPICS = ("/contacts", "/object", "/wrench/<contact>", "/crm", "/log")
+TOPICS = ("/contacts", "/object", "/wrench/<contact>", "/raw", "/crm", "/log")
 """The topics of a record (``<contact>``: each contact's label)."""
 
 _WRENCH = {

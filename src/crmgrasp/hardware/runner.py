@@ -186,8 +186,8 @@ class HandSteps:
 
     def _sense(self, steps: int, error: Error) -> OneStep:
         when = "before the first CRM" if steps == 0 else f"after CRM {steps}"
-        t, reading = self.task, checked_reading(self.task, self.hand.sense(), when)
-        if isinstance(reading, NoContact):
+        t, (reading, obs) = self.task, checked_reading(self.task, self.hand.sense(), when)
+        if obs is None:  # NoContact
             self.lost = str(reading.reason)
             nan = float("nan")
             lost = (nan,) * len(t.model.observation_names)
@@ -196,7 +196,6 @@ class HandSteps:
         pose = getattr(self.hand, "object_pose", None)
         clock = checked_time(getattr(self.hand, "time", steps))
         self.clock.append((clock, None if pose is None else checked_pose(t, pose())))
-        obs = t.observe(reading)
         mu = float(t.quality(reading))
         grasped = bool(t.grasped(mu))
         index = t.discretizer.index(obs, error)

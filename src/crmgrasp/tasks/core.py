@@ -270,8 +270,9 @@ class Task:
 
     def action_index(self, action: Any) -> int:
         """``action`` as an index of ``actions``: an integer (a Python or NumPy one, or a 0-d
-        integer array; not a bool) in ``[0, len(actions))``; else a one-line error. Every step that takes an index
-        (the readable step, the kernels, the environments) takes it through here.
+        integer array; not a bool) in ``[0, len(actions))``; else a one-line error. Every step
+        that takes an index (the readable step, the kernels, the environments) takes it through
+        here.
 
         >>> paper_box().action_index(np.int64(3))
         3
