@@ -22,9 +22,10 @@ from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, shown
 
 __all__ = [
+    "as_path",
     "check_output",
     "check_new_output",
     "check_folder",
@@ -49,14 +50,21 @@ def temporaries(folder: str | os.PathLike[str]) -> list[Path]:
     return sorted(p for p in Path(folder).rglob(f"{_TMP_PREFIX}*") if p.is_file() and not p.is_symlink())
 
 
+def as_path(path: object, what: str = "file") -> Path:
+    """``path`` (text or an ``os.PathLike``) as a [`Path`][], or a one-line error naming ``what``."""
+    if not isinstance(path, (str, os.PathLike)):
+        raise CrmgraspError(f"{what} path must be text or a path, got {shown(path)}")
+    return Path(path)
+
+
 def check_output(path: str | os.PathLike[str], what: str = "output file") -> Path:
     """``path`` as a [`Path`][] if a file can be written there: not empty, not an
     existing non-regular file (device node, FIFO, socket, folder) or a symlink to one,
     and its folder exists (or can be made) and is writable. Call it before any long
     work, so that a bad path fails at once."""
+    target = as_path(path, what)
     if str(path) == "":
         raise CrmgraspError(f"{what} path is empty")
-    target = Path(path)
     if target.exists() or target.is_symlink():
         try:
             mode = os.stat(target).st_mode  # follows a symlink
@@ -87,9 +95,9 @@ def check_new_output(path: str | os.PathLike[str], what: str, overwrite: bool, e
 def check_folder(path: str | os.PathLike[str], what: str = "output folder") -> Path:
     """``path`` as a [`Path`][] if it is, or can be made, a writable folder (checked
     before any long work)."""
+    target = as_path(path, what)
     if str(path) == "":
         raise CrmgraspError(f"{what} path is empty")
-    target = Path(path)
     if target.exists() and not target.is_dir():
         raise CrmgraspError(f"{what} {str(target)!r} exists and is not a folder")
     probe = target.resolve()
@@ -104,7 +112,7 @@ def read_bounded(path: str | os.PathLike[str], max_bytes: int, what: str = "file
     """The bytes of a regular file of at most ``max_bytes``; a one-line error for a
     missing file, a FIFO, device or folder (never opened, so never blocking or endless)
     or a larger file."""
-    p = Path(path)
+    p = as_path(path, what)
     try:
         mode = os.stat(p).st_mode
     except FileNotFoundError:

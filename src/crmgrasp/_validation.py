@@ -10,6 +10,7 @@ __all__ = [
     "CrmgraspError",
     "as_numbers",
     "as_point",
+    "generator",
     "finite",
     "positive",
     "non_negative",
@@ -122,6 +123,16 @@ def as_numbers(value: object, name: str, count: int, what: str = "") -> tuple[fl
 def as_point(value: object, name: str) -> tuple[float, float]:
     """Return ``value`` as a finite 2-tuple of floats, or raise `CrmgraspError`."""
     return as_numbers(value, name, 2, "a pair (x, y)")  # type: ignore[return-value]
+
+
+def generator(value: object, name: str = "rng") -> Any:
+    """Return ``value`` if it is a ``numpy.random.Generator`` (every random draw of the
+    package comes from one), or raise `CrmgraspError`."""
+    import numpy as np  # the package imports numpy anyway; this module stays importable first
+
+    if not isinstance(value, np.random.Generator):
+        raise CrmgraspError(f"{name} must be a numpy.random.Generator, got {shown(value)}")
+    return value
 
 
 def integer(value: object, name: str, low: int, high: int) -> int:

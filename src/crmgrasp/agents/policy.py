@@ -53,8 +53,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from crmgrasp._io import read_bounded, write_json
-from crmgrasp._validation import CrmgraspError, shown
+from crmgrasp._io import as_path, read_bounded, write_json
+from crmgrasp._validation import CrmgraspError, generator, shown
 from crmgrasp.agents.base import allowed_choice, erred_here
 from crmgrasp.agents.tabular import TabularAgent
 from crmgrasp.model.hand import Error
@@ -114,7 +114,7 @@ def policy_digest(doc: dict[str, Any]) -> str:
 
 def read_policy_document(path: str | os.PathLike[str]) -> Any:
     """The parsed JSON of a policy file, read with the bounds above (one-line errors)."""
-    p = Path(path)
+    p = as_path(path, "policy file")
     data = read_bounded(p, MAX_BYTES, "policy file")
     try:
         return json.loads(
@@ -196,6 +196,11 @@ ObservationLike = int | Sequence[float]
 def observation_indices(task: Task, observations: Sequence[ObservationLike], actions: Sequence[int]) -> list[int]:
     """Check a history (``len(observations) == len(actions) + 1``, indices in range) and
     turn every observation into its discrete index (one-line errors)."""
+    try:
+        observations, actions = list(observations), list(actions)
+    except TypeError:
+        got = f"{shown(observations)} and {shown(actions)}"
+        raise CrmgraspError(f"a history is a sequence of observations and one of actions, got {got}") from None
     if len(observations) < 1 or len(observations) != len(actions) + 1:
         raise CrmgraspError(
             f"a history needs one more observation than actions, got {len(observations)} and {len(actions)}"
@@ -267,6 +272,10 @@ class GreedyPolicy:
         each, the best of the actions its greedy policy chooses among (``greedy_tried``: the tried
         ones; all ties kept); with the back-off table of an agent that has one
         (``backoff_tables()``)."""
+        if not isinstance(task, Task):
+            raise CrmgraspError(f"a policy needs a Task, got {shown(task)}")
+        if not all(hasattr(agent, name) for name in ("greedy_table", "greedy_tried", "n_actions")):
+            raise CrmgraspError(f"a greedy policy is made from a tabular agent, got {shown(agent)}")
         skip = bool(getattr(agent, "skip_errored", False))
         values, choices = agent.greedy_table, agent.greedy_tried
         _check_fits(task, k, agent.n_actions, values)
@@ -326,7 +335,8 @@ class GreedyPolicy:
         if self.skip_errored:
             for a, o in zip(actions, codes[1:]):
                 banned = erred_here(banned, int(a), Error(self.task.discretizer.decode(o)[1]))
-        return self.greedy(self.encoder.encode(hist), rng if rng is not None else np.random.default_rng(0), banned)
+        ties = np.random.default_rng(0) if rng is None else generator(rng)
+        return self.greedy(self.encoder.encode(hist), ties, banned)
 
     def update(self, *args: Any) -> None:
         """A saved policy does not learn."""

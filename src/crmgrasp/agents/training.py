@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from crmgrasp._progress import Progress
-from crmgrasp._validation import SEED_MAX, CrmgraspError, boolean, integer
+from crmgrasp._validation import SEED_MAX, CrmgraspError, boolean, integer, shown
 from crmgrasp.agents.backoff import BackoffVI
 from crmgrasp.agents.base import Agent, LearnerPolicy
 from crmgrasp.agents.baselines import FixedSequence, RandomAgent
@@ -78,8 +78,8 @@ def make_agent(name: str, n_actions: int, **params: object) -> Agent:
     """Build a registered agent; unknown names or parameters give a one-line error."""
     try:
         cls = AGENTS[name]
-    except KeyError:
-        raise CrmgraspError(f"unknown agent {name!r}; known agents: {', '.join(AGENTS)}") from None
+    except (KeyError, TypeError):
+        raise CrmgraspError(f"unknown agent {shown(name)}; known agents: {', '.join(AGENTS)}") from None
     accepted = agent_parameters(name)
     for key in params:
         if key not in accepted:
@@ -142,6 +142,8 @@ def build_agent(task: Task, encoder: KOrderEncoder, name: str, params: dict[str,
     as ``prior_weight`` pseudo-counts per pair (defaults: [`PRIOR_DEFAULTS`][])
     (`set_prior`). The prior is computed once
     per setting and reused by every trial."""
+    if params is not None and not isinstance(params, dict):
+        raise CrmgraspError(f"agent parameters must be a dict of name -> value, got {shown(params)}")
     p = dict(params or {})
     symmetric = boolean(p.pop("symmetric", False), "symmetric")
     prior = {key: p.pop(key) for key in PRIOR_KEYS if key in p}
@@ -330,6 +332,20 @@ def check_budget(trials: int, episodes: int, eval_episodes: int) -> None:
         )
 
 
+def _episode_counts(checkpoints: object) -> tuple[int, ...]:
+    """``checkpoints`` (any iterable of Python or NumPy integers) as ints in
+    ``[0, MAX_EPISODE_RECORDS]``; a one-line error otherwise."""
+    try:
+        if isinstance(checkpoints, (str, bytes)):
+            raise TypeError
+        marks: tuple[object, ...] = tuple(checkpoints)  # type: ignore[call-overload,arg-type]
+    except TypeError:
+        raise CrmgraspError(f"checkpoints must be episode counts, got {shown(checkpoints)}") from None
+    return tuple(
+        integer(int(c) if isinstance(c, np.integer) else c, "a checkpoint", 0, MAX_EPISODE_RECORDS) for c in marks
+    )
+
+
 def train_trials(
     task: Task,
     agent: str,
@@ -364,6 +380,10 @@ def train_trials(
     episodes that such a stepper ended early, by kind (its ``faults``), training and
     evaluation together."""
     check_budget(trials, episodes, eval_episodes)
+    if not isinstance(task, Task):
+        raise CrmgraspError(f"train_trials needs a Task, got {shown(task)}")
+    marks = _episode_counts(checkpoints)
+    integer(checkpoint_episodes, "checkpoint_episodes", 0, MAX_EPISODE_RECORDS)
     encoder = encoder_for(task, k)
     kernel = kernel_for(task, backend) if stepper is None else stepper(task)
     every = PROGRESS_EVERY if stepper is None else 1  # a hand's episode takes a noticeable time
@@ -371,7 +391,9 @@ def train_trials(
     success = np.empty((trials, episodes), dtype=bool)
     gsteps = np.empty((trials, eval_episodes), dtype=np.int64)
     gsucc = np.empty((trials, eval_episodes), dtype=bool)
-    ckpts = np.array(sorted({c for c in checkpoints if 1 <= c <= episodes}), dtype=np.int64)
+    ckpts = np.array(sorted({c for c in marks if 1 <= c <= episodes}), dtype=np.int64)
+    if len(ckpts) and checkpoint_episodes < 1:
+        raise CrmgraspError(f"checkpoint_episodes must be at least 1 with checkpoints {ckpts.tolist()}, got 0")
     csteps = np.empty((trials, len(ckpts)))
     agents = []
     for t, (env_rng, agent_rng, eval_rng) in enumerate(trial_generators(seed, trials, first_trial)):

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import product
 
-from crmgrasp._validation import CrmgraspError, finite
+from crmgrasp._validation import CrmgraspError, finite, shown
 
 __all__ = ["CRMRange", "full_ranges", "grid_points"]
 
@@ -76,6 +76,11 @@ class CRMRange:
     def __post_init__(self) -> None:
         if not isinstance(self.c, str) or not isinstance(self.f, str):
             raise CrmgraspError(f"a CRM range names its contacts by label, got {self.c!r} and {self.f!r}")
+        for name, corner in (("low", self.low), ("high", self.high)):
+            if isinstance(corner, (str, bytes)) or not isinstance(corner, (tuple, list)):
+                raise CrmgraspError(
+                    f"a CRM range's {name} is a tuple of offsets (one per coordinate), got {shown(corner)}"
+                )
         low = tuple(finite(v, "CRM range low") for v in self.low)
         high = tuple(finite(v, "CRM range high") for v in self.high)
         if not low or len(low) != len(high):

@@ -51,12 +51,13 @@ from typing import NamedTuple, Protocol
 import numpy as np
 from numpy.typing import ArrayLike
 
-from crmgrasp._validation import CrmgraspError, as_point, finite, non_negative, positive, shown
+from crmgrasp._validation import CrmgraspError, as_point, finite, generator, non_negative, positive, shown
 from crmgrasp.model.contacts import (
     ALL_LABELS,
     Config,
     Contact,
     Grip,
+    check_contacts,
     label_index,
     labels_of,
     make_config,
@@ -311,8 +312,14 @@ class Hand:
         """
         self.check_crm(crm)
         check_config(obj, config, contacts=self.contacts)
-        if rng is not None and not isinstance(rng, np.random.Generator):
-            raise CrmgraspError(f"rng must be a numpy.random.Generator, got {shown(rng)}")
+        if rng is not None:
+            generator(rng)
+        if noise is not None and not (hasattr(noise, "active") and callable(getattr(noise, "sense", None))):
+            raise CrmgraspError(f"noise must be a sensor model such as SensorNoise, got {shown(noise)}")
+        if sensed is not None:
+            check_contacts(sensed, "sensed")
+            if len(sensed) != self.contacts:
+                raise CrmgraspError(f"sensed has {len(sensed)} contacts; the hand has {self.contacts}")
         if sensed is None and noise is not None and noise.active:
             if rng is None:
                 raise CrmgraspError("sensing noise needs a numpy Generator (rng)")

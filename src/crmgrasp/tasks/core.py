@@ -16,7 +16,7 @@ from typing import Any, NamedTuple, overload
 import numpy as np
 from numpy.typing import NDArray
 
-from crmgrasp._validation import CrmgraspError, finite, is_finite_number, non_negative, shown
+from crmgrasp._validation import CrmgraspError, finite, generator, is_finite_number, non_negative, shown
 from crmgrasp.model.actions import CRMRange
 from crmgrasp.model.contact_model import ContactModel
 from crmgrasp.model.contacts import Config, Grip
@@ -358,7 +358,7 @@ class Task:
 
     def sample_world(self, rng: np.random.Generator, accept: StartFilter | None = None) -> World:
         """An episode's hidden world: `instance`, then a start on it."""
-        inst = self.instance(rng)
+        inst = self.instance(generator(rng))
         return World(inst, inst.sample_start(rng, accept))
 
     def sample_start(self, rng: np.random.Generator, accept: Any = None) -> Config | Grip:
@@ -368,6 +368,7 @@ class Task:
         candidates ([`CornerStarts`][] and the presets of `crmgrasp.tasks.presets`), a
         [`UniformFilter`][crmgrasp.tasks.starts.UniformFilter] by [`UniformStarts`][]."""
         self._one_object()
+        generator(rng)
         if accept is not None and _takes(self.starts, accept):
             return self.starts(self.obj, self.hand, self.mu_goal, rng, accept)  # type: ignore[call-arg]
         return self.starts(self.obj, self.hand, self.mu_goal, rng)
