@@ -9,7 +9,7 @@ same seed (common random numbers).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
@@ -335,12 +335,9 @@ def check_budget(trials: int, episodes: int, eval_episodes: int) -> None:
 def _episode_counts(checkpoints: object) -> tuple[int, ...]:
     """``checkpoints`` (any iterable of Python or NumPy integers) as ints in
     ``[0, MAX_EPISODE_RECORDS]``; a one-line error otherwise."""
-    try:
-        if isinstance(checkpoints, (str, bytes)):
-            raise TypeError
-        marks: tuple[object, ...] = tuple(checkpoints)  # type: ignore[call-overload,arg-type]
-    except TypeError:
-        raise CrmgraspError(f"checkpoints must be episode counts, got {shown(checkpoints)}") from None
+    if isinstance(checkpoints, (str, bytes)) or not isinstance(checkpoints, Iterable):
+        raise CrmgraspError(f"checkpoints must be episode counts, got {shown(checkpoints)}")
+    marks = tuple(checkpoints)
     return tuple(
         integer(int(c) if isinstance(c, np.integer) else c, "a checkpoint", 0, MAX_EPISODE_RECORDS) for c in marks
     )

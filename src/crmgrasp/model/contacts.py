@@ -252,10 +252,10 @@ UNIT_TOL = 1e-6
 _NORM2_TOL = 2.0 * UNIT_TOL  # on the squared length
 
 
-def check_contacts(config: object, name: str = "configuration") -> Config | Grip:
+def check_contacts(config: object, name: str = "configuration", contacts: int | None = None) -> Config | Grip:
     """``config`` if it is a [`Config`][] (or a [`Grip`][]) of [`Contact`][] with finite
-    coordinates and unit normals (within [`UNIT_TOL`][]); else a one-line
-    `CrmgraspError`. The public functions taking a
+    coordinates and unit normals (within [`UNIT_TOL`][]), and ``contacts`` of them if given;
+    else a one-line `CrmgraspError`. The public functions taking a
     configuration call it; the compiled kernels do not (their inputs come from the model).
 
     Examples
@@ -267,6 +267,8 @@ def check_contacts(config: object, name: str = "configuration") -> Config | Grip
     ...
     crmgrasp._validation.CrmgraspError: configuration: contact a's normal must be a unit vector, got (2, 0)
     """
+    if contacts is not None and isinstance(config, (Config, Grip)) and len(config) != contacts:
+        raise CrmgraspError(f"{name} has {len(config)} contacts; the hand has {contacts}")
     if type(config) is not Config or type(config.a) is not Contact or type(config.b) is not Contact:
         if not isinstance(config, (Config, Grip)) or not all(isinstance(c, Contact) for c in config):
             raise CrmgraspError(f"{name} must be a Config of two Contacts (or a Grip of more), got {config!r:.80}")

@@ -317,9 +317,7 @@ class Hand:
         if noise is not None and not (hasattr(noise, "active") and callable(getattr(noise, "sense", None))):
             raise CrmgraspError(f"noise must be a sensor model such as SensorNoise, got {shown(noise)}")
         if sensed is not None:
-            check_contacts(sensed, "sensed")
-            if len(sensed) != self.contacts:
-                raise CrmgraspError(f"sensed has {len(sensed)} contacts; the hand has {self.contacts}")
+            check_contacts(sensed, "sensed", self.contacts)
         if sensed is None and noise is not None and noise.active:
             if rng is None:
                 raise CrmgraspError("sensing noise needs a numpy Generator (rng)")

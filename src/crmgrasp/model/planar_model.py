@@ -136,10 +136,7 @@ class PlanarModel(LabelledContacts):
 
     def check_reading(self, config: object, name: str = "reading") -> Config | Grip:
         """[`check_contacts`][crmgrasp.model.contacts.check_contacts], with one contact per finger."""
-        config = check_contacts(config, name)
-        if len(config) != self.n_contacts:
-            raise CrmgraspError(f"{name} has {len(config)} contacts; the hand has {self.n_contacts}")
-        return config
+        return check_contacts(config, name, self.n_contacts)
 
     def place(self, obj: Any, points: Sequence[ArrayLike]) -> Config | Grip:
         """Each contact at the boundary point nearest its point (finite ``(x, y)``, metres;
