@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import re
+from numbers import Real
 from typing import Any
 
 __all__ = [
@@ -11,6 +12,7 @@ __all__ = [
     "as_numbers",
     "as_point",
     "generator",
+    "is_real",
     "finite",
     "positive",
     "non_negative",
@@ -75,6 +77,16 @@ def is_finite_number(value: object) -> bool:
     (True, False, False, False)
     """
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def is_real(value: object) -> bool:
+    """Whether ``value`` is a real number (a Python or NumPy one), not a ``bool``: what a
+    user's object (a hand's reading, a raw sensor value) must hold where a number is due.
+
+    >>> is_real(2), is_real(True), is_real("1")
+    (True, False, False)
+    """
+    return isinstance(value, Real) and not isinstance(value, bool)
 
 
 def positive(value: object, name: str) -> float:

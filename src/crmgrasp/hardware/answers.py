@@ -22,13 +22,12 @@ it returned, before anything is logged:
 from __future__ import annotations
 
 import math
-from numbers import Real
 from typing import Any
 
 import numpy as np
 
 from crmgrasp._io import dumps_json
-from crmgrasp._validation import CrmgraspError, shown
+from crmgrasp._validation import CrmgraspError, is_real, shown
 from crmgrasp.hardware.contact_sensing import NoContact
 from crmgrasp.model.hand import Error
 from crmgrasp.tasks import Task
@@ -55,11 +54,6 @@ QUATERNION_TOL = 1e-6
 """How far from 1 the norm of a spatial pose's quaternion ``qw, qx, qy, qz`` may be."""
 
 
-def _real(value: object) -> bool:
-    """A real number that is not a bool."""
-    return isinstance(value, Real) and not isinstance(value, bool)
-
-
 def checked_reading(task: Task, reading: Any, where: str = "") -> tuple[Any, tuple[float, ...] | None]:
     """``(reading, its observation)`` if ``reading`` (what ``sense()`` returned, ``where`` says
     when) is a configuration of ``task``'s contact model with finite numbers and a finite
@@ -73,7 +67,7 @@ def checked_reading(task: Task, reading: Any, where: str = "") -> tuple[Any, tup
         row = list(model.numbers(reading))
     except Exception:  # the user's object: any failure to read it is the same refusal
         row = []
-    if len(row) != width or not all(map(_real, row)):
+    if len(row) != width or not all(map(is_real, row)):
         raise CrmgraspError(f"the hand's sense(){at} returned {shown(reading, 80)}, not {what}")
     if not all(math.isfinite(float(v)) for v in row):
         raise CrmgraspError(f"the hand's sense(){at} returned a reading that is not finite: {shown(reading, 120)}")
@@ -110,7 +104,7 @@ def checked_raw(value: Any) -> dict[str, Any]:
 def checked_time(value: Any) -> float:
     """``value`` (the hand's ``time``) as a float if it is a real number of seconds in
     ``[0, MAX_TIME]``, else a one-line error."""
-    if not _real(value) or not 0.0 <= float(value) <= MAX_TIME:
+    if not is_real(value) or not 0.0 <= float(value) <= MAX_TIME:
         raise CrmgraspError(f"the hand's time is {shown(value)}, not a number of seconds in [0, {MAX_TIME:g}]")
     return float(value)
 
@@ -126,7 +120,7 @@ def checked_pose(task: Task, value: Any) -> tuple[float, ...] | None:
         numbers = list(value)
     except TypeError:
         numbers = []
-    if len(numbers) != width or not all(_real(v) and math.isfinite(float(v)) for v in numbers):
+    if len(numbers) != width or not all(is_real(v) and math.isfinite(float(v)) for v in numbers):
         raise CrmgraspError(f"the hand's object_pose() returned {shown(value, 80)}, not None or {width} finite numbers")
     pose = tuple(float(v) for v in numbers)
     if width == 7 and abs(math.hypot(*pose[3:]) - 1.0) > QUATERNION_TOL:

@@ -29,13 +29,12 @@ import json
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from numbers import Real
 from pathlib import Path
 from types import ModuleType
 from typing import Any
 
 from crmgrasp._io import atomic_path, json_safe
-from crmgrasp._validation import require_extra
+from crmgrasp._validation import is_real, require_extra
 
 __all__ = ["StepRecord", "write_mcap", "require_mcap", "contact_frames", "TOPICS"]
 
@@ -109,7 +108,7 @@ def _is_wrench(values: object) -> bool:
     return (
         isinstance(values, (list, tuple))
         and len(values) in (3, 6)
-        and all(isinstance(v, Real) and not isinstance(v, bool) and math.isfinite(v) for v in values)
+        and all(is_real(v) and math.isfinite(v) for v in values)
     )
 
 
