@@ -14,7 +14,7 @@ under 400 characters; any other exception, a warning, a longer message or a call
 after ``--seconds`` (5) is reported with the call, the argument and the value. It prints one JSON
 object and exits 1 if a call failed.
 
-Measured 2026-12-07 on the 2-core machine: 34 calls, 2,140 variants in 0.6 s, none failed.
+Measured 2026-12-07 on the 2-core machine: 68 calls, 4,280 variants in 1.2 s, none failed.
 The first 24 calls on the code before their fixes (46c3eef): 227 of 1,460 failed. A ``Contact`` of text,
 ``None`` or containers reached ``observe`` and ``min_friction`` as a ``TypeError`` (88); a hand
 given no ``Shape`` failed inside ``contact`` and ``execute`` (40); ``Task`` took actions that
@@ -26,7 +26,15 @@ added next (sampling a start, executing with noise or a given reading, ``Uniform
 ``CRMRange``, ``train_trials``, and a greedy policy's ``from_agent``, ``predict``, ``save`` and
 ``load``) on the code of db0d784: 274 of 680 failed, as an ``AttributeError`` or ``TypeError``
 from deep inside (a generator, a sensor, a reading, a task, an agent, parameters, checkpoints
-or a path of the wrong kind).
+or a path of the wrong kind). The 34 calls of the planners, the references, the episode loop,
+the environments' steps and the family helpers ([`planning_examples`][], [`loop_examples`][])
+on the code of 411076d: 934 of 2,140 failed. Something other than a ``Task`` reached 15
+functions as an ``AttributeError`` (298); the episode loop took a policy, a learner, an encoder
+or a generator of the wrong kind (154); the explicit POMDP's helpers took anything (168);
+starts that are no list (90); seeds of text, floats or negative (44, the environment's through
+Gymnasium's own error); offsets, labels, families and CRM sets of the family helpers (92);
+``episodes_to_within`` (47) and ``flat_action`` (39); and 10**100 sampled starts ran until the
+time limit (2).
 
 Usage: ``python benchmarks/api_fuzz.py [--seconds 5]``.
 """
@@ -48,11 +56,32 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from scipy import sparse
+
 import crmgrasp as c
 import task_file_fuzz
-from crmgrasp.agents import GreedyPolicy, train_trials
+from crmgrasp import sim
+from crmgrasp.agents import (
+    GreedyPolicy,
+    encoder_for,
+    episodes_to_within,
+    evaluate,
+    make_agent,
+    run_episode,
+    train_trials,
+)
+from crmgrasp.envs import ContinuousCRMEnv
+from crmgrasp.envs.continuous import PairOffsetActions, flat_action
+from crmgrasp.envs.vector import vector_env
 from crmgrasp.model.actions import CRMRange
+from crmgrasp.model.families import BoxFamily, RegularPolygonFamily
+from crmgrasp.planners import pomdp
+from crmgrasp.planners import references as refs
+from crmgrasp.planners.korder import korder_search
+from crmgrasp.planners.realizable import realizable_reference
 from crmgrasp.tasks import UniformStarts
+from crmgrasp.tasks.families import default_crms, family_task
+from crmgrasp.tasks.fingers import finger_crms, three_finger_task
 
 HOSTILE: tuple[Any, ...] = (
     None,
@@ -197,6 +226,72 @@ def examples() -> list[Call]:
         Call("GreedyPolicy.predict", policy.predict, [0], [], np.random.default_rng(0)),
         Call("GreedyPolicy.save", policy.save, "policy.json"),
         Call("GreedyPolicy.load", GreedyPolicy.load, "policy.json"),
+        *planning_examples(box),
+        *loop_examples(box),
+    ]
+
+
+def planning_examples(box: c.Task) -> list[Call]:
+    """The planners and references a user calls on a task and its sampled starts."""
+    starts = refs.sample_starts(box, 4, 0)
+    m = pomdp.POMDP(
+        2, 1, 2, [sparse.identity(2, format="csr")], np.full((1, 2, 2), 0.5), np.full(2, 0.5), np.zeros(2, bool)
+    )
+    pomdp.write_cassandra(m, "m.pomdp")
+    return [
+        Call("sample_starts", refs.sample_starts, box, 4, 0),
+        Call("clairvoyant_steps", refs.clairvoyant_steps, box, starts[0], horizon=5, backend="auto"),
+        Call("clairvoyant_bound", refs.clairvoyant_bound, box, starts, horizon=5, backend="auto"),
+        Call("graspable_starts", refs.graspable_starts, box, starts, horizon=5, backend="auto"),
+        Call("ungraspable_fraction", refs.ungraspable_fraction, box, starts, horizon=5, backend="auto"),
+        Call("belief_optimum", refs.belief_optimum, box, starts, horizon=5, backend="auto"),
+        Call("block_optima", refs.block_optima, box, starts, 2, horizon=5, backend="auto"),
+        Call("BeliefPolicy", refs.BeliefPolicy, box, starts, fallback="restart", backend="auto"),
+        Call("BeliefPolicy.run", refs.BeliefPolicy(box, starts).run, starts[0], np.random.default_rng(0)),
+        Call("realizable_reference", realizable_reference, box, starts, 4, 1, fallback="nearest", backend="auto"),
+        Call("korder_search", korder_search, box, starts, k=1, max_passes=2, init="belief"),
+        Call("collect_beliefs", pomdp.collect_beliefs, m, 3, 2, np.random.default_rng(0)),
+        Call("solve_pbvi", pomdp.solve_pbvi, m, np.full((1, 2), 0.5), 2),
+        Call("write_cassandra", pomdp.write_cassandra, m, "n.pomdp"),
+        Call("read_cassandra", pomdp.read_cassandra, "m.pomdp"),
+    ]
+
+
+def loop_examples(box: c.Task) -> list[Call]:
+    """The episode loop, the learners' helpers, the environments' steps and the families."""
+    enc = encoder_for(box, 1)
+    agent = make_agent("sarsa", len(box.actions))
+    env, cont, vec = c.CRMGraspEnv(), ContinuousCRMEnv(), vector_env(2)
+    env.reset(seed=0), cont.reset(seed=0), vec.reset(seed=0)
+    family = RegularPolygonFamily(sides=(3, 5), radius=(0.04, 0.08))
+    return [
+        Call("make_agent", make_agent, "sarsa", 4, alpha=0.3),
+        Call("encoder_for", encoder_for, box, 2),
+        Call("agents.run_episode", run_episode, box, agent, enc, np.random.default_rng(0), np.random.default_rng(1)),
+        Call("evaluate", evaluate, box, agent, enc, 3, np.random.default_rng(0), np.random.default_rng(1)),
+        Call("episodes_to_within", episodes_to_within, np.full(20, 1.7), 1.66, factor=1.05, window=10),
+        Call(
+            "sim.run_episode",
+            sim.run_episode,
+            box,
+            refs.BeliefPolicy(box, refs.sample_starts(box, 4, 0)),
+            np.random.default_rng(0),
+            start=None,
+            trace=True,
+        ),
+        Call("CRMGraspEnv.reset", env.reset, seed=0, options=None),
+        Call("CRMGraspEnv.step", env.step, 1),
+        Call("ContinuousCRMEnv", ContinuousCRMEnv, "paper-box", backend="auto"),
+        Call("ContinuousCRMEnv.step", cont.step, {"pair": 1, "r": np.array([0.0])}),
+        Call("vector_env", vector_env, 2, "paper-box"),
+        Call("CRMGraspVectorEnv.step", vec.step, np.array([0, 1])),
+        Call("flat_action", flat_action, PairOffsetActions(box).ranges, np.array([0.1, 0.2])),
+        Call("default_crms", default_crms, (0.04, 0.08)),
+        Call("finger_crms", finger_crms, ("a", "b", "c"), (0.03,)),
+        Call("RegularPolygonFamily", RegularPolygonFamily, sides=(3, 5), radius=(0.04, 0.08)),
+        Call("BoxFamily", BoxFamily, length=(0.2, 0.4), width=(0.06, 0.14)),
+        Call("family_task", family_task, "f", family, actions=default_crms(), symmetric=True, description=""),
+        Call("three_finger_task", three_finger_task, "f3", family, "three fingers", mu_goal=0.15),
     ]
 
 

@@ -166,6 +166,58 @@ def test_api_configurations_and_generators_are_checked(task):
             env.reset(options=options)  # type: ignore[arg-type]
 
 
+def test_the_episode_loop_checks_its_policy_learner_and_generators(task):
+    """What the loop is handed is checked where it arrives: before, a policy without
+    ``begin``, a learner with fewer actions than its encoder, or a seed of text reached
+    Python or Gymnasium as an ``AttributeError``, an ``IndexError`` or Gymnasium's error."""
+    from crmgrasp import sim
+    from crmgrasp.agents import encoder_for, evaluate, make_agent, run_episode
+
+    rng = np.random.default_rng(0)
+    with pytest.raises(CrmgraspError, match="a policy needs the methods begin, act, tell; 3 has no begin"):
+        sim.run_episode(task, 3, rng)  # type: ignore[arg-type]
+    with pytest.raises(CrmgraspError, match=re.escape("run_episode needs a Task (crmgrasp.make_task(name)), got None")):
+        sim.run_episode(None, 3, rng)  # type: ignore[arg-type]
+    agent = make_agent("sarsa", 3)
+    with pytest.raises(CrmgraspError, match="the agent has 3 actions, the encoder 4"):
+        run_episode(task, agent, encoder_for(task, 1), rng, rng)
+    with pytest.raises(CrmgraspError, match="a learner acts through a KOrderEncoder"):
+        run_episode(task, make_agent("sarsa", 4), 1, rng, rng)  # type: ignore[arg-type]
+    with pytest.raises(CrmgraspError, match=r"episodes must be an integer in \[0, 200000000\], got -1"):
+        evaluate(task, make_agent("sarsa", 4), encoder_for(task, 1), -1, rng)
+    for seed in (-1, "x", 1.5):
+        with pytest.raises(CrmgraspError, match="seed must be an integer"):
+            CRMGraspEnv(task).reset(seed=seed)  # type: ignore[arg-type]
+    assert CRMGraspEnv(task).reset(seed=np.int64(3))[0] == CRMGraspEnv(task).reset(seed=3)[0]
+
+
+def test_helpers_that_build_tasks_and_actions_check_their_arguments():
+    from crmgrasp.agents import episodes_to_within
+    from crmgrasp.envs.continuous import PairOffsetActions, flat_action
+    from crmgrasp.envs.vector import vector_env
+    from crmgrasp.model.families import BoxFamily
+    from crmgrasp.tasks import default_crms, family_task
+
+    with pytest.raises(CrmgraspError, match=r"CRM offsets must be a list, got 0\.04"):
+        default_crms(0.04)  # type: ignore[arg-type]
+    assert default_crms(np.array([0.04])) == default_crms((0.04,))
+    with pytest.raises(CrmgraspError, match=r"a task family must be a ShapeFamily \(BoxFamily\(\), ...\), got None"):
+        family_task("f", None)  # type: ignore[arg-type]
+    with pytest.raises(CrmgraspError, match=r"expected a CRM, got \[1.0, 2.0\]"):  # not the mirror's TypeError
+        family_task("f", BoxFamily(), actions=[[1.0, 2.0]])
+    with pytest.raises(CrmgraspError, match="CRMGraspVectorEnv needs a Task"):
+        vector_env(2, None)  # type: ignore[arg-type]
+    ranges = PairOffsetActions(make_task("paper-box")).ranges
+    with pytest.raises(CrmgraspError, match=r"the flat action must have shape \(2,\), got \(3,\)"):
+        flat_action(ranges, np.zeros(3))
+    with pytest.raises(CrmgraspError, match="ranges must be a non-empty list of CRMRange"):
+        flat_action([], np.zeros(2))
+    with pytest.raises(CrmgraspError, match="a learning curve must be a 1-D sequence of finite numbers"):
+        episodes_to_within([1.0, np.nan], 1.0)
+    with pytest.raises(CrmgraspError, match=r"window must be an integer in \[1, 200000000\], got 0"):
+        episodes_to_within([1.0, 1.0], 1.0, window=0)
+
+
 def test_the_fused_kernel_refuses_an_action_out_of_range(task):
     from crmgrasp.kernels import kernel_for
     from crmgrasp.sim import SimState

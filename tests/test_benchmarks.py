@@ -884,3 +884,17 @@ def test_api_fuzz_passes_and_reports_what_escapes(monkeypatch, capsys, tmp_path)
     hand_calls = {"Hand.contact", "Hand.execute", "Hand.execute with noise", "Hand.execute with a reading"}
     assert out["failed"] == 80 and {f["call"] for f in out["failures"]} == hand_calls
     assert all(f["argument"] == "argument 0" for f in out["failures"])
+
+
+def test_pomdp_file_fuzz_passes_and_reports_what_escapes(monkeypatch):
+    """Every edited ``.pomdp`` file reads or fails in one line naming it; with the range checks
+    taken away, the indices past the sizes are reported again."""
+    mod = _bench("pomdp_file_fuzz")
+    out = mod.main([])
+    assert out["failed"] == 0 and out["variants"] > 400
+    import crmgrasp.planners.pomdp as pomdp
+
+    monkeypatch.setattr(pomdp, "_check_rows", lambda *args: None)
+    out = mod.main([])
+    assert out["failed"] >= 10
+    assert {f["problem"].split(":")[0] for f in out["failures"]} <= {"ValueError", "IndexError", "MemoryError"}

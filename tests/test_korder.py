@@ -62,7 +62,7 @@ def test_discs_take_one_opposition():
 
 def test_bad_input():
     task = make_task("paper-box")
-    with pytest.raises(CrmgraspError, match="at least one start"):
+    with pytest.raises(CrmgraspError, match="korder_search needs a non-empty list of starts"):
         korder_search(task, [], k=1)
     with pytest.raises(CrmgraspError, match="history order k"):
         korder_search(task, sample_starts(task, 5, 0), k=11)

@@ -77,3 +77,51 @@ def test_sampled_paper_box_pomdp(task, tmp_path):
     assert 1.3 < agent.model_value() < 2.2
     back = read_cassandra(write_cassandra(m, tmp_path / "box.pomdp"))
     assert back.n_states == m.n_states
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (("states: 3", "states: -2"), r"states must be an integer in \[1, 100000000\], got -2"),
+        (("states: 3", "states: 10000000000"), "states must be an integer"),
+        (("observations: 3", "observations: 100000000"), "exceed 100,000,000 entries"),
+        (("T: 0 : 0 : 2 1.0", "T: 0 : 0 : 9 1.0"), "entry 'T: 0 : 0 : 9 1.0' is out of range"),
+        (("T: 0 : 0 : 2 1.0", "T: 0 : 0 : 2 nan"), "entry 'T: 0 : 0 : 2 nan' is out of range"),
+        (("O: 0 : 0 : 1 1.0", "O: 0 : 0 : 7 1.0"), "entry 'O: 0 : 0 : 7 1.0' is out of range"),
+        (("O: 0 : 0 : 1 1.0", "O: 0 : 0 : 1 1.5"), "is out of range"),
+        (("R: * : 2 : * : * 0.0", "R: * : 5 : * : * 0.0"), "a reward names a state outside 0..2"),
+        (("R: * : 2 : * : * 0.0", "R: * : 2"), "cannot read POMDP file"),
+        (("T: 0 : 0 : 2 1.0", "T: 0 : 0"), "cannot read POMDP file"),
+    ],
+)
+def test_a_corrupt_pomdp_file_is_one_line_naming_it(tmp_path, edit, message):
+    """Sizes, indices and probabilities are checked before anything is built (a negative or
+    huge size, an index out of range, a NaN reached numpy and scipy as a traceback or a
+    74 GB allocation)."""
+    text = write_cassandra(aliased(), tmp_path / "m.pomdp").read_text()
+    assert edit[0] in text
+    bad = tmp_path / "bad.pomdp"
+    bad.write_text(text.replace(edit[0], edit[1], 1))
+    with pytest.raises(CrmgraspError, match=message) as err:
+        read_cassandra(bad)
+    assert "\n" not in str(err.value) and "bad.pomdp" in str(err.value)
+
+
+def test_pbvi_and_belief_collection_check_their_arguments():
+    m = aliased()
+    for beliefs, message in [
+        (np.full((2, 2), 0.5), r"beliefs must be rows of 3 non-negative numbers"),
+        ([[0.5, 0.5, np.nan]], "beliefs must be rows"),
+        ([[0.5, 0.6, 0.0]], "each row sums to 1"),
+        ("x", "beliefs must be rows"),
+    ]:
+        with pytest.raises(CrmgraspError, match=message):
+            solve_pbvi(m, beliefs, 3)
+    with pytest.raises(CrmgraspError, match=r"horizon must be an integer in \[0, 1000\], got 1001"):
+        solve_pbvi(m, m.b0[None], 1001)
+    with pytest.raises(CrmgraspError, match="solve_pbvi needs a POMDP, got None"):
+        solve_pbvi(None, m.b0[None], 3)
+    with pytest.raises(CrmgraspError, match=r"rng must be a numpy\.random\.Generator"):
+        collect_beliefs(m, 3, 2, 0)
+    with pytest.raises(CrmgraspError, match=r"number of beliefs must be an integer in \[1, 100000\]"):
+        collect_beliefs(m, 10**100, 2, np.random.default_rng(0))

@@ -68,7 +68,7 @@ def test_realizable_reference_reports_both_and_their_graspable_means() -> None:
     assert (res["seed"], res["fallback"], res["planned_starts"]) == (7, "nearest", 300)
     with pytest.raises(CrmgraspError, match="unknown fallback 'near'"):
         realizable_reference(task, starts, 10, 1, "near")
-    with pytest.raises(CrmgraspError, match="policy_costs needs at least one start"):
+    with pytest.raises(CrmgraspError, match="policy_costs needs a non-empty list of starts"):
         policy_costs(BeliefPolicy(task, starts), [])
 
 

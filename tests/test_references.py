@@ -56,10 +56,18 @@ def test_paper_box_references_match_spec(task):
 
 
 def test_bad_reference_input(task):
-    with pytest.raises(CrmgraspError, match="at least one start"):
+    with pytest.raises(CrmgraspError, match="belief_optimum needs a non-empty list of starts"):
         belief_optimum(task, [])
-    with pytest.raises(CrmgraspError, match="integer >= 1"):
+    with pytest.raises(CrmgraspError, match=r"number of starts must be an integer in \[1, 1000000\], got 0"):
         sample_starts(make_task("paper-box"), 0, seed=0)
+    with pytest.raises(CrmgraspError, match=r"seed must be an integer in \[0, 9223372036854775807\], got -1"):
+        sample_starts(task, 3, seed=-1)
+    with pytest.raises(
+        CrmgraspError, match=r"belief_optimum needs a Task \(crmgrasp.make_task\(name\)\), got 'paper-box'"
+    ):
+        belief_optimum("paper-box", [])
+    with pytest.raises(CrmgraspError, match=r"clairvoyant_bound needs a non-empty list of starts .*, got 3"):
+        clairvoyant_bound(task, 3)
     assert clairvoyant_steps(task, Config(Contact(-0.15, 0.0, 1.0, 0.0), Contact(0.15, 0.0, -1.0, 0.0))) >= 1
     starts = sample_starts(task, 5, seed=0)
     for horizon in (-1, 0, 1.5, 1001):  # -1 gave a mean of -1.0 CRMs, 0 the task's step limit

@@ -132,6 +132,22 @@ def as_numbers(value: object, name: str, count: int, what: str = "") -> tuple[fl
     return tuple(finite(v, f"{name}[{i}]") for i, v in enumerate(items))
 
 
+def listed(value: object, name: str, what: str = "a list") -> tuple[Any, ...]:
+    """``value`` as a tuple if it is an ordered collection (a list, tuple, range or 1-D array;
+    not text, a mapping or a set), or a one-line error naming ``name``.
+
+    >>> listed([0.04, 0.08], "offsets")
+    (0.04, 0.08)
+    """
+    ordered = not isinstance(value, (str, bytes, dict, set, frozenset)) and hasattr(value, "__len__")
+    try:
+        if ordered:
+            return tuple(value)  # type: ignore[arg-type]
+    except TypeError:  # a 0-d array
+        pass
+    raise CrmgraspError(f"{name} must be {what}, got {shown(value)}")
+
+
 def as_point(value: object, name: str) -> tuple[float, float]:
     """Return ``value`` as a finite 2-tuple of floats, or raise `CrmgraspError`."""
     return as_numbers(value, name, 2, "a pair (x, y)")  # type: ignore[return-value]
@@ -168,6 +184,29 @@ def integer(value: object, name: str, low: int, high: int) -> int:
     if not low <= value <= high:
         raise CrmgraspError(f"{name} must be an integer in [{low}, {high}], got {value}")
     return value
+
+
+def seed_value(value: object, name: str = "seed") -> int:
+    """``value`` as a seed: an integer (Python's or NumPy's) in ``[0, SEED_MAX]``, or text of
+    one (one-line error otherwise).
+
+    >>> seed_value(3)
+    3
+    """
+    import numpy as np
+
+    if isinstance(value, np.integer):
+        value = int(value)
+    return integer(value, name, 0, SEED_MAX)
+
+
+def optional_seed(value: object) -> int | None:
+    """``None``, or [`seed_value`][]'s ``value``.
+
+    >>> optional_seed(3), optional_seed(None)
+    (3, None)
+    """
+    return None if value is None else seed_value(value)
 
 
 def setting(text: str) -> tuple[str, bool | int | float]:

@@ -25,10 +25,10 @@ from typing import Any, NamedTuple, Protocol, overload
 import numpy as np
 from numpy.typing import NDArray
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, generator, shown
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import CRM, Error
-from crmgrasp.tasks import Task, World
+from crmgrasp.tasks import Task, World, checked_task
 
 __all__ = [
     "OneStep",
@@ -286,6 +286,14 @@ class Episode(NamedTuple):
     trace: tuple[Transition, ...] = ()
 
 
+def check_policy(policy: object, methods: Sequence[str]) -> None:
+    """A one-line error unless ``policy`` has every method of ``methods`` (a [`Policy`][]'s
+    ``begin``, ``act`` and ``tell``; a [`BatchPolicy`][]'s the same)."""
+    missing = [m for m in methods if not callable(getattr(policy, m, None))]
+    if missing:
+        raise CrmgraspError(f"a policy needs the methods {', '.join(methods)}; {shown(policy)} has no {missing[0]}")
+
+
 def run_episode(
     task: Task,
     policy: Policy,
@@ -301,6 +309,9 @@ def run_episode(
     episode ends; starts and readings draw from ``rng``. Steps are `begin`
     and [`step`][] (of the episode's object), or the same steps of ``kernel``
     (faster, the same results)."""
+    checked_task(task, "run_episode")
+    check_policy(policy, ("begin", "act", "tell"))
+    generator(rng)
     if kernel is None:
         kernel = FamilyStepper(task) if task.family is not None else TaskSteps(task)
     if isinstance(start, World):

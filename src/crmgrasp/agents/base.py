@@ -31,9 +31,10 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from crmgrasp._validation import CrmgraspError, generator, shown
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import KOrderEncoder
-from crmgrasp.sim import Percept
+from crmgrasp.sim import Percept, check_policy
 
 __all__ = ["Agent", "LearnerPolicy", "greedy_choice", "allowed_choice", "erred_here"]
 
@@ -104,7 +105,13 @@ class LearnerPolicy:
     """
 
     def __init__(self, agent: Agent, encoder: KOrderEncoder, rng: np.random.Generator, *, learn: bool = True) -> None:
-        self.agent, self.encoder, self.rng, self.learn = agent, encoder, rng, learn
+        check_policy(agent, ("begin_episode", "act", "update") if learn else ("begin_episode", "greedy"))
+        if not isinstance(encoder, KOrderEncoder):
+            raise CrmgraspError(f"a learner acts through a KOrderEncoder (encoder_for(task, k)), got {shown(encoder)}")
+        n = getattr(agent, "n_actions", encoder.n_actions)
+        if n != encoder.n_actions:
+            raise CrmgraspError(f"the agent has {shown(n)} actions, the encoder {encoder.n_actions}")
+        self.agent, self.encoder, self.rng, self.learn = agent, encoder, generator(rng), learn
         self._pick = agent.act if learn else agent.greedy
         self._skip = bool(getattr(agent, "skip_errored_learning" if learn else "skip_errored", False))
         self._banned: frozenset[int] = frozenset()

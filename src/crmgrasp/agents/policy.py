@@ -59,7 +59,7 @@ from crmgrasp.agents.base import allowed_choice, erred_here
 from crmgrasp.agents.tabular import TabularAgent
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import MAX_K, KOrderEncoder
-from crmgrasp.tasks import Task, make_task, task_from_dict, task_names, task_to_dict
+from crmgrasp.tasks import Task, checked_task, make_task, task_from_dict, task_names, task_to_dict
 
 if TYPE_CHECKING:
     from crmgrasp.agents.symmetric import SymmetricAgent
@@ -272,8 +272,7 @@ class GreedyPolicy:
         each, the best of the actions its greedy policy chooses among (``greedy_tried``: the tried
         ones; all ties kept); with the back-off table of an agent that has one
         (``backoff_tables()``)."""
-        if not isinstance(task, Task):
-            raise CrmgraspError(f"a policy needs a Task, got {shown(task)}")
+        checked_task(task, "a policy")
         if not all(hasattr(agent, name) for name in ("greedy_table", "greedy_tried", "n_actions")):
             raise CrmgraspError(f"a greedy policy is made from a tabular agent, got {shown(agent)}")
         skip = bool(getattr(agent, "skip_errored", False))

@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from crmgrasp._progress import Progress
-from crmgrasp._validation import SEED_MAX, CrmgraspError, boolean, integer, shown
+from crmgrasp._validation import CrmgraspError, boolean, finite, integer, positive, seed_value, shown
 from crmgrasp.agents.backoff import BackoffVI
 from crmgrasp.agents.base import Agent, LearnerPolicy
 from crmgrasp.agents.baselines import FixedSequence, RandomAgent
@@ -32,7 +32,7 @@ from crmgrasp.model.hand import Outcome
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.sim import Stepper
 from crmgrasp.sim import run_episode as sim_run_episode
-from crmgrasp.tasks import Task
+from crmgrasp.tasks import Task, checked_task
 
 __all__ = [
     "AGENTS",
@@ -197,7 +197,7 @@ def _prior(
     if not isinstance(spec, str):
         raise CrmgraspError(f"prior_task must be a task name, file or factory, got {spec!r}")
     episodes = integer(prior.get("prior_episodes", PRIOR_DEFAULTS["prior_episodes"]), "prior_episodes", 1, 1_000_000)
-    seed = integer(prior.get("prior_seed", PRIOR_DEFAULTS["prior_seed"]), "prior_seed", 0, 2**63 - 1)
+    seed = seed_value(prior.get("prior_seed", PRIOR_DEFAULTS["prior_seed"]), "prior_seed")
     weight = float(prior.get("prior_weight", PRIOR_DEFAULTS["prior_weight"]))  # type: ignore[arg-type]  # checked by set_prior
     key = (spec, k, name, tuple(sorted(params.items())), symmetric, episodes, seed)
     if key not in _PRIORS:
@@ -220,6 +220,7 @@ def _prior(
 
 def encoder_for(task: Task, k: int) -> KOrderEncoder:
     """The k-order encoder of a task's discretized observations and actions."""
+    task = checked_task(task, "encoder_for")
     return KOrderEncoder(task.discretizer.size, len(task.actions), k)
 
 
@@ -254,10 +255,12 @@ def evaluate(
     """Greedy evaluation: CRMs per episode and success flags over ``episodes`` fresh
     starts. Starts (and sensing) draw from ``rng``, tie-breaking from ``agent_rng``
     (default: ``rng`` too); separate streams give every policy the same starts."""
+    episodes = integer(episodes, "episodes", 0, MAX_EPISODE_RECORDS)
+    agent_rng = rng if agent_rng is None else agent_rng
     steps = np.empty(episodes, dtype=np.int64)
     success = np.empty(episodes, dtype=bool)
     for i in range(episodes):
-        steps[i], success[i] = run_episode(task, agent, encoder, rng, agent_rng or rng, learn=False, kernel=kernel)
+        steps[i], success[i] = run_episode(task, agent, encoder, rng, agent_rng, learn=False, kernel=kernel)
     return steps, success
 
 
@@ -280,7 +283,7 @@ def trial_generators(seed: int, trials: int, first: int = 0) -> list[tuple[np.ra
     one seed: trial ``t`` draws from child ``t`` of ``SeedSequence(seed)`` whatever the
     other trials, so trials can run in any grouping, order or process. A seed outside
     ``[0, 2**63 - 1]`` or not an integer is a one-line error."""
-    seed = integer(int(seed) if isinstance(seed, np.integer) else seed, "seed", 0, SEED_MAX)
+    seed = seed_value(seed)
     children = [np.random.SeedSequence(seed, spawn_key=(t,)) for t in range(first, first + trials)]
     return [tuple(np.random.default_rng(s) for s in child.spawn(3)) for child in children]
 
@@ -377,8 +380,7 @@ def train_trials(
     episodes that such a stepper ended early, by kind (its ``faults``), training and
     evaluation together."""
     check_budget(trials, episodes, eval_episodes)
-    if not isinstance(task, Task):
-        raise CrmgraspError(f"train_trials needs a Task, got {shown(task)}")
+    checked_task(task, "train_trials")
     marks = _episode_counts(checkpoints)
     integer(checkpoint_episodes, "checkpoint_episodes", 0, MAX_EPISODE_RECORDS)
     encoder = encoder_for(task, k)
@@ -431,6 +433,17 @@ def checkpoints_to_within(
     return int(checkpoints[0 if len(bad) == 0 else bad[-1] + 1])
 
 
+def as_curve(curve: object) -> np.ndarray:
+    """``curve`` as a 1-D float array of finite numbers (one-line error otherwise)."""
+    try:
+        out = np.asarray(curve, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        out = np.empty((0, 0))
+    if out.ndim != 1 or not np.all(np.isfinite(out)):
+        raise CrmgraspError(f"a learning curve must be a 1-D sequence of finite numbers, got {shown(curve)}")
+    return out
+
+
 def episodes_to_within(curve: np.ndarray, reference: float, factor: float = 1.05, window: int = 10) -> int | None:
     """First episode (1-based) after which the ``window``-episode moving average of
     ``curve`` stays at or below ``factor * reference``; ``None`` if it never does.
@@ -442,6 +455,9 @@ def episodes_to_within(curve: np.ndarray, reference: float, factor: float = 1.05
     >>> episodes_to_within(np.array([5.0] * 20 + [1.0] * 30), 1.0, window=10)
     30
     """
+    curve = as_curve(curve)
+    reference, factor = finite(reference, "reference"), positive(factor, "factor")
+    window = integer(window, "window", 1, MAX_EPISODE_RECORDS)
     if len(curve) < window:
         return None
     ma = np.convolve(curve, np.ones(window) / window, mode="valid")  # ma[j] ends at episode j + window

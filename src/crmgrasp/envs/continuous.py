@@ -17,7 +17,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, shown
 from crmgrasp.envs.single import CONTINUOUS_ENVS, CRMGraspEnv
 from crmgrasp.model.actions import CRMRange
 from crmgrasp.tasks import Task
@@ -200,23 +200,29 @@ class FlatCRMAction(gym.ActionWrapper[dict[str, Any], np.ndarray, dict[str, Any]
         if not isinstance(inner, ContinuousCRMEnv):
             raise CrmgraspError(f"FlatCRMAction wraps a ContinuousCRMEnv, got {type(inner).__name__}")
         self._ranges = inner.ranges
-        self._dim = inner.actions.dim
-        self.action_space = spaces.Box(-1.0, 1.0, shape=(1 + self._dim,), dtype=np.float32)  # type: ignore[assignment]
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(1 + inner.actions.dim,), dtype=np.float32)  # type: ignore[assignment]
 
     def action(self, action: Any) -> dict[str, Any]:
         """The ``{"pair", "r"}`` action of ``u`` (see the class)."""
-        u = np.asarray(action, dtype=np.float64)
-        if u.shape != (1 + self._dim,):
-            raise CrmgraspError(f"the flat action must have shape ({1 + self._dim},), got {u.shape}")
-        pair, r = flat_action(self._ranges, u)
+        pair, r = flat_action(self._ranges, action)
         return {"pair": pair, "r": r}
 
 
 def flat_action(ranges: Sequence[CRMRange], u: np.ndarray) -> tuple[int, np.ndarray]:
     """The pair and offsets of a flat action ``u`` (``1 + d`` numbers in ``[-1, 1]``) over
     ``ranges`` ([`FlatCRMAction`][]): ``u[0]`` picks range ``min(floor((u[0] + 1) P / 2), P - 1)``,
-    ``u[1:]`` map affinely onto its box; a ``u`` outside ``[-1, 1]`` or not finite is a
-    one-line error."""
+    ``u[1:]`` map affinely onto its box; a ``u`` of another shape, outside ``[-1, 1]`` or not
+    finite is a one-line error."""
+    listed = isinstance(ranges, Sequence) and not isinstance(ranges, (str, bytes)) and len(ranges) > 0
+    if not listed or not all(isinstance(rg, CRMRange) for rg in ranges):
+        raise CrmgraspError(f"ranges must be a non-empty list of CRMRange, got {shown(ranges)}")
+    dim = len(ranges[0].low)
+    try:
+        u = np.asarray(u, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        raise CrmgraspError(f"the flat action must be {1 + dim} numbers, got {shown(u)}") from None
+    if u.shape != (1 + dim,):
+        raise CrmgraspError(f"the flat action must have shape ({1 + dim},), got {u.shape}")
     if not np.all((u >= -1.0) & (u <= 1.0)):  # also NaN
         raise CrmgraspError(f"the flat action must be finite and within [-1, 1], got {u.tolist()}")
     n = len(ranges)

@@ -12,14 +12,14 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from crmgrasp._validation import CrmgraspError, boolean, shown
+from crmgrasp._validation import CrmgraspError, boolean, optional_seed, shown
 from crmgrasp.kernels import Kernel, kernel_for
 from crmgrasp.model.contact_model import ContactModel
 from crmgrasp.model.contacts import Config
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.sim import OneStep, SimState
-from crmgrasp.tasks import Task, World, make_task
+from crmgrasp.tasks import Task, World, as_task
 
 __all__ = [
     "CRMGraspEnv",
@@ -165,9 +165,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         backend: str = "auto",
         exact_friction: bool = True,
     ) -> None:
-        self.task = make_task(task) if isinstance(task, str) else task
-        if not isinstance(self.task, Task):
-            raise CrmgraspError(f"task must be a Task or a registered name, got {task!r}")
+        self.task = as_task(task, "CRMGraspEnv")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise CrmgraspError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         self.render_mode = render_mode
@@ -202,7 +200,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
         """Start an episode. ``options={"config": Config}`` starts from a given
         configuration; on a family task, ``options={"world": World}`` from a given
         object and configuration (a family draws the object of each episode)."""
-        super().reset(seed=seed)
+        super().reset(seed=optional_seed(seed))
         self._last = None
         check_reset_options(options)
         if options and "world" in options:

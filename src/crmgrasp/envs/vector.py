@@ -28,11 +28,11 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from crmgrasp._validation import CrmgraspError, boolean, shown
+from crmgrasp._validation import CrmgraspError, boolean, optional_seed, shown
 from crmgrasp.envs.single import observation_space
 from crmgrasp.kernels import Kernel, kernel_for
 from crmgrasp.sim import episode_end, step_reward
-from crmgrasp.tasks import Task, make_task
+from crmgrasp.tasks import Task, as_task
 
 __all__ = [
     "CRMGraspVectorEnv",
@@ -80,7 +80,7 @@ class CRMGraspVectorEnv(VectorEnv):
             raise CrmgraspError(f"num_envs must be an integer in [1, {MAX_ENVS:,}], got {num_envs!r}")
         if render_mode is not None:
             raise CrmgraspError("the vector environment does not render; use CRMGraspEnv")
-        self.task = make_task(task) if isinstance(task, str) else task
+        self.task = as_task(task, type(self).__name__)
         if self.task.family is not None and not self._per_row_objects:
             raise CrmgraspError(
                 f"task {self.task.name!r} draws an object per episode: use {type(self).__name__}'s family "
@@ -143,7 +143,7 @@ class CRMGraspVectorEnv(VectorEnv):
         if isinstance(seed, list):
             raise CrmgraspError("the vector environment takes one integer seed for its generator")
         _no_options(options)
-        super().reset(seed=seed)
+        super().reset(seed=optional_seed(seed))
         self._buffer, self._next = np.empty((0, self._width)), 0
         n = self.num_envs
         self._cfg = np.array(self._starts(n))
@@ -284,7 +284,7 @@ class ContinuousFamilyVectorEnv(_PairOffsets, FamilyVectorEnv):
 def _pick(task: Task | str, single: type[CRMGraspVectorEnv], family: type[CRMGraspVectorEnv]) -> tuple[Task, type]:
     """``task`` as a [`Task`][crmgrasp.tasks.Task], and ``family`` if it draws an object per
     episode, else ``single``: the one place that picks a vector environment's class."""
-    t = make_task(task) if isinstance(task, str) else task
+    t = as_task(task, single.__name__)
     return t, single if t.family is None else family
 
 

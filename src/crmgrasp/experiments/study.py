@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from crmgrasp._io import read_bounded
-from crmgrasp._validation import SEED_MAX, CrmgraspError, integer, shown
+from crmgrasp._validation import CrmgraspError, integer, seed_value, shown
 from crmgrasp.tasks.core import checked_name
 from crmgrasp.tasks.schema import typed
 
@@ -198,7 +198,7 @@ def study_from_dict(doc: Any) -> Study:
     seeds = doc.get("seeds", [0])
     if not isinstance(seeds, list) or not seeds or any(isinstance(s, bool) or not isinstance(s, int) for s in seeds):
         raise CrmgraspError(f"seeds must be a non-empty list of integers, got {shown(seeds)}")
-    seeds = tuple(integer(s, "seed", 0, SEED_MAX) for s in seeds)
+    seeds = tuple(seed_value(s) for s in seeds)
     if len(set(seeds)) != len(seeds):
         raise CrmgraspError("seeds must not repeat")
     cells: list[dict[str, Any]] = []

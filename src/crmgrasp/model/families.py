@@ -41,6 +41,7 @@ from crmgrasp.model.family_base import (
     _poly,
     _range,
     _uniform,
+    check_family,
     family_dict,
     place,
     width,
@@ -52,6 +53,7 @@ from crmgrasp.model.shape import Shape
 __all__ = [
     "MAX_TRIES",
     "ShapeFamily",
+    "check_family",
     "Pose",
     "place",
     "BoxFamily",

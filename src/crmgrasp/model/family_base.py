@@ -11,12 +11,12 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, shown
 from crmgrasp.model.disc import Disc
 from crmgrasp.model.polygon import Polygon
 from crmgrasp.model.shape import Shape, check_reach
 
-__all__ = ["MAX_TRIES", "Range", "ShapeFamily", "Pose", "place", "width", "family_dict"]
+__all__ = ["MAX_TRIES", "Range", "ShapeFamily", "check_family", "Pose", "place", "width", "family_dict"]
 
 MAX_TRIES = 1000
 """Most draws a family makes for one object before it gives up with an error."""
@@ -134,6 +134,13 @@ class ShapeFamily(Protocol):
     def min_width(self) -> float: ...
 
     def describe(self) -> dict[str, Any]: ...
+
+
+def check_family(family: object) -> ShapeFamily:
+    """``family`` if it is a [`ShapeFamily`][] (``BoxFamily()``, ...); one-line error otherwise."""
+    if not isinstance(family, ShapeFamily):
+        raise CrmgraspError(f"a task family must be a ShapeFamily (BoxFamily(), ...), got {shown(family)}")
+    return family
 
 
 class _Family(ABC):

@@ -57,9 +57,9 @@ from crmgrasp.agents.policy import GreedyPolicy
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import KOrderEncoder
 from crmgrasp.planners.references import BeliefPolicy
-from crmgrasp.planners.sampled import SampledModel, Start, State
+from crmgrasp.planners.sampled import SampledModel, Start, State, checked_starts
 from crmgrasp.sim import OneStep, Percept, SimState, run_episode, step_reward
-from crmgrasp.tasks import Task
+from crmgrasp.tasks import Task, checked_task
 
 __all__ = ["korder_search", "KOrderResult", "INITS"]
 
@@ -234,8 +234,8 @@ def korder_search(
     mean cost over ``starts`` (CRMs per episode, plus ``error_cost`` per errored CRM; a
     start not grasped within ``task.max_steps`` costs that many), the starts'
     belief-space optimum in the same units (``init="belief"`` only) and the episodes run."""
-    if not starts:
-        raise CrmgraspError("korder_search needs at least one start")
+    checked_task(task, "korder_search")
+    checked_starts(starts, "korder_search")
     k = integer(k, "history order k", 0, 10)
     passes = integer(max_passes, "max_passes", 1, 10_000)
     if init not in INITS:

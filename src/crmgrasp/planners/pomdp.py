@@ -27,8 +27,8 @@ from pathlib import Path
 import numpy as np
 from scipy import sparse
 
-from crmgrasp._io import atomic_write_text
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._io import as_path, atomic_write_text
+from crmgrasp._validation import CrmgraspError, generator, integer, shown
 
 __all__ = ["POMDP", "PBVIPolicy", "belief_update", "solve_pbvi", "collect_beliefs", "write_cassandra", "read_cassandra"]
 
@@ -59,6 +59,18 @@ class POMDP:
         return np.where(self.goal, 0.0, -1.0)
 
 
+MAX_HORIZON = 1000
+"""The longest horizon [`collect_beliefs`][] and [`solve_pbvi`][] take, in steps (a task's
+longest episode)."""
+
+
+def _checked(m: object, who: str) -> POMDP:
+    """``m`` if it is a [`POMDP`][]; one-line error otherwise, naming ``who``."""
+    if not isinstance(m, POMDP):
+        raise CrmgraspError(f"{who} needs a POMDP, got {shown(m)}")
+    return m
+
+
 def belief_update(m: POMDP, b: np.ndarray, a: int, o: int) -> np.ndarray | None:
     """``b'(s') = eta Z(o | s', a) sum_s T(s' | s, a) b(s)``; ``None`` if ``o`` has
     probability 0 under ``b`` and ``a``."""
@@ -69,7 +81,12 @@ def belief_update(m: POMDP, b: np.ndarray, a: int, o: int) -> np.ndarray | None:
 
 
 def collect_beliefs(m: POMDP, n: int, horizon: int, rng: np.random.Generator) -> np.ndarray:
-    """Up to ``n`` distinct beliefs reachable from ``b0`` under random actions."""
+    """Up to ``n`` (1 to 100,000) distinct beliefs reachable from ``b0`` under random
+    actions, each run at most ``horizon`` steps (0 to [`MAX_HORIZON`][])."""
+    m = _checked(m, "collect_beliefs")
+    n = integer(n, "number of beliefs", 1, 100_000)
+    horizon = integer(horizon, "horizon", 0, MAX_HORIZON)
+    rng = generator(rng)
     points = [m.b0]
     seen = {m.b0.round(9).tobytes()}
     for _ in range(50 * n):
@@ -116,7 +133,11 @@ class PBVIPolicy:
 
 
 def solve_pbvi(m: POMDP, beliefs: np.ndarray, horizon: int) -> PBVIPolicy:
-    """Finite-horizon point-based value iteration over ``beliefs`` (rows)."""
+    """Finite-horizon point-based value iteration over ``beliefs`` (rows: distributions over
+    the states) with ``horizon`` steps to go (0 to [`MAX_HORIZON`][])."""
+    m = _checked(m, "solve_pbvi")
+    beliefs = _beliefs(m, beliefs)
+    horizon = integer(horizon, "horizon", 0, MAX_HORIZON)
     r = m.reward()
     alphas = [np.zeros((1, m.n_states))]
     acts = [np.zeros(1, dtype=np.int64)]
@@ -145,8 +166,22 @@ def solve_pbvi(m: POMDP, beliefs: np.ndarray, horizon: int) -> PBVIPolicy:
     return PBVIPolicy(alphas, acts)
 
 
+def _beliefs(m: POMDP, beliefs: object) -> np.ndarray:
+    """``beliefs`` as a float array of rows that are distributions over ``m``'s states."""
+    try:
+        b = np.array(beliefs, dtype=np.float64)
+    except (TypeError, ValueError):
+        b = np.empty(0)
+    if b.ndim != 2 or b.shape[1] != m.n_states or not len(b) or not np.all(b >= 0.0):  # also NaN
+        raise CrmgraspError(f"beliefs must be rows of {m.n_states} non-negative numbers, got {shown(beliefs)}")
+    if not np.allclose(b.sum(axis=1), 1.0):
+        raise CrmgraspError("beliefs must be distributions: each row sums to 1")
+    return b
+
+
 def write_cassandra(m: POMDP, path: str | os.PathLike[str]) -> Path:
     """Write ``m`` in Cassandra's ``.pomdp`` format (discount 1, values reward)."""
+    m = _checked(m, "write_cassandra")
     lines = [
         "# crmgrasp POMDP: reward -1 per CRM outside the goal states",
         "discount: 1.0",
@@ -170,31 +205,24 @@ def write_cassandra(m: POMDP, path: str | os.PathLike[str]) -> Path:
     return atomic_write_text(path, "\n".join(lines) + "\n")
 
 
+MAX_ENTRIES = 100_000_000
+"""The most numbers a POMDP read from a file may hold in its dense observation array
+(``actions x states x observations``; 800 MB)."""
+
+_Row = tuple[int, int, int, float]
+
+
 def read_cassandra(path: str | os.PathLike[str]) -> POMDP:
-    """Read a file written by [`write_cassandra`][] (that subset of the format)."""
-    head: dict[str, str] = {}
-    t_rows: list[tuple[int, int, int, float]] = []
-    o_rows: list[tuple[int, int, int, float]] = []
-    goal_states: list[int] = []
+    """Read a file written by [`write_cassandra`][] (that subset of the format); a file that
+    is not one, or whose sizes, indices or probabilities are out of range, is a one-line
+    error naming it."""
+    path = as_path(path, "POMDP file")
     try:
-        for line in Path(path).read_text(encoding="utf-8").splitlines():
-            line = line.split("#", 1)[0].strip()
-            if not line:
-                continue
-            key, _, rest = line.partition(":")
-            if key in ("T", "O"):
-                act, src, tail = (x.strip() for x in rest.split(":"))
-                dst, prob = tail.split()
-                (t_rows if key == "T" else o_rows).append((int(act), int(src), int(dst), float(prob)))
-            elif key == "R":
-                parts = [x.strip() for x in rest.split(":")]
-                if float(parts[3].split()[-1]) == 0.0:
-                    goal_states.append(int(parts[1]))
-            else:
-                head[key.strip()] = rest.strip()
-        n_s, n_a, n_o = int(head["states"]), int(head["actions"]), int(head["observations"])
+        head, t_rows, o_rows, goal_states = _parse(path.read_text(encoding="utf-8"))
+        n_s, n_a, n_o = (integer(head[k], k, 1, MAX_ENTRIES) for k in ("states", "actions", "observations"))
         b0 = np.array([float(x) for x in head["start"].split()])
-    except (KeyError, ValueError, OSError) as exc:
+        _check_rows(n_s, n_a, n_o, t_rows, o_rows, goal_states)
+    except (KeyError, ValueError, IndexError, OSError, CrmgraspError) as exc:
         raise CrmgraspError(f"cannot read POMDP file {str(path)!r}: {exc}") from None
     trans = []
     for a in range(n_a):
@@ -207,3 +235,40 @@ def read_cassandra(path: str | os.PathLike[str]) -> POMDP:
     goal = np.zeros(n_s, dtype=bool)
     goal[goal_states] = True
     return POMDP(n_s, n_a, n_o, trans, obs, b0, goal)
+
+
+def _parse(text: str) -> tuple[dict[str, str], list[_Row], list[_Row], list[int]]:
+    """The header entries, the ``T`` and ``O`` rows and the goal states of a ``.pomdp`` text."""
+    head: dict[str, str] = {}
+    t_rows: list[_Row] = []
+    o_rows: list[_Row] = []
+    goal_states: list[int] = []
+    for line in text.splitlines():
+        line = line.split("#", 1)[0].strip()
+        if not line:
+            continue
+        key, _, rest = line.partition(":")
+        if key in ("T", "O"):
+            act, src, tail = (x.strip() for x in rest.split(":"))
+            dst, prob = tail.split()
+            (t_rows if key == "T" else o_rows).append((int(act), int(src), int(dst), float(prob)))
+        elif key == "R":
+            parts = [x.strip() for x in rest.split(":")]
+            if float(parts[3].split()[-1]) == 0.0:
+                goal_states.append(int(parts[1]))
+        else:
+            head[key.strip()] = rest.strip()
+    return head, t_rows, o_rows, goal_states
+
+
+def _check_rows(n_s: int, n_a: int, n_o: int, t_rows: list[_Row], o_rows: list[_Row], goal: list[int]) -> None:
+    """A one-line error unless the sizes fit [`MAX_ENTRIES`][] and every row's indices and
+    probability are in range."""
+    if n_a * n_s * n_o > MAX_ENTRIES:
+        raise CrmgraspError(f"{n_a} actions x {n_s} states x {n_o} observations exceed {MAX_ENTRIES:,} entries")
+    for key, rows, n_to in (("T", t_rows, n_s), ("O", o_rows, n_o)):
+        for a, s0, s1, pr in rows:
+            if not (0 <= a < n_a and 0 <= s0 < n_s and 0 <= s1 < n_to and 0.0 <= pr <= 1.0):
+                raise CrmgraspError(f"entry '{key}: {a} : {s0} : {s1} {pr}' is out of range")
+    if any(not 0 <= s < n_s for s in goal):
+        raise CrmgraspError(f"a reward names a state outside 0..{n_s - 1}")

@@ -18,13 +18,12 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from crmgrasp._progress import Progress
-from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.hand import Error
 from crmgrasp.model.sensing import SensorNoise
 from crmgrasp.planners.references import BeliefPolicy, graspable_starts, sample_starts
-from crmgrasp.planners.sampled import Start, expansion_kernel
+from crmgrasp.planners.sampled import Start, checked_starts, expansion_kernel
 from crmgrasp.sim import run_episode
-from crmgrasp.tasks import Task
+from crmgrasp.tasks import Task, checked_task
 
 __all__ = ["policy_costs", "realizable_reference"]
 
@@ -43,8 +42,7 @@ def policy_costs(
     policy's, at least the task's own optimum in expectation, where the optimum over the
     starts is at most that in expectation (it is the best policy for those very starts).
     ``advance``, if given, is called after each start (a progress display's)."""
-    if not starts:
-        raise CrmgraspError("policy_costs needs at least one start")
+    checked_starts(starts, "policy_costs")
     task, backend = policy.task, policy.backend
     if task.noise.active:  # noise-free dynamics, as the references' own
         task = dataclasses.replace(task, noise=SensorNoise())
@@ -79,7 +77,8 @@ def realizable_reference(
     costs both the step limit. In expectation the task's own optimum lies between the
     optimum over ``starts`` (at most it) and ``mean`` (at least it). ``progress`` shows each
     policy's run over the starts (it plans as they run)."""
-    other = BeliefPolicy(task, sample_starts(task, n, seed), fallback, backend)  # it plans as it runs
+    checked_starts(starts, "realizable_reference")
+    other = BeliefPolicy(task, sample_starts(checked_task(task, "realizable_reference"), n, seed), fallback, backend)
     best = BeliefPolicy(task, starts, backend=backend)
     value = best.optimum()
     optimum = _run(best, starts, progress, "the optimum over the starts")

@@ -35,13 +35,13 @@ from collections.abc import Sequence
 import numpy as np
 
 from crmgrasp._collector import collector_paused
-from crmgrasp._validation import CrmgraspError, integer
+from crmgrasp._validation import CrmgraspError, integer, seed_value
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import Error
-from crmgrasp.planners.sampled import SampledModel, Start, State
+from crmgrasp.planners.sampled import SampledModel, Start, State, checked_starts
 from crmgrasp.sim import Percept, run_episode
 from crmgrasp.tasks import Task, World
-from crmgrasp.tasks.core import MAX_STEPS
+from crmgrasp.tasks.core import MAX_STEPS, checked_task
 
 __all__ = [
     "clairvoyant_steps",
@@ -54,7 +54,11 @@ __all__ = [
     "sample_starts",
     "BeliefPolicy",
     "FALLBACKS",
+    "MAX_STARTS",
 ]
+
+MAX_STARTS = 1_000_000
+"""The most starts [`sample_starts`][] draws at once (the command line's bound too)."""
 
 
 def _horizon(task: Task, horizon: int | None) -> int:
@@ -63,11 +67,17 @@ def _horizon(task: Task, horizon: int | None) -> int:
     return task.max_steps if horizon is None else integer(horizon, "horizon", 1, MAX_STEPS)
 
 
+def _model(task: object, starts: object, backend: str, who: str) -> tuple[SampledModel, Sequence[Start]]:
+    """The sampled model of ``task`` and the checked ``starts`` of the call ``who``."""
+    return SampledModel(checked_task(task, who), backend), checked_starts(starts, who)
+
+
 def sample_starts(task: Task, n: int, seed: int) -> list[Config | Grip] | list[World]:
-    """``n`` starts from the task's sampler, seeded (worlds, for a family task)."""
-    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-        raise CrmgraspError(f"number of starts must be an integer >= 1, got {n!r}")
-    rng = np.random.default_rng(seed)
+    """``n`` starts from the task's sampler, seeded (worlds, for a family task; ``n`` at
+    most [`MAX_STARTS`][])."""
+    checked_task(task, "sample_starts")
+    integer(n, "number of starts", 1, MAX_STARTS)
+    rng = np.random.default_rng(seed_value(seed))
     if task.family is not None:
         return [task.sample_world(rng) for _ in range(n)]
     return [task.sample_start(rng) for _ in range(n)]
@@ -76,13 +86,13 @@ def sample_starts(task: Task, n: int, seed: int) -> list[Config | Grip] | list[W
 def clairvoyant_steps(task: Task, config: Start, horizon: int | None = None, backend: str = "auto") -> int:
     """Fewest CRMs from ``config`` (or a world) to a grasp (``horizon``, default
     ``task.max_steps``, if none is reachable within it)."""
-    model = SampledModel(task, backend)
+    model = SampledModel(checked_task(task, "clairvoyant_steps"), backend)
     return model.clairvoyant(model.state(config), _horizon(task, horizon))
 
 
 def clairvoyant_bound(task: Task, starts: Sequence[Start], horizon: int | None = None, backend: str = "auto") -> float:
     """Mean of [`clairvoyant_steps`][] over ``starts``."""
-    model = SampledModel(task, backend)
+    model, starts = _model(task, starts, backend, "clairvoyant_bound")
     h = _horizon(task, horizon)
     return float(np.mean([model.clairvoyant(model.state(c), h) for c in starts]))
 
@@ -92,9 +102,7 @@ def graspable_starts(
 ) -> np.ndarray:
     """Per start, whether some sequence of at most ``horizon`` (default ``task.max_steps``)
     CRMs reaches a grasp from it knowing the true configuration (a boolean array)."""
-    if not starts:
-        raise CrmgraspError("graspable_starts needs at least one start")
-    model = SampledModel(task, backend)
+    model, starts = _model(task, starts, backend, "graspable_starts")
     h = _horizon(task, horizon)
     return np.array([model.depth(model.state(c), h) is not None for c in starts], dtype=bool)
 
@@ -105,8 +113,7 @@ def ungraspable_fraction(
     """Share of ``starts`` from which no sequence of at most ``horizon`` (default
     ``task.max_steps``) CRMs reaches a grasp, even knowing the true configuration
     (the share of [`graspable_starts`][] that are not)."""
-    if not starts:
-        raise CrmgraspError("ungraspable_fraction needs at least one start")
+    checked_starts(starts, "ungraspable_fraction")
     return int((~graspable_starts(task, starts, horizon, backend)).sum()) / len(starts)
 
 
@@ -137,9 +144,7 @@ def _first_groups(model: SampledModel, starts: Sequence[Start]) -> dict[int, tup
 def belief_optimum(task: Task, starts: Sequence[Start], horizon: int | None = None, backend: str = "auto") -> float:
     """Exact optimal expected CRMs per episode over ``starts`` from observations only
     (with ``task.error_cost`` c > 0: the expected cost, CRMs plus c per errored CRM)."""
-    if not starts:
-        raise CrmgraspError("belief_optimum needs at least one start")
-    model = SampledModel(task, backend)
+    model, starts = _model(task, starts, backend, "belief_optimum")
     h = _horizon(task, horizon)
     memo: dict[tuple[tuple[State, ...], int], float] = {}
     with collector_paused():  # the memo is large and acyclic
@@ -159,7 +164,8 @@ def block_optima(
     (over a union of disjoint sets the optimum is at least the sets' size-weighted mean), so
     the blocks' mean against the optimum over all ``starts`` shows how far the sample size
     still moves it."""
-    n = len(starts)
+    checked_task(task, "block_optima")
+    n = len(checked_starts(starts, "block_optima"))
     if isinstance(blocks, bool) or not isinstance(blocks, int) or blocks < 1 or n % blocks:
         raise CrmgraspError(f"blocks must be a whole number that divides the {n} starts, got {blocks!r}")
     size = n // blocks
@@ -239,12 +245,10 @@ class BeliefPolicy:
     """
 
     def __init__(self, task: Task, starts: Sequence[Start], fallback: str = "restart", backend: str = "auto") -> None:
-        if not starts:
-            raise CrmgraspError("BeliefPolicy needs at least one start")
+        self._model, starts = _model(task, starts, backend, "BeliefPolicy")
         if fallback not in FALLBACKS:
             raise CrmgraspError(f"unknown fallback {fallback!r}: choose one of {', '.join(FALLBACKS)}")
         self.task, self.fallback, self.backend = task, fallback, backend
-        self._model = SampledModel(task, backend)
         self._memo: dict = {}
         self._acts: dict = {}
         self._belief: tuple[State, ...] = ()

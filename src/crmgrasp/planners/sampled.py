@@ -13,14 +13,14 @@ import dataclasses
 from collections import deque
 from collections.abc import Sequence
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, shown
 from crmgrasp.kernels import BACKENDS, Kernel, compiled_rules, kernel_for
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import Error
 from crmgrasp.model.sensing import SensorNoise
 from crmgrasp.tasks import Task, World
 
-__all__ = ["SampledModel", "expansion_kernel", "Start", "Place", "State", "Step", "SAME"]
+__all__ = ["SampledModel", "checked_starts", "expansion_kernel", "Start", "Place", "State", "Step", "SAME"]
 
 Start = Config | Grip | World
 """A start: a configuration of the task's object, or a world (an object and a configuration)."""
@@ -30,6 +30,14 @@ State = int
 """A hidden state: its index in ``SampledModel.places`` (each place gets one, once)."""
 Step = tuple[State, int, bool]
 """A transition: the next state, its observation index and whether it grasped."""
+
+
+def checked_starts(starts: object, who: str) -> Sequence[Start]:
+    """``starts`` if it is a non-empty sequence (a list or tuple of starts: each is checked
+    where [`SampledModel.state`][] numbers it); one-line error otherwise, naming ``who``."""
+    if isinstance(starts, (str, bytes)) or not isinstance(starts, Sequence) or not starts:
+        raise CrmgraspError(f"{who} needs a non-empty list of starts (from sample_starts), got {shown(starts)}")
+    return starts
 
 
 class SampledModel:

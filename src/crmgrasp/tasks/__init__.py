@@ -6,7 +6,17 @@ from TOML files and ``package.module:factory`` strings ([`resolve_task`][], what
 ``--task`` accepts) and writes them back as plain data.
 """
 
-from crmgrasp.tasks.core import Symmetry, Task, World, make_task, paper_box, register_task, task_names
+from crmgrasp.tasks.core import (
+    Symmetry,
+    Task,
+    World,
+    as_task,
+    checked_task,
+    make_task,
+    paper_box,
+    register_task,
+    task_names,
+)
 from crmgrasp.tasks.families import FAMILY_TASKS, BoundaryStarts, default_crms, family_task, mirror_symmetry
 from crmgrasp.tasks.files import TEMPLATE, load_task_file, resolve_task, task_from_dict, task_to_dict
 from crmgrasp.tasks.fingers import FINGER_TASKS, finger_crms, three_finger_task
@@ -45,6 +55,8 @@ __all__ = [
     "Symmetry",
     "paper_box",
     "make_task",
+    "as_task",
+    "checked_task",
     "register_task",
     "task_names",
     "acceptable",

@@ -16,11 +16,11 @@ from typing import Any, NamedTuple, overload
 import numpy as np
 from numpy.typing import NDArray
 
-from crmgrasp._validation import CrmgraspError, finite, generator, is_finite_number, non_negative, shown
+from crmgrasp._validation import CrmgraspError, finite, generator, is_finite_number, listed, non_negative, shown
 from crmgrasp.model.actions import CRMRange
 from crmgrasp.model.contact_model import ContactModel
 from crmgrasp.model.contacts import Config, Grip
-from crmgrasp.model.families import ShapeFamily
+from crmgrasp.model.families import ShapeFamily, check_family
 from crmgrasp.model.geometry import Rectangle, Shape
 from crmgrasp.model.hand import CRM, Error, Hand
 from crmgrasp.model.planar_model import PlanarModel
@@ -180,8 +180,7 @@ class Task:
         self._check_starts()
         self._check_common()
         if self.family is not None:
-            if not isinstance(self.family, ShapeFamily):
-                raise CrmgraspError(f"task family must be a ShapeFamily, got {self.family!r}")
+            check_family(self.family)
             self._check_family_width()
 
     def _check_family_width(self) -> None:
@@ -211,9 +210,7 @@ class Task:
         """The checks every task takes, planar or spatial: actions (through the hand's
         ``check_crm``), goal, length, symmetry, rewards, reference."""
         checked_name(self.name, 2 * NAME_LENGTH)
-        if isinstance(self.actions, (str, bytes)) or not isinstance(self.actions, Sequence):
-            raise CrmgraspError(f"task actions must be a sequence of CRMs, got {shown(self.actions)}")
-        actions = tuple(self.actions)
+        actions = listed(self.actions, "task actions", "a sequence of CRMs")
         if not actions:
             raise CrmgraspError("a task needs at least one CRM action")
         for a in actions:
@@ -501,3 +498,22 @@ def make_task(name: str) -> Task:
     if not isinstance(task, Task):
         raise CrmgraspError(f"the factory registered as task {name!r} returned {shown(task)}, not a Task")
     return task
+
+
+def checked_task(task: object, who: str) -> Task:
+    """``task`` if it is a [`Task`][]; otherwise a one-line error saying that ``who`` needs one.
+
+    >>> checked_task("paper-box", "belief_optimum")
+    Traceback (most recent call last):
+    ...
+    crmgrasp._validation.CrmgraspError: belief_optimum needs a Task (crmgrasp.make_task(name)), got 'paper-box'
+    """
+    if not isinstance(task, Task):
+        raise CrmgraspError(f"{who} needs a Task (crmgrasp.make_task(name)), got {shown(task)}")
+    return task
+
+
+def as_task(task: object, who: str) -> Task:
+    """``task`` as a [`Task`][]: a registered name through [`make_task`][], a `Task` as it is
+    (one-line error otherwise, naming ``who``)."""
+    return make_task(task) if isinstance(task, str) else checked_task(task, who)

@@ -25,12 +25,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import ClassVar
 
 import numpy as np
 
-from crmgrasp._validation import CrmgraspError, positive, tries
+from crmgrasp._validation import CrmgraspError, listed, positive, tries
 from crmgrasp.model.contacts import LABELS, Config, Contact
 from crmgrasp.model.families import (
     BoxFamily,
@@ -44,6 +44,7 @@ from crmgrasp.model.families import (
     StarFamily,
     TShapeFamily,
     UHandleFamily,
+    check_family,
 )
 from crmgrasp.model.geometry import Disc, Polygon, Shape
 from crmgrasp.model.hand import CRM, Hand
@@ -182,7 +183,7 @@ def default_crms(offsets: Sequence[float] = (0.04, 0.08)) -> tuple[CRM, ...]:
     """``(a,b,0)``, ``(b,a,0)``, then for each offset ``d``: ``(a,a,d)``, ``(b,b,-d)``,
     ``(a,a,-d)``, ``(b,b,d)`` (mirror pairs next to each other)."""
     out = [CRM("a", "b", 0.0), CRM("b", "a", 0.0)]
-    for d in offsets:
+    for d in listed(offsets, "CRM offsets"):
         d = positive(d, "CRM offset")
         out += [CRM("a", "a", d), CRM("b", "b", -d), CRM("a", "a", -d), CRM("b", "b", d)]
     return tuple(out)
@@ -214,19 +215,19 @@ def family_task(
 ) -> Task:
     """A task on ``family`` with the paper's hand and bins by default, the
     [`default_crms`][], [`BoundaryStarts`][] and the mirror symmetry."""
-    acts = tuple(actions) if actions is not None else default_crms()
-    return Task(
+    acts = listed(actions, "actions", "a sequence of CRMs") if actions is not None else default_crms()
+    task = Task(
         name=name,
-        obj=family.nominal(),
+        obj=check_family(family).nominal(),
         hand=hand,
         actions=acts,
         discretizer=discretizer,
         starts=starts if starts is not None else BoundaryStarts(),
         family=family,
-        symmetry=mirror_symmetry(acts, hand.labels) if symmetric else None,
         description=description,
         **kwargs,  # type: ignore[arg-type]
-    )
+    )  # its CRMs checked before their mirror images are looked up
+    return replace(task, symmetry=mirror_symmetry(task.actions, hand.labels)) if symmetric else task
 
 
 def _box_family() -> Task:

@@ -27,7 +27,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import replace
 
-from crmgrasp._validation import positive
+from crmgrasp._validation import listed, positive
 from crmgrasp.model.contact_model import observation_names
 from crmgrasp.model.families import BoxFamily, DiscFamily, MixedFamily, RegularPolygonFamily, ShapeFamily
 from crmgrasp.model.hand import CRM, Hand
@@ -53,6 +53,7 @@ def finger_crms(labels: Sequence[str] = ("a", "b", "c"), offsets: Sequence[float
     >>> len(finger_crms())
     12
     """
+    labels, offsets = listed(labels, "labels"), listed(offsets, "CRM offsets")
     out = [CRM(c, f, 0.0) for c in labels for f in labels if c != f]
     for c in labels:
         for d in offsets:
