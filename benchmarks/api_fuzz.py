@@ -14,7 +14,7 @@ under 400 characters; any other exception, a warning, a longer message or a call
 after ``--seconds`` (5) is reported with the call, the argument and the value. It prints one JSON
 object and exits 1 if a call failed.
 
-Measured 2026-12-07 on the 2-core machine: 68 calls, 4,280 variants in 1.2 s, none failed.
+Measured 2026-12-07 on the 2-core machine: 97 calls, 5,960 variants in 2 s, none failed.
 The first 24 calls on the code before their fixes (46c3eef): 227 of 1,460 failed. A ``Contact`` of text,
 ``None`` or containers reached ``observe`` and ``min_friction`` as a ``TypeError`` (88); a hand
 given no ``Shape`` failed inside ``contact`` and ``execute`` (40); ``Task`` took actions that
@@ -34,7 +34,14 @@ or a generator of the wrong kind (154); the explicit POMDP's helpers took anythi
 starts that are no list (90); seeds of text, floats or negative (44, the environment's through
 Gymnasium's own error); offsets, labels, families and CRM sets of the family helpers (92);
 ``episodes_to_within`` (47) and ``flat_action`` (39); and 10**100 sampled starts ran until the
-time limit (2).
+time limit (2). The 30 calls of the spatial model, the hardware runner, CRM grids, task files
+and figures ([`spatial_examples`][], [`hardware_examples`][]) on the code of c589ca7: 475 of
+1,680 failed. Figures took any object, hand, configuration, outcome or curve (118); CRM grids
+and ranges took anything, and 10**100 offsets ran until the time limit (84); 3-vectors of text
+reached numpy in the 3-D hand, solids and quality (72); ``execute_crm3d`` and ``observe3d``
+took anything as an object, a hand, contacts or a table (102); something other than a
+``Task`` reached ``KinematicHand``, ``log_columns`` and ``task_to_dict`` (60); and the CRM
+sets of the spatial helpers (21) and a task file's path (18).
 
 Usage: ``python benchmarks/api_fuzz.py [--seconds 5]``.
 """
@@ -73,15 +80,24 @@ from crmgrasp.agents import (
 from crmgrasp.envs import ContinuousCRMEnv
 from crmgrasp.envs.continuous import PairOffsetActions, flat_action
 from crmgrasp.envs.vector import vector_env
-from crmgrasp.model.actions import CRMRange
+from crmgrasp.hardware.runner import HandSteps, KinematicHand, PolicyRunner, log_columns
+from crmgrasp.model.actions import CRMRange, full_ranges, grid_points
 from crmgrasp.model.families import BoxFamily, RegularPolygonFamily
+from crmgrasp.model.mesh import open_cup
+from crmgrasp.model.quality3d import ferrari_canny, force_closure_3d, min_friction_3d
+from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable
+from crmgrasp.model.spatial import CRM3D, Config3D, Contact3D, Cylinder, Hand3D, box3d, execute_crm3d, observe3d
 from crmgrasp.planners import pomdp
 from crmgrasp.planners import references as refs
 from crmgrasp.planners.korder import korder_search
 from crmgrasp.planners.realizable import realizable_reference
+from crmgrasp.plotting import friction_histogram, learning_curve_figure, scene_figure
 from crmgrasp.tasks import UniformStarts
 from crmgrasp.tasks.families import default_crms, family_task
+from crmgrasp.tasks.files import TEMPLATE, load_task_file, resolve_task, task_to_dict
 from crmgrasp.tasks.fingers import finger_crms, three_finger_task
+from crmgrasp.tasks.offsets import offset_grid
+from crmgrasp.tasks.spatial import SpatialTask, SurfaceStarts, spatial_crms, tripod_crms
 
 HOSTILE: tuple[Any, ...] = (
     None,
@@ -228,6 +244,8 @@ def examples() -> list[Call]:
         Call("GreedyPolicy.load", GreedyPolicy.load, "policy.json"),
         *planning_examples(box),
         *loop_examples(box),
+        *spatial_examples(),
+        *hardware_examples(box, cfg),
     ]
 
 
@@ -292,6 +310,76 @@ def loop_examples(box: c.Task) -> list[Call]:
         Call("BoxFamily", BoxFamily, length=(0.2, 0.4), width=(0.06, 0.14)),
         Call("family_task", family_task, "f", family, actions=default_crms(), symmetric=True, description=""),
         Call("three_finger_task", three_finger_task, "f3", family, "three fingers", mu_goal=0.15),
+    ]
+
+
+def _observe3d(x: Any, n: Any) -> Any:
+    """The observation of a spatial configuration whose contact ``a`` is ``Contact3D(x, n)``."""
+    return observe3d(Config3D(Contact3D(x, n), Contact3D((-0.1, 0.0, 0.05), (1.0, 0.0, 0.0))))
+
+
+def spatial_examples() -> list[Call]:
+    """The spatial model's objects, families, hand, CRMs, quality and task."""
+    cup = c.make_task("cup-3d")
+    world = cup.sample_world(np.random.default_rng(0))
+    solid = box3d((-0.1, -0.05, 0.0), (0.1, 0.05, 0.1))
+    points, normals = [(0.1, 0.0, 0.05), (-0.1, 0.0, 0.05)], [(-1.0, 0.0, 0.0), (1.0, 0.0, 0.0)]
+    return [
+        Call("Hand3D", Hand3D, 0.16, 0.12, backoff=0.01, h=(0.0, 0.0, 1.0), g=(1.0, 0.0, 0.0)),
+        Call("CRM3D", CRM3D, "a", "b", (0.0, 0.0)),
+        Call("observe3d(Config3D(Contact3D(...)))", _observe3d, (0.1, 0.0, 0.05), (-1.0, 0.0, 0.0)),
+        Call("box3d", box3d, (-0.1, -0.05, 0.0), (0.1, 0.05, 0.1)),
+        Call("Cylinder", Cylinder, (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), 0.05, 0.1),
+        Call("open_cup", open_cup, 0.05, 0.1, wall=0.005, segments=24),
+        Call("BoxOnTable", BoxOnTable, length=(0.15, 0.3), width=(0.06, 0.12), height=(0.06, 0.2)),
+        Call("CylinderOnTable", CylinderOnTable, radius=(0.03, 0.07), height=(0.06, 0.2), upright=0.5),
+        Call("min_friction_3d", min_friction_3d, points, normals),
+        Call("force_closure_3d", force_closure_3d, points, normals, 0.1, edges=8),
+        Call("ferrari_canny", ferrari_canny, points, normals, 0.5, edges=8),
+        Call("execute_crm3d", execute_crm3d, world.task.obj, cup.hand, world.config, CRM3D("a", "b"), table=0.0),
+        Call("spatial_crms", spatial_crms, 0.05),
+        Call("tripod_crms", tripod_crms, ("a", "b", "c"), 0.03),
+        Call("SurfaceStarts", SurfaceStarts, max_tries=100, up=0.5),
+        Call("SpatialTask", SpatialTask, name="s", obj=solid, hand=cup.hand, actions=spatial_crms(), mu_goal=0.05),
+    ]
+
+
+def _run_policy(path: Any, start: Any, log: Any) -> Any:
+    """One run of the saved policy at ``path`` on a kinematic hand from ``start``, logged to ``log``."""
+    policy = GreedyPolicy.load(path)
+    hand = KinematicHand(policy.task, start, np.random.default_rng(0))
+    return PolicyRunner(policy).run(hand, np.random.default_rng(1), log=log)
+
+
+def _closed(figure: Callable[..., Any]) -> Callable[..., None]:
+    """``figure``'s call, its figure closed (matplotlib warns past 20 open figures)."""
+
+    def call(*args: Any, **kwargs: Any) -> None:
+        import matplotlib.pyplot as plt
+
+        plt.close(figure(*args, **kwargs))
+
+    return call
+
+
+def hardware_examples(box: c.Task, cfg: c.Config) -> list[Call]:
+    """A saved policy on a hand, task files, CRM grids and figures."""
+    Path("t.toml").write_text(TEMPLATE, encoding="utf-8")
+    curves = {"sarsa": (np.full(5, 2.0), np.full(5, 0.1))}
+    return [
+        Call("PolicyRunner.run", _run_policy, "policy.json", cfg, "run.csv"),
+        Call("KinematicHand", KinematicHand, box, cfg, np.random.default_rng(0), noise=None),
+        Call("HandSteps", HandSteps, box, hand=None),
+        Call("log_columns", log_columns, box),
+        Call("offset_grid", offset_grid, box, 8),
+        Call("full_ranges", full_ranges, ("a", "b"), 1, 0.16),
+        Call("grid_points", grid_points, -0.1, 0.1, 5),
+        Call("resolve_task", resolve_task, "paper-box"),
+        Call("load_task_file", load_task_file, "t.toml"),
+        Call("task_to_dict", task_to_dict, box),
+        Call("scene_figure", _closed(scene_figure), box.obj, box.hand, cfg, None, title="t"),
+        Call("learning_curve_figure", _closed(learning_curve_figure), curves, 1.66, "t", highlight="sarsa"),
+        Call("friction_histogram", _closed(friction_histogram), [0.1, 0.2], 0, "t"),
     ]
 
 

@@ -218,6 +218,42 @@ def test_helpers_that_build_tasks_and_actions_check_their_arguments():
         episodes_to_within([1.0, 1.0], 1.0, window=0)
 
 
+def test_spatial_rules_grids_and_figures_check_their_arguments(capsys, tmp_path, monkeypatch):
+    """The 3-D rules, CRM grids and figures refuse what they cannot use in one line; before,
+    text reached numpy, ``None`` reached an attribute, and a grid of 1,000 offsets per
+    coordinate on a 3-D task (4,000,000 CRMs, deduplicated by a list scan) ran for good."""
+    from crmgrasp.model.actions import grid_points
+    from crmgrasp.model.spatial import Config3D, Contact3D, box3d, execute_crm3d, observe3d
+    from crmgrasp.plotting import friction_histogram, scene_figure
+    from crmgrasp.tasks.offsets import grid_crms
+
+    cup = make_task("cup-3d")
+    world = cup.sample_world(np.random.default_rng(0))
+    bad = Config3D(Contact3D(("x", 0.0, 0.0), (1.0, 0.0, 0.0)), world.config.b)
+    with pytest.raises(CrmgraspError, match="observe3d: contact a must be finite 3-vectors"):
+        observe3d(bad)
+    with pytest.raises(CrmgraspError, match="a spatial object must be a ConvexPolyhedron, Cylinder or TriangleMesh"):
+        execute_crm3d(None, cup.hand, world.config, cup.actions[0])  # type: ignore[arg-type]
+    with pytest.raises(CrmgraspError, match="table height must be a number, got 'x'"):
+        execute_crm3d(world.task.obj, cup.hand, world.config, cup.actions[0], table="x")  # type: ignore[arg-type]
+    with pytest.raises(CrmgraspError, match="a box's lo corner must be numbers, got 'abc'"):
+        box3d("abc", (1.0, 1.0, 1.0))
+    with pytest.raises(CrmgraspError, match=r"offsets per coordinate must be an integer in \[1, 1000\]"):
+        grid_points(-0.1, 0.1, 10**100)
+    with pytest.raises(CrmgraspError, match="make 4,000,000 CRMs on task 'cup-3d'; at most 100,000"):
+        grid_crms(cup, 1000)
+    err = _one_line_exit_2(["references", "--task", "cup-3d", "--offset-grid", "1000"], capsys, tmp_path, monkeypatch)
+    assert "4,000,000 CRMs" in err
+    box = make_task("paper-box")
+    cfg = box.sample_start(np.random.default_rng(0))
+    with pytest.raises(CrmgraspError, match="a scene's object must be a Shape or a solid, got None"):
+        scene_figure(None, box.hand, cfg)  # type: ignore[arg-type]
+    with pytest.raises(CrmgraspError, match="a scene of a Polygon needs a Hand, got None"):
+        scene_figure(box.obj, None, cfg)  # type: ignore[arg-type]
+    with pytest.raises(CrmgraspError, match="friction values must be numbers"):
+        friction_histogram("x", 0, "t")  # type: ignore[arg-type]
+
+
 def test_the_fused_kernel_refuses_an_action_out_of_range(task):
     from crmgrasp.kernels import kernel_for
     from crmgrasp.sim import SimState

@@ -34,7 +34,7 @@ def test_grid_points_are_even_and_mirror_exactly():
         assert len(pts) == n and pts == tuple(-p for p in reversed(pts))
         assert n == 1 or (pts[0] == -0.16 and pts[-1] == 0.16)
         assert all(b > a for a, b in itertools.pairwise(pts))
-    with pytest.raises(CrmgraspError, match="integer number of offsets"):
+    with pytest.raises(CrmgraspError, match=r"offsets per coordinate must be an integer in \[1, 1000\], got 0"):
         grid_points(0, 1, 0)
 
 

@@ -24,7 +24,17 @@ from crmgrasp.model.quality import ANTIPODAL_TOL, positively_spans
 from crmgrasp.model.quality3d import force_closure_3d, least_friction_3d, min_friction_3d
 from crmgrasp.model.sensing import SensorNoise
 from crmgrasp.model.solids import Cylinder, box3d
-from crmgrasp.model.spatial import CRM3D, Contact3D, Grip3D, Hand3D, execute_crm3d, faces_palm3d, feasible3d, observe3d
+from crmgrasp.model.spatial import (
+    CRM3D,
+    Config3D,
+    Contact3D,
+    Grip3D,
+    Hand3D,
+    execute_crm3d,
+    faces_palm3d,
+    feasible3d,
+    observe3d,
+)
 from crmgrasp.tasks import make_task, task_from_dict, task_to_dict
 from crmgrasp.tasks.spatial import TRIPOD_HAND, tripod_crms
 
@@ -267,7 +277,7 @@ def test_a_crm_stays_within_the_aperture_of_every_still_contact() -> None:
     near = execute_crm3d(box, hand, g, CRM3D("a", "b", (0.0, 0.0)), table=0.0)
     assert near.config[0].x == pytest.approx((-0.05, -0.14, 0.05))  # b's line is within A of c
     two = Hand3D(aperture=0.16, palm_depth=0.0)
-    out2 = execute_crm3d(box, two, (g[0], g[1]), CRM3D("a", "b", (0.0, 0.0)), table=0.0)  # type: ignore[arg-type]
+    out2 = execute_crm3d(box, two, Config3D(g[0], g[1]), CRM3D("a", "b", (0.0, 0.0)), table=0.0)
     assert out2.config[0].x == pytest.approx(near.config[0].x)
     far = Grip3D(g[0], Contact3D((0.05, 0.14, 0.05), (-1.0, 0.0, 0.0)), g[2])
     g2 = Grip3D(Contact3D((-0.05, 0.14, 0.05), (1.0, 0.0, 0.0)), far[1], Contact3D((0.05, -0.14, 0.05), (-1, 0, 0)))

@@ -132,6 +132,24 @@ def as_numbers(value: object, name: str, count: int, what: str = "") -> tuple[fl
     return tuple(finite(v, f"{name}[{i}]") for i, v in enumerate(items))
 
 
+def float_array(value: object, name: str) -> Any:
+    """``value`` (a number, or nested sequences of numbers) as a float64 numpy array, or a
+    one-line error naming ``name``: text, bytes, mappings, ragged lists and other objects are not
+    numbers. Its shape and values are the caller's to check.
+
+    >>> float_array([(0, 1), (2, 3)], "points").shape
+    (2, 2)
+    """
+    import numpy as np
+
+    if not isinstance(value, (str, bytes, dict)):
+        try:
+            return np.asarray(value, dtype=np.float64)
+        except (TypeError, ValueError, OverflowError):
+            pass
+    raise CrmgraspError(f"{name} must be numbers, got {shown(value)}")
+
+
 def listed(value: object, name: str, what: str = "a list") -> tuple[Any, ...]:
     """``value`` as a tuple if it is an ordered collection (a list, tuple, range or 1-D array;
     not text, a mapping or a set), or a one-line error naming ``name``.

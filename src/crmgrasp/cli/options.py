@@ -12,6 +12,7 @@ from typing import Any, NoReturn
 
 from crmgrasp._validation import SEED_MAX, CrmgraspError, as_point, finite, integer, shown
 from crmgrasp.hardware import HANDS
+from crmgrasp.model.actions import MAX_GRID
 from crmgrasp.model.contacts import ALL_LABELS, LABELS
 from crmgrasp.tasks import Task
 from crmgrasp.tasks.presets import START_PRESETS
@@ -153,7 +154,7 @@ def _add_task(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--offset-grid",
-        type=_int(1, 1000),
+        type=_int(1, MAX_GRID),
         default=None,
         metavar="N",
         help="replace the task's CRMs by N evenly spaced offsets per coordinate over each contact pair of its "

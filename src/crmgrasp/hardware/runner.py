@@ -22,7 +22,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from crmgrasp._io import dumps_json, write_csv
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, generator
 from crmgrasp.agents.policy import GreedyPolicy
 from crmgrasp.hardware.answers import checked_error, checked_pose, checked_raw, checked_reading, checked_time
 from crmgrasp.hardware.contact_sensing import NoContact
@@ -31,7 +31,7 @@ from crmgrasp.model.hand import CRM, Error
 from crmgrasp.model.sensing import SensorNoise
 from crmgrasp.model.spatial import CRM3D, Contacts3D
 from crmgrasp.sim import OneStep, Percept, SimState, run_episode, step_reward
-from crmgrasp.tasks import Task
+from crmgrasp.tasks import Task, checked_task
 
 __all__ = ["HandInterface", "HandSteps", "KinematicHand", "PolicyRunner", "RunResult", "log_columns"]
 
@@ -45,6 +45,7 @@ def log_columns(task: Task) -> list[str]:
     contact model's row order (``ax, ay, anx, any, ...`` in the plane; ``ax, ay, az, anx,
     any, anz, ...`` in space), the model's observation (``rho, m_a, m_b``), then
     [`RUN_COLUMNS`][]."""
+    task = checked_task(task, "log_columns")
     return ["step", *task.model.columns, *task.model.observation_names, *RUN_COLUMNS]
 
 
@@ -67,8 +68,9 @@ class KinematicHand:
     def __init__(
         self, task: Task, start: Config | Grip | Contacts3D, rng: np.random.Generator, noise: SensorNoise | None = None
     ):
+        task = checked_task(task, "KinematicHand")
         self.task = task if noise is None else dataclasses.replace(task, noise=noise)
-        self.config, self.rng = task.check_config(start, "start"), rng
+        self.config, self.rng = task.check_config(start, "start"), generator(rng)
         self._reading: Config | Grip | Contacts3D | None = None
 
     def sense(self) -> Config | Grip | Contacts3D:

@@ -15,9 +15,13 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import product
 
-from crmgrasp._validation import CrmgraspError, finite, shown
+from crmgrasp._validation import CrmgraspError, finite, integer, listed, positive, shown
 
-__all__ = ["CRMRange", "full_ranges", "grid_points"]
+__all__ = ["CRMRange", "full_ranges", "grid_points", "MAX_GRID"]
+
+MAX_GRID = 1000
+"""The most offsets per coordinate a grid takes ([`grid_points`][]; the command line's
+``--offset-grid`` bound too)."""
 
 
 def grid_points(low: float, high: float, n: int) -> tuple[float, ...]:
@@ -31,8 +35,8 @@ def grid_points(low: float, high: float, n: int) -> tuple[float, ...]:
     >>> grid_points(-0.1, 0.1, 1)
     (0.0,)
     """
-    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-        raise CrmgraspError(f"a grid needs an integer number of offsets >= 1, got {n!r}")
+    n = integer(n, "offsets per coordinate", 1, MAX_GRID)
+    low, high = finite(low, "a grid's low end"), finite(high, "a grid's high end")
     if n == 1:
         return (0.5 * (low + high),)
     pts = [low + (high - low) * i / (n - 1) for i in range(n)]
@@ -127,6 +131,9 @@ def full_ranges(labels: Sequence[str], offset_dim: int, reach: float) -> tuple[C
     >>> print(*full_ranges("ab", 1, 0.16))
     (a,a,[-0.16,0.16]) (a,b,[-0.16,0.16]) (b,a,[-0.16,0.16]) (b,b,[-0.16,0.16])
     """
+    labels = tuple(labels) if isinstance(labels, str) else listed(labels, "labels")  # "ab": the labels a, b
+    reach = positive(reach, "reach")
+    offset_dim = integer(offset_dim, "offset_dim", 1, 2)
     half = reach if offset_dim == 1 else reach / math.sqrt(offset_dim)
     while math.hypot(*(half,) * offset_dim) > reach:  # the corners within reach despite rounding
         half = math.nextafter(half, 0.0)

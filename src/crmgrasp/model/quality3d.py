@@ -44,7 +44,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from crmgrasp._validation import CrmgraspError, non_negative
+from crmgrasp._validation import CrmgraspError, float_array, non_negative
 from crmgrasp.model import quality
 from crmgrasp.model.quality import ANTIPODAL_TOL, positively_spans, span_margin
 from crmgrasp.model.solids import cross, dot, norm
@@ -67,8 +67,7 @@ F64 = NDArray[np.float64]
 
 def _contacts(points: ArrayLike, normals: ArrayLike, count: int | None = None) -> tuple[F64, F64]:
     """Checked ``(n, 3)`` points and unit normals (one-line errors)."""
-    p = np.asarray(points, dtype=np.float64)
-    n = np.asarray(normals, dtype=np.float64)
+    p, n = float_array(points, "contact points"), float_array(normals, "contact normals")
     if p.ndim != 2 or p.shape[1] != 3 or n.shape != p.shape or len(p) == 0:
         raise CrmgraspError(f"points and normals must both have shape (n, 3), got {p.shape} and {n.shape}")
     if count is not None and len(p) != count:

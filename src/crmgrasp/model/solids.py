@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from crmgrasp._validation import CrmgraspError, positive
+from crmgrasp._validation import CrmgraspError, float_array, positive
 from crmgrasp.model.shape import EPS, check_reach
 
 __all__ = [
@@ -82,7 +82,7 @@ def rotation_z(angle: float) -> F64:
 
 
 def _unit(v: ArrayLike, name: str) -> F64:
-    u = np.asarray(v, dtype=np.float64)
+    u = float_array(v, name)
     length = math.sqrt(u.dot(u)) if u.shape == (3,) else 0.0  # what np.linalg.norm computes
     if not (math.isfinite(length) and length > 0.0 and np.isfinite(u).all()):
         raise CrmgraspError(f"{name} must be a finite non-zero 3-vector, got {v!r}")
@@ -123,7 +123,7 @@ class ConvexPolyhedron:
     planes: tuple[Plane, ...]
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "planes", _unit_planes(np.asarray(self.planes, dtype=np.float64)))
+        object.__setattr__(self, "planes", _unit_planes(float_array(self.planes, "a polyhedron's planes")))
         check_reach([b for *_, b in self.planes], "a polyhedron's face (its distance from the origin)")
 
     def contains(self, p: ArrayLike) -> bool:
@@ -215,7 +215,7 @@ class ConvexPolyhedron:
 
 def box3d(lo: ArrayLike, hi: ArrayLike) -> ConvexPolyhedron:
     """The axis-aligned box ``[lo, hi]`` (faces in the order -x, +x, -y, +y, -z, +z)."""
-    lo_, hi_ = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+    lo_, hi_ = float_array(lo, "a box's lo corner"), float_array(hi, "a box's hi corner")
     if lo_.shape != (3,) or hi_.shape != (3,):
         raise CrmgraspError(f"a box needs finite lo < hi in every coordinate, got {lo!r} and {hi!r}")
     (x0, y0, z0), (x1, y1, z1) = lo_.tolist(), hi_.tolist()
@@ -249,7 +249,7 @@ class Cylinder:
     height: float
 
     def __post_init__(self) -> None:
-        o = np.asarray(self.origin, dtype=np.float64)
+        o = float_array(self.origin, "cylinder origin")
         if o.shape != (3,) or not np.all(np.isfinite(o)):
             raise CrmgraspError(f"cylinder origin must be a finite 3-vector, got {self.origin!r}")
         object.__setattr__(self, "origin", tuple(o.tolist()))

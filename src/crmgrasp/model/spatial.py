@@ -20,9 +20,10 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from crmgrasp._validation import CrmgraspError, non_negative, positive
+from crmgrasp._validation import CrmgraspError, finite, non_negative, positive, shown
 from crmgrasp.model.contacts import Labelled, label_index, labels_of
 from crmgrasp.model.hand import Error
+from crmgrasp.model.mesh import TriangleMesh
 from crmgrasp.model.solids import SURFACE, ConvexPolyhedron, Cylinder, Solid, _unit, box3d, cross, dot, norm
 
 __all__ = [
@@ -30,6 +31,10 @@ __all__ = [
     "Config3D",
     "Grip3D",
     "config3d",
+    "check_contacts3d",
+    "check_solid",
+    "SOLIDS",
+    "UNIT_TOL",
     "ConvexPolyhedron",
     "box3d",
     "Cylinder",
@@ -86,6 +91,49 @@ def config3d(contacts: Sequence[Contact3D]) -> Config3D | Grip3D:
 
 
 Contacts3D = Config3D | Grip3D
+
+SOLIDS = (ConvexPolyhedron, Cylinder, TriangleMesh)
+"""The kinds of solid the spatial rules step."""
+
+
+def check_solid(obj: object) -> Solid:
+    """``obj`` if it is a solid the spatial rules step (a [`ConvexPolyhedron`][], a
+    [`Cylinder`][] or a [`TriangleMesh`][crmgrasp.model.mesh.TriangleMesh]); a one-line error otherwise."""
+    if not isinstance(obj, SOLIDS):
+        raise CrmgraspError(f"a spatial object must be a ConvexPolyhedron, Cylinder or TriangleMesh, got {shown(obj)}")
+    return obj  # type: ignore[return-value]
+
+
+UNIT_TOL = 1e-6
+"""How far a given contact normal's length may lie from 1 before [`check_contacts3d`][] refuses it."""
+
+
+def check_contacts3d(config: object, name: str = "configuration", contacts: int | None = None) -> Contacts3D:
+    """``config`` if it is a [`Config3D`][] (two contacts) or a [`Grip3D`][] (more; ``contacts``
+    of them when given) of finite [`Contact3D`][]s with unit normals (within [`UNIT_TOL`][]),
+    wherever they lie; else a one-line error naming ``name``."""
+    count = len(config) if contacts is None and isinstance(config, (Config3D, Grip3D)) else contacts or 2
+    kind = Config3D if count == 2 else Grip3D
+    if not isinstance(config, kind) or len(config) != count or not all(isinstance(c, Contact3D) for c in config):
+        raise CrmgraspError(f"{name} must be a {kind.__name__} of {count} Contact3D, got {shown(config, 200)}")
+    for label, c in zip(labels_of(count), config):
+        x, n = _triple(c.x), _triple(c.n)
+        if x is None or n is None:
+            raise CrmgraspError(f"{name}: contact {label} must be finite 3-vectors, got {shown(tuple(c), 200)}")
+        if abs(math.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) - 1.0) > UNIT_TOL:
+            raise CrmgraspError(f"{name}: contact {label}'s normal must be a unit vector, got {shown(c.n, 200)}")
+    return config
+
+
+def _triple(v: object) -> list[float] | None:
+    """``v`` as three finite floats, or None (text is no vector)."""
+    if isinstance(v, (str, bytes)):
+        return None
+    try:
+        out = [float(e) for e in v]  # type: ignore[attr-defined]
+    except (TypeError, ValueError, OverflowError):
+        return None
+    return out if len(out) == 3 and all(map(math.isfinite, out)) else None
 
 
 @dataclass(frozen=True)
@@ -330,8 +378,14 @@ def execute_crm3d(
     line to where it crosses the table plane (the finger approaches from the table's
     surface); if the line never rises above the table before the chord ends, or that
     point is inside the object, the CRM is a palm error (the hand would meet the table)."""
+    check_solid(obj)
+    if not isinstance(hand, Hand3D):
+        raise CrmgraspError(f"execute_crm3d needs a Hand3D, got {shown(hand)}")
     hand.check_crm(crm)
-    sensed = cfg if sensed is None else sensed
+    check_contacts3d(cfg, "configuration", hand.contacts)
+    sensed = cfg if sensed is None else check_contacts3d(sensed, "reading", hand.contacts)
+    if table is not None:
+        table = finite(table, "table height")
     moving = label_index(crm.c)
     stills = [c for i, c in enumerate(cfg) if i != moving]
     chord = goal_chord3d(hand, crm, sensed[label_index(crm.f)], stills)
@@ -360,6 +414,7 @@ def observe3d(cfg: Contacts3D) -> tuple[float, ...]:
     magnitude ``|m_j|``, ``m_j = sum_{i != j} (x_i - x_j) x n_i`` (sections 4 and 9; for two
     contacts ``m_a = (x_b - x_a) x n_b``, ``m_b = (x_a - x_b) x n_a``). Sums run in label order
     from the first term, so that two contacts give the two-contact formulas bit for bit."""
+    check_contacts3d(cfg, "observe3d")
     xs, ns = [np.array(c.x) for c in cfg], [np.array(c.n) for c in cfg]
     s = ns[0]
     for n in ns[1:]:

@@ -31,6 +31,7 @@ from crmgrasp.model.spatial import (
     Grip3D,
     Hand3D,
     Outcome3D,
+    check_contacts3d,
     config3d,
     execute_crm3d,
     feasible3d,
@@ -41,8 +42,9 @@ from crmgrasp.model.spatial import (
 __all__ = ["SpatialModel", "contact3d"]
 
 SURFACE_TOL = 1e-6
-"""How far (m) a given contact may lie from the solid's surface, and its normal's length
-from 1, before [`SpatialModel.check_config`][] refuses it."""
+"""How far (m) a given contact may lie from the solid's surface before
+[`SpatialModel.check_config`][] refuses it (and its normal's length from 1:
+[`crmgrasp.model.spatial.UNIT_TOL`][], the same)."""
 
 
 def contact3d(point: ArrayLike, normal: ArrayLike) -> Contact3D:
@@ -181,21 +183,8 @@ class SpatialModel(LabelledContacts):
     def check_reading(self, config: object, name: str = "reading") -> Contacts3D:
         """``config`` if it is a [`Config3D`][] (two contacts) or a [`Grip3D`][] (more) of
         one finite contact per finger with unit normals (within [`SURFACE_TOL`][]), wherever it
-        lies; else a one-line error."""
-        count = self.n_contacts
-        kind = Config3D if count == 2 else Grip3D
-        if not isinstance(config, kind) or len(config) != count or not all(isinstance(c, Contact3D) for c in config):
-            raise CrmgraspError(f"{name} must be a {kind.__name__} of {count} Contact3D, got {config!r:.200}")
-        for label, c in zip(self.labels, config):
-            try:
-                x, n = np.asarray(c.x, dtype=float), np.asarray(c.n, dtype=float)
-            except (TypeError, ValueError):
-                x = n = np.full(1, np.nan)
-            if x.shape != (3,) or n.shape != (3,) or not (np.all(np.isfinite(x)) and np.all(np.isfinite(n))):
-                raise CrmgraspError(f"{name}: contact {label} must be finite 3-vectors, got {tuple(c)}")
-            if abs(float(np.linalg.norm(n)) - 1.0) > SURFACE_TOL:
-                raise CrmgraspError(f"{name}: contact {label}'s normal must be a unit vector, got {c.n}")
-        return config
+        lies; else a one-line error ([`check_contacts3d`][crmgrasp.model.spatial.check_contacts3d])."""
+        return check_contacts3d(config, name, self.n_contacts)
 
     def place(self, obj: Any, points: Sequence[ArrayLike]) -> Contacts3D:
         """Each contact where the ray from the solid's centre toward its point (finite

@@ -16,7 +16,8 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Circle
 from matplotlib.patches import Polygon as PolygonPatch
 
-from crmgrasp.model.contacts import ALL_LABELS, Config, Grip
+from crmgrasp._validation import CrmgraspError, finite, float_array, integer, shown
+from crmgrasp.model.contacts import ALL_LABELS, Config, Grip, check_contacts
 from crmgrasp.model.geometry import Disc, Polygon, Shape
 from crmgrasp.model.hand import Hand, Outcome
 from crmgrasp.plotting.colors import COLORS
@@ -123,11 +124,35 @@ def is_planar(obj: Any) -> bool:
     return isinstance(obj, (Polygon, Disc)) or hasattr(obj, "perimeter")
 
 
+def check_scene(obj: object, hand: object, config: object, outcome: object) -> None:
+    """A one-line error unless ``obj`` is a planar [`Shape`][crmgrasp.model.geometry.Shape]
+    with a [`Hand`][crmgrasp.model.hand.Hand], its configuration and an ``Outcome`` or None,
+    or a solid with a ``Hand3D``, its configuration and an ``Outcome3D`` or None."""
+    from crmgrasp.model import spatial
+
+    hand_kind: type
+    outcome_kind: type
+    check: Any
+    if isinstance(obj, Shape):
+        hand_kind, outcome_kind, check = Hand, Outcome, check_contacts
+    elif isinstance(obj, spatial.SOLIDS):
+        hand_kind, outcome_kind, check = spatial.Hand3D, spatial.Outcome3D, spatial.check_contacts3d
+    else:
+        raise CrmgraspError(f"a scene's object must be a Shape or a solid, got {shown(obj)}")
+    if not isinstance(hand, hand_kind):
+        raise CrmgraspError(f"a scene of a {type(obj).__name__} needs a {hand_kind.__name__}, got {shown(hand)}")
+    check(config, "configuration", hand.contacts)
+    if outcome is not None and not isinstance(outcome, outcome_kind):
+        raise CrmgraspError(f"a scene's outcome must be an {outcome_kind.__name__} or None, got {shown(outcome)}")
+
+
 def scene_figure(
     obj: Shape, hand: Hand, config: Config | Grip, outcome: Outcome | None = None, title: str | None = None
 ) -> Figure:
     """A one-panel figure of [`draw_scene`][] (of [`crmgrasp.plotting.spatial.scene_figure3d`][]
-    for a solid: ``outcome`` then gives the configuration after the CRM)."""
+    for a solid: ``outcome`` then gives the configuration after the CRM); a scene that
+    cannot be drawn is a one-line error ([`check_scene`][])."""
+    check_scene(obj, hand, config, outcome)
     if not is_planar(obj):
         from crmgrasp.plotting.spatial import scene_figure3d
 
@@ -142,15 +167,20 @@ def scene_figure(
 
 
 def friction_histogram(values: Sequence[float], failures: int, title: str) -> Figure:
-    """Histogram of minimum friction coefficients (paper Fig. 4)."""
+    """Histogram of minimum friction coefficients (paper Fig. 4; ``values``: numbers, those
+    not finite left out)."""
+    array = float_array(values, "friction values")
+    failures = integer(failures, "failures", 0, 10**12)
+    if array.ndim != 1:
+        raise CrmgraspError(f"friction values must be a list of numbers, got shape {array.shape}")
     fig = Figure(figsize=(5.5, 3.8), layout="constrained")
     ax = fig.add_subplot()
-    vals = np.asarray([v for v in values if math.isfinite(v)])
+    vals = array[np.isfinite(array)]
     top = max(0.1, float(vals.max()) * 1.1) if len(vals) else 0.1
     ax.hist(vals, bins=np.linspace(0.0, top, 16).tolist(), color="tab:blue", edgecolor="white")
     ax.set_xlabel("minimum friction coefficient for force closure")
     ax.set_ylabel("grasps")
-    note = f"n = {len(values)}" + (f", {failures} failed (no contact / error)" if failures else "")
+    note = f"n = {len(array)}" + (f", {failures} failed (no contact / error)" if failures else "")
     ax.set_title(f"{title}\n{note}", fontsize=10)
     return fig
 
@@ -223,6 +253,17 @@ def _twins(curves: dict[str, tuple[np.ndarray, np.ndarray]]) -> dict[str, str]:
     return out
 
 
+def _check_curves(curves: object) -> None:
+    """A one-line error unless ``curves`` maps names to (mean, standard error) pairs of
+    equally long 1-D arrays of numbers."""
+    if not isinstance(curves, dict) or not all(isinstance(k, str) for k in curves):
+        raise CrmgraspError(f"curves must be a dict of learner names to (mean, standard error), got {shown(curves)}")
+    for name, pair in curves.items():
+        arrays = [float_array(a, f"curve {name!r}") for a in pair] if isinstance(pair, (tuple, list)) else []
+        if len(arrays) != 2 or arrays[0].ndim != 1 or arrays[0].shape != arrays[1].shape:
+            raise CrmgraspError(f"curve {name!r} must be (mean, standard error): two equally long 1-D arrays")
+
+
 def learning_curve_figure(
     curves: dict[str, tuple[np.ndarray, np.ndarray]],
     reference: float | None,
@@ -243,6 +284,9 @@ def learning_curve_figure(
     earlier one is drawn dashed and named in the legend ("= SARSA ..."). Curves and bands
     are ``smooth``-episode moving averages plotted at the window's last episode; linear
     episode axis unless ``log_x``."""
+    _check_curves(curves)
+    if reference is not None:
+        reference = finite(reference, "reference")
     twins = _twins(curves)
     banded = [n for n in curves if n not in twins]
     groups = [banded[i : i + per_panel] for i in range(0, max(len(banded), 1), per_panel)] or [[]]

@@ -20,13 +20,13 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from crmgrasp._io import read_bounded
+from crmgrasp._io import as_path, read_bounded
 from crmgrasp._validation import CrmgraspError, shown
 from crmgrasp.model import families as fam
 from crmgrasp.model.geometry import Disc, Polygon
 from crmgrasp.model.hand import Hand
 from crmgrasp.model.sensing import Discretizer, SensorNoise
-from crmgrasp.tasks.core import Task, checked_name, make_task, task_names
+from crmgrasp.tasks.core import Task, checked_name, checked_task, make_task, task_names
 from crmgrasp.tasks.families import BoundaryStarts
 from crmgrasp.tasks.presets import LongSideStarts, MixtureStarts, NearCornerStarts, VertexStarts, with_reading
 from crmgrasp.tasks.schema import (
@@ -326,6 +326,7 @@ def task_to_dict(task: Task) -> dict[str, Any]:
     (Python code does not travel); [`task_from_dict`][] refuses it."""
     from crmgrasp.tasks.spatial import SpatialTask
 
+    checked_task(task, "task_to_dict")
     if isinstance(task, SpatialTask):
         from crmgrasp.tasks.spatial_files import spatial_to_dict
 
@@ -371,7 +372,7 @@ def key_reference() -> str:
 def load_task_file(path: str | Path) -> Task:
     """The task a TOML file states (read with a 1 MiB bound; one-line errors naming
     the file and the key)."""
-    p = Path(path)
+    p = as_path(path, "task file")
     data = read_bounded(p, MAX_TASK_FILE_BYTES, "task file")
     try:
         doc = tomllib.loads(data.decode("utf-8"))

@@ -12,22 +12,33 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
-from crmgrasp._validation import CrmgraspError
-from crmgrasp.tasks.core import Symmetry, Task, symmetry_of
+from crmgrasp._validation import CrmgraspError, integer
+from crmgrasp.model.actions import MAX_GRID
+from crmgrasp.tasks.core import Symmetry, Task, checked_task, symmetry_of
 
-__all__ = ["offset_grid", "grid_crms", "mirror_symmetry", "OffsetTree", "offset_tree", "MAX_DEPTH"]
+__all__ = ["offset_grid", "grid_crms", "mirror_symmetry", "OffsetTree", "offset_tree", "MAX_DEPTH", "MAX_GRID_CRMS"]
+
+
+MAX_GRID_CRMS = 100_000
+"""The most CRMs a grid of offsets may make (a 3-D task's four pairs: up to 158 offsets per
+coordinate)."""
 
 
 def grid_crms(task: Task, n: int) -> tuple[Any, ...]:
     """The CRMs of ``n`` offsets per coordinate over each of ``task.crm_ranges`` (a fixed
-    range gives its one CRM), in range order, without repeats."""
-    out: list[Any] = []
+    range gives its one CRM), in range order, without repeats; at most [`MAX_GRID_CRMS`][]
+    of them (one-line error)."""
+    n = integer(n, "offsets per pair", 1, MAX_GRID)
+    count = sum(1 if rg.fixed else n ** len(rg.low) for rg in task.crm_ranges)
+    if count > MAX_GRID_CRMS:
+        raise CrmgraspError(
+            f"{n} offsets per coordinate make {count:,} CRMs on task {task.name!r}; at most {MAX_GRID_CRMS:,}"
+        )
+    out: dict[Any, None] = {}
     for rg in task.crm_ranges:
         points = [rg.low] if rg.fixed else rg.grid(n)
         for r in points:
-            crm = task.model.range_crm(rg, r)
-            if crm not in out:
-                out.append(crm)
+            out.setdefault(task.model.range_crm(rg, r), None)
     return tuple(out)
 
 
@@ -47,9 +58,7 @@ def offset_grid(task: Task, n: int) -> Task:
     """``task`` with the CRMs [`grid_crms`][] ``(task, n)`` as its actions, named
     ``<name>-grid<n>``: its declared symmetry kept where the grid is mirror-closed
     ([`mirror_symmetry`][]), its reference mean dropped (another action set)."""
-    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-        raise CrmgraspError(f"offsets per pair must be an integer >= 1, got {n!r}")
-    actions = grid_crms(task, n)
+    actions = grid_crms(checked_task(task, "offset_grid"), n)
     return dataclasses.replace(
         task,
         name=f"{task.name}-grid{n}",

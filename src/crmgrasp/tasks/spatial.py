@@ -26,14 +26,13 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from crmgrasp._validation import CrmgraspError, finite, positive, tries
+from crmgrasp._validation import CrmgraspError, finite, listed, positive, tries
 from crmgrasp.model.contact_model import observation_names
 from crmgrasp.model.hand import Error
-from crmgrasp.model.mesh import TriangleMesh
 from crmgrasp.model.sensing import Discretizer
 from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable, OpenCupOnTable, SolidFamily
-from crmgrasp.model.solids import ConvexPolyhedron, Cylinder, Solid, dot, surface_point
-from crmgrasp.model.spatial import CRM3D, Contacts3D, Hand3D, config3d
+from crmgrasp.model.solids import Solid, dot, surface_point
+from crmgrasp.model.spatial import CRM3D, Contacts3D, Hand3D, check_solid, config3d
 from crmgrasp.model.spatial_model import SpatialModel, contact3d
 from crmgrasp.tasks.core import PAPER_BINS, Symmetry, Task, register_task, symmetry_of
 
@@ -86,7 +85,7 @@ def tripod_crms(labels: Sequence[str] = ("a", "b", "c"), lateral: float = 0.03) 
     >>> len(tripod_crms())
     18
     """
-    d = positive(lateral, "lateral offset")
+    d, labels = positive(lateral, "lateral offset"), listed(labels, "labels")
     return tuple(CRM3D(c, f, (r, 0.0)) for c in labels for f in labels if c != f for r in (0.0, d, -d))
 
 
@@ -94,6 +93,7 @@ def spatial_crms(step: float = 0.05) -> tuple[CRM3D, ...]:
     """The default 3-D CRM set (10): oppose ``a`` onto ``b``'s line, oppose ``b`` onto
     ``a``'s; slide each contact by ``step`` metres along ``+-t_1`` (horizontal) and
     ``+-t_2`` (up or down the face) of its own tangent frame."""
+    step = positive(step, "CRM step")
     slides = ((step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step))
     return (
         CRM3D("a", "b", (0.0, 0.0)),
@@ -161,10 +161,7 @@ class SpatialTask(Task):
     table: float | None = 0.0
 
     def __post_init__(self) -> None:
-        if not isinstance(self.obj, (ConvexPolyhedron, Cylinder, TriangleMesh)):
-            raise CrmgraspError(
-                f"a spatial task's object must be a ConvexPolyhedron, Cylinder or TriangleMesh, got {self.obj!r}"
-            )
+        check_solid(self.obj)
         if not isinstance(self.hand, Hand3D):
             raise CrmgraspError(f"a spatial task's hand must be a Hand3D, got {self.hand!r}")
         self._set_model(SpatialModel(self.hand, self.noise, self.table))
