@@ -14,7 +14,7 @@ under 400 characters; any other exception, a warning, a longer message or a call
 after ``--seconds`` (5) is reported with the call, the argument and the value. It prints one JSON
 object and exits 1 if a call failed.
 
-Measured 2026-12-07 on the 2-core machine: 97 calls, 5,960 variants in 2 s, none failed.
+Measured 2026-12-07 on the 2-core machine: 113 calls, 8,600 variants in 3 s, none failed.
 The first 24 calls on the code before their fixes (46c3eef): 227 of 1,460 failed. A ``Contact`` of text,
 ``None`` or containers reached ``observe`` and ``min_friction`` as a ``TypeError`` (88); a hand
 given no ``Shape`` failed inside ``contact`` and ``execute`` (40); ``Task`` took actions that
@@ -41,7 +41,11 @@ and ranges took anything, and 10**100 offsets ran until the time limit (84); 3-v
 reached numpy in the 3-D hand, solids and quality (72); ``execute_crm3d`` and ``observe3d``
 took anything as an object, a hand, contacts or a table (102); something other than a
 ``Task`` reached ``KinematicHand``, ``log_columns`` and ``task_to_dict`` (60); and the CRM
-sets of the spatial helpers (21) and a task file's path (18).
+sets of the spatial helpers (21) and a task file's path (18). The 16 experiments' configs
+([`config_examples`][]) on the code of fbe9770: 4 of 2,640 failed (a ``ThirdContactConfig``
+preset of the wrong kind), but only because a config took anything: ``Figure4Config(trials="x")``
+was built, and its run failed inside with a ``TypeError``. Each field is now checked against
+its type where the config is built (``crmgrasp.experiments.configs``).
 
 Usage: ``python benchmarks/api_fuzz.py [--seconds 5]``.
 """
@@ -246,6 +250,7 @@ def examples() -> list[Call]:
         *loop_examples(box),
         *spatial_examples(),
         *hardware_examples(box, cfg),
+        *config_examples(),
     ]
 
 
@@ -381,6 +386,42 @@ def hardware_examples(box: c.Task, cfg: c.Config) -> list[Call]:
         Call("learning_curve_figure", _closed(learning_curve_figure), curves, 1.66, "t", highlight="sarsa"),
         Call("friction_histogram", _closed(friction_histogram), [0.1, 0.2], 0, "t"),
     ]
+
+
+CONFIG_MODULES = (
+    "compare",
+    "continuous_offsets",
+    "cost_of_failure",
+    "figure4",
+    "figure7",
+    "figure8",
+    "figure9",
+    "generalization",
+    "mujoco",
+    "mujoco_spatial",
+    "non_convex",
+    "physics_learning",
+    "sensitivity",
+    "spatial",
+    "third_contact",
+)
+"""The modules of ``crmgrasp.experiments`` whose parameters are a ``...Config`` dataclass."""
+
+
+def config_examples() -> list[Call]:
+    """Every experiment's config, built with each of its fields given as its default."""
+    import dataclasses
+    import importlib
+
+    out = []
+    for name in CONFIG_MODULES:
+        module = importlib.import_module(f"crmgrasp.experiments.{name}")
+        for cls in vars(module).values():
+            if isinstance(cls, type) and cls.__name__.endswith("Config") and cls.__module__ == module.__name__:
+                default = cls()
+                fields = {f.name: getattr(default, f.name) for f in dataclasses.fields(default)}
+                out.append(Call(cls.__name__, cls, **fields))
+    return out
 
 
 class _LateError(Exception):

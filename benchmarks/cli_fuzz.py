@@ -223,10 +223,22 @@ def run_case(argv: list[str], seconds: float) -> tuple[str, str | None]:
     return "failed", f"status {status}, {text.count(chr(10))} lines on stderr: {text[:300]!r}"
 
 
-HEAVY = ("torch", "stable_baselines3", "sb3_contrib", "mujoco", "pomdp_py", "ray", "pyarrow", "matplotlib.pyplot")
+HEAVY = (
+    "torch",
+    "torch._dynamo",
+    "stable_baselines3",
+    "sb3_contrib",
+    "mujoco",
+    "pomdp_py",
+    "ray",
+    "pyarrow",
+    "matplotlib.pyplot",
+)
 """Modules imported before the first case where installed: the time limit interrupts a command
 wherever it is, and one interrupted inside a module's first import leaves the module half
-imported for every later case (seen: torch, after which the deep peer's cases failed)."""
+imported for every later case (seen: torch, after which the deep peer's cases failed; then
+``torch._dynamo``, which torch imports only when first needed: 10 of ``compare``'s cases in
+the full run of 2026-12-08)."""
 
 
 @contextlib.contextmanager

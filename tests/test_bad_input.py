@@ -633,3 +633,30 @@ def test_a_setting_keeps_integers_whole():
 
     assert setting(" explore = 2 ") == ("explore", 2) and isinstance(setting("explore=2")[1], int)
     assert setting("beta=-0.25") == ("beta", -0.25) and setting("sample=TRUE") == ("sample", True)
+
+
+def test_an_experiments_parameters_are_checked_when_built(tmp_path):
+    """Each field of an experiment's config is checked against its type where the config is
+    built; before, ``Figure4Config(trials="x")`` was accepted and the run failed inside with a
+    ``TypeError``, and ``GeneralizationConfig(families="t-shape")`` held the families "t",
+    "-", "s", ... (a string is a sequence)."""
+    from crmgrasp.experiments.figure4 import Figure4Config, figure_4_opposition_quality
+    from crmgrasp.experiments.generalization import GeneralizationConfig
+    from crmgrasp.experiments.third_contact import ThirdContactConfig
+
+    for kwargs, message in [
+        ({"trials": "x"}, "Figure4Config.trials must be an integer, got 'x'"),
+        ({"seed": -1}, r"Figure4Config.seed must be an integer in \[0, 9223372036854775807\], got -1"),
+        ({"sigma_p": float("nan")}, "Figure4Config.sigma_p must be finite, got nan"),
+        ({"task": None}, "Figure4Config.task must be text, got None"),
+    ]:
+        with pytest.raises(CrmgraspError, match=message):
+            Figure4Config(**kwargs)
+    with pytest.raises(CrmgraspError, match=r"GeneralizationConfig\.families must be a list, got .t-shape."):
+        GeneralizationConfig(families="t-shape")  # type: ignore[arg-type]
+    assert GeneralizationConfig(families=["t-shape"]).families == ("t-shape",)  # stored as a tuple
+    with pytest.raises(CrmgraspError, match=r"ThirdContactConfig.pairs\[0\] must have 2 items, got 3"):
+        ThirdContactConfig(pairs=(("a", "b", "c"),))  # type: ignore[arg-type]
+    with pytest.raises(CrmgraspError, match="the experiment's parameters must be a Figure4Config, got None"):
+        figure_4_opposition_quality(tmp_path / "out", None)  # type: ignore[arg-type]
+    assert not (tmp_path / "out").exists()

@@ -109,7 +109,7 @@ def boolean(value: object, name: str) -> bool:
     """Return ``value`` if it is a bool (true or false, not a number or text), or raise
     `CrmgraspError`."""
     if not isinstance(value, bool):
-        raise CrmgraspError(f"{name} must be true or false, got {value!r}")
+        raise CrmgraspError(f"{name} must be true or false, got {shown(value)}")
     return value
 
 

@@ -29,6 +29,7 @@ from crmgrasp.agents.deep import (
     train_recurrent_ppo,
 )
 from crmgrasp.agents.training import episodes_to_within
+from crmgrasp.experiments.configs import CheckedConfig, checked_config
 from crmgrasp.experiments.learning import SYMMETRIC_DYNA_Q, LearnerSpec, learn, usable
 from crmgrasp.experiments.runs import RunFolder
 from crmgrasp.experiments.stats import MIN_TRIALS, bootstrap_ci, budget, fmt, iqm, normal_ci
@@ -71,7 +72,7 @@ COLUMNS = [
 
 
 @dataclass(frozen=True)
-class CompareConfig:
+class CompareConfig(CheckedConfig):
     """Parameters of the comparison (``quick`` shrinks every budget)."""
 
     task: str = "paper-box"
@@ -117,6 +118,7 @@ def compare(
     the table and the figure; return a summary. ``task`` overrides the registered task
     ``config.task`` names (a task from a file); with a run folder ``store``, each
     learner's trials are saved there as they finish and reused by a resumed run."""
+    config = checked_config(config, CompareConfig)
     task = make_task(config.task) if task is None else task
     rows, curves = _learner_rows(task, config, backend, progress, store, jobs)
     t0 = time.perf_counter()

@@ -26,6 +26,7 @@ import numpy as np
 
 from crmgrasp._io import save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
+from crmgrasp.experiments.configs import CheckedConfig, checked_config
 from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts
 from crmgrasp.tasks import Task, make_task
 from crmgrasp.tasks.offsets import offset_grid
@@ -50,7 +51,7 @@ LEARNED = (
 
 
 @dataclass(frozen=True)
-class ContinuousOffsetsConfig:
+class ContinuousOffsetsConfig(CheckedConfig):
     """Tasks; grids (offsets per coordinate: ``grids`` in the plane, ``spatial_grids`` in
     space, where a pair gets ``n**2``); sampled starts per task (the references' and the
     learned policies' evaluation); model-vi's grid (per coordinate, planar and spatial);
@@ -161,6 +162,7 @@ def continuous_offsets(
     per task and CRM set; ``learned``: model-vi per task on its CRMs and on a grid, refine-vi
     on a fine grid;
     ``budget``)."""
+    cfg = checked_config(cfg, ContinuousOffsetsConfig)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     tasks = [make_task(name) for name in cfg.tasks]

@@ -47,6 +47,7 @@ from crmgrasp.experiments._episodes import (
     greedy_records,
     train_model_vi,
 )
+from crmgrasp.experiments.configs import CheckedConfig, checked_config
 from crmgrasp.planners.references import BeliefPolicy, sample_starts
 from crmgrasp.sim import Policy
 from crmgrasp.tasks import Task, make_task
@@ -109,7 +110,7 @@ def policy_rows(records: Sequence[EpisodeRecord], cost: float) -> dict[str, floa
 
 
 @dataclass(frozen=True)
-class CostConfig:
+class CostConfig(CheckedConfig):
     """Settings: the tasks (the first is the summary's headline), the costs, the sampled
     worlds of the belief-space optimum, the held-out worlds both policies run on, and the
     learner's budget (model-vi, k = 1, mirror quotient where the task declares one)."""
@@ -138,6 +139,7 @@ def cost_of_failure(
     share rises from the lowest to the highest cost), ``errors_fall`` and
     ``prepare_first_rises`` (the share of ``other`` episodes); the first task's
     ``rows``, ``optimal_rows`` and ``switch`` also at the top level."""
+    cfg = checked_config(cfg, CostConfig)
     if not cfg.tasks:
         raise CrmgraspError("cost of failure needs at least one task")
     out = Path(out_dir)

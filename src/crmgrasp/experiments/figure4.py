@@ -21,6 +21,7 @@ import numpy as np
 
 from crmgrasp._io import save_figure, write_csv, write_json
 from crmgrasp._validation import CrmgraspError
+from crmgrasp.experiments.configs import CheckedConfig, checked_config
 from crmgrasp.model.contacts import Config, two_contacts
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.model.hand import CRM, Error
@@ -33,7 +34,7 @@ __all__ = ["Figure4Config", "figure_4_opposition_quality", "long_side_start"]
 
 
 @dataclass(frozen=True)
-class Figure4Config:
+class Figure4Config(CheckedConfig):
     """Parameters of the Figure 4 experiment."""
 
     task: str = "paper-box"
@@ -98,6 +99,7 @@ def long_side_start(
 def figure_4_opposition_quality(out_dir: str | Path, config: Figure4Config = Figure4Config()) -> dict[str, Any]:
     """Run the experiment; write ``data.csv``, ``figure4.png`` and ``config.json`` to
     ``out_dir``; return a summary dict."""
+    config = checked_config(config, Figure4Config)
     if config.trials < 1:
         raise CrmgraspError(f"trials must be >= 1, got {config.trials}")
     task = make_task(config.task)

@@ -16,6 +16,7 @@ from typing import Any
 
 from crmgrasp._io import save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
+from crmgrasp.experiments.configs import CheckedConfig, checked_config
 from crmgrasp.experiments.learning import SYMMETRIC_DYNA_Q, LearnerSpec, LearnRun, _mean_sem, best_policy, learn, usable
 from crmgrasp.experiments.stats import budget
 from crmgrasp.plotting import checkpoint_figure, learning_curve_figure
@@ -38,7 +39,7 @@ DEFAULT_LEARNERS: tuple[LearnerSpec, ...] = (
 
 
 @dataclass(frozen=True)
-class Figure7Config:
+class Figure7Config(CheckedConfig):
     """Parameters of Figure 7."""
 
     task: str = "paper-box"
@@ -72,6 +73,7 @@ def figure_7_learning_curve(
     """Run every learner; write ``curves.csv``, ``checkpoints.csv``, ``learners.csv``,
     ``figure7.png``, ``figure7_greedy.png``, ``figure7_k_ablation.png``,
     ``policy.json`` (the paper SARSA's best trial) and ``config.json``."""
+    config = checked_config(config, Figure7Config)
     task = make_task(config.task)
     out = Path(out_dir)
     kw: dict[str, Any] = dict(

@@ -25,6 +25,7 @@ import numpy as np
 from crmgrasp._io import atomic_path, save_figure, write_csv, write_json
 from crmgrasp.agents.training import rollout
 from crmgrasp.experiments._policy import learned_policy
+from crmgrasp.experiments.configs import CheckedConfig, checked_config
 from crmgrasp.plotting import rollout_animation, rollout_panels
 from crmgrasp.tasks import make_task
 
@@ -39,7 +40,7 @@ FIGURE8_STARTS: dict[str, tuple[tuple[float, float], tuple[float, float]]] = {
 
 
 @dataclass(frozen=True)
-class Figure8Config:
+class Figure8Config(CheckedConfig):
     """Parameters of Figure 8."""
 
     task: str = "paper-box"
@@ -55,6 +56,7 @@ def figure_8_strategies(
     out_dir: str | Path, config: Figure8Config = Figure8Config(), *, backend: str = "auto"
 ) -> dict[str, Any]:
     """Execute the learned policy from the three starts and draw them."""
+    config = checked_config(config, Figure8Config)
     task = make_task(config.task)
     policy = learned_policy(task, config.policy, config.seed, config.train_trials, config.train_episodes, backend)
     rng = np.random.default_rng(config.seed)

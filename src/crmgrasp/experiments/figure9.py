@@ -25,6 +25,7 @@ import numpy as np
 from crmgrasp._io import save_figure, write_csv, write_json
 from crmgrasp.agents.training import rollout
 from crmgrasp.experiments._policy import learned_policy
+from crmgrasp.experiments.configs import CheckedConfig, checked_config
 from crmgrasp.experiments.figure4 import noisy_execution
 from crmgrasp.model.contacts import Config, two_contacts
 from crmgrasp.model.geometry import Polygon
@@ -35,7 +36,7 @@ __all__ = ["Figure9Config", "figure_9_robonaut_trials", "thumb_far_start", "Clus
 
 
 @dataclass(frozen=True)
-class Figure9Config:
+class Figure9Config(CheckedConfig):
     """Parameters of Figure 9."""
 
     task: str = "paper-box"
@@ -111,6 +112,7 @@ def figure_9_robonaut_trials(
     out_dir: str | Path, config: Figure9Config = Figure9Config(), *, backend: str = "auto"
 ) -> dict[str, Any]:
     """Run the trials and plot the three clusters."""
+    config = checked_config(config, Figure9Config)
     base = make_task(config.task)
     policy = learned_policy(base, config.policy, config.seed, config.train_trials, config.train_episodes, backend)
     noisy = noisy_execution(base, config.sigma_n_deg, config.sigma_p, config.palm_tolerance_deg)

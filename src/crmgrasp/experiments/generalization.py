@@ -50,6 +50,7 @@ from crmgrasp._io import write_csv, write_json
 from crmgrasp._progress import Progress
 from crmgrasp.agents.base import Agent
 from crmgrasp.experiments._episodes import MODEL_VI_LABEL, EpisodeRecord, greedy_records, train_model_vi
+from crmgrasp.experiments.configs import CheckedConfig, checked_config
 from crmgrasp.model import families as fam
 from crmgrasp.model.families import Pose, SamplerFamily
 from crmgrasp.planners.korder import korder_search
@@ -69,7 +70,7 @@ OUT_OF_RANGE: dict[str, Any] = {
 
 
 @dataclass(frozen=True)
-class GeneralizationConfig:
+class GeneralizationConfig(CheckedConfig):
     """Families, training objects, learner budget (trials x episodes), worlds for the
     references and evaluations, seed."""
 
@@ -221,6 +222,7 @@ def generalization(
     """Run the experiment on every family of ``cfg``; write ``generalization.csv``,
     ``strategy_<family>.csv``, ``generalization.png`` and ``summary.json``; return the
     summary (per family the numbers of the module docstring)."""
+    cfg = checked_config(cfg, GeneralizationConfig)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     stage = progress.stage("generalization", len(cfg.families), "families") if progress else None

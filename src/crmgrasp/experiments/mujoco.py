@@ -28,6 +28,7 @@ import numpy as np
 from crmgrasp._io import save_figure, write_csv, write_json
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.experiments._policy import learned_policy
+from crmgrasp.experiments.configs import CheckedConfig, checked_config
 from crmgrasp.experiments.figure4 import long_side_start, noisy_execution
 from crmgrasp.experiments.figure9 import Clusters, Figure9Config, thumb_far_start
 from crmgrasp.hardware.contact_sensing import NoContact
@@ -57,7 +58,7 @@ class MujocoFigure9Config(Figure9Config):
 
 
 @dataclass(frozen=True)
-class MujocoFigure4Config:
+class MujocoFigure4Config(CheckedConfig):
     """Parameters of Figure 4 on the MuJoCo stand-in (see [`Figure4Config`][crmgrasp.experiments.Figure4Config])."""
 
     task: str = "paper-box"
@@ -154,6 +155,7 @@ def figure_9_mujoco(
     out_dir: str | Path, config: MujocoFigure9Config = MujocoFigure9Config(), *, backend: str = "auto"
 ) -> dict[str, Any]:
     """Run the kinematic policy on the MuJoCo hand; write CSV, PNG, per-trial logs and config."""
+    config = checked_config(config, MujocoFigure9Config)
     c = config
     base = make_task(c.task)
     policy = learned_policy(base, c.policy, c.seed, c.train_trials, c.train_episodes, backend)
@@ -232,6 +234,7 @@ def _random_crms_agreeing(
 
 def figure_4_mujoco(out_dir: str | Path, config: MujocoFigure4Config = MujocoFigure4Config()) -> dict[str, Any]:
     """Opposition CRMs on the MuJoCo hand and the contact-sensing accuracy; write CSV, PNG, config."""
+    config = checked_config(config, MujocoFigure4Config)
     c = config
     task = hardware_task(make_task(c.task), c.palm_tolerance_deg)
     rng = np.random.default_rng(c.seed)

@@ -25,6 +25,7 @@ import numpy as np
 from crmgrasp._io import save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
 from crmgrasp.experiments._policy import learned_policy
+from crmgrasp.experiments.configs import CheckedConfig, checked_config
 from crmgrasp.experiments.learning import LearnerSpec
 from crmgrasp.experiments.mujoco import SensingErrors, animate
 from crmgrasp.hardware.mujoco import hardware_task
@@ -52,7 +53,7 @@ COLUMNS = [
 
 
 @dataclass(frozen=True)
-class SpatialMujocoConfig:
+class SpatialMujocoConfig(CheckedConfig):
     """Parameters of the spatial MuJoCo transfer."""
 
     tasks: tuple[str, ...] = ("cup-3d", "box-3d")
@@ -188,6 +189,7 @@ def spatial_mujoco(
 ) -> dict[str, Any]:
     """Train (or load) each task's policy, run it on the MuJoCo and kinematic hands; write
     ``data.csv``, ``spatial_mujoco.png``, per-trial step logs, ``summary.json``; return the summary."""
+    config = checked_config(config, SpatialMujocoConfig)
     c = config
     if c.policies and len(c.policies) != len(c.tasks):
         raise ValueError(f"give one policy file per task ({len(c.tasks)}), got {len(c.policies)}")

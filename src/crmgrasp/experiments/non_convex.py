@@ -25,6 +25,7 @@ from crmgrasp._progress import Progress
 from crmgrasp.agents.base import Agent
 from crmgrasp.agents.training import encoder_for, rollout
 from crmgrasp.experiments._episodes import MODEL_VI_LABEL, greedy_records, train_model_vi
+from crmgrasp.experiments.configs import CheckedConfig, checked_config
 from crmgrasp.model.contacts import Config
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts
@@ -44,7 +45,7 @@ def inside(obj: Polygon, config: Config) -> bool:
 
 
 @dataclass(frozen=True)
-class NonConvexConfig:
+class NonConvexConfig(CheckedConfig):
     """Task, learner budget, held-out worlds, seed."""
 
     task: str = "u-handle"
@@ -65,6 +66,7 @@ def non_convex(
     """Train, evaluate, draw; return the summary (``learner_mean_crms``,
     ``belief_optimum``, ``clairvoyant_bound``, ``success_rate``, ``inside_share``,
     ``gap_to_optimum``)."""
+    cfg = checked_config(cfg, NonConvexConfig)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     task = make_task(cfg.task)

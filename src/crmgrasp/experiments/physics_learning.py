@@ -40,6 +40,7 @@ from crmgrasp._progress import Progress
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents.policy import GreedyPolicy
 from crmgrasp.agents.training import build_agent, encoder_for, run_episode
+from crmgrasp.experiments.configs import CheckedConfig, checked_config
 from crmgrasp.experiments.parallel import run_parallel
 from crmgrasp.experiments.stats import bootstrap_ci
 from crmgrasp.hardware.mujoco.steps import MujocoSteps
@@ -60,7 +61,7 @@ WAYS = ("transferred", "scratch", "fine-tuned")
 
 
 @dataclass(frozen=True)
-class PhysicsLearningConfig:
+class PhysicsLearningConfig(CheckedConfig):
     """Parameters of the physics-learning experiment."""
 
     tasks: tuple[str, ...] = ("paper-box", "box-family", "cup-3d")
@@ -173,7 +174,7 @@ def physics_learning(
 ) -> dict[str, Any]:
     """Run the experiment (see the module docstring); write its files to ``out_dir``;
     return the summary. ``jobs`` worker processes run (task, seed) units at once."""
-    c = PhysicsLearningConfig() if config is None else config
+    c = PhysicsLearningConfig() if config is None else checked_config(config, PhysicsLearningConfig)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     episodes = dict(zip(c.tasks, c.mujoco_episodes, strict=True))

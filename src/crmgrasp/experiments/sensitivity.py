@@ -34,6 +34,7 @@ from crmgrasp._io import atomic_write_text, save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
 from crmgrasp.agents.base import LearnerPolicy
 from crmgrasp.agents.training import build_agent, encoder_for, episodes_to_within, trial_generators
+from crmgrasp.experiments.configs import CheckedConfig, checked_config
 from crmgrasp.experiments.parallel import run_parallel, usable_jobs
 from crmgrasp.experiments.stats import budget, fmt
 from crmgrasp.kernels import kernel_for
@@ -73,7 +74,7 @@ READINGS: tuple[Reading, ...] = (
 
 
 @dataclass(frozen=True)
-class SensitivityConfig:
+class SensitivityConfig(CheckedConfig):
     """Budgets of the sensitivity study (``quick()`` shrinks them)."""
 
     task: str = "paper-box"
@@ -190,6 +191,7 @@ def figure_7_sensitivity(
     """Run every reading on every seed (``jobs`` worker processes at once, the same
     results); write the table and the figures; return a summary (per reading: the median
     plateau and episodes, and the optimum)."""
+    config = checked_config(config, SensitivityConfig)
     from crmgrasp.planners.references import belief_optimum, sample_starts
     from crmgrasp.plotting import learning_curve_figure
 

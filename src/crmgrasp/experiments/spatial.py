@@ -25,6 +25,7 @@ from crmgrasp._progress import Progress
 from crmgrasp.agents.base import Agent, LearnerPolicy
 from crmgrasp.agents.training import TrialResult, encoder_for, train_trials
 from crmgrasp.experiments._episodes import greedy_records
+from crmgrasp.experiments.configs import CheckedConfig, checked_config
 from crmgrasp.experiments.stats import bootstrap_ci
 from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts, ungraspable_fraction
 from crmgrasp.sim import run_episode
@@ -37,7 +38,7 @@ LEARNERS = {"paper SARSA k=2": ("sarsa", 2), "model-vi k=1": ("model-vi", 1)}
 
 
 @dataclass(frozen=True)
-class SpatialConfig:
+class SpatialConfig(CheckedConfig):
     """Tasks, and per task the training episodes and the held-out worlds (the optimum's
     cost grows fast with them on boxes), trials, checkpoints, seed."""
 
@@ -91,6 +92,7 @@ def spatial(
     ``belief_optimum``, ``clairvoyant_bound``, ``ungraspable_fraction`` and per learner
     ``greedy_mean_crms`` (with a 95% interval over trials), ``success_rate`` and
     ``gap_to_optimum``."""
+    cfg = checked_config(cfg, SpatialConfig)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     stage = progress.stage("spatial", len(cfg.tasks) * (len(LEARNERS) + 1), "stages") if progress else None

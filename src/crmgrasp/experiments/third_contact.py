@@ -30,6 +30,7 @@ from crmgrasp._io import save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.agents.presets import PRESETS
+from crmgrasp.experiments.configs import CheckedConfig, checked_config
 from crmgrasp.kernels import compiled_rules
 from crmgrasp.planners.references import belief_optimum, clairvoyant_bound, sample_starts, ungraspable_fraction
 from crmgrasp.tasks import make_task
@@ -53,7 +54,7 @@ COLUMNS = (
 
 
 @dataclass(frozen=True)
-class ThirdContactConfig:
+class ThirdContactConfig(CheckedConfig):
     """Twin tasks (two fingers, three), goals, sampled starts per task and goal, the
     learner's trials and episodes per trial, MuJoCo worlds for the first trial's policy (0:
     none; none either without the extra ``crmgrasp[mujoco]``), seed, and the learner: a
@@ -75,6 +76,7 @@ class ThirdContactConfig:
     preset: str = "families"
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         if self.preset not in PRESETS:
             raise CrmgraspError(f"unknown learner preset {self.preset!r}; known presets: {', '.join(PRESETS)}")
 
@@ -152,6 +154,7 @@ def third_contact(
 ) -> dict[str, Any]:
     """Compute the table, draw it, write it; return the summary (``rows``: one per task and
     goal; ``budget``)."""
+    cfg = checked_config(cfg, ThirdContactConfig)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     units = [(pair, mu, name) for pair in cfg.pairs for mu in cfg.mu_goals for name in pair]
