@@ -14,7 +14,7 @@ under 400 characters; any other exception, a warning, a longer message or a call
 after ``--seconds`` (5) is reported with the call, the argument and the value. It prints one JSON
 object and exits 1 if a call failed.
 
-Measured 2026-12-07 on the 2-core machine: 113 calls, 8,600 variants in 3 s, none failed.
+Measured 2026-12-08 on the 2-core machine: 121 calls, 9,020 variants in 2 s, none failed.
 The first 24 calls on the code before their fixes (46c3eef): 227 of 1,460 failed. A ``Contact`` of text,
 ``None`` or containers reached ``observe`` and ``min_friction`` as a ``TypeError`` (88); a hand
 given no ``Shape`` failed inside ``contact`` and ``execute`` (40); ``Task`` took actions that
@@ -45,7 +45,12 @@ sets of the spatial helpers (21) and a task file's path (18). The 16 experiments
 ([`config_examples`][]) on the code of fbe9770: 4 of 2,640 failed (a ``ThirdContactConfig``
 preset of the wrong kind), but only because a config took anything: ``Figure4Config(trials="x")``
 was built, and its run failed inside with a ``TypeError``. Each field is now checked against
-its type where the config is built (``crmgrasp.experiments.configs``).
+its type where the config is built (``crmgrasp.experiments.configs``). The 8 calls of the
+kernel seam ([`kernel_examples`][]) on the code of f605494: 192 of 420 failed, and the run
+crashed the process at its end ("corrupted double-linked list", a segmentation fault in
+other orders): ``Kernel.successors([[1.0, 2.0]])`` handed a row of 2 numbers to compiled code
+that reads 8 (repeated alone, it crashed Python too). A kernel now checks a configuration
+before its compiled code reads it (``Kernel.trust``), and a step its state.
 
 Usage: ``python benchmarks/api_fuzz.py [--seconds 5]``.
 """
@@ -251,6 +256,7 @@ def examples() -> list[Call]:
         *spatial_examples(),
         *hardware_examples(box, cfg),
         *config_examples(),
+        *kernel_examples(box, cfg),
     ]
 
 
@@ -385,6 +391,25 @@ def hardware_examples(box: c.Task, cfg: c.Config) -> list[Call]:
         Call("scene_figure", _closed(scene_figure), box.obj, box.hand, cfg, None, title="t"),
         Call("learning_curve_figure", _closed(learning_curve_figure), curves, 1.66, "t", highlight="sarsa"),
         Call("friction_histogram", _closed(friction_histogram), [0.1, 0.2], 0, "t"),
+    ]
+
+
+def kernel_examples(box: c.Task, cfg: c.Config) -> list[Call]:
+    """The seam's entry points: picking a kernel, its per-episode steps and the batch helper."""
+    from crmgrasp.kernels import compiled_rules, execute_batch, kernel_for
+
+    kernel = kernel_for(box, "auto")
+    state = kernel.begin(cfg, np.random.default_rng(0)).state
+    rows = np.array([[-0.15, -0.02, 1.0, 0.0, -0.10, -0.05, 0.0, 1.0]])
+    return [
+        Call("kernel_for", kernel_for, box, "auto", "exact"),
+        Call("compiled_rules", compiled_rules, box),
+        Call("execute_batch", execute_batch, box.obj, box.hand, rows, 0, 1, 0.0, sensed=None, backend="auto"),
+        Call("Kernel.begin", kernel.begin, cfg, np.random.default_rng(0)),
+        Call("Kernel.step_one", kernel.step_one, state, 1, np.random.default_rng(0)),
+        Call("Kernel.sample_start", kernel.sample_start, np.random.default_rng(0)),
+        Call("Kernel.sample_starts", kernel.sample_starts, np.random.default_rng(0), 4),
+        Call("Kernel.successors", kernel.successors, cfg),
     ]
 
 

@@ -660,3 +660,46 @@ def test_an_experiments_parameters_are_checked_when_built(tmp_path):
     with pytest.raises(CrmgraspError, match="the experiment's parameters must be a Figure4Config, got None"):
         figure_4_opposition_quality(tmp_path / "out", None)  # type: ignore[arg-type]
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("name", ["paper-box", "triangles-3f", "cup-3d", "box-3d-3f"])
+def test_a_kernel_checks_what_its_compiled_code_would_read(name):
+    """A configuration reaches compiled code only as a configuration of the task's model:
+    before, ``kernel_for(paper-box).successors([[1.0, 2.0]])`` handed a row of 2 numbers to
+    code that reads 8, and repeated it crashed the process (a segmentation fault)."""
+    from crmgrasp.kernels import kernel_for
+
+    task = make_task(name)
+    kernel = kernel_for(task, "auto")
+    rng = np.random.default_rng(0)
+    if task.family is not None:
+        world = task.sample_world(rng)
+        kernel.use(world.task)
+        good = world.config
+    else:
+        good = task.sample_start(rng)
+    for bad in ([[1.0, 2.0]], None, (good[0],), np.array([np.nan])):
+        with pytest.raises(CrmgraspError, match="configuration"):
+            kernel.successors(bad)
+        with pytest.raises(CrmgraspError, match="configuration"):
+            kernel.begin(bad, rng)
+    with pytest.raises(CrmgraspError, match="a step needs the SimState of the episode's last step, got None"):
+        kernel.step_one(None, 0, rng)
+    first = kernel.begin(good, rng)
+    assert kernel.step_one(first.state, 0, rng).state.steps == 1  # a checked start steps as before
+
+
+def test_execute_batch_checks_its_rows_indices_and_offsets(task):
+    from crmgrasp.kernels import execute_batch
+
+    rows = np.array([[-0.15, -0.02, 1.0, 0.0, -0.10, -0.05, 0.0, 1.0]])
+    for kwargs, message in [
+        ({"c": "x"}, "c must be numbers, got 'x'"),
+        ({"c": 0.5}, r"contact indices c and f must be integers in \[0, 1\]"),
+        ({"f": [0, 1]}, r"f must be one number or 1, got shape \(2,\)"),
+        ({"r": 1e308}, "CRM offsets r must be finite and within r_max"),
+        ({"configs": "abc"}, "configs must be numbers, got 'abc'"),
+    ]:
+        args = {"configs": rows, "c": 0, "f": 1, "r": 0.0, **kwargs}
+        with pytest.raises(CrmgraspError, match=message):
+            execute_batch(task.obj, task.hand, args["configs"], args["c"], args["f"], args["r"])

@@ -307,7 +307,7 @@ def test_batch_input_errors(task):
     arr = configs_to_array([task.sample_start(np.random.default_rng(0))])
     with pytest.raises(CrmgraspError, match=r"shape \(N, 8\)"):
         execute_batch(task.obj, task.hand, arr[:, :6], 0, 1, 0.0)
-    with pytest.raises(CrmgraspError, match=re.escape("c and f must be in [0, 1] (the hand's contacts)")):
+    with pytest.raises(CrmgraspError, match=re.escape("c and f must be integers in [0, 1] (the hand's contacts)")):
         execute_batch(task.obj, task.hand, arr, 2, 1, 0.0)
     with pytest.raises(CrmgraspError, match="r_max"):
         execute_batch(task.obj, task.hand, arr, 0, 1, 1.0)

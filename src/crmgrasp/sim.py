@@ -123,6 +123,14 @@ def reset(task: Task, rng: np.random.Generator) -> OneStep:
     return begin(task, task.sample_start(rng), rng)
 
 
+def checked_state(state: object) -> SimState:
+    """``state`` if it is a [`SimState`][] (what `begin` and `step` return); a one-line error
+    otherwise."""
+    if type(state) is not SimState:
+        raise CrmgraspError(f"a step needs the SimState of the episode's last step, got {shown(state)}")
+    return state
+
+
 def step(task: Task, state: SimState, action: Any, rng: np.random.Generator) -> OneStep:
     """Execute ``task.actions[action]`` (or the CRM ``action`` itself, within the
     hand's reach) from ``state``: the CRM from the state's reading, then one reading of
@@ -131,7 +139,7 @@ def step(task: Task, state: SimState, action: Any, rng: np.random.Generator) -> 
     ``terminated`` when the true configuration is a grasp (``min_friction <=
     mu_goal``); ``truncated`` when ``max_steps`` CRMs have been executed without.
     """
-    out = task.execute(state.config, task.crm(action), state.sensed)
+    out = task.execute(checked_state(state).config, task.crm(action), state.sensed)
     sensed = task.read(out.config, rng)
     obs = task.observe(sensed)
     mu = task.quality(out.config)

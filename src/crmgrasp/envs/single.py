@@ -250,7 +250,7 @@ class CRMGraspEnv(gym.Env[dict[str, Any], np.int64]):
             self._block = min(2 * self._block, _MAX_BLOCK)
         row = self._starts[self._next]
         self._next += 1
-        return self.kernel.config_of(row)
+        return self.kernel.trusted(self.kernel.config_of(row))  # a row of the kernel's own starts
 
     def render(self) -> np.ndarray | None:  # type: ignore[override]
         """An RGB image of the scene (``render_mode="rgb_array"``), else ``None``."""

@@ -41,7 +41,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, float_array, shown
 from crmgrasp.kernels.base import BatchStep, Kernel
 from crmgrasp.kernels.reference import ReferenceKernel
 from crmgrasp.model.contact_model import ContactModel
@@ -49,7 +49,7 @@ from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.geometry import Polygon, Shape
 from crmgrasp.model.hand import CRM, Hand
 from crmgrasp.sim import OneStep
-from crmgrasp.tasks import Task
+from crmgrasp.tasks import Task, checked_task
 
 __all__ = [
     "BACKENDS",
@@ -87,8 +87,9 @@ def kernel_for(task: Task, backend: str = "auto", friction: str = "exact") -> Ke
     observation, error, reward and episode end is the same either way; a kernel whose least
     friction is cheap returns the exact one in both. A tripod's compiled step then stops its
     least friction once the grasp is decided (`crmgrasp.kernels._closure_jit.decided_friction`)."""
+    checked_task(task, "kernel_for")
     if backend not in BACKENDS:
-        raise CrmgraspError(f"unknown backend {backend!r}; choose one of {', '.join(BACKENDS)}")
+        raise CrmgraspError(f"unknown backend {shown(backend)}; choose one of {', '.join(BACKENDS)}")
     if friction not in FRICTIONS:
         raise CrmgraspError(f"unknown friction {friction!r}; choose one of {', '.join(FRICTIONS)}")
     if task.family is not None:
@@ -147,7 +148,7 @@ def compiled_rules(task: Task) -> Task:
     ([`crmgrasp.kernels.fingers.compiled_least_friction`][]); ``task`` itself otherwise.
     For code that applies the task's rules directly rather than through a kernel (the
     reference values and the k-order search); the results are the same bit for bit."""
-    if task.model.n_contacts <= 2:
+    if checked_task(task, "compiled_rules").model.n_contacts <= 2:
         return task
     if task.model.kind == "spatial":
         from crmgrasp.kernels.closure import with_compiled_least_friction
@@ -167,15 +168,27 @@ asked for ([`kernel_for`][]), the object and the noise. A new contact model adds
 
 def _rows(configs: ArrayLike, name: str, model: ContactModel) -> NDArray[np.float64]:
     if isinstance(configs, (list, tuple)) and configs and isinstance(configs[0], (Config, Grip)):
-        arr = model.rows_of(list(configs))
+        try:
+            arr = model.rows_of(list(configs))
+        except (TypeError, ValueError):
+            raise CrmgraspError(f"{name} must be configurations of the hand's contacts, got {shown(configs)}") from None
     else:
-        arr = np.asarray(configs, dtype=np.float64)
+        arr = float_array(configs, name)
     width = model.row_width
     if arr.ndim != 2 or arr.shape[1] != width:
         raise CrmgraspError(f"{name} must have shape (N, {width}), got {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise CrmgraspError(f"{name} must be finite")
     return arr
+
+
+def _per_row(value: ArrayLike, name: str, n: int) -> NDArray[np.float64]:
+    """``value`` as ``n`` numbers: one for every row, or one per row (one-line error otherwise)."""
+    arr = float_array(value, name)
+    try:
+        return np.broadcast_to(arr, (n,))
+    except ValueError:
+        raise CrmgraspError(f"{name} must be one number or {n}, got shape {arr.shape}") from None
 
 
 def execute_batch(
@@ -203,12 +216,10 @@ def execute_batch(
     if sen.shape != cfg.shape:
         raise CrmgraspError(f"sensed configs must have shape {cfg.shape}, got {sen.shape}")
     n = len(cfg)
-    ci = np.broadcast_to(np.asarray(c, dtype=np.int64), (n,))
-    fi = np.broadcast_to(np.asarray(f, dtype=np.int64), (n,))
-    rr = np.broadcast_to(np.asarray(r, dtype=np.float64), (n,))
+    ci, fi, rr = (_per_row(v, name, n) for v, name in ((c, "c"), (f, "f"), (r, "r")))
     last = hand.contacts - 1
-    if np.any((ci < 0) | (ci > last) | (fi < 0) | (fi > last)):
-        raise CrmgraspError(f"contact indices c and f must be in [0, {last}] (the hand's contacts)")
+    if not np.all((ci >= 0) & (ci <= last) & (fi >= 0) & (fi <= last) & (ci == np.floor(ci)) & (fi == np.floor(fi))):
+        raise CrmgraspError(f"contact indices c and f must be integers in [0, {last}] (the hand's contacts)")
     if not np.all(np.isfinite(rr)) or np.any(np.abs(rr) > hand.r_max):  # type: ignore[operator]
         raise CrmgraspError(f"CRM offsets r must be finite and within r_max = {hand.r_max:g}")
-    return kernel_for(task, backend).execute_crms(cfg, sen, ci, fi, rr)
+    return kernel_for(task, backend).execute_crms(cfg, sen, ci.astype(np.int64), fi.astype(np.int64), rr)

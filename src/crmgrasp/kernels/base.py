@@ -23,10 +23,19 @@ from numpy.typing import NDArray
 from crmgrasp._validation import CrmgraspError
 from crmgrasp.model.hand import CRM, Error
 from crmgrasp.model.sensing import Discretizer
-from crmgrasp.sim import OneStep, SimState, begin, episode_end, step, step_reward
+from crmgrasp.sim import OneStep, SimState, begin, checked_state, episode_end, step, step_reward
 from crmgrasp.tasks import StartFilter, Task
 
-__all__ = ["Kernel", "FusedSingleStep", "OneStep", "BatchStep", "Successor", "bin_thresholds", "stepwise_successors"]
+__all__ = [
+    "Kernel",
+    "FusedSingleStep",
+    "OneStep",
+    "BatchStep",
+    "Successor",
+    "UNSET",
+    "bin_thresholds",
+    "stepwise_successors",
+]
 
 _ERRORS = tuple(Error)
 _new = tuple.__new__  # builds the step's NamedTuples without their Python-level __new__ (the hot path)
@@ -92,6 +101,11 @@ def _action_table(key: tuple[Any, ...], actions: Any, labels: tuple[str, ...]) -
     return table
 
 
+UNSET: Any = object()
+"""What no configuration is: the mark of a kernel's buffer or check that holds none yet (``None``
+may be given as a configuration, and must then be checked and refused)."""
+
+
 class Kernel(ABC):
     """A task's rules over rows. Subclasses implement [`execute_crms`][] and
     [`observe`][], and may set `start_filter` (a compiled
@@ -99,6 +113,7 @@ class Kernel(ABC):
     one with [`crmgrasp.kernels.kernel_for`][]."""
 
     name: ClassVar[str] = "abstract"
+    _checked: Any = UNSET  # the configuration [`trust`][] checked last
 
     def __init__(self, task: Task) -> None:
         self.task = task
@@ -109,6 +124,22 @@ class Kernel(ABC):
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.task.name!r})"
+
+    def trust(self, config: Any) -> Any:
+        """``config`` once it is a configuration of the task's model (its type, one contact per
+        finger, finite numbers, unit normals: ``ContactModel.check_reading``), before compiled
+        code reads it: that code indexes its arrays by what it reads, unchecked. The last
+        configuration checked, or one the kernel produced itself (``trusted``), is not checked
+        again, so that an episode checks its start once."""
+        if config is not self._checked:
+            self.model.check_reading(config, "configuration")
+            self._checked = config
+        return config
+
+    def trusted(self, config: Any) -> Any:
+        """``config``, produced by this kernel: the next [`trust`][] of it passes at once."""
+        self._checked = config
+        return config
 
     def rebind(self, instance: Task) -> Kernel:
         """This kernel's path for ``instance``, the task on another object of the same kind
@@ -188,6 +219,7 @@ class Kernel(ABC):
         """Every action of the task from ``config``, in order, noise-free (the reading is the
         configuration): one [`Successor`][] each, from one batched call of the rules
         ([`execute`][], [`observe`][]); the reference values' search step."""
+        self.trust(config)
         n = len(self.acts)
         rows = np.array([self.model.row_of(config)] * n, dtype=np.float64)
         new, err = self.execute(rows, rows, np.arange(n))
@@ -200,8 +232,8 @@ class Kernel(ABC):
 
     def sample_start(self, rng: np.random.Generator) -> Any:
         """One start (`crmgrasp.tasks.Task.sample_start`, with `start_filter`):
-        the task's scalar stream."""
-        return self.task.sample_start(rng, self.start_filter)
+        the task's scalar stream; [`trusted`][]: the sampler places contacts on the object)."""
+        return self.trusted(self.task.sample_start(rng, self.start_filter))
 
     def sample_starts(self, rng: np.random.Generator, n: int) -> F64:
         """``n`` starts as rows (`crmgrasp.tasks.Task.sample_starts`, with
@@ -274,13 +306,13 @@ class FusedSingleStep(Kernel):
 
     def _forget(self) -> None:
         """No configuration in the buffer (at construction and on a new object)."""
-        self._v_of: Any = None
+        self._v_of: Any = UNSET
         # whether _vals and _mu hold the observation and least friction of _v's row
         self._known, self._mu = False, 0.0
 
     def _load(self, config: Any) -> None:
         if config is not self._v_of:
-            self._v.reshape(-1)[:] = self.model.row_of(config)
+            self._v.reshape(-1)[:] = self.model.row_of(self.trust(config))
             self._v_of, self._known = config, False
 
     @abstractmethod
@@ -299,6 +331,7 @@ class FusedSingleStep(Kernel):
         return OneStep(SimState(config, config, 0), tuple(self._vals[:, 0].tolist()), Error.NONE, index, mu)
 
     def step_one(self, state: SimState, action: Any, rng: np.random.Generator) -> OneStep:
+        checked_state(state)
         if self.model.is_crm(action):  # a CRM of the hand's continuous action space
             return self._step(state, 0, self.crm_row(action))
         if type(action) is not int or not 0 <= action < len(self.acts):  # compiled code does not check indices

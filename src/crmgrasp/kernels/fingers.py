@@ -20,7 +20,7 @@ from crmgrasp.kernels.polygon import kernel_edges, params, rebound
 from crmgrasp.model import quality
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.model.hand import CRM, Error
-from crmgrasp.sim import OneStep, SimState, episode_end, step_reward
+from crmgrasp.sim import OneStep, SimState, checked_state, episode_end, step_reward
 from crmgrasp.tasks import Task
 
 __all__ = ["FingersKernel", "compiled_least_friction"]
@@ -137,10 +137,11 @@ class FingersKernel(Kernel):
         return sensed, tuple(float(v[0]) for v in values), int(index[0]), float(mu[0])
 
     def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
-        sensed, obs, index, mu = self._after(config, 0, rng)
+        sensed, obs, index, mu = self._after(self.trust(config), 0, rng)
         return OneStep(SimState(config, sensed, 0), obs, Error.NONE, index, mu)
 
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
+        checked_state(state)
         if isinstance(action, CRM):  # a CRM of the hand's continuous action space
             return self.step_row(state, self.crm_row(action), rng)
         if type(action) is not int or not 0 <= action < len(self.acts):  # compiled code does not check indices
@@ -148,11 +149,12 @@ class FingersKernel(Kernel):
         return self.step_row(state, self.acts[action : action + 1], rng)
 
     def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:
-        srow = np.array([self.model.row_of(state.config)])
-        sen = srow if state.sensed is state.config else np.array([self.model.row_of(state.sensed)])
+        srow = np.array([self.model.row_of(self.trust(state.config))])
+        sensed = state.sensed if state.sensed is state.config else self.model.check_reading(state.sensed)
+        sen = srow if sensed is state.config else np.array([self.model.row_of(sensed)])
         new, err = self.execute_table(srow, sen, row)
         code = int(err[0])
-        config = state.config if code else self.model.config_of(new[0].tolist())
+        config = state.config if code else self.trusted(self.model.config_of(new[0].tolist()))
         sensed, obs, index, mu = self._after(config, code, rng)
         steps = state.steps + 1
         terminated, truncated = episode_end(self.task, mu, steps)

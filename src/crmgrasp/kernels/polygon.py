@@ -14,13 +14,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 import crmgrasp.kernels._polygon_jit as jit
-from crmgrasp.kernels.base import F64, I64, BatchStep, Kernel, bin_thresholds
+from crmgrasp.kernels.base import F64, I64, UNSET, BatchStep, Kernel, bin_thresholds
 from crmgrasp.model import quality, shape
-from crmgrasp.model.contacts import Config, Grip, config_from_row
+from crmgrasp.model.contacts import config_from_row
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.model.hand import CRM, Error
 from crmgrasp.model.sensing import Observation
-from crmgrasp.sim import OneStep, SimState, episode_end, step_reward
+from crmgrasp.sim import OneStep, SimState, checked_state, episode_end, step_reward
 from crmgrasp.tasks import Task
 
 __all__ = ["PolygonKernel", "FusedPolygonKernel", "kernel_edges", "params", "rebound"]
@@ -158,10 +158,10 @@ class FusedPolygonKernel(PolygonKernel):
 
     def _fresh(self) -> None:
         """A new object: no configuration in the buffer yet."""
-        self._v_of: Config | Grip | None = None
+        self._v_of: Any = UNSET
 
     def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
-        self._v[0, :8] = config.a + config.b
+        self._v[0, :8] = self.trust(config).a + config.b
         self._v_of = config
         index = jit.begin_one(self._v, self.th, self.p, self.q, self._out)
         _, _, _, _, _, _, _, _, rho, m_a, m_b, mu = self._out[0].tolist()
@@ -169,6 +169,7 @@ class FusedPolygonKernel(PolygonKernel):
         return _new(OneStep, (state, obs, Error.NONE, index, mu, 0.0, False, False))
 
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
+        checked_state(state)
         if isinstance(action, CRM):  # a CRM of the hand's continuous action space
             return self._step(state, 0, self.crm_row(action))
         if type(action) is not int or not 0 <= action < len(self.acts):  # compiled code does not check indices
@@ -182,7 +183,7 @@ class FusedPolygonKernel(PolygonKernel):
         """The CRM ``table[action]`` from ``state``, one compiled call."""
         config = state.config
         if config is not self._v_of:
-            self._v[0, :8] = config[0] + config[1]
+            self._v[0, :8] = self.trust(config)[0] + config[1]
             self._v_of = config
         code, index = jit.step_one(self._v, action, table, self.e, self.th, self.p, self.q, self._out)
         o = self._out[0].tolist()

@@ -15,14 +15,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from crmgrasp.kernels.base import F64, Successor, bin_thresholds, stepwise_successors
+from crmgrasp.kernels.base import F64, UNSET, Successor, bin_thresholds, stepwise_successors
 from crmgrasp.kernels.reference import ReferenceKernel
 from crmgrasp.model.hand import Error
 from crmgrasp.model.mesh import PARITY_RAY, TriangleMesh
 from crmgrasp.model.sensing import Observation
 from crmgrasp.model.solids import Cylinder
 from crmgrasp.model.spatial import CRM3D, Config3D
-from crmgrasp.sim import OneStep, SimState, episode_end, step_reward
+from crmgrasp.sim import OneStep, SimState, checked_state, episode_end, step_reward
 from crmgrasp.tasks.spatial import SurfaceStarts
 
 __all__ = ["SpatialKernel", "FusedSpatialKernel", "spatial_params"]
@@ -102,7 +102,7 @@ class FusedSpatialKernel(SpatialKernel):
     def _fresh(self) -> None:
         self._v, self._out = np.empty(16), np.empty(16)
         self._start_row = np.empty(12)  # a start try's configuration, read before the next try
-        self._v_of: Config3D | None = None
+        self._v_of: Any = UNSET
         self.start_filter = self._accept  # type: ignore[assignment]
 
     def rebind(self, instance: Any) -> FusedSpatialKernel:
@@ -111,12 +111,12 @@ class FusedSpatialKernel(SpatialKernel):
         ([`solid_params`][], as [`spatial_params`][] would write them)."""
         self.task = instance
         self.planes, self.cyl = solid_params(instance.solid, self.p, self.q)
-        self._v_of = None
+        self._v_of = UNSET
         return self
 
     def _load(self, config: Config3D) -> None:
         if config is not self._v_of:
-            self._v[:12] = self.model.row_of(config)
+            self._v[:12] = self.model.row_of(self.trust(config))
             self._v_of = config
 
     def begin(self, config: Any, rng: np.random.Generator) -> OneStep:
@@ -126,6 +126,7 @@ class FusedSpatialKernel(SpatialKernel):
         return OneStep(SimState(config, config, 0), Observation(rho, m_a, m_b), Error.NONE, index, mu)
 
     def step_one(self, state: SimState, action: Any, rng: np.random.Generator) -> OneStep:
+        checked_state(state)
         if isinstance(action, CRM3D):  # a CRM of the hand's continuous action space
             return self._step(state, 0, self.crm_row(action))
         if type(action) is not int or not 0 <= action < len(self.acts):  # compiled code does not check indices

@@ -273,7 +273,8 @@ def check_contacts(config: object, name: str = "configuration", contacts: int | 
         if not isinstance(config, (Config, Grip)) or not all(isinstance(c, Contact) for c in config):
             raise CrmgraspError(f"{name} must be a Config of two Contacts (or a Grip of more), got {config!r:.80}")
         if len(config) > 2:
-            _check_each(config, name)
+            if not _fine(config):
+                _check_each(config, name)
             return config
     (ax, ay, anx, any_), (bx, by, bnx, bny) = config
     try:
@@ -285,6 +286,20 @@ def check_contacts(config: object, name: str = "configuration", contacts: int | 
     if not fine:
         _check_each(config, name)
     return config
+
+
+def _fine(config: Config | Grip) -> bool:
+    """Whether every contact is finite with a unit normal (within [`UNIT_TOL`][]): the quick
+    test of a hand with more than two contacts, as the two-contact one above."""
+    total = 0.0
+    try:
+        for x, y, nx, ny in config:
+            total += x + y + nx + ny
+            if not abs(nx * nx + ny * ny - 1.0) <= _NORM2_TOL:
+                return False
+    except TypeError:  # a value that is no number: named by _check_each
+        return False
+    return math.isfinite(total)
 
 
 def _check_each(config: Config | Grip, name: str) -> None:

@@ -16,7 +16,16 @@ from typing import Any, NamedTuple, overload
 import numpy as np
 from numpy.typing import NDArray
 
-from crmgrasp._validation import CrmgraspError, finite, generator, is_finite_number, listed, non_negative, shown
+from crmgrasp._validation import (
+    CrmgraspError,
+    finite,
+    generator,
+    integer,
+    is_finite_number,
+    listed,
+    non_negative,
+    shown,
+)
 from crmgrasp.model.actions import CRMRange
 from crmgrasp.model.contact_model import ContactModel
 from crmgrasp.model.contacts import Config, Grip
@@ -101,6 +110,9 @@ def _takes(sampler: Any, accept: Any) -> bool:
         return bool(getattr(sampler, "takes_uniform_filter", False))
     return bool(getattr(sampler, "takes_corner_filter", False))
 
+
+MAX_SAMPLED = 10_000_000
+"""The most starts [`Task.sample_starts`][] draws in one call."""
 
 MAX_STEPS = 1000
 """The longest episode a task may ask for, in CRMs (the task files' bound too)."""
@@ -373,8 +385,9 @@ class Task:
     def sample_starts(self, rng: np.random.Generator, n: int, accept: StartFilter | None = None) -> np.ndarray:
         """``n`` starts as rows of the model's layout: [`CornerStarts.batch`][] (another stream than
         `sample_start`'s, the same distribution; ``accept`` as there), or ``n``
-        scalar draws for other samplers."""
+        scalar draws for other samplers (``n``: 0 to [`MAX_SAMPLED`][])."""
         self._one_object()
+        rng, n = generator(rng), integer(n, "number of starts", 0, MAX_SAMPLED)
         if isinstance(self.starts, CornerStarts):
             return self.starts.batch(self.obj, self.hand, self.mu_goal, rng, n, accept or accept_corner_candidates)
         return self.model.rows_of([self.sample_start(rng, accept) for _ in range(n)])
