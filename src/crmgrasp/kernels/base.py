@@ -20,7 +20,7 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, float_array, shown
 from crmgrasp.model.hand import CRM, Error
 from crmgrasp.model.sensing import Discretizer
 from crmgrasp.sim import OneStep, SimState, begin, checked_state, episode_end, step, step_reward
@@ -38,6 +38,17 @@ __all__ = [
 ]
 
 _ERRORS = tuple(Error)
+
+
+def _per_row(value: Any, name: str, n: int, low: int, high: int) -> None:
+    """A one-line error unless ``value`` is one integer in ``[low, high]`` or ``n`` of them."""
+    a = float_array(value, name)
+    if a.ndim > 1 or (a.ndim == 1 and len(a) not in (1, n)):
+        raise CrmgraspError(f"{name} must be one integer or {n}, got shape {a.shape}")
+    if not np.all((a >= low) & (a <= high) & (a == np.floor(a))):
+        raise CrmgraspError(f"{name} must be integers in [{low}, {high}]")
+
+
 _new = tuple.__new__  # builds the step's NamedTuples without their Python-level __new__ (the hot path)
 
 F64 = NDArray[np.float64]
@@ -136,6 +147,34 @@ class Kernel(ABC):
             self._checked = config
         return config
 
+    def check_batch(self, cfg: Any, sen: Any, err: Any = UNSET, crms: tuple[Any, Any, Any] | None = None) -> int:
+        """The number ``N`` of rows, once ``cfg`` and ``sen`` are arrays of the model's layout,
+        ``(N, row_width)``; ``err`` (if given) error codes and ``crms`` (if given) the contact
+        indices and finite offsets ``(c, f, r)``, each one value or one per row. Compiled code
+        reads them by those sizes and values, unchecked (a one-line error otherwise)."""
+        width = self.model.row_width
+        for a, name in ((cfg, "rows"), (sen, "sensed rows")):
+            if not isinstance(a, np.ndarray) or a.ndim != 2 or a.shape[1] != width:
+                got = a.shape if isinstance(a, np.ndarray) else shown(a)
+                raise CrmgraspError(f"{name} must be an array of shape (N, {width}), got {got}")
+        n = len(cfg)
+        if sen.shape != cfg.shape:
+            raise CrmgraspError(f"sensed rows must have the rows' shape {cfg.shape}, got {sen.shape}")
+        if err is not UNSET:
+            _per_row(err, "error codes", n, 0, len(Error) - 1)
+        if crms is not None:
+            last = self.model.n_contacts - 1
+            _per_row(crms[0], "contact indices c", n, 0, last)
+            _per_row(crms[1], "contact indices f", n, 0, last)
+            r, d = float_array(crms[2], "offsets"), self.model.offset_dim
+            try:
+                np.broadcast_to(r, (n,) if d == 1 else (n, d))
+            except ValueError:
+                raise CrmgraspError(f"offsets must be one or {n} of {d} number(s), got shape {r.shape}") from None
+            if not np.all(np.isfinite(r)):
+                raise CrmgraspError("offsets must be finite")
+        return n
+
     def trusted(self, config: Any) -> Any:
         """``config``, produced by this kernel: the next [`trust`][] of it passes at once."""
         self._checked = config
@@ -179,6 +218,7 @@ class Kernel(ABC):
 
     def read_rows(self, rows: F64, rng: np.random.Generator) -> F64:
         """One sensed reading per row (the model's ``read_rows``)."""
+        self.check_batch(rows, rows)
         return self.model.read_rows(rows, rng)
 
     # ------------------------------------------------------------ the rules
@@ -197,7 +237,8 @@ class Kernel(ABC):
     # ------------------------------------------------------------ composites
     def execute(self, cfg: F64, sen: F64, actions: I64) -> tuple[F64, NDArray[np.int8]]:
         """[`execute_crms`][] of the task's actions ``actions`` (indices)."""
-        return self.execute_table(cfg, sen, self.acts[actions])
+        n = self.check_batch(cfg, sen)
+        return self.execute_table(cfg, sen, self.acts[self.task.action_indices(actions, n)])
 
     def execute_table(self, cfg: F64, sen: F64, table: F64) -> tuple[F64, NDArray[np.int8]]:
         """[`execute_crms`][] of one CRM per row given as a row of an action table

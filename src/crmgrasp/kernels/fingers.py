@@ -101,7 +101,7 @@ class FingersKernel(Kernel):
         return rebound(self, instance)
 
     def execute_crms(self, cfg: F64, sen: F64, c: I64, f: I64, r: F64) -> tuple[F64, NDArray[np.int8]]:
-        rows = len(cfg)
+        rows = self.check_batch(cfg, sen, crms=(c, f, r))
         crms = [np.ascontiguousarray(np.broadcast_to(v, rows), dtype=t) for v, t in ((c, int), (f, int), (r, float))]
         new, err = np.empty((rows, 4 * self.n)), np.empty(rows, dtype=np.int8)
         true, seen = (np.ascontiguousarray(a, dtype=np.float64) for a in (cfg, sen))
@@ -109,7 +109,7 @@ class FingersKernel(Kernel):
         return new, err
 
     def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[np.ndarray, ...]:
-        n = len(cfg)
+        n = self.check_batch(cfg, sen, err)
         values = np.empty((1 + self.n, n))
         index, mu = np.empty(n, dtype=np.int64), np.empty(n)
         jit.observe_rows(

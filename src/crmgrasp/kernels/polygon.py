@@ -100,8 +100,8 @@ class PolygonKernel(Kernel):
     def execute_crms(self, cfg: F64, sen: F64, c: I64, f: I64, r: F64) -> tuple[F64, NDArray[np.int8]]:
         """The planar model's compiled CRMs: contact indices 0 (a) and 1 (b) become the
         compiled code's "is b" flags here, at its boundary."""
+        n = self.check_batch(cfg, sen, crms=(c, f, r))
         cfg = np.ascontiguousarray(cfg, dtype=np.float64)
-        n = len(cfg)
         new = np.empty_like(cfg)
         err = np.empty(n, dtype=np.int8)
         jit.execute_rows(
@@ -119,7 +119,7 @@ class PolygonKernel(Kernel):
         return new, err
 
     def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[np.ndarray, ...]:
-        n = len(cfg)
+        n = self.check_batch(cfg, sen, err)
         rho, m_a, m_b, mu = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
         index = np.empty(n, dtype=np.int64)
         jit.observe_rows(

@@ -34,6 +34,7 @@ class ReferenceKernel(Kernel):
         return self.model.row_of(config)
 
     def execute_crms(self, cfg: F64, sen: F64, c: I64, f: I64, r: F64) -> tuple[F64, NDArray[np.int8]]:
+        self.check_batch(cfg, sen, crms=(c, f, r))
         new = np.array(cfg, dtype=np.float64, copy=True).reshape(-1, self.model.row_width)
         n = len(new)
         err = np.zeros(n, dtype=np.int8)
@@ -57,7 +58,7 @@ class ReferenceKernel(Kernel):
         return new, err
 
     def observe(self, cfg: F64, sen: F64, err: np.ndarray) -> tuple[np.ndarray, ...]:
-        n = len(cfg)
+        n = self.check_batch(cfg, sen, err)
         values, mu = np.empty((len(self.model.observation_names), n)), np.empty(n)
         index = np.empty(n, dtype=np.int64)
         bin_index, config_of = self.task.discretizer.index, self.config_of
