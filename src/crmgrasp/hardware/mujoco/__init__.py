@@ -14,8 +14,8 @@ import math
 import os
 from types import ModuleType
 
-from crmgrasp._validation import CrmgraspError, require_extra
-from crmgrasp.tasks import Task
+from crmgrasp._validation import CrmgraspError, non_negative, require_extra
+from crmgrasp.tasks import Task, checked_task
 
 __all__ = ["require_mujoco", "mujoco_available", "hardware_task"]
 
@@ -23,8 +23,13 @@ __all__ = ["require_mujoco", "mujoco_available", "hardware_task"]
 def hardware_task(task: Task, palm_tolerance_deg: float = 10.0, mu_goal: float | None = None) -> Task:
     """``task`` as a real (or MuJoCo) hand runs it: a fingertip palm tolerance
     (``hand.palm_normal_tol = sin(palm_tolerance_deg)``; the default 1e-9 would turn
-    every sensed contact a hair off into a palm error) and, optionally, another goal."""
-    hand = dataclasses.replace(task.hand, palm_normal_tol=math.sin(math.radians(palm_tolerance_deg)))
+    every sensed contact a hair off into a palm error; degrees in ``[0, 90)``) and,
+    optionally, another goal."""
+    checked_task(task, "hardware_task")
+    tolerance = non_negative(palm_tolerance_deg, "palm tolerance (degrees)")
+    if tolerance >= 90.0:
+        raise CrmgraspError(f"palm tolerance (degrees) must be below 90, got {tolerance:g}")
+    hand = dataclasses.replace(task.hand, palm_normal_tol=math.sin(math.radians(tolerance)))
     out = dataclasses.replace(task, hand=hand)
     return out if mu_goal is None else dataclasses.replace(out, mu_goal=mu_goal)
 

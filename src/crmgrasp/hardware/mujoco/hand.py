@@ -37,14 +37,14 @@ from typing import Any
 
 import numpy as np
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, generator
 from crmgrasp.hardware.contact_sensing import Circle, ContactDetector, NoContact, contact_from_wrench
 from crmgrasp.hardware.mujoco import require_mujoco
-from crmgrasp.hardware.mujoco.model import PhysicsParams, mjcf
+from crmgrasp.hardware.mujoco.model import PhysicsParams, checked_params, mjcf
 from crmgrasp.model.contacts import Config, Contact, Grip
 from crmgrasp.model.hand import CRM, Error, goal_line
 from crmgrasp.model.palm import faces_palm, palm_point
-from crmgrasp.tasks import Task
+from crmgrasp.tasks import Task, checked_task
 
 __all__ = ["MujocoHand", "PhysicsError", "FAULTS"]
 
@@ -88,8 +88,9 @@ class MujocoHand:
         self, task: Task, start: Config, rng: np.random.Generator, params: PhysicsParams | None = None
     ) -> None:
         self.mj = require_mujoco()
-        params = PhysicsParams() if params is None else params
-        self.task, self.params, self.rng = task, params, rng
+        task = checked_task(task, "MujocoHand")
+        start, params = task.check_config(start, "start"), checked_params(params)
+        self.task, self.params, self.rng = task, params, generator(rng)
         self.labels = tuple(task.model.labels)
         """The fingertips, in the contact model's order (``a, b``; ``a, b, c`` for three fingers)."""
         n = len(self.labels)

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields
 
-from crmgrasp._validation import CrmgraspError, non_negative, positive
+from crmgrasp._validation import CrmgraspError, non_negative, positive, shown
 from crmgrasp.model.disc import Disc
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.tasks import Task
@@ -106,6 +106,15 @@ class PhysicsParams:
     def tick(self) -> float:
         """Control period, s."""
         return self.timestep * self.control_steps
+
+
+def checked_params(params: object) -> PhysicsParams:
+    """``params`` if it is a [`PhysicsParams`][] (the defaults for ``None``); one-line error otherwise."""
+    if params is None:
+        return PhysicsParams()
+    if not isinstance(params, PhysicsParams):
+        raise CrmgraspError(f"physics parameters must be a PhysicsParams, got {shown(params)}")
+    return params
 
 
 def _object_geom(task: Task, p: PhysicsParams) -> tuple[str, str]:

@@ -41,7 +41,7 @@ import numpy as np
 
 from crmgrasp.hardware.mujoco import hardware_task, require_mujoco
 from crmgrasp.hardware.mujoco.hand import FAULTS, PhysicsError
-from crmgrasp.hardware.mujoco.model import PhysicsParams
+from crmgrasp.hardware.mujoco.model import PhysicsParams, checked_params
 from crmgrasp.hardware.runner import HandSteps
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import Error
@@ -81,7 +81,7 @@ class MujocoSteps(HandSteps):
     def __init__(self, task: Task, params: PhysicsParams | None = None, palm_tolerance_deg: float = 10.0) -> None:
         self.require()
         super().__init__(hardware_task(task, palm_tolerance_deg))
-        self.params = PhysicsParams() if params is None else params
+        self.params = checked_params(params)
         self.palm_tolerance_deg = palm_tolerance_deg
         self.instance = self.task if task.family is None else self.task.with_object(task.obj)
         self.faults: Counter[str] = Counter()
