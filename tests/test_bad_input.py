@@ -703,3 +703,25 @@ def test_execute_batch_checks_its_rows_indices_and_offsets(task):
         args = {"configs": rows, "c": 0, "f": 1, "r": 0.0, **kwargs}
         with pytest.raises(CrmgraspError, match=message):
             execute_batch(task.obj, task.hand, args["configs"], args["c"], args["f"], args["r"])
+
+
+def test_a_kernels_action_table_row_is_checked_unless_its_caller_did(task):
+    """``step_row`` reads ``2 + offset_dim`` numbers of its row, contact indices among them:
+    a row of another shape, an index past the hand's contacts or a NaN offset is one line
+    (before, compiled code read them as they were). The continuous environments check the
+    pair and offset themselves and say so (``checked=True``)."""
+    from crmgrasp.kernels import kernel_for
+
+    kernel = kernel_for(task, "auto")
+    rng = np.random.default_rng(0)
+    state = kernel.begin(task.sample_start(rng), rng).state
+    good = kernel.crm_row(task.actions[1])
+    for row, message in [
+        (np.zeros((1, 2)), r"must be a float64 array of shape \(1, 3\), got \(\(1, 2\), 'float64'\)"),
+        (np.array([[0.0, 5.0, 0.0]]), r"contact indices in \[0, 1\] and finite offsets"),
+        (np.array([[0.0, 1.0, np.nan]]), "finite offsets"),
+        ([[0.0, 1.0, 0.0]], "must be a float64 array"),
+    ]:
+        with pytest.raises(CrmgraspError, match=message):
+            kernel.step_row(state, row, rng)
+    assert kernel.step_row(state, good, rng) == kernel.step_row(state, good, rng, checked=True)

@@ -174,7 +174,7 @@ class ContinuousCRMEnv(CRMGraspEnv):
         pair, values = self.actions.one(action)
         row = self.actions.row(pair, values)
         self._last = (self._state, (pair, values))
-        res = self.kernel.step_row(self._state, row, self.np_random)
+        res = self.kernel.step_row(self._state, row, self.np_random, checked=True)  # the pair and offset checked above
         obs, info = self._emit(res)
         return obs, res.reward, res.terminated, res.truncated, info
 

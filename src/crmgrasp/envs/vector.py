@@ -278,7 +278,7 @@ class ContinuousFamilyVectorEnv(_PairOffsets, FamilyVectorEnv):
         self.actions = _use_pair_offsets(self)
 
     def _one(self, j: int, actions: np.ndarray) -> Any:
-        return self._rows[j].step_row(self._states[j], actions[j : j + 1], self.np_random)
+        return self._rows[j].step_row(self._states[j], actions[j : j + 1], self.np_random, checked=True)
 
 
 def _pick(task: Task | str, single: type[CRMGraspVectorEnv], family: type[CRMGraspVectorEnv]) -> tuple[Task, type]:

@@ -14,6 +14,7 @@ bit for bit.
 from __future__ import annotations
 
 import functools
+import math
 from abc import ABC, abstractmethod
 from typing import Any, ClassVar, NamedTuple
 
@@ -163,17 +164,36 @@ class Kernel(ABC):
         if err is not UNSET:
             _per_row(err, "error codes", n, 0, len(Error) - 1)
         if crms is not None:
-            last = self.model.n_contacts - 1
-            _per_row(crms[0], "contact indices c", n, 0, last)
-            _per_row(crms[1], "contact indices f", n, 0, last)
-            r, d = float_array(crms[2], "offsets"), self.model.offset_dim
-            try:
-                np.broadcast_to(r, (n,) if d == 1 else (n, d))
-            except ValueError:
-                raise CrmgraspError(f"offsets must be one or {n} of {d} number(s), got shape {r.shape}") from None
-            if not np.all(np.isfinite(r)):
-                raise CrmgraspError("offsets must be finite")
+            self._check_crms(n, *crms)
         return n
+
+    def _check_crms(self, n: int, c: Any, f: Any, r: Any) -> None:
+        """A one-line error unless ``c`` and ``f`` are contact indices and ``r`` finite offsets,
+        one or ``n`` of each."""
+        last = self.model.n_contacts - 1
+        _per_row(c, "contact indices c", n, 0, last)
+        _per_row(f, "contact indices f", n, 0, last)
+        r, d = float_array(r, "offsets"), self.model.offset_dim
+        try:
+            np.broadcast_to(r, (n,) if d == 1 else (n, d))
+        except ValueError:
+            raise CrmgraspError(f"offsets must be one or {n} of {d} number(s), got shape {r.shape}") from None
+        if not np.all(np.isfinite(r)):
+            raise CrmgraspError("offsets must be finite")
+
+    def check_row(self, state: Any, row: Any) -> None:
+        """A one-line error unless ``state`` is a `SimState` and ``row`` one action-table row,
+        an array of shape ``(1, 2 + offset_dim)``: the compiled single step reads that many
+        numbers, the contact indices among them, unchecked."""
+        checked_state(state)
+        width = 2 + self.model.offset_dim
+        if not isinstance(row, np.ndarray) or row.shape != (1, width) or row.dtype != np.float64:
+            got = (row.shape, str(row.dtype)) if isinstance(row, np.ndarray) else shown(row)
+            raise CrmgraspError(f"an action-table row must be a float64 array of shape (1, {width}), got {got}")
+        c, f, *r = row[0].tolist()  # plain floats: a few tests in Python beat numpy's on one row
+        last = self.model.n_contacts - 1
+        if not (0 <= c <= last and 0 <= f <= last and c == int(c) and f == int(f) and all(map(math.isfinite, r))):
+            raise CrmgraspError(f"an action-table row holds contact indices in [0, {last}] and finite offsets")
 
     def trusted(self, config: Any) -> Any:
         """``config``, produced by this kernel: the next [`trust`][] of it passes at once."""
@@ -290,10 +310,14 @@ class Kernel(ABC):
         ([`crmgrasp.sim.step`][])."""
         return step(self.task, state, action, rng)
 
-    def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:
+    def step_row(self, state: SimState, row: F64, rng: np.random.Generator, checked: bool = False) -> OneStep:
         """The CRM of the action-table row ``row`` (shape ``(1, 2 + offset_dim)``: contact
-        indices and offsets, within the hand's reach: the caller checks) from ``state``: the
-        continuous action's step, [`crmgrasp.sim.step`][] of that CRM."""
+        indices and offsets) from ``state``: the continuous action's step,
+        [`crmgrasp.sim.step`][] of that CRM. The row is checked ([`check_row`][]) unless
+        ``checked``: a caller that has checked it (the continuous environments, which check the
+        pair and the offset against the pair's range) skips the second check."""
+        if not checked:
+            self.check_row(state, row)
         r = row[0, 2] if self.model.offset_dim == 1 else row[0, 2:]
         return step(self.task, state, self.model.crm(int(row[0, 0]), int(row[0, 1]), r), rng)
 
@@ -379,7 +403,9 @@ class FusedSingleStep(Kernel):
             action = self.task.action_index(action)
         return self._step(state, action, self.acts)
 
-    def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:
+    def step_row(self, state: SimState, row: F64, rng: np.random.Generator, checked: bool = False) -> OneStep:
+        if not checked:
+            self.check_row(state, row)
         return self._step(state, 0, row)
 
     def _step(self, state: SimState, action: int, table: F64) -> OneStep:

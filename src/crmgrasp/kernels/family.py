@@ -80,8 +80,8 @@ class FamilyKernel(Kernel):
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
         return self.current.step_one(state, action, rng)
 
-    def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:
-        return self.current.step_row(state, row, rng)
+    def step_row(self, state: SimState, row: F64, rng: np.random.Generator, checked: bool = False) -> OneStep:
+        return self.current.step_row(state, row, rng, checked)
 
     def step_table(
         self, cfg: F64, sen: F64, table: F64, resets: NDArray[np.bool_], starts: F64, rng: np.random.Generator

@@ -143,12 +143,14 @@ class FingersKernel(Kernel):
     def step_one(self, state: SimState, action: int | CRM, rng: np.random.Generator) -> OneStep:
         checked_state(state)
         if isinstance(action, CRM):  # a CRM of the hand's continuous action space
-            return self.step_row(state, self.crm_row(action), rng)
+            return self.step_row(state, self.crm_row(action), rng, checked=True)
         if type(action) is not int or not 0 <= action < len(self.acts):  # compiled code does not check indices
             action = self.task.action_index(action)
-        return self.step_row(state, self.acts[action : action + 1], rng)
+        return self.step_row(state, self.acts[action : action + 1], rng, checked=True)
 
-    def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:
+    def step_row(self, state: SimState, row: F64, rng: np.random.Generator, checked: bool = False) -> OneStep:
+        if not checked:
+            self.check_row(state, row)
         srow = np.array([self.model.row_of(self.trust(state.config))])
         sensed = state.sensed if state.sensed is state.config else self.model.check_reading(state.sensed)
         sen = srow if sensed is state.config else np.array([self.model.row_of(sensed)])

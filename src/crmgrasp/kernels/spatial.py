@@ -133,7 +133,9 @@ class FusedSpatialKernel(SpatialKernel):
             action = self.task.action_index(action)
         return self._step(state, action, self.acts4)
 
-    def step_row(self, state: SimState, row: F64, rng: np.random.Generator) -> OneStep:
+    def step_row(self, state: SimState, row: F64, rng: np.random.Generator, checked: bool = False) -> OneStep:
+        if not checked:
+            self.check_row(state, row)
         return self._step(state, 0, row)
 
     def _step(self, state: SimState, action: int, table: F64) -> OneStep:
