@@ -7,6 +7,8 @@ import re
 from numbers import Real
 from typing import Any
 
+import numpy as np
+
 __all__ = [
     "CrmgraspError",
     "as_numbers",
@@ -140,8 +142,6 @@ def float_array(value: object, name: str) -> Any:
     >>> float_array([(0, 1), (2, 3)], "points").shape
     (2, 2)
     """
-    import numpy as np
-
     if not isinstance(value, (str, bytes, dict)):
         try:
             return np.asarray(value, dtype=np.float64)
@@ -174,8 +174,6 @@ def as_point(value: object, name: str) -> tuple[float, float]:
 def generator(value: object, name: str = "rng") -> Any:
     """Return ``value`` if it is a ``numpy.random.Generator`` (every random draw of the
     package comes from one), or raise `CrmgraspError`."""
-    import numpy as np  # the package imports numpy anyway; this module stays importable first
-
     if not isinstance(value, np.random.Generator):
         raise CrmgraspError(f"{name} must be a numpy.random.Generator, got {shown(value)}")
     return value
@@ -211,8 +209,6 @@ def seed_value(value: object, name: str = "seed") -> int:
     >>> seed_value(3)
     3
     """
-    import numpy as np
-
     if isinstance(value, np.integer):
         value = int(value)
     return integer(value, name, 0, SEED_MAX)

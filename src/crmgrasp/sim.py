@@ -294,12 +294,22 @@ class Episode(NamedTuple):
     trace: tuple[Transition, ...] = ()
 
 
-def check_policy(policy: object, methods: Sequence[str]) -> None:
+_HAS: set[tuple[type, tuple[str, ...]]] = set()
+"""The classes seen to define the methods asked for: each is checked once, not per episode."""
+
+
+def check_policy(policy: object, methods: tuple[str, ...]) -> None:
     """A one-line error unless ``policy`` has every method of ``methods`` (a [`Policy`][]'s
-    ``begin``, ``act`` and ``tell``; a [`BatchPolicy`][]'s the same)."""
+    ``begin``, ``act`` and ``tell``; a learner's own). A class that defines them all is
+    remembered, so that an episode's check is one set lookup."""
+    key = (type(policy), methods)
+    if key in _HAS:
+        return
     missing = [m for m in methods if not callable(getattr(policy, m, None))]
     if missing:
         raise CrmgraspError(f"a policy needs the methods {', '.join(methods)}; {shown(policy)} has no {missing[0]}")
+    if all(callable(getattr(type(policy), m, None)) for m in methods):
+        _HAS.add(key)
 
 
 def run_episode(
