@@ -14,8 +14,8 @@ under 400 characters; any other exception, a warning, a longer message or a call
 after ``--seconds`` (5) is reported with the call, the argument and the value. It prints one JSON
 object and exits 1 if a call failed.
 
-Measured 2026-12-08 on the 2-core machine: 129 calls, 9,540 variants in 3 s, none failed (with
-MuJoCo installed; 126 calls without it).
+Measured 2026-12-08 on the 2-core machine: 138 calls, 10,160 variants in 3 s, none failed (with
+MuJoCo and the deep extra installed).
 The first 24 calls on the code before their fixes (46c3eef): 227 of 1,460 failed. A ``Contact`` of text,
 ``None`` or containers reached ``observe`` and ``min_friction`` as a ``TypeError`` (88); a hand
 given no ``Shape`` failed inside ``contact`` and ``execute`` (40); ``Task`` took actions that
@@ -59,7 +59,10 @@ arrays' shapes, indices and offsets (``Kernel.check_batch``), and ``step_row`` i
 (``Kernel.check_row``: 40 of 60 variants failed at 1bad162). The MuJoCo stand-in's
 ``MujocoHand``, ``MujocoSteps`` and ``hardware_task`` ([`mujoco_examples`][]) on the code of
 05bd926: 142 of 200 failed (something other than a ``Task``, a start, a generator or physics
-parameters reached an attribute; a palm tolerance of text reached ``math.radians``).
+parameters reached an attribute; a palm tolerance of text reached ``math.radians``). The learners' helpers
+([`learner_examples`][]) on the code of 86c3c34: 148 of 620 failed (``features`` took any
+values, error code and bounds: 56; a preset, a deep learner or an agent named by something
+that is not text reached a dict lookup; ``bounds_of`` and ``apply_preset`` took non-tasks).
 
 Usage: ``python benchmarks/api_fuzz.py [--seconds 5]``.
 """
@@ -267,6 +270,7 @@ def examples() -> list[Call]:
         *config_examples(),
         *kernel_examples(box, cfg),
         *mujoco_examples(box, cfg),
+        *learner_examples(box),
     ]
 
 
@@ -443,6 +447,32 @@ def mujoco_examples(box: c.Task, cfg: c.Config) -> list[Call]:
         Call("MujocoSteps", MujocoSteps, box, params=None, palm_tolerance_deg=10.0),
         Call("hardware_task", hardware_task, box, palm_tolerance_deg=10.0, mu_goal=None),
     ]
+
+
+def learner_examples(box: c.Task) -> list[Call]:
+    """The learners' helpers: presets, the peers written from their papers, the deep peer's
+    settings and features (``check_deep`` only with the extra ``crmgrasp[deep]``)."""
+    import dataclasses
+
+    from crmgrasp.agents import deep, deep_trials, peers, presets
+
+    config = deep.RecurrentPPOConfig()
+    fields = {f.name: getattr(config, f.name) for f in dataclasses.fields(config)}
+    out = [
+        Call(
+            "apply_preset", presets.apply_preset, "fastest", box, agent=None, k=None, symmetric=False, prior_task=None
+        ),
+        Call("PSRL", peers.PSRL, 4, alpha0=0.1),
+        Call("UCBVI", peers.UCBVI, 4, scale=0.03),
+        Call("RecurrentPPOConfig", deep.RecurrentPPOConfig, **fields),
+        Call("deep_config", deep_trials.deep_config, "recurrent-ppo", {"gamma": 0.9}),
+        Call("features", deep.features, [1.0, 0.02, 0.03], 0, deep.bounds_of(box)),
+        Call("bounds_of", deep.bounds_of, box),
+        Call("crm_of_action", deep.crm_of_action, box, 1),
+    ]
+    if deep.deep_available():
+        out.append(Call("check_deep", deep_trials.check_deep, "recurrent-ppo", {"gamma": 0.9}))
+    return out
 
 
 CONFIG_MODULES = (

@@ -725,3 +725,25 @@ def test_a_kernels_action_table_row_is_checked_unless_its_caller_did(task):
         with pytest.raises(CrmgraspError, match=message):
             kernel.step_row(state, row, rng)
     assert kernel.step_row(state, good, rng) == kernel.step_row(state, good, rng, checked=True)
+
+
+def test_the_learners_helpers_check_names_tasks_and_features(task):
+    """A preset, an agent or a deep learner named by something other than text, and features
+    of the wrong kind, are one line (before: ``TypeError: unhashable type`` from a dict lookup,
+    and a ``TypeError`` or ``IndexError`` from inside ``features``)."""
+    from crmgrasp.agents import deep, deep_trials, presets
+
+    with pytest.raises(CrmgraspError, match=r"unknown preset array\(\[nan\]\); known: "):
+        presets.apply_preset(np.array([np.nan]), task)
+    with pytest.raises(CrmgraspError, match=r"agent must be a learner's name, got \[\]"):
+        presets.apply_preset("fastest", task, agent=[])  # type: ignore[arg-type]
+    with pytest.raises(CrmgraspError, match="apply_preset needs a Task"):
+        presets.apply_preset("fastest", None)  # type: ignore[arg-type]
+    with pytest.raises(CrmgraspError, match="deep learner parameters must be a dict, got 3"):
+        deep_trials.deep_config("ppo", 3)  # type: ignore[arg-type]
+    bounds = deep.bounds_of(task)
+    with pytest.raises(CrmgraspError, match=r"features need one number per bound .* error code in \[0, 3\)"):
+        deep.features([1.0, 0.0, 0.0], 7, bounds)
+    with pytest.raises(CrmgraspError, match="a model's discrete action must be an integer, got nan"):
+        deep.crm_of_action(task, np.nan)
+    assert deep.features([1.0, 0.0, 0.0], 0, bounds)[3] == 1.0  # the error flag's one-hot

@@ -150,6 +150,18 @@ def float_array(value: object, name: str) -> Any:
     raise CrmgraspError(f"{name} must be numbers, got {shown(value)}")
 
 
+def known(name: object, table: Any, what: str) -> str:
+    """``name`` if it is text and a key of ``table`` (a registry); otherwise a one-line error
+    naming ``what`` and the known names.
+
+    >>> known("sarsa", {"sarsa": 1}, "agent")
+    'sarsa'
+    """
+    if not isinstance(name, str) or name not in table:
+        raise CrmgraspError(f"unknown {what} {shown(name)}; known: {', '.join(table)}")
+    return name
+
+
 def listed(value: object, name: str, what: str = "a list") -> tuple[Any, ...]:
     """``value`` as a tuple if it is an ordered collection (a list, tuple, range or 1-D array;
     not text, a mapping or a set), or a one-line error naming ``name``.

@@ -22,6 +22,7 @@ import hashlib
 import importlib
 import io
 import json
+import math
 import os
 import time
 import zipfile
@@ -34,12 +35,12 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from crmgrasp._validation import CrmgraspError, boolean, require_extra
+from crmgrasp._validation import CrmgraspError, boolean, float_array, require_extra, shown
 from crmgrasp.agents.training import checkpoint_generators, checkpoints_to_within
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import Error
 from crmgrasp.sim import Percept, StepperRows, run_batch
-from crmgrasp.tasks import Task, World
+from crmgrasp.tasks import Task, World, checked_task
 
 __all__ = [
     "ContinuousObservation",
@@ -66,18 +67,26 @@ def features(values: Sequence[float], error: int, bounds: Sequence[tuple[float, 
     """The policy's input vector (float32, length ``len(bounds) + len(Error)``): each
     observation value clipped into its ``(low, high)`` and divided by ``max(-low, high)``
     (``rho / 4`` and ``m / (2A)`` for two contacts), then the error flag one-hot."""
-    n = len(bounds)
-    v = np.zeros(n + N_ERRORS, dtype=np.float32)
-    for i, (x, (lo, hi)) in enumerate(zip(values, bounds, strict=True)):
-        v[i] = min(max(x, lo), hi) / max(-lo, hi)
-    v[n + int(error)] = 1.0
+    try:
+        n = len(bounds)
+        v = np.zeros(n + N_ERRORS, dtype=np.float32)
+        for i, (x, (lo, hi)) in enumerate(zip(values, bounds, strict=True)):
+            v[i] = min(max(x, lo), hi) / max(-lo, hi)
+        if not 0 <= error < N_ERRORS:
+            raise IndexError
+        v[n + int(error)] = 1.0
+    except (TypeError, ValueError, IndexError, OverflowError):  # the happy path pays no test
+        raise CrmgraspError(
+            f"features need one number per bound (low, high) and an error code in [0, {N_ERRORS}), "
+            f"got {shown(values)}, {shown(error)}, {shown(bounds)}"
+        ) from None
     return v
 
 
 def bounds_of(task: Task) -> tuple[tuple[float, float], ...]:
     """The ``(low, high)`` of each of the task's observation quantities, in order (the
     model's [`observation_bounds`][crmgrasp.model.contact_model.ContactModel.observation_bounds])."""
-    return tuple(task.model.observation_bounds().values())
+    return tuple(checked_task(task, "bounds_of").model.observation_bounds().values())
 
 
 class ContinuousObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs):
@@ -303,9 +312,12 @@ class RecurrentPolicy:
 def crm_of_action(task: Task, action: Any) -> Any:
     """The task's CRM that a model's action names: ``task.actions[a]`` for an integer, the
     CRM of a flat continuous action ([`crmgrasp.envs.continuous.flat_action`][]) for a vector."""
-    u = np.asarray(action, dtype=np.float64).ravel()
+    u = float_array(action, "a model's action").ravel()
     if u.size == 1:
-        return int(u[0])
+        a = float(u[0])
+        if not (math.isfinite(a) and a == int(a)):
+            raise CrmgraspError(f"a model's discrete action must be an integer, got {a!r}")
+        return int(a)
     from crmgrasp.envs.continuous import flat_action
 
     ranges = task.crm_ranges

@@ -33,7 +33,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from crmgrasp._progress import Progress
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, known, shown
 from crmgrasp.agents.deep import (
     DEEP_AGENTS,
     RecurrentPolicy,
@@ -70,8 +70,9 @@ def deep_defaults(name: str) -> dict[str, object]:
 def deep_config(name: str, params: dict[str, object] | None = None) -> RecurrentPPOConfig:
     """The settings of deep learner ``name`` with ``params`` (``gamma``, ``continuous``) on
     top; one-line errors for an unknown learner, an unknown parameter or a discrete SAC."""
-    if name not in DEEP_AGENTS:
-        raise CrmgraspError(f"unknown deep learner {name!r}; known: {', '.join(DEEP_AGENTS)}")
+    known(name, DEEP_AGENTS, "deep learner")
+    if params is not None and not isinstance(params, dict):
+        raise CrmgraspError(f"deep learner parameters must be a dict, got {shown(params)}")
     given = dict(params or {})
     for key in given:
         if key not in _PARAMETERS:

@@ -14,10 +14,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, known, shown
 from crmgrasp.agents.tabular import TabularAgent
 from crmgrasp.agents.training import AGENTS
-from crmgrasp.tasks import Task
+from crmgrasp.tasks import Task, checked_task
 
 __all__ = ["LearnerPreset", "PRESETS", "LearnerChoice", "apply_preset"]
 
@@ -104,11 +104,11 @@ def apply_preset(
     ``prior_task`` is the user's alone (no preset adds one); the mirror quotient is on if
     asked for, or if the preset wants it, the agent is tabular and the task declares a
     symmetry; the preset's parameters come along only when its own agent runs."""
-    try:
-        preset = PRESETS[name]
-    except KeyError:
-        raise CrmgraspError(f"unknown preset {name!r}; known presets: {', '.join(PRESETS)}") from None
-    chosen = agent or preset.agent
+    preset = PRESETS[known(name, PRESETS, "preset")]
+    checked_task(task, "apply_preset")
+    if agent is not None and not isinstance(agent, str):  # any learner's name: the caller resolves it
+        raise CrmgraspError(f"agent must be a learner's name, got {shown(agent)}")
+    chosen = preset.agent if agent is None else agent
     made = AGENTS.get(chosen)
     tabular = isinstance(made, type) and issubclass(made, TabularAgent)
     mirror = symmetric or (preset.symmetric and tabular and task.symmetry is not None)
