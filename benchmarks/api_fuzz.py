@@ -14,8 +14,8 @@ under 400 characters; any other exception, a warning, a longer message or a call
 after ``--seconds`` (5) is reported with the call, the argument and the value. It prints one JSON
 object and exits 1 if a call failed.
 
-Measured 2026-12-08 on the 2-core machine: 138 calls, 10,160 variants in 3 s, none failed (with
-MuJoCo and the deep extra installed).
+Measured 2026-12-08 on the 2-core machine: 159 calls, 11,480 variants in 4 s, none failed (with
+MuJoCo, the MCAP and the deep extras installed).
 The first 24 calls on the code before their fixes (46c3eef): 227 of 1,460 failed. A ``Contact`` of text,
 ``None`` or containers reached ``observe`` and ``min_friction`` as a ``TypeError`` (88); a hand
 given no ``Shape`` failed inside ``contact`` and ``execute`` (40); ``Task`` took actions that
@@ -63,6 +63,14 @@ parameters reached an attribute; a palm tolerance of text reached ``math.radians
 ([`learner_examples`][]) on the code of 86c3c34: 148 of 620 failed (``features`` took any
 values, error code and bounds: 56; a preset, a deep learner or an agent named by something
 that is not text reached a dict lookup; ``bounds_of`` and ``apply_preset`` took non-tasks).
+The 21 calls of fingertip sensing, MCAP step records, sweeps and run folders, and the vector
+environments' resets ([`api_examples_io`][]) on the code of a8d4749: 414 of 1,320 failed. A
+``write_mcap`` record with a field of the wrong kind failed inside the Foxglove SDK (156); the
+fingertip, force, torque, filter sample and thresholds of the contact sensing reached numpy
+(127; a torque of 1e308 overflowed with a warning, now a reading is bounded by ``MAX_READING``);
+``run_study``, ``report``, ``read_status``, ``leftovers`` and ``default_run_dir`` took
+something other than a study, a run folder or a path (112); ``FamilyVectorEnv.reset`` passed
+its seed to Gymnasium unchecked (14); a run's config of complex numbers reached ``json`` (5).
 
 Usage: ``python benchmarks/api_fuzz.py [--seconds 5]``.
 """
@@ -86,6 +94,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from scipy import sparse
 
+import api_examples_io
 import crmgrasp as c
 import task_file_fuzz
 from crmgrasp import sim
@@ -271,6 +280,7 @@ def examples() -> list[Call]:
         *kernel_examples(box, cfg),
         *mujoco_examples(box, cfg),
         *learner_examples(box),
+        *(Call(label, f, *args, **kwargs) for label, f, args, kwargs in api_examples_io.io_examples(box)),
     ]
 
 

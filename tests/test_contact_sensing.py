@@ -75,8 +75,38 @@ def test_threshold_and_bad_input():
     with pytest.raises(CrmgraspError, match="radius must be > 0"):
         Circle(0.0)
     for threshold in (0.0, -1.0, float("nan"), float("inf")):  # NaN took every reading for a contact
-        with pytest.raises(CrmgraspError, match="contact threshold must be a finite force > 0 N"):
+        with pytest.raises(CrmgraspError, match=r"contact threshold \(N\) must be"):
             contact_from_wrench(Circle(0.01), (0.0, 1.0), 0.0, threshold)
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda: contact_from_wrench(None, (0.0, 1.0), 0.0), "fingertip must be a Circle, Flat or Sphere"),
+        (lambda: contact_from_wrench(Circle(0.01), "x", 0.0), "force reading must be numbers"),
+        (lambda: contact_from_wrench(Circle(0.01), (0.0, 2.0), 1e308), "torque reading must be at most 1e"),
+        (lambda: contact_from_wrench(Sphere(0.01), (0, 0, 1), {"a": 1}), "torque reading must be numbers"),
+        (lambda: Sphere(0.01, center="xyz"), "sphere center"),
+        (lambda: HighPass(0.5, 0.01)("x"), "filter sample must be numbers"),
+        (lambda: ContactDetector(0.5, 0.01, on=None), r"onset threshold on \(N\) must be a number"),
+        (lambda: ContactDetector(0.5, 0.01)(2.0), "force sample must be a vector"),
+        (lambda: ContactDetector(0.5, 0.01)(np.inf), "force sample must be finite"),
+    ],
+)
+def test_sensing_input_is_checked_in_one_line(call, message):
+    """A fingertip, a wrench, a filter sample or a threshold that is not what it must be:
+    one line naming it (before, numpy's and Python's own errors, and an overflow warning)."""
+    with pytest.raises(CrmgraspError, match=message):
+        call()
+
+
+def test_high_pass_keeps_its_channels():
+    """A sample with another number of channels than the first is refused, not broadcast."""
+    hp = HighPass(0.5, 0.01)
+    hp((0.0, 1.0))
+    with pytest.raises(CrmgraspError, match=r"shape \(3,\); the earlier samples had \(2,\)"):
+        hp((0.0, 1.0, 2.0))
+    assert hp((0.0, 1.0)).shape == (2,)
 
 
 def test_high_pass_removes_drift_and_passes_steps():

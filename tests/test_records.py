@@ -102,3 +102,32 @@ def test_missing_extra_is_one_line(hide_module):
     hide_module("foxglove")
     with pytest.raises(CrmgraspError, match=r"pip install 'crmgrasp\[mcap\]'"):
         records.require_mcap()
+
+
+def _record(**change):
+    frames = {"a": ((-0.15, -0.02, 0.0), (1.0, 0.0, 0.0)), "b": ((-0.1, -0.05, 0.0), (0.0, 1.0, 0.0))}
+    rec = records.StepRecord(0.0, 0, frames, {"rho": 0.0, "m_a": 0.0, "m_b": 0.0}, 0, "a")
+    for name, value in change.items():
+        setattr(rec, name, value)
+    return rec
+
+
+@pytest.mark.parametrize(
+    ("given", "message"),
+    [
+        (None, "records must be a list of StepRecord"),
+        ([1], "record 0 cannot be written: it is no StepRecord"),
+        ([_record(), _record(time=float("nan"))], "record 1 cannot be written: its time is nan"),
+        ([_record(contacts={"a": ((0.0, 0.0), (1.0, 0.0, 0.0))})], "its contacts is"),
+        ([_record(raw={"a": [1j]})], "its raw is"),
+        ([_record(pose=(0.0, 0.0))], "its pose is"),
+        ([_record(step=True)], "its step is True, not an integer >= 0"),
+    ],
+)
+def test_a_malformed_record_is_one_line_and_nothing_is_written(tmp_path, given, message):
+    """What ``write_mcap`` is given is checked before the file is opened (before, a record's
+    field of the wrong kind failed inside the Foxglove SDK with its own error)."""
+    with pytest.raises(CrmgraspError, match=message):
+        records.write_mcap(tmp_path / "x.mcap", given, "paper-box")
+    assert list(tmp_path.iterdir()) == []
+    assert records.write_mcap(tmp_path / "y.mcap", [_record(raw={"a": [0.0, 1.0, 0.0]})], "paper-box").exists()

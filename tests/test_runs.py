@@ -361,3 +361,21 @@ def test_workers_are_spawned_once_torch_is_loaded(monkeypatch):
     assert start_method() == ("fork" if forkable else "spawn")
     monkeypatch.setitem(sys.modules, "torch", types.ModuleType("torch"))
     assert start_method() == "spawn"
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda p: RunFolder(p / "r", "learn", "paper-box", {"x": 1j}), "a run's config must be JSON data"),
+        (lambda p: RunFolder(p / "r", None, "paper-box", {}), "a run's command name must be text, got None"),
+        (lambda p: default_run_dir("learn", 3, root=p), "a run's task name must be text, got 3"),
+        (lambda p: default_run_dir("learn", "t", root=None), "runs folder path must be text or a path"),
+        (lambda p: read_status(None), "run folder path must be text or a path"),
+        (lambda p: leftovers(b"x"), "run folder path must be text or a path"),
+    ],
+)
+def test_a_run_folder_of_the_wrong_kind_is_one_line_and_makes_nothing(tmp_path, call, message):
+    """Names, a config JSON cannot hold and folder paths are checked before a folder is made."""
+    with pytest.raises(CrmgraspError, match=message):
+        call(tmp_path)
+    assert list(tmp_path.iterdir()) == []

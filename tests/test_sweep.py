@@ -372,3 +372,18 @@ def test_a_resumed_study_with_a_damaged_unit_is_refused_in_one_line(tmp_path, ca
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert main(["sweep", "report", str(out)]) == 0
+
+
+def test_the_python_api_of_a_sweep_checks_its_arguments(tmp_path):
+    """``run_study`` and ``report`` called from Python with something else than a study, a run
+    folder or a path: one line each (before, an ``AttributeError`` or ``TypeError``)."""
+    from crmgrasp.experiments.runs import RunFolder
+    from crmgrasp.experiments.study import study_from_dict
+
+    study = study_from_dict({"trials": 1, "episodes": 2, "eval_episodes": 1, "cell": [{"task": "paper-box"}]})
+    with pytest.raises(CrmgraspError, match="run_study takes a Study and a RunFolder, got None"):
+        sweep_mod.run_study(None, RunFolder(tmp_path / "s", "sweep", "study", study.to_dict()))
+    with pytest.raises(CrmgraspError, match="run_study takes a Study and a RunFolder, got Study"):
+        sweep_mod.run_study(study, str(tmp_path / "s"))
+    with pytest.raises(CrmgraspError, match="study folder path must be text or a path"):
+        sweep_mod.report(None)

@@ -7,7 +7,7 @@ import pytest
 import crmgrasp  # noqa: F401
 from crmgrasp import Config, Contact, CrmgraspError, min_friction
 from crmgrasp.envs.single import ENV_ID
-from crmgrasp.envs.vector import CRMGraspVectorEnv
+from crmgrasp.envs.vector import CRMGraspVectorEnv, FamilyVectorEnv
 from crmgrasp.model.hand import execute_crm, feasible
 from crmgrasp.model.sensing import Error
 
@@ -117,3 +117,14 @@ def test_the_class_is_picked_by_the_task_and_a_family_is_refused_at_construction
     assert obs["error"].shape == (2,)
     with pytest.raises(CrmgraspError, match="'box-3d' draws an object per episode: use CRMGraspVectorEnv's family"):
         CRMGraspVectorEnv(2, "box-3d")
+
+
+@pytest.mark.parametrize("make", [lambda: CRMGraspVectorEnv(2), lambda: FamilyVectorEnv(2, "box-family")])
+def test_a_reset_seed_is_checked_in_one_line(make):
+    """Both vector environments check a reset's seed the same way (the family's went to
+    Gymnasium's own error)."""
+    env = make()
+    for seed in (float("nan"), -1, "7x", 1.5):
+        with pytest.raises(CrmgraspError, match="seed"):
+            env.reset(seed=seed)
+    assert env.reset(seed=3)[1]["obs_index"].shape == (2,)

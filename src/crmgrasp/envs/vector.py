@@ -107,6 +107,13 @@ class CRMGraspVectorEnv(VectorEnv):
         self._buffer = np.empty((0, self._width))
         self._next = 0
 
+    def _reseed(self, seed: Any, options: Any) -> None:
+        """Check a reset's arguments and seed the shared generator (Gymnasium's ``reset``)."""
+        if isinstance(seed, list):
+            raise CrmgraspError("the vector environment takes one integer seed for its generator")
+        _no_options(options)
+        VectorEnv.reset(self, seed=optional_seed(seed))
+
     def _starts(self, n: int) -> np.ndarray:
         """``n`` fresh starts, served from a block drawn ``max(2048, n)`` at a time
         (starts are i.i.d., so block draws change cost, not distribution)."""
@@ -140,10 +147,7 @@ class CRMGraspVectorEnv(VectorEnv):
         self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         """Reset every sub-environment (``seed`` seeds the shared generator)."""
-        if isinstance(seed, list):
-            raise CrmgraspError("the vector environment takes one integer seed for its generator")
-        _no_options(options)
-        super().reset(seed=optional_seed(seed))
+        self._reseed(seed, options)
         self._buffer, self._next = np.empty((0, self._width)), 0
         n = self.num_envs
         self._cfg = np.array(self._starts(n))
@@ -209,10 +213,7 @@ class FamilyVectorEnv(CRMGraspVectorEnv):
         self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         """Reset every sub-environment: a new object and start per row."""
-        if isinstance(seed, list):
-            raise CrmgraspError("the vector environment takes one integer seed for its generator")
-        _no_options(options)
-        VectorEnv.reset(self, seed=seed)
+        self._reseed(seed, options)
         self._steps[:] = 0
         self._prev_done[:] = False
         self._ready = True

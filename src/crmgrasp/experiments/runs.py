@@ -44,7 +44,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from crmgrasp._io import check_folder, dumps_json, read_bounded, temporaries, write_json
+from crmgrasp._io import as_path, check_folder, dumps_json, read_bounded, temporaries, write_json
 from crmgrasp._validation import CrmgraspError, shown
 
 __all__ = ["RunFolder", "read_status", "leftovers", "default_run_dir", "source_digest", "STATUSES", "JOURNAL"]
@@ -60,13 +60,21 @@ def _now() -> str:
 
 def default_run_dir(command: str, task: str, root: str | Path = "runs") -> Path:
     """``runs/<command>-<task>-<UTC YYYYMMDDTHHMMSSZ>``, with ``-2``, ``-3``, ... if taken."""
+    _names(command, task)
     stamp = _dt.datetime.now(_dt.UTC).strftime("%Y%m%dT%H%M%SZ")
-    base = Path(root) / f"{command}-{task}-{stamp}"
+    base = as_path(root, "runs folder") / f"{command}-{task}-{stamp}"
     path, n = base, 1
     while path.exists():
         n += 1
         path = base.with_name(f"{base.name}-{n}")
     return path
+
+
+def _names(command: object, task: object) -> None:
+    """A one-line error unless a run's ``command`` and ``task`` names are text."""
+    for what, name in (("command", command), ("task", task)):
+        if not isinstance(name, str):
+            raise CrmgraspError(f"a run's {what} name must be text, got {shown(name)}")
 
 
 def _git_commit() -> str | None:
@@ -171,7 +179,7 @@ def _journal(folder: Path) -> dict[str, Any]:
 def read_status(folder: str | Path) -> str:
     """The status of a run folder: one of `STATUSES`, or ``killed`` for a run
     that says ``running`` but whose process is gone."""
-    doc = _read(Path(folder))
+    doc = _read(as_path(folder, "run folder"))
     if doc["status"] == "running" and not _alive(doc.get("pid"), doc.get("host")):
         return "killed"
     return str(doc["status"])
@@ -180,6 +188,7 @@ def read_status(folder: str | Path) -> str:
 def leftovers(folder: str | Path) -> list[str]:
     """The temporary files that writes cut short left in a run folder (paths relative to
     it): ``--resume`` and ``--overwrite`` delete them."""
+    folder = as_path(folder, "run folder")
     return [str(p.relative_to(folder)) for p in temporaries(folder)]
 
 
@@ -231,8 +240,12 @@ class RunFolder:
     ) -> None:
         if overwrite and resume:
             raise CrmgraspError("--overwrite and --resume exclude each other")
+        _names(command, task)
+        try:
+            self.config = json.loads(dumps_json(config))  # plain JSON data, as it will be read back
+        except (TypeError, ValueError, RecursionError) as exc:
+            raise CrmgraspError(f"a run's config must be JSON data ({shown(str(exc), 80)})") from None
         self.path = default_run_dir(command, task) if path is None else check_folder(path, "--out")
-        self.config = json.loads(json.dumps(config))  # plain JSON data, as it will be read back
         self.resumed = self._was_complete = False
         made = not self.path.exists()
         self.path.mkdir(parents=True, exist_ok=True)

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from crmgrasp._io import atomic_write_text, read_bounded, save_figure, write_csv, write_json
+from crmgrasp._io import as_path, atomic_write_text, read_bounded, save_figure, write_csv, write_json
 from crmgrasp._progress import Progress
 from crmgrasp._validation import CrmgraspError, is_finite_number, shown
 from crmgrasp.experiments.learning import LearnerSpec, learn
@@ -99,6 +99,8 @@ def run_study(
     """Run every (cell, seed) not yet recorded in ``store`` (``jobs`` at once, in local
     worker processes or as Ray tasks: ``crmgrasp.experiments.parallel.run_parallel``),
     then write the tables. Returns the number of units ok and failed."""
+    if not isinstance(study, Study) or not isinstance(store, RunFolder):
+        raise CrmgraspError(f"run_study takes a Study and a RunFolder, got {shown(study)} and {shown(store)}")
     units = [
         (f"{cell_id(c)} seed {s}", _Unit(c, s, study.trials, study.episodes, study.eval_episodes, backend))
         for c in study.cells
@@ -308,7 +310,7 @@ def report(folder: str | Path) -> Path:
     only inside the folder; a damaged record or unit file is a one-line error."""
     from crmgrasp.experiments.runs import _read, read_status
 
-    out = Path(folder)
+    out = as_path(folder, "study folder")
     rec = _read(out)
     if rec.get("command") != "sweep":
         raise CrmgraspError(f"{str(out)!r} is not a study folder (command {shown(rec.get('command'))})")

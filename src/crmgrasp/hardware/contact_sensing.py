@@ -30,7 +30,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from crmgrasp._validation import CrmgraspError, as_point, finite, positive
+from crmgrasp._validation import CrmgraspError, as_numbers, as_point, finite, float_array, positive, shown
 
 __all__ = [
     "Circle",
@@ -41,7 +41,23 @@ __all__ = [
     "contact_from_wrench",
     "HighPass",
     "ContactDetector",
+    "MAX_READING",
 ]
+
+MAX_READING = 1e9
+"""The largest force (N) or torque (N m) component a reading may hold: far past any sensor,
+and small enough that the line-of-action arithmetic cannot overflow."""
+
+
+def _reading(value: object, name: str) -> np.ndarray:
+    """``value`` (a number or a vector of them) as a float array whose components are finite
+    and at most [`MAX_READING`][] in size, or a one-line error naming ``name``."""
+    x = float_array(value, name)
+    if not np.all(np.isfinite(x)):
+        raise CrmgraspError(f"{name} must be finite, got {shown(value)}")
+    if np.any(np.abs(x) > MAX_READING):
+        raise CrmgraspError(f"{name} must be at most {MAX_READING:g} in size, got {shown(value)}")
+    return x
 
 
 class SensedContact(NamedTuple):
@@ -95,10 +111,7 @@ class Sphere:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "radius", positive(self.radius, "fingertip radius"))
-        c = np.asarray(self.center, dtype=float)
-        if c.shape != (3,) or not np.all(np.isfinite(c)):
-            raise CrmgraspError(f"sphere center must be 3 finite numbers, got {self.center!r}")
-        object.__setattr__(self, "center", tuple(float(v) for v in c))
+        object.__setattr__(self, "center", as_numbers(self.center, "sphere center", 3))
 
 
 def contact_from_wrench(
@@ -124,12 +137,10 @@ def contact_from_wrench(
     >>> contact_from_wrench(Circle(0.01), (0.0, 0.01), 0.0)
     NoContact(reason='force 0.01 N below the 0.05 N contact threshold')
     """
-    f = np.asarray(force, dtype=float)
-    m = np.asarray(torque, dtype=float)
-    if not (np.all(np.isfinite(f)) and np.all(np.isfinite(m))):
-        raise CrmgraspError("force and torque readings must be finite")
-    if not 0.0 < threshold < math.inf:  # also NaN; at 0 a zero force would divide by zero
-        raise CrmgraspError(f"the contact threshold must be a finite force > 0 N, got {threshold!r}")
+    if not isinstance(tip, (Circle, Flat, Sphere)):
+        raise CrmgraspError(f"the fingertip must be a Circle, Flat or Sphere, got {shown(tip)}")
+    f, m = _reading(force, "force reading"), _reading(torque, "torque reading")
+    threshold = positive(threshold, "contact threshold (N)")  # at 0 a zero force would divide by zero
     planar = isinstance(tip, (Circle, Flat))
     if planar and (f.shape != (2,) or m.ndim != 0):
         raise CrmgraspError(f"a planar fingertip needs a 2-vector force and a scalar torque, got {f.shape}, {m.shape}")
@@ -182,8 +193,10 @@ class HighPass:
         self._y: np.ndarray | None = None
 
     def __call__(self, x: ArrayLike) -> np.ndarray:
-        """Filter one sample (a scalar or a vector of channels)."""
-        x = np.asarray(x, dtype=float)
+        """Filter one sample (a scalar or a vector of channels, as many as the first sample's)."""
+        x = _reading(x, "filter sample")
+        if self._x is not None and x.shape != self._x.shape:
+            raise CrmgraspError(f"filter sample has shape {x.shape}; the earlier samples had {self._x.shape}")
         if self._x is None:
             self._x, self._y = x.copy(), np.zeros_like(x)
             return self._y.copy()
@@ -207,6 +220,7 @@ class ContactDetector:
     """
 
     def __init__(self, tau: float, dt: float, on: float = 0.2, off: float = 0.1) -> None:
+        on, off = finite(on, "onset threshold on (N)"), finite(off, "re-arm threshold off (N)")
         if not 0.0 < off <= on:
             raise CrmgraspError(f"need 0 < off <= on thresholds, got on={on}, off={off}")
         self.filter = HighPass(tau, dt)
@@ -215,7 +229,9 @@ class ContactDetector:
 
     def __call__(self, force: ArrayLike) -> bool:
         """Feed one raw force sample; True exactly at a contact onset."""
-        raw = np.asarray(force, dtype=float)
+        raw = _reading(force, "force sample")
+        if raw.ndim != 1:
+            raise CrmgraspError(f"a force sample must be a vector of components, got shape {raw.shape}")
         filtered = self.filter(raw)
         size = float(np.linalg.norm(raw))
         gain = float(filtered @ raw) / size if size > 0 else 0.0  # filtered change along the push

@@ -33,10 +33,10 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from crmgrasp._io import atomic_path, json_safe
-from crmgrasp._validation import is_real, require_extra
+from crmgrasp._io import atomic_path, check_output, dumps_json, json_safe
+from crmgrasp._validation import CrmgraspError, is_real, require_extra, shown
 
-__all__ = ["StepRecord", "write_mcap", "require_mcap", "contact_frames", "TOPICS"]
+__all__ = ["StepRecord", "write_mcap", "require_mcap", "contact_frames", "check_records", "TOPICS"]
 
 TOPICS = ("/contacts", "/object", "/wrench/<contact>", "/raw", "/crm", "/log")
 """The topics of a record (``<contact>``: each contact's label)."""
@@ -179,11 +179,84 @@ def _scene(fg: Any, rec: StepRecord, stamp: Any) -> Any:
     return msgs.SceneUpdate(entities=entities)
 
 
+def _numbers(values: Any, sizes: tuple[int, ...]) -> bool:
+    """Whether ``values`` is a list or tuple of one of ``sizes`` real, finite numbers."""
+    return isinstance(values, (list, tuple)) and len(values) in sizes and all(map(_finite, values))
+
+
+def _finite(value: Any) -> bool:
+    return is_real(value) and math.isfinite(value)
+
+
+def _count(value: Any) -> bool:
+    """Whether ``value`` is an integer >= 0 (not a bool)."""
+    return isinstance(value, int) and not isinstance(value, bool) and value >= 0
+
+
+def _text_keys(value: Any) -> bool:
+    return isinstance(value, dict) and all(isinstance(k, str) for k in value)
+
+
+def _json(value: Any) -> bool:
+    try:
+        dumps_json(value, indent=None)
+    except (TypeError, ValueError, RecursionError):
+        return False
+    return True
+
+
+def _problem(rec: StepRecord) -> str | None:
+    """What is wrong with ``rec``'s fields (``None`` if nothing): the form the module writes."""
+    from crmgrasp.hardware.answers import MAX_TIME
+
+    checks = (
+        ("time", _finite(rec.time) and 0.0 <= rec.time <= MAX_TIME, f"seconds in [0, {MAX_TIME:g}]"),
+        ("step", _count(rec.step), "an integer >= 0"),
+        (
+            "contacts",
+            _text_keys(rec.contacts)
+            and all(
+                isinstance(f, (list, tuple)) and len(f) == 2 and all(_numbers(v, (3,)) for v in f)
+                for f in rec.contacts.values()
+            ),
+            "label -> (point, normal), each 3 finite numbers",
+        ),
+        ("observation", _text_keys(rec.observation) and all(map(_finite, rec.observation.values())), "name -> number"),
+        ("obs_index", _count(rec.obs_index), "an integer >= 0"),
+        ("label", isinstance(rec.label, str), "text"),
+        ("raw", _text_keys(rec.raw) and _json(rec.raw), "a dict with text keys that JSON holds"),
+        ("pose", rec.pose is None or _numbers(rec.pose, (3, 7)), "None, or 3 or 7 finite numbers"),
+        ("action", rec.action is None or _count(rec.action), "None or an integer >= 0"),
+        ("crm", rec.crm is None or isinstance(rec.crm, str), "None or text"),
+        ("error", rec.error is None or isinstance(rec.error, str), "None or text"),
+    )
+    for name, ok, want in checks:
+        if not ok:
+            return f"its {name} is {shown(getattr(rec, name))}, not {want}"
+    return None
+
+
+def check_records(records: Any) -> list[StepRecord]:
+    """``records`` as a list if it is a list or tuple of [`StepRecord`][]s whose fields have
+    the form the module writes, else a one-line error naming the first record that does not."""
+    if not isinstance(records, (list, tuple)):
+        raise CrmgraspError(f"records must be a list of StepRecord, got {shown(records)}")
+    for i, rec in enumerate(records):
+        problem = _problem(rec) if isinstance(rec, StepRecord) else "it is no StepRecord"
+        if problem:
+            raise CrmgraspError(f"record {i} cannot be written: {problem}")
+    return list(records)
+
+
 def write_mcap(path: str | Path, records: Sequence[StepRecord], task_name: str) -> Path:
     """Write ``records`` (one per reading) to the MCAP file ``path`` (see the module
-    docstring); return the path."""
+    docstring); return the path. The records are checked first ([`check_records`][]), so a
+    malformed one leaves nothing written."""
+    records = check_records(records)
+    if not isinstance(task_name, str):
+        raise CrmgraspError(f"the task name must be text, got {shown(task_name)}")
+    path = check_output(path, "MCAP record")
     fg = require_mcap()
-    path = Path(path)
     with atomic_path(path) as tmp:
         ctx = fg.Context()
         writer = fg.open_mcap(str(tmp), allow_overwrite=True, context=ctx)
