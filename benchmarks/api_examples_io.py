@@ -1,5 +1,6 @@
 """The working calls of [`api_fuzz`][]'s input and output surfaces: fingertip sensing, step
-records, sweeps and run folders, and the vector environments' resets.
+records, sweeps and run folders, the vector environments' resets, and what a user calls on
+results (intervals, a hand's conformance, saved policies, the sampled POMDP, policy costs).
 
 Each function returns [`Example`][]s, one working call per public constructor or function,
 which ``api_fuzz`` makes into its ``Call``s and gives each of their arguments every hostile value
@@ -27,7 +28,13 @@ def example(label: str, function: Callable[..., Any], *args: Any, **kwargs: Any)
 
 def io_examples(box: c.Task) -> list[Example]:
     """Every example of this module."""
-    return [*sensing_examples(), *records_examples(box), *study_examples(), *vector_examples()]
+    return [
+        *sensing_examples(),
+        *records_examples(box),
+        *study_examples(),
+        *vector_examples(),
+        *analysis_examples(box),
+    ]
 
 
 def _filtered(tau: Any, dt: Any, first: Any, second: Any) -> Any:
@@ -139,4 +146,35 @@ def vector_examples() -> list[Example]:
         example("FamilyVectorEnv.reset", fam.reset, seed=0, options=None),
         example("FamilyVectorEnv.step", fam.step, np.array([0, 1])),
         example("continuous_vector_env", continuous_vector_env, 2, "paper-box", exact_friction=True),
+    ]
+
+
+def analysis_examples(box: c.Task) -> list[Example]:
+    """Intervals over trials, a hand's conformance test, loading a saved policy, the sampled
+    POMDP and its belief update, a belief policy's costs, the graspable check, the controller."""
+    from crmgrasp.agents.controller import run_controller
+    from crmgrasp.agents.loading import load_policy
+    from crmgrasp.experiments.stats import bootstrap_ci, ci_text, iqm, normal_ci
+    from crmgrasp.hardware.conformance import check_hand
+    from crmgrasp.hardware.runner import KinematicHand
+    from crmgrasp.planners import references as refs
+    from crmgrasp.planners.pomdp import belief_update
+    from crmgrasp.planners.pomdp_task import build_task_pomdp
+    from crmgrasp.planners.realizable import policy_costs
+
+    values = [1.0, 2.0, 3.0, 4.0, 5.0]
+    m = build_task_pomdp(box, samples=2, n_starts=20, max_states=2000).model
+    starts = refs.sample_starts(box, 4, 0)
+    return [
+        example("bootstrap_ci", bootstrap_ci, values, seed=0, confidence=0.95, resamples=100),
+        example("normal_ci", normal_ci, values),
+        example("iqm", iqm, values),
+        example("ci_text", ci_text, 1.6, 1.7, over="trials"),
+        example("check_hand", check_hand, KinematicHand, box, seed=0, worlds=1),
+        example("load_policy", load_policy, "policy.json", task=box),
+        example("build_task_pomdp", build_task_pomdp, box, cell=0.01, samples=2, n_starts=20, seed=0, max_states=2000),
+        example("belief_update", belief_update, m, m.b0, 0, 0),
+        example("policy_costs", policy_costs, refs.BeliefPolicy(box, starts), starts, advance=None),
+        example("graspable_warning", refs.graspable_warning, box, n=5, seed=0, backend="auto"),
+        example("run_controller", run_controller, box, 3, np.random.default_rng(0)),
     ]

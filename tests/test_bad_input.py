@@ -747,3 +747,68 @@ def test_the_learners_helpers_check_names_tasks_and_features(task):
     with pytest.raises(CrmgraspError, match="a model's discrete action must be an integer, got nan"):
         deep.crm_of_action(task, np.nan)
     assert deep.features([1.0, 0.0, 0.0], 0, bounds)[3] == 1.0  # the error flag's one-hot
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda s: s["bootstrap_ci"]("x"), "values must be numbers"),
+        (lambda s: s["bootstrap_ci"]([1.0] * 5, seed=float("nan")), r"seed must be an integer in \[0, "),
+        (lambda s: s["bootstrap_ci"]([1.0] * 5, confidence=1e-320), r"confidence must be in \[0.5, 1\)"),
+        (lambda s: s["bootstrap_ci"]([1.0] * 5, resamples=10**100), r"resamples must be an integer in \[100, "),
+        (lambda s: s["normal_ci"]([]), "a normal interval needs at least one value, got none"),
+        (lambda s: s["iqm"]({"a": 1}), "values must be numbers"),
+        (lambda s: s["ci_text"]("x", 1.7), "an interval's ends must be numbers"),
+    ],
+)
+def test_the_interval_helpers_check_their_values(call, message):
+    """The statistics a user applies to results: one line for values, a seed, a confidence or a
+    number of resamples of the wrong kind (before, numpy's, scipy's and Python's own errors)."""
+    from crmgrasp.experiments import stats
+
+    with pytest.raises(CrmgraspError, match=message):
+        call(vars(stats))
+    assert stats.bootstrap_ci([1.0, 2.0, 3.0, 4.0, 5.0], seed=np.int64(3)) == stats.bootstrap_ci(
+        [1.0, 2.0, 3.0, 4.0, 5.0], seed=3
+    )
+
+
+def test_the_pomdp_helpers_hand_check_and_controller_check_their_arguments(tmp_path):
+    """``belief_update``, ``build_task_pomdp``, ``policy_costs``, ``check_hand``, ``load_policy``
+    and ``run_controller``: one line naming the argument (before, attribute, type and index
+    errors from inside, and a ``worlds`` of 10**100 ran until stopped)."""
+    from crmgrasp.agents.controller import run_controller
+    from crmgrasp.agents.loading import load_policy
+    from crmgrasp.hardware.conformance import check_hand
+    from crmgrasp.hardware.runner import KinematicHand
+    from crmgrasp.planners import references as refs
+    from crmgrasp.planners.pomdp import belief_update
+    from crmgrasp.planners.pomdp_task import build_task_pomdp
+    from crmgrasp.planners.realizable import policy_costs
+
+    box = make_task("paper-box")
+    m = build_task_pomdp(box, samples=2, n_starts=20, max_states=2000).model
+    cases = [
+        (lambda: belief_update(m, m.b0[:-1], 0, 0), f"belief must be a distribution over the {m.n_states} states"),
+        (lambda: belief_update(m, m.b0, m.n_actions, 0), r"action must be an integer in \[0, 3\]"),
+        (lambda: belief_update(m, m.b0, 0, -1), "observation must be an integer"),
+        (lambda: build_task_pomdp(None), "build_task_pomdp needs a Task"),
+        (lambda: build_task_pomdp(box, samples=None), "samples per cell must be an integer"),
+        (lambda: policy_costs(None, []), "policy_costs needs a BeliefPolicy, got None"),
+        (
+            lambda: policy_costs(refs.BeliefPolicy(box, refs.sample_starts(box, 2, 0)), [], advance=1.0),
+            "advance must be a function or None",
+        ),
+        (lambda: check_hand(None, box), "make_hand must make a hand"),
+        (lambda: check_hand(KinematicHand, box, worlds=10**100), r"worlds must be an integer in \[1, 1000\]"),
+        (lambda: check_hand(KinematicHand, None), "check_hand needs a Task"),
+        (lambda: load_policy(None), "policy file path must be text or a path"),
+        (lambda: load_policy(tmp_path / "p.json", task=float("nan")), "load_policy needs a Task"),
+        (lambda: run_controller(box, None, np.random.default_rng(0)), "episodes must be an integer"),
+        (lambda: run_controller(None, 3, np.random.default_rng(0)), "run_controller needs a Task"),
+    ]
+    for call, message in cases:
+        with pytest.raises(CrmgraspError, match=message):
+            call()
+    o = int(np.flatnonzero(m.Z[0].T @ (m.T[0].T @ m.b0))[0])  # an observation the first action can give
+    assert np.array_equal(belief_update(m, m.b0, np.int64(0), np.int64(o)), belief_update(m, m.b0, 0, o))

@@ -28,11 +28,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, generator, integer
+from crmgrasp.agents.training import MAX_EPISODE_RECORDS
 from crmgrasp.model.contacts import Config, Grip
 from crmgrasp.model.hand import CRM, Error
 from crmgrasp.sim import Percept, run_episode
-from crmgrasp.tasks import Task
+from crmgrasp.tasks import Task, checked_task
 
 __all__ = ["GraspController", "run_controller"]
 
@@ -93,6 +94,8 @@ class GraspController:
 def run_controller(task: Task, episodes: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     """CRMs per episode and success flags of the controller over fresh starts (noise
     from ``task.noise``; starts and readings drawn from ``rng``)."""
+    task, rng = checked_task(task, "run_controller"), generator(rng)
+    episodes = integer(episodes, "episodes", 1, MAX_EPISODE_RECORDS)
     ctl = GraspController(task)
     steps = np.empty(episodes, dtype=np.int64)
     success = np.empty(episodes, dtype=bool)

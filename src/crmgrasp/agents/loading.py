@@ -12,8 +12,9 @@ import os
 import stat
 from typing import Any
 
+from crmgrasp._io import as_path
 from crmgrasp.agents.policy import GreedyPolicy
-from crmgrasp.tasks import Task
+from crmgrasp.tasks import Task, checked_task
 
 __all__ = ["load_policy"]
 
@@ -33,6 +34,9 @@ def _is_zip(path: str | os.PathLike[str]) -> bool:
 def load_policy(path: str | os.PathLike[str], task: Task | None = None) -> Any:
     """A saved policy of any kind: a tabular [`GreedyPolicy`][] (JSON) or a deep
     [`RecurrentPolicy`][crmgrasp.agents.deep.RecurrentPolicy] (zip; needs the extra ``deep``)."""
+    path = as_path(path, "policy file")
+    if task is not None:
+        task = checked_task(task, "load_policy")
     if _is_zip(path):
         from crmgrasp.agents.deep import RecurrentPolicy
 

@@ -374,6 +374,8 @@ class GreedyPolicy:
         """Read ([`read_policy_document`][]) and validate a policy file for ``task``
         (default: the registered task the file names)."""
         doc = read_policy_document(path)
+        if task is not None:
+            task = checked_task(task, "GreedyPolicy.load")
         if task is None:
             task = policy_task(doc, source=f"policy file {str(path)!r}")
         return cls.from_dict(doc, task, source=repr(str(path)))

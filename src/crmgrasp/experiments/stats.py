@@ -16,11 +16,22 @@ from typing import Any
 
 import numpy as np
 
+from crmgrasp._validation import CrmgraspError, finite, float_array, integer, seed_value, shown
+
 __all__ = ["bootstrap_ci", "normal_ci", "iqm", "fmt", "never", "budget", "ci_text", "summary_lines", "MIN_TRIALS"]
 
 MIN_TRIALS = 5
 """The fewest independent trials an interval over trials is given for: below it a bootstrap
 of the mean has too few distinct resamples to mean anything, and no interval is reported."""
+
+
+MAX_RESAMPLES = 10_000_000
+"""The most bootstrap resamples an interval may ask for."""
+
+
+def _values(values: Any) -> np.ndarray:
+    """``values`` as a flat float array (one value per trial or episode), or a one-line error."""
+    return np.asarray(float_array(values, "values")).ravel()
 
 
 def bootstrap_ci(values: Any, seed: int = 0, confidence: float = 0.95, resamples: int = 10_000) -> tuple[float, float]:
@@ -36,7 +47,12 @@ def bootstrap_ci(values: Any, seed: int = 0, confidence: float = 0.95, resamples
     >>> bootstrap_ci([1.0, 2.0])
     (nan, nan)
     """
-    x = np.asarray(values, dtype=np.float64).ravel()
+    x = _values(values)
+    seed = seed_value(seed)
+    confidence = finite(confidence, "confidence")
+    if not 0.5 <= confidence < 1.0:
+        raise CrmgraspError(f"confidence must be in [0.5, 1), got {confidence}")
+    resamples = integer(resamples, "resamples", 100, MAX_RESAMPLES)
     if x.size < MIN_TRIALS or not np.all(np.isfinite(x)):
         return (math.nan, math.nan)
     if np.all(x == x[0]):
@@ -63,7 +79,9 @@ def normal_ci(values: Any) -> tuple[float, float, float]:
     >>> normal_ci([1.0, 2.0, 3.0])[0]
     2.0
     """
-    x = np.asarray(values, dtype=np.float64).ravel()
+    x = _values(values)
+    if x.size == 0:
+        raise CrmgraspError("a normal interval needs at least one value, got none")
     m = float(x.mean())
     half = 1.96 * float(x.std(ddof=1)) / math.sqrt(x.size) if x.size > 1 else 0.0
     return m, m - half, m + half
@@ -75,6 +93,10 @@ def ci_text(lo: float, hi: float, over: str = "trials") -> str:
     >>> ci_text(1.6234, 1.7111), ci_text(float("nan"), float("nan"))
     ('95% CI over trials 1.623-1.711', 'no interval: fewer than 5 trials')
     """
+    ends = float_array((lo, hi), "an interval's ends")
+    if ends.shape != (2,):
+        raise CrmgraspError(f"an interval's ends must be two numbers, got {shown((lo, hi))}")
+    lo, hi = float(ends[0]), float(ends[1])
     if not (math.isfinite(lo) and math.isfinite(hi)):
         return f"no interval: fewer than {MIN_TRIALS} {over}"
     return f"95% CI over {over} {fmt(lo)}-{fmt(hi)}"
@@ -122,7 +144,7 @@ def iqm(values: Any) -> float:
     """
     from scipy.stats import trim_mean
 
-    x = np.asarray(values, dtype=np.float64).ravel()
+    x = _values(values)
     return float(trim_mean(x, 0.25)) if x.size else math.nan
 
 

@@ -32,13 +32,16 @@ from typing import Any
 
 import numpy as np
 
-from crmgrasp._validation import CrmgraspError
+from crmgrasp._validation import CrmgraspError, integer, seed_value, shown
 from crmgrasp.hardware.answers import checked_error, checked_raw, checked_reading
 from crmgrasp.hardware.runner import HandInterface, PolicyRunner
 from crmgrasp.model.contacts import ALL_LABELS
-from crmgrasp.tasks import Task
+from crmgrasp.tasks import Task, checked_task
 
 __all__ = ["check_hand", "CHECKS"]
+
+MAX_WORLDS = 1000
+"""The most worlds [`check_hand`][] runs a hand in (each runs every CRM of the task)."""
 
 CHECKS = ("sense", "execute", "refuse", "raw_reading", "runner")
 """The checks of [`check_hand`][], in order."""
@@ -92,7 +95,10 @@ def check_hand(make_hand: MakeHand, task: Task, seed: int = 0, worlds: int = 2) 
     worlds of ``task`` (one hand per world and CRM); return the names of the checks passed
     ([`CHECKS`][]; ``raw_reading`` only where the hand has it). The first failure raises a
     one-line `CrmgraspError` naming its check."""
-    rng = np.random.default_rng(seed)
+    if not callable(make_hand):
+        raise CrmgraspError(f"make_hand must make a hand from (task, start, rng), got {shown(make_hand)}")
+    task, worlds = checked_task(task, "check_hand"), integer(worlds, "worlds", 1, MAX_WORLDS)
+    rng = np.random.default_rng(seed_value(seed))
     passed: list[str] = []
     has_raw = False
     for w in range(worlds):

@@ -28,7 +28,7 @@ import numpy as np
 from scipy import sparse
 
 from crmgrasp._io import as_path, atomic_write_text
-from crmgrasp._validation import CrmgraspError, generator, integer, shown
+from crmgrasp._validation import CrmgraspError, float_array, generator, integer, shown
 
 __all__ = ["POMDP", "PBVIPolicy", "belief_update", "solve_pbvi", "collect_beliefs", "write_cassandra", "read_cassandra"]
 
@@ -73,7 +73,18 @@ def _checked(m: object, who: str) -> POMDP:
 
 def belief_update(m: POMDP, b: np.ndarray, a: int, o: int) -> np.ndarray | None:
     """``b'(s') = eta Z(o | s', a) sum_s T(s' | s, a) b(s)``; ``None`` if ``o`` has
-    probability 0 under ``b`` and ``a``."""
+    probability 0 under ``b`` and ``a``. Checks its arguments (a one-line error for a belief
+    that is no distribution over ``m``'s states, or an action or observation out of range)."""
+    m = _checked(m, "belief_update")
+    belief = np.asarray(float_array(b, "belief"))
+    if belief.shape != (m.n_states,) or not np.all(belief >= 0.0) or not np.isclose(belief.sum(), 1.0):
+        raise CrmgraspError(f"belief must be a distribution over the {m.n_states} states, got {shown(b)}")
+    a, o = (int(v) if isinstance(v, np.integer) else v for v in (a, o))
+    return belief_step(m, belief, integer(a, "action", 0, m.n_actions - 1), integer(o, "observation", 0, m.n_obs - 1))
+
+
+def belief_step(m: POMDP, b: np.ndarray, a: int, o: int) -> np.ndarray | None:
+    """[`belief_update`][]'s rule, unchecked: for the planners' own beliefs, actions and observations."""
     pred = m.T[a].T @ b
     post = pred * m.Z[a][:, o]
     total = post.sum()
@@ -102,7 +113,7 @@ def collect_beliefs(m: POMDP, n: int, horizon: int, rng: np.random.Generator) ->
             if p_obs.sum() <= 0:
                 break
             o = int(rng.choice(m.n_obs, p=p_obs / p_obs.sum()))
-            nb = belief_update(m, b, a, o)
+            nb = belief_step(m, b, a, o)
             if nb is None or nb[~m.goal].sum() <= 0:
                 break
             nb = np.where(m.goal, 0.0, nb)

@@ -22,14 +22,15 @@ from abc import ABC, abstractmethod
 import numpy as np
 from scipy import sparse
 
-from crmgrasp._validation import CrmgraspError, positive
+from crmgrasp._validation import CrmgraspError, integer, positive, seed_value
 from crmgrasp.model.contacts import Config, Contact, Grip
 from crmgrasp.model.geometry import Polygon
 from crmgrasp.model.hand import Error, execute_crm
 from crmgrasp.model.sensing import observe
-from crmgrasp.planners.pomdp import POMDP, PBVIPolicy, belief_update, collect_beliefs, solve_pbvi
+from crmgrasp.planners.pomdp import POMDP, PBVIPolicy, belief_step, collect_beliefs, solve_pbvi
 from crmgrasp.sim import Percept, run_episode
-from crmgrasp.tasks import Task, acceptable
+from crmgrasp.tasks import Task, acceptable, checked_task
+from crmgrasp.tasks.core import MAX_SAMPLED
 
 __all__ = ["TaskPOMDP", "build_task_pomdp", "BeliefTracker", "POMDPAgent"]
 
@@ -84,6 +85,10 @@ def build_task_pomdp(
     and, breadth first, from ``samples`` acceptable configurations drawn in each reached cell
     and moved by every CRM; a grasp leads to one absorbing goal state. Transition and
     observation probabilities are the counted frequencies."""
+    task = checked_task(task, "build_task_pomdp")
+    samples = integer(samples, "samples per cell", 1, 10_000)
+    n_starts = integer(n_starts, "n_starts", 1, MAX_SAMPLED)
+    seed, max_states = seed_value(seed), integer(max_states, "max_states", 1, 10_000_000)
     obj = task.obj
     if not isinstance(obj, Polygon):
         raise CrmgraspError(f"the sampled POMDP needs a polygonal object, got {type(obj).__name__}")
@@ -247,7 +252,7 @@ class BeliefTracker(ABC):
         if percept.terminated:
             return
         m, b, a = self.tp.model, self._b, self._a
-        nb = belief_update(m, b, a, percept.obs_index)
+        nb = belief_step(m, b, a, percept.obs_index)
         if nb is None or nb[~m.goal].sum() <= 0:
             nb = m.T[a].T @ b
         nb = np.where(m.goal, 0.0, nb)

@@ -18,6 +18,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from crmgrasp._progress import Progress
+from crmgrasp._validation import CrmgraspError, shown
 from crmgrasp.model.hand import Error
 from crmgrasp.model.sensing import SensorNoise
 from crmgrasp.planners.references import BeliefPolicy, graspable_starts, sample_starts
@@ -42,6 +43,10 @@ def policy_costs(
     policy's, at least the task's own optimum in expectation, where the optimum over the
     starts is at most that in expectation (it is the best policy for those very starts).
     ``advance``, if given, is called after each start (a progress display's)."""
+    if not isinstance(policy, BeliefPolicy):
+        raise CrmgraspError(f"policy_costs needs a BeliefPolicy, got {shown(policy)}")
+    if advance is not None and not callable(advance):
+        raise CrmgraspError(f"advance must be a function or None, got {shown(advance)}")
     checked_starts(starts, "policy_costs")
     task, backend = policy.task, policy.backend
     if task.noise.active:  # noise-free dynamics, as the references' own
