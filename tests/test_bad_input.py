@@ -290,7 +290,7 @@ def test_policy_reader_refuses_files_that_are_not_small_regular_json(saved_polic
     import json
     import os
 
-    import crmgrasp.agents.policy as policy_module
+    import crmgrasp.agents.policy_file as policy_module
 
     task, good = saved_policy
     doc = json.loads(good.read_text())

@@ -273,7 +273,7 @@ class RecurrentPolicy:
     def load(cls, path: str | os.PathLike[str], task: Task | None = None) -> RecurrentPolicy:
         """Read a saved deep policy (one-line errors for a damaged file or another task)."""
         from crmgrasp._io import read_bounded
-        from crmgrasp.agents.policy import first_difference, policy_task
+        from crmgrasp.agents.policy_file import first_difference, policy_task
         from crmgrasp.tasks import task_to_dict
 
         where = f"policy file {str(path)!r}"

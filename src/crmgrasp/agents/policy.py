@@ -36,7 +36,7 @@ in canonical decimal; its ``"greedy"`` entry lists the actions tied for the best
 (usually one). In a state the file does not list (nor its back-off table), the policy
 picks uniformly among all actions. ``sha256`` is the digest of the document without it, serialised with
 sorted keys and no spaces, so an edited file (a changed ``k``, table or header) is
-refused. Loading reads at most [`MAX_BYTES`][] from a regular file, parses strict
+refused. Loading reads at most [`MAX_BYTES`][crmgrasp.agents.policy_file.MAX_BYTES] from a regular file, parses strict
 standard JSON (no duplicate keys, no NaN, integers of at most 20 digits, bounded
 nesting), checks every field and refuses a policy made for another task, history
 order, CRM set or bins.
@@ -44,8 +44,6 @@ order, CRM set or bins.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
 from collections.abc import Collection, Sequence
 from pathlib import Path
@@ -53,13 +51,23 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from crmgrasp._io import as_path, read_bounded, write_json
+from crmgrasp._io import write_json
 from crmgrasp._validation import CrmgraspError, generator, shown
 from crmgrasp.agents.base import allowed_choice, erred_here
+from crmgrasp.agents.policy_file import (
+    MAX_BYTES,
+    MAX_INT_DIGITS,
+    crm_difference,
+    first_difference,
+    policy_digest,
+    policy_task,
+    read_policy_document,
+    written_spec,
+)
 from crmgrasp.agents.tabular import TabularAgent
 from crmgrasp.model.hand import Error
 from crmgrasp.model.history import MAX_K, KOrderEncoder
-from crmgrasp.tasks import Task, checked_task, make_task, task_from_dict, task_names, task_to_dict
+from crmgrasp.tasks import Task, checked_task, task_to_dict
 
 if TYPE_CHECKING:
     from crmgrasp.agents.symmetric import SymmetricAgent
@@ -80,114 +88,6 @@ VERSION = 2
 VERSIONS = (2, 3, 4)
 """Versions read: 2, 3 (2 with a back-off table, written only with one) and 4 (either with
 ``skip_errored`` and ranked tables)."""
-MAX_BYTES = 64 * 2**20
-"""Largest policy file read (64 MiB; a paper-box table is a few kB)."""
-
-_MAX_INT_DIGITS = 20
-
-
-def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
-    out: dict[str, Any] = {}
-    for key, value in pairs:
-        if key in out:
-            raise CrmgraspError(f"key {shown(key)} appears more than once")
-        out[key] = value
-    return out
-
-
-def _int(text: str) -> int:
-    if len(text.lstrip("-")) > _MAX_INT_DIGITS:
-        raise CrmgraspError(f"integer {shown(text)} has more than {_MAX_INT_DIGITS} digits")
-    return int(text)
-
-
-def _no_constant(text: str) -> Any:
-    raise CrmgraspError(f"{text} is not standard JSON")
-
-
-def policy_digest(doc: dict[str, Any]) -> str:
-    """SHA-256 hex digest of a policy document without its ``sha256`` field (sorted
-    keys, no spaces)."""
-    body = {k: v for k, v in doc.items() if k != "sha256"}
-    return hashlib.sha256(json.dumps(body, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
-
-
-def read_policy_document(path: str | os.PathLike[str]) -> Any:
-    """The parsed JSON of a policy file, read with the bounds above (one-line errors)."""
-    p = as_path(path, "policy file")
-    data = read_bounded(p, MAX_BYTES, "policy file")
-    try:
-        return json.loads(
-            data.decode("utf-8"),
-            object_pairs_hook=_no_duplicates,
-            parse_int=_int,
-            parse_constant=_no_constant,
-        )
-    except CrmgraspError as exc:
-        raise CrmgraspError(f"policy file {str(p)!r}: {exc}") from None
-    except RecursionError:
-        raise CrmgraspError(f"policy file {str(p)!r} is nested too deeply") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise CrmgraspError(f"policy file {str(p)!r} is not valid JSON ({exc})") from None
-
-
-def _written(spec: Any) -> Any:
-    """A stored task spec as today's writer states it (read, then written back), so that a
-    file saved before a key was added or left out by default still matches its task; the
-    spec as stored when it does not read."""
-    try:
-        return task_to_dict(task_from_dict(spec))
-    except CrmgraspError:
-        return spec
-
-
-def first_difference(a: Any, b: Any, where: str = "") -> str | None:
-    """The first key path at which two JSON values differ (``None`` if equal)."""
-    if isinstance(a, dict) and isinstance(b, dict):
-        for key in sorted(set(a) | set(b), key=str):
-            sub = first_difference(a.get(key), b.get(key), f"{where}.{key}" if where else str(key))
-            if sub is not None:
-                return sub
-        return None
-    if isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
-        for i, (x, y) in enumerate(zip(a, b)):
-            sub = first_difference(x, y, f"{where}[{i}]")
-            if sub is not None:
-                return sub
-        return None
-    return None if a == b else (where or "the task")
-
-
-def _crm_difference(got: Any, expected: list[Any]) -> str:
-    """How a policy's CRM set ``got`` differs from the task's ``expected``, in a few words: its
-    type, its count, or its first CRM that differs (a grid's set has hundreds)."""
-    if not isinstance(got, list):
-        return f"is {shown(got)}, not a list of the task's {len(expected)} CRMs"
-    if len(got) != len(expected):
-        return f"has {len(got)} CRMs, the task's {len(expected)}"
-    i = next(i for i, (x, y) in enumerate(zip(got, expected, strict=True)) if x != y)
-    return f"differs from the task's at CRM {i + 1}: {shown(got[i])} in the policy, {shown(expected[i])} in the task"
-
-
-def policy_task(doc: Any, source: str = "policy") -> Task:
-    """The task a policy document carries (``task_spec``) or names (a registered task)."""
-    if not isinstance(doc, dict):
-        raise CrmgraspError(f"{source}: not a crmgrasp policy")
-    spec, name = doc.get("task_spec"), doc.get("task")
-    if spec is not None:
-        if isinstance(spec, dict) and isinstance(spec.get("starts"), dict) and spec["starts"].get("kind") == "custom":
-            if isinstance(name, str) and name in task_names():
-                return make_task(name)
-            raise CrmgraspError(f"{source}: its task {name!r} has Python-defined starts; give the task (--task)")
-        try:
-            return task_from_dict(spec)
-        except CrmgraspError as exc:
-            raise CrmgraspError(f"{source}: bad task_spec: {exc}") from None
-    if not isinstance(name, str):
-        raise CrmgraspError(f"{source} names no task")
-    return make_task(name)
-
-
 ObservationLike = int | Sequence[float]
 """A discrete observation index, or the model's observation values then the error flag
 (``(rho, m_a, m_b, error)`` for two contacts)."""
@@ -399,7 +299,7 @@ class GreedyPolicy:
         if doc["task"] != task.name:
             raise bad(f"policy is for task {doc['task']!r}, not {task.name!r}")
         if "task_spec" in doc:
-            where = first_difference(_written(doc["task_spec"]), task_to_dict(task))
+            where = first_difference(written_spec(doc["task_spec"]), task_to_dict(task))
             if where is not None:
                 raise bad(f"policy was made for another version of task {task.name!r} (it differs in {where})")
         agent = doc.get("agent", "unknown")
@@ -410,7 +310,7 @@ class GreedyPolicy:
             raise bad(f"k must be an integer in [0, {MAX_K}], got {shown(k)}")
         expected, bins = crm_rows(task), task.discretizer.to_dict()
         if doc["actions"] != expected:
-            raise bad(f"policy's CRM set {_crm_difference(doc['actions'], expected)}")
+            raise bad(f"policy's CRM set {crm_difference(doc['actions'], expected)}")
         if doc["bins"] != bins:
             where = first_difference(doc["bins"], bins)
             raise bad(f"policy's observation bins differ from the task's (in {where}): {shown(doc['bins'])}")
@@ -511,7 +411,7 @@ def _read_table(greedy: Any, encoder: KOrderEncoder, bad: Any) -> dict[int, tupl
         raise bad('"greedy" must be an object mapping state codes to action lists')
     table: dict[int, tuple[int, ...]] = {}
     for key, acts in greedy.items():
-        if not (key.isascii() and key.isdigit() and len(key) <= _MAX_INT_DIGITS and key == str(int(key))):
+        if not (key.isascii() and key.isdigit() and len(key) <= MAX_INT_DIGITS and key == str(int(key))):
             raise bad(f"state code {shown(key)} is not a canonical non-negative integer")
         s = int(key)
         if not 0 <= s < encoder.size:

@@ -9,7 +9,7 @@ factory under a new name with [`register_task`][].
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple, overload
 
@@ -36,6 +36,7 @@ from crmgrasp.model.planar_model import PlanarModel
 from crmgrasp.model.sensing import Discretizer, SensorNoise
 from crmgrasp.model.shape import check_shape
 from crmgrasp.tasks.starts import CornerStarts, StartFilter, StartSampler, accept_corner_candidates
+from crmgrasp.tasks.symmetry import Symmetry, check_symmetry, symmetry_of
 
 __all__ = [
     "Task",
@@ -51,56 +52,6 @@ __all__ = [
 
 
 NUMBER_WORDS = {2: "two", 3: "three", 4: "four"}
-
-
-@dataclass(frozen=True)
-class Symmetry:
-    """A mirror symmetry of a task, declared by its author.
-
-    Claim: some reflection of the plane maps the object onto itself and the start
-    distribution onto itself (with the labels ``a`` and ``b`` swapped, which puts
-    the palm back on the right). Then CRM ``(c, f, r)`` corresponds to
-    ``(c', f', -r)`` (primes: swapped labels), ``rho`` and the error flag are
-    unchanged and ``(m_a, m_b)`` becomes ``(-m_b, -m_a)``. ``actions[i]`` is the index
-    of the CRM that corresponds to CRM ``i``; [`Task`][] checks it against that
-    rule and the observation bins (moments binned by magnitude, the same thresholds
-    for both). Learners may use it to pool experience (``symmetric=True``).
-    """
-
-    actions: tuple[int, ...]
-
-
-def symmetry_of(actions: Sequence[Any], mirror: Callable[[Any], Any]) -> Symmetry:
-    """The [`Symmetry`][] that maps each CRM of ``actions`` to ``mirror(crm)`` (a contact
-    model's ``mirror_crm``); an error naming the first CRM whose mirror the set lacks.
-
-    >>> symmetry_of(paper_box().actions, paper_box().model.mirror_crm)
-    Symmetry(actions=(1, 0, 3, 2))
-    """
-    index = {a: i for i, a in enumerate(actions)}
-    perm = []
-    for a in actions:
-        i = index.get(mirror(a))
-        if i is None:
-            raise CrmgraspError(f"the CRM set has no mirror of {a}; declare no symmetry")
-        perm.append(i)
-    return Symmetry(tuple(perm))
-
-
-def _check_symmetry(sym: Symmetry, actions: tuple[Any, ...], disc: Discretizer, model: ContactModel) -> None:
-    perm = tuple(sym.actions)
-    n = len(actions)
-    if sorted(perm) != list(range(n)) or any(perm[perm[i]] != i for i in range(n)):
-        raise CrmgraspError(f"symmetry actions must be an involutive permutation of 0..{n - 1}, got {perm!r}")
-    for i, crm in enumerate(actions):
-        m, expected = actions[perm[i]], model.mirror_crm(crm)
-        if m != expected:
-            raise CrmgraspError(f"symmetry maps {crm} to {m}, but its mirror is {expected}")
-    axes, th = model.mirror_axes, disc.thresholds
-    swapped = [(disc.names[i], disc.names[j]) for i, j in enumerate(axes) if i < j]
-    if not disc.abs_moments or any(th[i] != th[j] for i, j in enumerate(axes)):
-        same = ", ".join(f"{a} and {b}" for a, b in swapped)
-        raise CrmgraspError(f"a symmetric task needs moments binned by magnitude with the same {same} thresholds")
 
 
 def _takes(sampler: Any, accept: Any) -> bool:
@@ -146,7 +97,7 @@ class Task:
         Best achievable mean CRMs per episode for a learner on this task (the
         belief-space optimum where known), used to report ``episodes_to_5pct``.
     symmetry
-        A declared mirror symmetry ([`Symmetry`][]), or None.
+        A declared mirror symmetry ([`Symmetry`][crmgrasp.tasks.symmetry.Symmetry]), or None.
     grasp_reward
         Reward of the CRM that reaches a grasp (every other CRM: -1). The paper's "-1
         in all states" read literally gives -1 (the default); read as "in all non-goal
@@ -249,7 +200,7 @@ class Task:
             if not isinstance(self.symmetry, Symmetry):
                 raise CrmgraspError(f"task symmetry must be a Symmetry, got {self.symmetry!r}")
             try:
-                _check_symmetry(self.symmetry, actions, self.discretizer, self.model)
+                check_symmetry(self.symmetry, actions, self.discretizer, self.model)
             except CrmgraspError as exc:
                 raise CrmgraspError(
                     f"{exc} (a task made from a symmetric one with other CRMs or bins needs symmetry=None)"

@@ -50,9 +50,10 @@ from crmgrasp.model.geometry import Disc, Polygon, Shape
 from crmgrasp.model.hand import CRM, Hand
 from crmgrasp.model.planar_model import mirror_crm
 from crmgrasp.model.sensing import Discretizer
-from crmgrasp.tasks.core import PAPER_BINS, PAPER_CRMS, PAPER_HAND, Symmetry, Task, register_task, symmetry_of
+from crmgrasp.tasks.core import PAPER_BINS, PAPER_CRMS, PAPER_HAND, Task, register_task
 from crmgrasp.tasks.presets import VertexStarts
 from crmgrasp.tasks.starts import CornerStarts, StartSampler, acceptable
+from crmgrasp.tasks.symmetry import Symmetry, symmetry_of
 
 __all__ = [
     "BoundaryStarts",

@@ -14,7 +14,8 @@ from typing import Any
 
 from crmgrasp._validation import CrmgraspError, integer
 from crmgrasp.model.actions import MAX_GRID
-from crmgrasp.tasks.core import Symmetry, Task, checked_task, symmetry_of
+from crmgrasp.tasks.core import Task, checked_task
+from crmgrasp.tasks.symmetry import Symmetry, symmetry_of
 
 __all__ = ["offset_grid", "grid_crms", "mirror_symmetry", "OffsetTree", "offset_tree", "MAX_DEPTH", "MAX_GRID_CRMS"]
 

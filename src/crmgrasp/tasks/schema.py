@@ -25,7 +25,8 @@ from crmgrasp.model.contact_model import observation_names
 from crmgrasp.model.contacts import LABELS
 from crmgrasp.model.hand import CRM
 from crmgrasp.model.sensing import Discretizer, SensorNoise
-from crmgrasp.tasks.core import Symmetry, Task
+from crmgrasp.tasks.core import Task
+from crmgrasp.tasks.symmetry import Symmetry
 
 __all__ = [
     "init_keys",

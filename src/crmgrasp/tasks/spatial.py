@@ -34,7 +34,8 @@ from crmgrasp.model.solid_families import BoxOnTable, CylinderOnTable, OpenCupOn
 from crmgrasp.model.solids import Solid, dot, surface_point
 from crmgrasp.model.spatial import CRM3D, Contacts3D, Hand3D, check_solid, config3d
 from crmgrasp.model.spatial_model import SpatialModel, contact3d
-from crmgrasp.tasks.core import PAPER_BINS, Symmetry, Task, register_task, symmetry_of
+from crmgrasp.tasks.core import PAPER_BINS, Task, register_task
+from crmgrasp.tasks.symmetry import Symmetry, symmetry_of
 
 __all__ = [
     "SpatialTask",
