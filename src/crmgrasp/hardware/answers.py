@@ -39,6 +39,7 @@ __all__ = [
     "checked_error",
     "checked_pose",
     "checked_raw",
+    "raw_problem",
     "checked_reading",
     "checked_time",
 ]
@@ -87,17 +88,24 @@ def checked_error(value: Any, crm: Any) -> Error:
     raise CrmgraspError(f"the hand's execute({crm}) returned {shown(value)}, not an Error ({names})")
 
 
-def checked_raw(value: Any) -> dict[str, Any]:
-    """``value`` (what ``raw_reading()`` returned) if it is a dict with string keys that
-    serialises to JSON, else a one-line error."""
+def raw_problem(value: Any) -> str | None:
+    """What keeps ``value`` from being a raw reading (a dict with string keys that serialises to
+    JSON: what ``raw_reading()`` returns and a step record holds), or ``None``."""
     if not isinstance(value, dict) or not all(isinstance(k, str) for k in value):
-        raise CrmgraspError(f"the hand's raw_reading() returned {shown(value)}, not a dict with string keys")
+        return f"{shown(value)}, not a dict with string keys"
     try:
         dumps_json(value, indent=None)
     except (TypeError, ValueError, RecursionError) as exc:
-        raise CrmgraspError(
-            f"the hand's raw_reading() returned a dict that JSON cannot hold ({shown(str(exc), 80)})"
-        ) from None
+        return f"a dict that JSON cannot hold ({shown(str(exc), 80)})"
+    return None
+
+
+def checked_raw(value: Any) -> dict[str, Any]:
+    """``value`` (what ``raw_reading()`` returned) if it is a raw reading ([`raw_problem`][]),
+    else a one-line error."""
+    problem = raw_problem(value)
+    if problem is not None:
+        raise CrmgraspError(f"the hand's raw_reading() returned {problem}")
     return value
 
 

@@ -33,7 +33,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from crmgrasp._io import atomic_path, check_output, dumps_json, json_safe
+from crmgrasp._io import atomic_path, check_output, json_safe
 from crmgrasp._validation import CrmgraspError, is_real, require_extra, shown
 
 __all__ = ["StepRecord", "write_mcap", "require_mcap", "contact_frames", "check_records", "TOPICS"]
@@ -197,17 +197,9 @@ def _text_keys(value: Any) -> bool:
     return isinstance(value, dict) and all(isinstance(k, str) for k in value)
 
 
-def _json(value: Any) -> bool:
-    try:
-        dumps_json(value, indent=None)
-    except (TypeError, ValueError, RecursionError):
-        return False
-    return True
-
-
 def _problem(rec: StepRecord) -> str | None:
     """What is wrong with ``rec``'s fields (``None`` if nothing): the form the module writes."""
-    from crmgrasp.hardware.answers import MAX_TIME
+    from crmgrasp.hardware.answers import MAX_TIME, raw_problem
 
     checks = (
         ("time", _finite(rec.time) and 0.0 <= rec.time <= MAX_TIME, f"seconds in [0, {MAX_TIME:g}]"),
@@ -224,7 +216,7 @@ def _problem(rec: StepRecord) -> str | None:
         ("observation", _text_keys(rec.observation) and all(map(_finite, rec.observation.values())), "name -> number"),
         ("obs_index", _count(rec.obs_index), "an integer >= 0"),
         ("label", isinstance(rec.label, str), "text"),
-        ("raw", _text_keys(rec.raw) and _json(rec.raw), "a dict with text keys that JSON holds"),
+        ("raw", raw_problem(rec.raw) is None, "a dict with text keys that JSON holds"),
         ("pose", rec.pose is None or _numbers(rec.pose, (3, 7)), "None, or 3 or 7 finite numbers"),
         ("action", rec.action is None or _count(rec.action), "None or an integer >= 0"),
         ("crm", rec.crm is None or isinstance(rec.crm, str), "None or text"),
