@@ -31,7 +31,7 @@ MAX_RESAMPLES = 10_000_000
 
 def _values(values: Any) -> np.ndarray:
     """``values`` as a flat float array (one value per trial or episode), or a one-line error."""
-    return np.asarray(float_array(values, "values")).ravel()
+    return float_array(values, "values").ravel()
 
 
 def bootstrap_ci(values: Any, seed: int = 0, confidence: float = 0.95, resamples: int = 10_000) -> tuple[float, float]:

@@ -42,6 +42,7 @@ __all__ = [
     "raw_problem",
     "checked_reading",
     "checked_time",
+    "is_clock",
 ]
 
 MAX_TIME = 1e9
@@ -109,10 +110,16 @@ def checked_raw(value: Any) -> dict[str, Any]:
     return value
 
 
+def is_clock(value: Any) -> bool:
+    """Whether ``value`` is a clock reading: a real number of seconds in ``[0, MAX_TIME]`` (a
+    hand's ``time``, a step record's)."""
+    return is_real(value) and 0.0 <= float(value) <= MAX_TIME
+
+
 def checked_time(value: Any) -> float:
-    """``value`` (the hand's ``time``) as a float if it is a real number of seconds in
-    ``[0, MAX_TIME]``, else a one-line error."""
-    if not is_real(value) or not 0.0 <= float(value) <= MAX_TIME:
+    """``value`` (the hand's ``time``) as a float if it is a clock reading ([`is_clock`][]),
+    else a one-line error."""
+    if not is_clock(value):
         raise CrmgraspError(f"the hand's time is {shown(value)}, not a number of seconds in [0, {MAX_TIME:g}]")
     return float(value)
 

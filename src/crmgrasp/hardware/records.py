@@ -35,6 +35,7 @@ from typing import Any
 
 from crmgrasp._io import atomic_path, check_output, json_safe
 from crmgrasp._validation import CrmgraspError, is_real, require_extra, shown
+from crmgrasp.hardware.answers import MAX_TIME, is_clock, raw_problem
 
 __all__ = ["StepRecord", "write_mcap", "require_mcap", "contact_frames", "check_records", "TOPICS"]
 
@@ -105,11 +106,7 @@ def require_mcap() -> ModuleType:
 
 def _is_wrench(values: object) -> bool:
     """A planar ``f_x, f_y, m_z`` or a spatial ``f, m`` reading: 3 or 6 finite real numbers."""
-    return (
-        isinstance(values, (list, tuple))
-        and len(values) in (3, 6)
-        and all(is_real(v) and math.isfinite(v) for v in values)
-    )
+    return _numbers(values, (3, 6))
 
 
 def _wrench(values: Sequence[float]) -> dict[str, dict[str, float]]:
@@ -197,20 +194,19 @@ def _text_keys(value: Any) -> bool:
     return isinstance(value, dict) and all(isinstance(k, str) for k in value)
 
 
+def _frame(value: Any) -> bool:
+    """Whether ``value`` is a contact's ``(point, normal)``: two 3-vectors of finite numbers."""
+    return isinstance(value, (list, tuple)) and len(value) == 2 and all(_numbers(v, (3,)) for v in value)
+
+
 def _problem(rec: StepRecord) -> str | None:
     """What is wrong with ``rec``'s fields (``None`` if nothing): the form the module writes."""
-    from crmgrasp.hardware.answers import MAX_TIME, raw_problem
-
     checks = (
-        ("time", _finite(rec.time) and 0.0 <= rec.time <= MAX_TIME, f"seconds in [0, {MAX_TIME:g}]"),
+        ("time", is_clock(rec.time), f"seconds in [0, {MAX_TIME:g}]"),
         ("step", _count(rec.step), "an integer >= 0"),
         (
             "contacts",
-            _text_keys(rec.contacts)
-            and all(
-                isinstance(f, (list, tuple)) and len(f) == 2 and all(_numbers(v, (3,)) for v in f)
-                for f in rec.contacts.values()
-            ),
+            _text_keys(rec.contacts) and all(map(_frame, rec.contacts.values())),
             "label -> (point, normal), each 3 finite numbers",
         ),
         ("observation", _text_keys(rec.observation) and all(map(_finite, rec.observation.values())), "name -> number"),

@@ -76,7 +76,7 @@ def belief_update(m: POMDP, b: np.ndarray, a: int, o: int) -> np.ndarray | None:
     probability 0 under ``b`` and ``a``. Checks its arguments (a one-line error for a belief
     that is no distribution over ``m``'s states, or an action or observation out of range)."""
     m = _checked(m, "belief_update")
-    belief = np.asarray(float_array(b, "belief"))
+    belief = float_array(b, "belief")
     if belief.shape != (m.n_states,) or not np.all(belief >= 0.0) or not np.isclose(belief.sum(), 1.0):
         raise CrmgraspError(f"belief must be a distribution over the {m.n_states} states, got {shown(b)}")
     a, o = (int(v) if isinstance(v, np.integer) else v for v in (a, o))
